@@ -25,15 +25,25 @@ def _elem(f_type: Primitive | Struct) -> str:
     return f"ctypes.{f_type.ctypes_type}" if isinstance(f_type, Primitive) else class_name(f_type)
 
 
+def _doc(md: MessageDef) -> str:
+    text = comment_text(md.doc).replace("\\", "\\\\")
+    return text.replace('"""', "'" * 3)
+
+
+def _tail(out: list[str], cls: str, specs: list[str]) -> list[str]:
+    out += ["    _ln_specs_ = (", *(f"        {sp}," for sp in specs), "    )"]
+    return [*out, "", "", f"finalize({cls})", "", ""]
+
+
 def _struct_class(md: MessageDef, s: Struct) -> list[str]:
     cls = class_name(s)
-    title = f"{md.name}{' ' + s.section if s.section else ''}"
-    doc = comment_text(md.doc).replace('"""', "'''").replace("\\", "\\\\")
-    out = [f"class {cls}(LnStruct):", f'    """{title}{": " + doc if doc and not s.section else ""}"""', "",
+    title = f"{md.name} {s.section}" if s.section else md.name
+    doc = _doc(md) if md.doc and not s.section else ""
+    out = [f"class {cls}(LnStruct):", f'    """{title}{": " + doc if doc else ""}"""', "",
            "    _pack_ = 1", "    _fields_ = ["]
     specs = []
     if not s.fields:
-        out.append('        ("_ln_empty", ctypes.c_uint8),  # ctypes has no empty structs; not in the layout')
+        out.append('        ("_ln_empty", ctypes.c_uint8),  # no empty ctypes structs; not in the layout')
     for f in s.fields:
         elem = _elem(f.type)
         tail = f"  # {comment_text(f.doc)}" if f.doc else ""
@@ -51,22 +61,19 @@ def _struct_class(md: MessageDef, s: Struct) -> list[str]:
         out.append(f'    SIGNATURE = "{md.signature}"')
         out.append(f"    LAYOUT_HASH = 0x{md.layout_hash:016x}")
     out.append(f"    SIZE = {s.size}")
-    out.append(f"    _ln_specs_ = ({''.join(sp + ', ' for sp in specs)})")
-    out += ["", "", f"finalize({cls})", "", ""]
-    return out
+    return _tail(out, cls, specs)
 
 
 def _combined_class(md: MessageDef) -> list[str]:
     cls = f"{c_name(md.name)}_t"
     members = [(_MEMBER[n], class_name(s)) for n, s in md.sections.items()]
-    out = [f"class {cls}(LnStruct):", f'    """{md.name} ({md.kind}): {" and ".join(m for m, _ in members)}"""', "",
-           "    _pack_ = 1", "    _fields_ = ["]
+    doc = _doc(md)
+    out = [f"class {cls}(LnStruct):", f'    """{md.name} ({md.kind}){": " + doc if doc else ""}"""',
+           "", "    _pack_ = 1", "    _fields_ = ["]
     out += [f'        ("{m}", {c}),' for m, c in members]
-    specs = "".join(f'("{m}", "scalar", {c}, 1), ' for m, c in members)
     out += ["    ]", f'    MD_NAME = "{md.name}"', f'    KIND = "{md.kind}"',
-            f'    SIGNATURE = "{md.signature}"', f"    LAYOUT_HASH = 0x{md.layout_hash:016x}",
-            f"    _ln_specs_ = ({specs})", "", "", f"finalize({cls})", "", ""]
-    return out
+            f'    SIGNATURE = "{md.signature}"', f"    LAYOUT_HASH = 0x{md.layout_hash:016x}"]
+    return _tail(out, cls, [f'("{m}", "scalar", {c}, 1)' for m, c in members])
 
 
 def emit(requested: list[MessageDef], output: Path, version: str) -> str:

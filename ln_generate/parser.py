@@ -52,6 +52,8 @@ class RawFile:
     doc: str = ""
     defines: list[RawDefine] = field(default_factory=list)
     sections: list[RawSection] = field(default_factory=list)
+    errors: list[Diagnostic] = field(default_factory=list)  # syntax errors; parsing goes on
+    broken_aliases: set[str] = field(default_factory=set)  # defines that had syntax errors
 
 
 def decode(data: bytes, path: str) -> str:
@@ -174,9 +176,8 @@ class _Parser:
                 self.errors.extend(e.diagnostics)
             self.seen_significant = True
         self.raw.doc = "\n".join(doc).strip()
-        self.finish(lineno_last=text.count("\n") + 1)
-        if self.errors:
-            raise MdError(self.errors)
+        self.finish()
+        self.raw.errors = self.errors
         return self.raw
 
     def line(self, toks: list[Token], comment: str, lineno: int, end_col: int) -> None:
@@ -229,6 +230,8 @@ class _Parser:
         )
 
     def define(self, toks: list[Token], lineno: int, end_col: int) -> None:
+        if len(toks) > 1 and toks[1].kind == "ident":
+            self.raw.broken_aliases.add(toks[1].text)  # until the line proves sound
         for i, (kind, text) in enumerate((("ident", None), ("ident", "as"), ("string", None)), 1):
             if i >= len(toks) or toks[i].kind != kind or (text and toks[i].text != text):
                 col = toks[i].col if i < len(toks) else end_col
@@ -246,6 +249,7 @@ class _Parser:
                 )
         md_name = name.value
         assert isinstance(md_name, str)
+        self.raw.broken_aliases.discard(alias.text)
         self.raw.defines.append(
             RawDefine(alias.text, self.loc(lineno, alias.col), md_name, self.loc(lineno, name.col + 1))
         )
@@ -306,7 +310,7 @@ class _Parser:
             )
         )
 
-    def finish(self, lineno_last: int) -> None:
+    def finish(self) -> None:
         raw = self.raw
         if raw.kind == "message":
             if not raw.sections and not self.errors:
@@ -314,6 +318,8 @@ class _Parser:
                 self.error(1, 1, f"empty message definition ({what})")
             return
         assert raw.kind_loc is not None
+        if self.errors:
+            return  # a missing section is most likely a consequence of those errors
         present = {s.name for s in raw.sections}
         for name in SECTIONS[raw.kind]:
             if name not in present:
@@ -323,6 +329,9 @@ class _Parser:
 
 
 def parse(data: bytes, path: str) -> RawFile:
-    """Parse the bytes of one md file; raises MdError with every problem found."""
+    """Parse the bytes of one md file; syntax errors are collected in `.errors`.
+
+    Only undecodable bytes raise at once (MdError), since nothing can follow them.
+    """
     text = decode(data, path)
     return _Parser(path).parse(text)

@@ -58,7 +58,7 @@ class MdRegistry:
     def _resolve(
         self, name: str, path: Path, raw: RawFile, stack: tuple[str, ...]
     ) -> MessageDef:
-        errors: list[Diagnostic] = []
+        errors: list[Diagnostic] = list(raw.errors)
         md = MessageDef(name, raw.kind, path, {}, doc=raw.doc)  # type: ignore[arg-type]
         for d in raw.defines:
             try:
@@ -76,10 +76,10 @@ class MdRegistry:
                 )
                 continue
             md.imports[d.alias] = imported
-        failed_aliases = {d.alias for d in raw.defines} - md.imports.keys()
+        failed_aliases = ({d.alias for d in raw.defines} - md.imports.keys()) | raw.broken_aliases
         for section in raw.sections:
             struct = Struct(name, section.name or None)
-            seen: dict[str, Location] = {}
+            seen: dict[str, tuple[Location, str]] = {}
             for rf in section.fields:
                 try:
                     struct.fields.append(self._field(rf, md, failed_aliases, seen))
@@ -96,7 +96,9 @@ class MdRegistry:
                 )
             md.sections[section.name] = struct
         if errors:
-            raise MdError(errors)
+            here = [d for d in errors if d.loc.file == str(path)]
+            elsewhere = [d for d in errors if d.loc.file != str(path)]
+            raise MdError(elsewhere + sorted(here, key=lambda d: (d.loc.line, d.loc.col)))
         md.signature = md_signature(md)
         md.layout_hash = layout_hash(md)
         return md
@@ -106,7 +108,7 @@ class MdRegistry:
         rf: RawField,
         md: MessageDef,
         failed_aliases: set[str],
-        seen: dict[str, Location],
+        seen: dict[str, tuple[Location, str]],
     ) -> Field:
         ftype: Primitive | Struct
         if rf.type_name in md.imports:
@@ -123,15 +125,21 @@ class MdRegistry:
         reason = reserved_reason(rf.name)
         if reason:
             raise MdError.at(rf.name_loc, reason)
-        names = [rf.name, f"{rf.name}_len"] if rf.dynamic else [rf.name]
-        for n in names:
+        names = [(rf.name, "")]
+        if rf.dynamic:
+            names.append((f"{rf.name}_len", rf.name))
+        for n, owner in names:
             if n in seen:
-                what = "duplicate field" if n == rf.name else "implicit length field"
-                raise MdError.at(
-                    rf.name_loc, f"{what} '{n}' (already defined at line {seen[n].line})"
-                )
-        for n in names:
-            seen[n] = rf.name_loc
+                first_loc, first_owner = seen[n]
+                if first_owner:
+                    what = f"field '{n}' clashes with the implicit length field of '{first_owner}'"
+                elif owner:
+                    what = f"implicit length field '{n}' of '{owner}' clashes with field '{n}'"
+                else:
+                    what = f"duplicate field '{n}'"
+                raise MdError.at(rf.name_loc, f"{what} (first defined at line {first_loc.line})")
+        for n, owner in names:
+            seen[n] = (rf.name_loc, owner)
         if rf.dynamic:
             return Field(rf.name, ftype, "dynamic", 0, rf.name_loc, doc=rf.comment)
         if rf.count is not None:

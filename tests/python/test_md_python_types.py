@@ -1,0 +1,132 @@
+"""Behaviour of the generated Python types: numpy views, str fields, dynamic fields, dicts."""
+
+from __future__ import annotations
+
+import ctypes
+import gc
+import importlib.util
+import sys
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+import pytest
+
+from ln_generate.cli import main
+
+NAMES = ["robot/joint_state", "robot/tool_state", "robot/set_gains", "robot/plan_path",
+         "robot/fault_event", "t/chars"]
+
+
+@pytest.fixture(scope="module")
+def m(tmp_path_factory: pytest.TempPathFactory) -> ModuleType:
+    root = tmp_path_factory.mktemp("pytypes")
+    (root / "md" / "t").mkdir(parents=True)
+    (root / "md" / "t" / "chars").write_text("char label[8]\nchar initial\nint16_t ids[3]\n")
+    out = root / "gen_pytypes.py"
+    assert main(["-o", str(out), "--md-dir", str(root / "md"), *NAMES]) == 0
+    spec = importlib.util.spec_from_file_location("gen_pytypes", out)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["gen_pytypes"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_array_fields_are_writable_views(m: ModuleType) -> None:
+    js = m.robot_joint_state_t()
+    view = js.position
+    assert isinstance(view, np.ndarray) and view.dtype == np.dtype("<f8") and view.shape == (7,)
+    view[:] = np.arange(7) * 0.5
+    js.velocity = [1, 2, 3, 4, 5, 6, 7]
+    raw = bytes(js)
+    assert np.frombuffer(raw, "<f8", 7, 12).tolist() == [0, 0.5, 1, 1.5, 2, 2.5, 3]
+    assert np.frombuffer(raw, "<f8", 7, 68).tolist() == [1, 2, 3, 4, 5, 6, 7]
+    with pytest.raises(ValueError):
+        js.effort = [1, 2, 3]
+
+
+def test_views_of_a_buffer_share_its_memory(m: ModuleType) -> None:
+    buf = bytearray(m.robot_joint_state_t.SIZE)
+    js = m.robot_joint_state_t.from_buffer(buf)
+    js.position[6] = 42.0
+    js.cycle = 7
+    assert np.frombuffer(bytes(buf), "<f8", 1, 12 + 6 * 8)[0] == 42.0
+    assert int.from_bytes(buf[8:12], "little") == 7
+
+
+def test_nested_struct_and_nested_array(m: ModuleType) -> None:
+    ts = m.robot_tool_state_t.from_dict(
+        {"flange": {"position": [1, 2, 3]}, "stiffness": list(range(36)), "gripper_closed": 1}
+    )
+    ts.tool.orientation[3] = 1.0
+    d = ts.to_dict()
+    assert d["flange"]["position"] == [1, 2, 3]
+    assert d["tool"]["orientation"] == [0, 0, 0, 1]
+    assert d["stiffness"][35] == 35
+    assert m.robot_tool_state_t.from_dict(d).to_dict() == d
+
+
+def test_char_fields_are_str(m: ModuleType) -> None:
+    c = m.t_chars_t()
+    c.label = "gripper"
+    assert c.label == "gripper"
+    assert bytes(c)[:8] == b"gripper\0"
+    c.label = b"12345678"  # exactly full: no terminator needed
+    assert c.label == "12345678"
+    with pytest.raises(ValueError, match="do not fit in char\\[8\\]"):
+        c.label = "123456789"
+    c.initial = b"Z"
+    assert c.to_dict() == {"label": "12345678", "initial": "Z", "ids": [0, 0, 0]}
+
+
+def test_dynamic_fields_accept_lists_arrays_bytes_and_str(m: ModuleType) -> None:
+    sg = m.robot_set_gains_t()
+    sg.req.profile_name = "soft"
+    gc.collect()
+    assert sg.req.profile_name_len == 4 and sg.req.profile_name == "soft"
+    sg.resp.message = b"bad \xff bytes"
+    assert sg.resp.message == "bad \udcff bytes"  # lossless round trip of non-UTF-8
+    assert m.robot_set_gains_t.from_dict(sg.to_dict()).resp.message == sg.resp.message
+    pp = m.robot_plan_path_t()
+    pp.req.constraints = [{"data": "joint_limits"}, {"data": "collision"}]
+    pp.resp.waypoints = [m.robot_joint_state_t.from_dict({"cycle": 1}), {"cycle": 2}]
+    gc.collect()
+    assert [c.data for c in pp.req.constraints] == ["joint_limits", "collision"]
+    assert [w.cycle for w in pp.resp.waypoints] == [1, 2]
+    assert pp.resp.waypoints_len == 2
+
+
+def test_dynamic_numeric_field(tmp_path: Path) -> None:
+    (tmp_path / "t").mkdir()
+    (tmp_path / "t" / "dyn").write_text("float* samples\n")
+    out = tmp_path / "gen_dyn.py"
+    assert main(["-o", str(out), "--md-dir", str(tmp_path), "t/dyn"]) == 0
+    ns: dict[str, object] = {}
+    exec(compile(out.read_text(), str(out), "exec"), ns)
+    cls = ns["t_dyn_t"]
+    obj = cls()  # type: ignore[operator]
+    assert obj.samples.shape == (0,)
+    obj.samples = np.array([1.5, 2.5, 3.5])
+    gc.collect()
+    assert obj.samples.dtype == np.dtype("<f4") and obj.samples.tolist() == [1.5, 2.5, 3.5]
+    with pytest.raises(ValueError, match="1-d"):
+        obj.samples = [[1, 2], [3, 4]]
+    obj2 = cls()  # type: ignore[operator]
+    obj2.samples_len = 2  # length without a buffer: refused instead of reading garbage
+    with pytest.raises(ValueError, match="NULL pointer"):
+        _ = obj2.samples
+
+
+def test_from_dict_rejects_unknown_fields(m: ModuleType) -> None:
+    with pytest.raises(KeyError, match="robot/joint_state: no field 'positon'"):
+        m.robot_joint_state_t.from_dict({"positon": [0] * 7})
+
+
+def test_constants_and_registry(m: ModuleType) -> None:
+    js = m.robot_joint_state_t
+    assert ctypes.sizeof(js) == js.SIZE == 180
+    assert js.SIGNATURE == "double 8 1,uint32_t 4 1,double 8 7,double 8 7,double 8 7"
+    assert m.MESSAGES["robot/set_gains"] is m.robot_set_gains_t
+    assert m.robot_set_gains_t.KIND == "service"
+    assert m.robot_fault_event_t.from_dict({"call": {"text": "hot"}}).call.text == "hot"
