@@ -1,0 +1,17 @@
+/* ln_internal.h — shared by every libln source file and never installed.
+ * Includes the public header first, so each source sees exactly the API it implements,
+ * and holds the macros that are not part of the contract. */
+#ifndef LN_INTERNAL_H
+#define LN_INTERNAL_H
+
+#include "ln/ln.h"
+
+/* Number of entries in a true array (not a pointer). */
+#define LN_ARRAY_SIZE(a) (sizeof(a) / sizeof((a)[0]))
+
+/* Number of entries in LN_ERRNO_MAP, as a constant expression. */
+#define LN_ERRNO_COUNT_(name, code, message) +1
+enum { LN_ERROR_COUNT = 0 LN_ERRNO_MAP(LN_ERRNO_COUNT_) };
+#undef LN_ERRNO_COUNT_
+
+#endif /* LN_INTERNAL_H */
