@@ -77,6 +77,8 @@ def emit_md(md: MessageDef) -> list[str]:
     for name, s in md.sections.items():
         suffix = f"_{name.upper()}" if name else ""
         out.append(f"#define {macro}{suffix}_SIZE {s.size}")
+    if md.kind == "message":  # the (md name, layout hash, size) arguments of ln_publish/subscribe
+        out.append(f"#define {macro}_MD {macro}_MD_NAME, {macro}_LAYOUT_HASH, sizeof({base}_t)")
     out += asserts
     out += [f"#elif {marker} != {hash_lit}",
             f'#error "{md.name}: included from two generated headers with different layouts"',

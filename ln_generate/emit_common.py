@@ -6,7 +6,7 @@ from pathlib import Path
 
 from .diagnostics import Diagnostic, Location, MdError
 from .model import MessageDef, Struct
-from .names import c_name
+from .names import c_name, reserved_reason
 
 
 def banner(version: str, mds: list[MessageDef]) -> list[str]:
@@ -29,20 +29,56 @@ def ordered(requested: list[MessageDef]) -> list[MessageDef]:
     return mds
 
 
+#: Typedefs of <stdint.h>/<stddef.h> that a generated `NAME_t` must not redefine.
+_STD_TYPES = frozenset(
+    [f"{u}int{n}_t" for u in ("", "u") for n in (8, 16, 32, 64)]
+    + [f"{u}int_{k}{n}_t" for u in ("", "u") for k in ("least", "fast") for n in (8, 16, 32, 64)]
+    + ["intptr_t", "uintptr_t", "intmax_t", "uintmax_t", "size_t", "ptrdiff_t", "wchar_t",
+       "max_align_t"]
+)
+
+
+def _type_names(md: MessageDef) -> list[str]:
+    base = c_name(md.name)
+    names = [f"{base}_t"]
+    if md.kind != "message":
+        names += [f"{base}_{section}_t" for section in md.sections]
+    return names
+
+
 def check_clashes(mds: list[MessageDef]) -> None:
-    """Two md names that map to one C identifier (`a_b/c`, `a/b_c`) cannot share a file."""
-    seen: dict[str, MessageDef] = {}
+    """Refuse md names whose generated identifiers collide with each other or with C/C++.
+
+    `a_b/c` and `a/b_c` both give `a_b_c_t`; `p/svc`'s request type is `p_svc_request_t`
+    like the md `p/svc_request`; `p/pose` and `P/pose` share their upper-case macros; an
+    md `int8` would redefine `int8_t`; a C++ keyword cannot name a namespace.
+    """
+    types: dict[str, MessageDef] = {}
+    macros: dict[str, MessageDef] = {}
     errors = []
+
+    def clash(md: MessageDef, message: str) -> None:
+        errors.append(Diagnostic(Location(str(md.path), 1, 1), message))
+
     for md in mds:
-        other = seen.setdefault(c_name(md.name), md)
-        if other is not md:
-            errors.append(
-                Diagnostic(
-                    Location(str(md.path), 1, 1),
-                    f"'{md.name}' and '{other.name}' both map to the C name "
-                    f"'{c_name(md.name)}'; generate them into separate files",
-                )
-            )
+        for name in _type_names(md):
+            other = types.setdefault(name, md)
+            if other is not md:
+                clash(md, f"'{md.name}' and '{other.name}' both generate the type '{name}'; "
+                          "generate them into separate files")
+            if name in _STD_TYPES:
+                clash(md, f"md name '{md.name}' generates the type '{name}', which <stdint.h> "
+                          "or <stddef.h> already defines")
+        macro = c_name(md.name).upper()
+        other = macros.setdefault(macro, md)
+        if other is not md and other.name != md.name:
+            clash(md, f"'{md.name}' and '{other.name}' both generate the macros {macro}_*; "
+                      "generate them into separate files")
+        for part in md.name.split("/")[:-1]:
+            reason = reserved_reason(part)
+            if reason:
+                clash(md, f"md name '{md.name}' cannot be a C++ namespace: "
+                          + reason.replace("field name", "component"))
     if errors:
         raise MdError(errors)
 
@@ -52,8 +88,14 @@ def section_structs(md: MessageDef) -> list[tuple[str, Struct]]:
 
 
 def comment_text(text: str) -> str:
-    """A comment safe inside /* */ and on one line."""
-    return " ".join(text.replace("*/", "* /").split())
+    """A comment safe on one line in C (`/* */`), C++ (`//`) and Python (`#`, docstrings).
+
+    Control characters go, comment delimiters are broken up, and a trailing backslash
+    (a line continuation in C and C++) is dropped.
+    """
+    text = "".join(ch if ch.isprintable() else " " for ch in text)
+    text = " ".join(text.replace("*/", "* /").replace("/*", "/ *").split())
+    return text.rstrip("\\").rstrip()
 
 
 def guard_name(output: Path) -> str:

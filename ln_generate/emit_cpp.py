@@ -88,6 +88,12 @@ def emit_md(md: MessageDef) -> list[str]:
     out += asserts
     if ns:
         out.append(f"}}  // namespace {'::'.join(ns)}")
+    if md.kind == "message":
+        prefix = "::".join(ns) + "::" if ns else ""
+        out += [f"template <> struct ln::md_traits<::{prefix}{leaf}_t> {{",
+                f"    static constexpr const char* md_name = {'::' + prefix}{leaf}_md_name;",
+                f"    static constexpr std::uint64_t layout_hash = {hash_lit};",
+                "};"]
     out += [f"#elif {marker} != {hash_lit}",
             f'#error "{md.name}: included from two generated headers with different layouts"',
             "#endif", ""]
@@ -102,7 +108,11 @@ def emit(requested: list[MessageDef], output: Path, version: str) -> str:
              "#include <cstddef>", "#include <cstdint>", "",
              "#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__",
              '#error "links_and_nodes message layouts are little-endian"',
-             "#endif", ""]
+             "#endif", "",
+             "namespace ln {",
+             "// md name and layout hash of a generated message type (ln.hpp ports use it)",
+             "template <typename T> struct md_traits;",
+             "}  // namespace ln", ""]
     for md in mds:
         lines += emit_md(md)
     lines += [f"#endif  // {guard}", ""]

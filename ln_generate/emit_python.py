@@ -26,8 +26,8 @@ def _elem(f_type: Primitive | Struct) -> str:
 
 
 def _doc(md: MessageDef) -> str:
-    text = comment_text(md.doc).replace("\\", "\\\\")
-    return text.replace('"""', "'" * 3)
+    """The md's comment as docstring text: backslashes and double quotes escaped."""
+    return comment_text(md.doc).replace("\\", "\\\\").replace('"', '\\"')
 
 
 def _tail(out: list[str], cls: str, specs: list[str]) -> list[str]:

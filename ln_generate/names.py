@@ -7,6 +7,7 @@ any of the three (or by the generated Python classes) are refused up front.
 from __future__ import annotations
 
 import keyword
+import re
 
 C_KEYWORDS = frozenset(
     """auto break case char const continue default do double else enum extern float for
@@ -25,8 +26,14 @@ CPP_KEYWORDS = frozenset(
 PY_KEYWORDS = frozenset(keyword.kwlist)
 #: Attributes of the generated Python classes that a field would shadow.
 PY_CLASS_NAMES = frozenset(
-    "MD_NAME SIGNATURE LAYOUT_HASH SIZE to_dict from_dict copy _fields_ _pack_ "
-    "_anonymous_ _objects _b_base_ _b_needsfree_".split()
+    "MD_NAME SIGNATURE LAYOUT_HASH SIZE KIND MESSAGES to_dict from_dict update copy _fields_ "
+    "_pack_ _anonymous_ _objects _b_base_ _b_needsfree_ from_buffer from_buffer_copy "
+    "from_address from_param in_dll".split()
+)
+#: Macros that <stddef.h>/<stdint.h> or the compilers' GNU modes define.
+_C_MACRO_RE = re.compile(
+    r"(U?INT(8|16|32|64|PTR|MAX)_(MAX|MIN|C)|U?INT_(LEAST|FAST)(8|16|32|64)_(MAX|MIN)"
+    r"|(SIZE|PTRDIFF|WCHAR|WINT|SIG_ATOMIC)_(MAX|MIN)|NULL|offsetof|linux|unix|i386)\Z"
 )
 
 
@@ -36,6 +43,10 @@ def reserved_reason(name: str) -> str | None:
         return f"field name '{name}' is a reserved word in C"
     if name in CPP_KEYWORDS:
         return f"field name '{name}' is a reserved word in C++"
+    if re.match(r"_[A-Z]", name):
+        return f"field name '{name}' is reserved in C (underscore and capital letter)"
+    if _C_MACRO_RE.match(name):
+        return f"field name '{name}' is a macro of the C headers or compilers"
     if name in PY_KEYWORDS:
         return f"field name '{name}' is a reserved word in Python"
     if name in PY_CLASS_NAMES:

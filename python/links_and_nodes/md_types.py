@@ -137,6 +137,19 @@ def _char_array_property(name: str, count: int, offset: int) -> property:
     return property(get, set_, doc=f"char[{count}] as str (UTF-8, NUL-terminated if shorter)")
 
 
+def _char_scalar_property(name: str, offset: int) -> property:
+    def get(self: LnStruct) -> str:
+        return _decode(ctypes.string_at(ctypes.addressof(self) + offset, 1).rstrip(b"\0"))
+
+    def set_(self: LnStruct, value: str | bytes | int) -> None:
+        data = bytes([value]) if isinstance(value, int) else _encode(value)
+        if len(data) > 1:
+            raise ValueError(f"{self.MD_NAME}.{name}: a char holds one byte, got {len(data)}")
+        ctypes.memmove(ctypes.addressof(self) + offset, data.ljust(1, b"\0"), 1)
+
+    return property(get, set_, doc="char as a one-character str")
+
+
 def _dynamic_property(name: str, elem: Any, cfield: Any) -> property:
     len_name = f"{name}_len"
     is_struct = isinstance(elem, type) and issubclass(elem, LnStruct)
@@ -186,6 +199,8 @@ def finalize(cls: type[LnStruct]) -> type[LnStruct]:
         cfield = cls.__dict__[name]
         if kind == "dynamic":
             setattr(cls, name, _dynamic_property(name, elem, cfield))
+        elif kind == "scalar" and elem is ctypes.c_char:
+            setattr(cls, name, _char_scalar_property(name, cfield.offset))
         elif kind == "array" and elem is ctypes.c_char:
             setattr(cls, name, _char_array_property(name, count, cfield.offset))
         elif kind == "array" and elem in _DTYPES:

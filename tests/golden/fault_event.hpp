@@ -11,6 +11,11 @@
 #error "links_and_nodes message layouts are little-endian"
 #endif
 
+namespace ln {
+// md name and layout hash of a generated message type (ln.hpp ports use it)
+template <typename T> struct md_traits;
+}  // namespace ln
+
 // robot/fault_event (event): Fault notifications of the arm controller; subscribers choose a minimum severity on connect.
 #ifndef LN_MD_CPP_ROBOT_FAULT_EVENT
 #define LN_MD_CPP_ROBOT_FAULT_EVENT 0x4a5dee34a9c40442ULL

@@ -37,6 +37,7 @@ typedef struct robot_joint_state {
 #define ROBOT_JOINT_STATE_SIGNATURE "double 8 1,uint32_t 4 1,double 8 7,double 8 7,double 8 7"
 #define ROBOT_JOINT_STATE_LAYOUT_HASH UINT64_C(0xef8f8ef877c98834)
 #define ROBOT_JOINT_STATE_SIZE 180
+#define ROBOT_JOINT_STATE_MD ROBOT_JOINT_STATE_MD_NAME, ROBOT_JOINT_STATE_LAYOUT_HASH, sizeof(robot_joint_state_t)
 LN_MD_STATIC_ASSERT(sizeof(robot_joint_state_t) == 180, "robot/joint_state: size");
 LN_MD_STATIC_ASSERT(offsetof(robot_joint_state_t, timestamp) == 0, "robot/joint_state: offset of timestamp");
 LN_MD_STATIC_ASSERT(offsetof(robot_joint_state_t, cycle) == 8, "robot/joint_state: offset of cycle");

@@ -11,6 +11,11 @@
 #error "links_and_nodes message layouts are little-endian"
 #endif
 
+namespace ln {
+// md name and layout hash of a generated message type (ln.hpp ports use it)
+template <typename T> struct md_traits;
+}  // namespace ln
+
 // robot/joint_state (message): Joint state of a 7-axis robot arm, published by the arm controller every cycle.
 #ifndef LN_MD_CPP_ROBOT_JOINT_STATE
 #define LN_MD_CPP_ROBOT_JOINT_STATE 0xef8f8ef877c98834ULL
@@ -35,6 +40,10 @@ static_assert(offsetof(joint_state_t, position) == 12, "robot/joint_state: offse
 static_assert(offsetof(joint_state_t, velocity) == 68, "robot/joint_state: offset of velocity");
 static_assert(offsetof(joint_state_t, effort) == 124, "robot/joint_state: offset of effort");
 }  // namespace robot
+template <> struct ln::md_traits<::robot::joint_state_t> {
+    static constexpr const char* md_name = ::robot::joint_state_md_name;
+    static constexpr std::uint64_t layout_hash = 0xef8f8ef877c98834ULL;
+};
 #elif LN_MD_CPP_ROBOT_JOINT_STATE != 0xef8f8ef877c98834ULL
 #error "robot/joint_state: included from two generated headers with different layouts"
 #endif

@@ -37,6 +37,7 @@ typedef struct robot_joint_state {
 #define ROBOT_JOINT_STATE_SIGNATURE "double 8 1,uint32_t 4 1,double 8 7,double 8 7,double 8 7"
 #define ROBOT_JOINT_STATE_LAYOUT_HASH UINT64_C(0xef8f8ef877c98834)
 #define ROBOT_JOINT_STATE_SIZE 180
+#define ROBOT_JOINT_STATE_MD ROBOT_JOINT_STATE_MD_NAME, ROBOT_JOINT_STATE_LAYOUT_HASH, sizeof(robot_joint_state_t)
 LN_MD_STATIC_ASSERT(sizeof(robot_joint_state_t) == 180, "robot/joint_state: size");
 LN_MD_STATIC_ASSERT(offsetof(robot_joint_state_t, timestamp) == 0, "robot/joint_state: offset of timestamp");
 LN_MD_STATIC_ASSERT(offsetof(robot_joint_state_t, cycle) == 8, "robot/joint_state: offset of cycle");
@@ -60,6 +61,7 @@ typedef struct ln_string {
 #define LN_STRING_SIGNATURE "uint32_t 4 1,char* 1 1"
 #define LN_STRING_LAYOUT_HASH UINT64_C(0x187f4920997c8507)
 #define LN_STRING_SIZE 12
+#define LN_STRING_MD LN_STRING_MD_NAME, LN_STRING_LAYOUT_HASH, sizeof(ln_string_t)
 LN_MD_STATIC_ASSERT(sizeof(void*) == 8, "ln/string: dynamic fields need 64-bit pointers");
 LN_MD_STATIC_ASSERT(sizeof(ln_string_t) == 12, "ln/string: size");
 LN_MD_STATIC_ASSERT(offsetof(ln_string_t, data_len) == 0, "ln/string: offset of data_len");

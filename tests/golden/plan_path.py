@@ -36,7 +36,7 @@ finalize(robot_joint_state_t)
 
 
 class ln_string_t(LnStruct):
-    """ln/string: A variable-length string, for arrays of strings: define string as "ln/string" string* names"""
+    """ln/string: A variable-length string, for arrays of strings: define string as \"ln/string\" string* names"""
 
     _pack_ = 1
     _fields_ = [

@@ -34,6 +34,7 @@ typedef struct robot_pose {
 #define ROBOT_POSE_SIGNATURE "double 8 3,double 8 4"
 #define ROBOT_POSE_LAYOUT_HASH UINT64_C(0x304c20702db36ce0)
 #define ROBOT_POSE_SIZE 56
+#define ROBOT_POSE_MD ROBOT_POSE_MD_NAME, ROBOT_POSE_LAYOUT_HASH, sizeof(robot_pose_t)
 LN_MD_STATIC_ASSERT(sizeof(robot_pose_t) == 56, "robot/pose: size");
 LN_MD_STATIC_ASSERT(offsetof(robot_pose_t, position) == 0, "robot/pose: offset of position");
 LN_MD_STATIC_ASSERT(offsetof(robot_pose_t, orientation) == 24, "robot/pose: offset of orientation");
@@ -56,6 +57,7 @@ typedef struct robot_tool_state {
 #define ROBOT_TOOL_STATE_SIGNATURE "[double 8 3,double 8 4] 56 1,[double 8 3,double 8 4] 56 1,double 8 36,uint8_t 1 1"
 #define ROBOT_TOOL_STATE_LAYOUT_HASH UINT64_C(0x1ed59ae6c4c74888)
 #define ROBOT_TOOL_STATE_SIZE 401
+#define ROBOT_TOOL_STATE_MD ROBOT_TOOL_STATE_MD_NAME, ROBOT_TOOL_STATE_LAYOUT_HASH, sizeof(robot_tool_state_t)
 LN_MD_STATIC_ASSERT(sizeof(robot_tool_state_t) == 401, "robot/tool_state: size");
 LN_MD_STATIC_ASSERT(offsetof(robot_tool_state_t, flange) == 0, "robot/tool_state: offset of flange");
 LN_MD_STATIC_ASSERT(offsetof(robot_tool_state_t, tool) == 56, "robot/tool_state: offset of tool");

@@ -11,6 +11,11 @@
 #error "links_and_nodes message layouts are little-endian"
 #endif
 
+namespace ln {
+// md name and layout hash of a generated message type (ln.hpp ports use it)
+template <typename T> struct md_traits;
+}  // namespace ln
+
 // robot/pose (message): A Cartesian pose: position in metres, orientation as a unit quaternion (x, y, z, w).
 #ifndef LN_MD_CPP_ROBOT_POSE
 #define LN_MD_CPP_ROBOT_POSE 0x304c20702db36ce0ULL
@@ -29,6 +34,10 @@ static_assert(sizeof(pose_t) == 56, "robot/pose: size");
 static_assert(offsetof(pose_t, position) == 0, "robot/pose: offset of position");
 static_assert(offsetof(pose_t, orientation) == 24, "robot/pose: offset of orientation");
 }  // namespace robot
+template <> struct ln::md_traits<::robot::pose_t> {
+    static constexpr const char* md_name = ::robot::pose_md_name;
+    static constexpr std::uint64_t layout_hash = 0x304c20702db36ce0ULL;
+};
 #elif LN_MD_CPP_ROBOT_POSE != 0x304c20702db36ce0ULL
 #error "robot/pose: included from two generated headers with different layouts"
 #endif
@@ -55,6 +64,10 @@ static_assert(offsetof(tool_state_t, tool) == 56, "robot/tool_state: offset of t
 static_assert(offsetof(tool_state_t, stiffness) == 112, "robot/tool_state: offset of stiffness");
 static_assert(offsetof(tool_state_t, gripper_closed) == 400, "robot/tool_state: offset of gripper_closed");
 }  // namespace robot
+template <> struct ln::md_traits<::robot::tool_state_t> {
+    static constexpr const char* md_name = ::robot::tool_state_md_name;
+    static constexpr std::uint64_t layout_hash = 0x1ed59ae6c4c74888ULL;
+};
 #elif LN_MD_CPP_ROBOT_TOOL_STATE != 0x1ed59ae6c4c74888ULL
 #error "robot/tool_state: included from two generated headers with different layouts"
 #endif
