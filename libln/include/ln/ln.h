@@ -4,6 +4,9 @@
 #ifndef LN_LN_H
 #define LN_LN_H
 
+#include <stddef.h>
+#include <stdint.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -86,6 +89,126 @@ LN_EXPORT const char* ln_version(void);
  * Call it as LN_VERSION_CHECK() to pass the numbers of the header you compiled against. */
 LN_EXPORT int ln_version_check(int major, int minor);
 #define LN_VERSION_CHECK() ln_version_check(LN_VERSION_MAJOR, LN_VERSION_MINOR)
+
+
+/* ==== clients, topics ======================================================================
+ * Ownership: a client owns its ports; ln_client_destroy() closes every port it still has, so
+ * port handles must not be used after their client is gone.  Setup calls (create, publish,
+ * subscribe, unpublish, unsubscribe, destroy) must come from one thread at a time; ln_write,
+ * ln_read and the zero-copy calls may be used from any thread, one thread per port at a time.
+ * Timeouts are in seconds: < 0 waits forever, 0 does not wait (LN_EAGAIN), > 0 waits at
+ * most that long (LN_ETIMEOUT). */
+typedef struct ln_client ln_client;
+typedef struct ln_outport ln_outport;
+typedef struct ln_inport ln_inport;
+
+typedef struct ln_client_options {
+    const char* manager; /* "HOST:PORT" or ":PORT"; NULL: -ln_manager in argv, then $LN_MANAGER */
+    int argc;            /* argv to search for "-ln_manager HOST:PORT" (may be 0/NULL) */
+    char** argv;
+    double timeout;      /* seconds for connecting and for each manager request (default 10) */
+} ln_client_options;
+
+LN_EXPORT void ln_client_options_init(ln_client_options* opts);
+
+/* Connects to the manager and registers as `name` (LN_PROGRAM_NAME overrides it; the manager
+ * may append "-2", "-3", ... if the name is taken).  On success *out owns the connection; free
+ * it with ln_client_destroy().  On failure *out is NULL and the code says why (ECONNECTION,
+ * EVERSION, EPROTOCOL, ETIMEOUT, EINVAL); ln_last_error() has the details. */
+LN_EXPORT int ln_client_create(ln_client** out, const char* name, const ln_client_options* opts);
+LN_EXPORT int ln_client_destroy(ln_client* clnt);
+/* The name the manager gave this client; owned by the client. */
+LN_EXPORT const char* ln_client_name(const ln_client* clnt);
+
+/* Text of the last error of the calling thread, with context (topic, md, sizes, errno).
+ * Valid until the thread's next libln call that fails; never NULL. */
+LN_EXPORT const char* ln_last_error(void);
+
+/* Port options: buffers = 1 is a *latest* subscriber (always the newest sample), N > 1 a
+ * *queued* one that sees every sample while it is at most N behind (older ones are dropped
+ * and counted as overruns).  For publishers, LN_PUBLISH_WAIT_FOR_SUBSCRIBERS makes ln_write
+ * wait (up to its timeout) while a queued subscriber has no free buffer, instead of dropping
+ * that subscriber's oldest sample. */
+#define LN_PUBLISH_WAIT_FOR_SUBSCRIBERS 0x1u
+typedef struct ln_port_options {
+    uint32_t buffers; /* 1 .. 1024, default 1 */
+    uint32_t flags;   /* LN_PUBLISH_* */
+} ln_port_options;
+
+LN_EXPORT void ln_port_options_init(ln_port_options* opts);
+
+/* Register a publisher/subscriber of `topic` with messages of md `md_name`, layout hash and
+ * size (generated headers give all three as NAME_MD, e.g. ROBOT_JOINT_STATE_MD).  A topic has
+ * one layout: a port with another hash or size is refused with LN_ELAYOUT.  opts may be NULL.
+ * The port belongs to the client; close it with ln_unpublish/ln_unsubscribe or let
+ * ln_client_destroy do it. */
+LN_EXPORT int ln_publish(ln_client* clnt, ln_outport** out, const char* topic, const char* md_name,
+                         uint64_t layout_hash, size_t message_size, const ln_port_options* opts);
+LN_EXPORT int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic,
+                           const char* md_name, uint64_t layout_hash, size_t message_size,
+                           const ln_port_options* opts);
+LN_EXPORT int ln_unpublish(ln_outport* port);
+LN_EXPORT int ln_unsubscribe(ln_inport* port);
+
+/* What a read returns besides the data. */
+typedef struct ln_sample_info {
+    uint64_t seq;          /* publish sequence number of the topic, from 1, gap-free per topic */
+    int64_t timestamp_ns;  /* CLOCK_REALTIME when it was published */
+    uint64_t overruns;     /* samples this port lost since its previous read */
+} ln_sample_info;
+
+/* Copy `size` bytes (must equal the message size) into the topic.  Never blocks unless the
+ * port has LN_PUBLISH_WAIT_FOR_SUBSCRIBERS or another publisher of the topic holds a loan. */
+LN_EXPORT int ln_write(ln_outport* port, const void* data, size_t size, double timeout);
+/* Zero-copy write: *data points at the next slot; fill it, then commit (publishes it) or
+ * abort (publishes nothing).  Other publishers of the topic wait until then. */
+LN_EXPORT int ln_write_loan(ln_outport* port, void** data, double timeout);
+LN_EXPORT int ln_write_commit(ln_outport* port);
+LN_EXPORT int ln_write_abort(ln_outport* port);
+
+/* Copy the next sample (latest: the newest one not read yet; queued: the oldest unread) into
+ * data[size].  info may be NULL.  A sample is never torn: a slot overwritten while being
+ * copied is detected and skipped (counted in overruns). */
+LN_EXPORT int ln_read(ln_inport* port, void* data, size_t size, double timeout,
+                      ln_sample_info* info);
+/* Zero-copy read: *data points into the ring until ln_read_release(), which returns LN_OK if
+ * the sample stayed intact, LN_EOVERRUN if a publisher overwrote it meanwhile (the ring wrapped
+ * around: use more buffers or release sooner). */
+LN_EXPORT int ln_read_borrow(ln_inport* port, const void** data, double timeout,
+                             ln_sample_info* info);
+LN_EXPORT int ln_read_release(ln_inport* port);
+
+LN_EXPORT int ln_outport_subscriber_count(const ln_outport* port);
+LN_EXPORT int ln_inport_publisher_count(const ln_inport* port);
+/* Total samples this subscriber lost since it subscribed. */
+LN_EXPORT uint64_t ln_inport_overruns(const ln_inport* port);
+
+/* ==== topic segment administration (used by ln_manager) ===================================
+ * The manager creates, sizes, grows and removes the shared-memory segments of topics; clients
+ * only map them.  It maps only a segment's header, never its data. */
+typedef struct ln_ring_admin ln_ring_admin;
+
+LN_EXPORT int ln_ring_admin_create(ln_ring_admin** out, const char* shm_name, const char* topic,
+                                   const char* md_name, uint64_t layout_hash,
+                                   uint64_t message_size, uint32_t slots);
+/* Unmaps; the segment stays until ln_ring_admin_unlink(). */
+LN_EXPORT void ln_ring_admin_close(ln_ring_admin* admin);
+LN_EXPORT int ln_ring_admin_unlink(const char* shm_name);
+LN_EXPORT int ln_ring_admin_set_counts(ln_ring_admin* admin, uint32_t publishers,
+                                       uint32_t subscribers);
+/* Reserve reader slot `index` (0..63) for a subscriber process with `buffers`; release frees
+ * it again (a dead subscriber stops holding back publishers that wait for subscribers). */
+LN_EXPORT int ln_ring_admin_reserve_reader(ln_ring_admin* admin, uint32_t index, int32_t pid,
+                                           uint32_t buffers);
+LN_EXPORT int ln_ring_admin_release_reader(ln_ring_admin* admin, uint32_t index);
+/* Hand the topic over to a bigger `successor` segment: reader slots and the sequence number
+ * carry over, publishers and subscribers move on their next call. */
+LN_EXPORT int ln_ring_admin_retire(ln_ring_admin* admin, ln_ring_admin* successor,
+                                   const char* successor_name, double timeout);
+/* Unlink every segment of `instance` ("/dev/shm/ln.<instance>.*"); returns how many, or < 0. */
+LN_EXPORT int ln_ring_admin_purge_instance(const char* instance);
+/* Slot count and bytes of a ring for `message_size` and `slots` (the manager's limit check). */
+LN_EXPORT uint64_t ln_ring_segment_size(uint64_t message_size, uint32_t slots);
 
 #ifdef __cplusplus
 }

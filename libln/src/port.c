@@ -1,0 +1,456 @@
+/* port.c — publishers (outports) and subscribers (inports): registration with the manager,
+ * mapping the topic ring it names, and the copy and zero-copy write/read paths on it.
+ * A port follows its topic to a bigger ring when the manager retires the old one. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "client_internal.h"
+#include "ring.h"
+
+#define LN_OUTPORT_MAGIC 0x4c4e4f50u
+#define LN_INPORT_MAGIC 0x4c4e4950u
+#define LN_NO_READER 0xffffffffu
+
+typedef struct ln_port_common {
+    uint32_t magic;
+    ln_client* clnt;
+    uint32_t port_id;
+    uint64_t layout_hash;
+    uint64_t size;
+    ln_ring ring;
+    char topic[LN_RING_NAME_MAX];
+} ln_port_common;
+
+struct ln_outport {
+    ln_port_common c;
+    uint32_t flags;
+    ln_ring_slot* loan;
+};
+
+struct ln_inport {
+    ln_port_common c;
+    ln_ring_cursor cur;
+    ln_ring_slot* borrowed;
+    uint64_t borrowed_word;
+};
+
+void ln_port_options_init(ln_port_options* opts)
+{
+    if (opts) {
+        opts->buffers = 1;
+        opts->flags = 0;
+    }
+}
+
+static int bad_port(const void* port, uint32_t magic, const char* what)
+{
+    if (!port || *(const uint32_t*)port != magic)
+        return ln_set_error(NULL, LN_EBADHANDLE, "%s: invalid or closed port handle", what);
+    return LN_OK;
+}
+
+/* Move to the successor ring while this one is retired. */
+static int follow(ln_port_common* p)
+{
+    while (atomic_load_explicit(&p->ring.hdr->retired, memory_order_acquire)) {
+        char next[LN_RING_NAME_MAX];
+        memcpy(next, p->ring.hdr->successor, sizeof(next));
+        next[sizeof(next) - 1] = '\0';
+        ln_ring fresh;
+        int rc = ln_ring_attach(&fresh, next, p->layout_hash, p->size);
+        if (rc != LN_OK)
+            return rc;
+        ln_ring_detach(&p->ring);
+        p->ring = fresh;
+    }
+    return LN_OK;
+}
+
+static int close_remote(ln_port_common* p)
+{
+    ln_wbuf body;
+    ln_rbuf reply;
+    uint16_t type = 0;
+    ln_wbuf_init(&body);
+    ln_wbuf_u32(&body, p->port_id);
+    int rc = ln_client_request(p->clnt, LN_MSG_CLOSE_PORT, &body, &type, &reply);
+    ln_wbuf_free(&body);
+    if (rc == LN_OK && (type != LN_MSG_OK || ln_rbuf_end(&reply) != LN_OK))
+        rc = ln_set_error(p->clnt, LN_EPROTOCOL, "unexpected answer %u to CLOSE_PORT", type);
+    return rc;
+}
+
+/* Register a port with the manager and map the ring it names. */
+static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const char* topic,
+                     const char* md_name, uint64_t hash, size_t size, const ln_port_options* o,
+                     uint32_t* reader_index)
+{
+    ln_port_options defaults;
+    if (!o) {
+        ln_port_options_init(&defaults);
+        o = &defaults;
+    }
+    int rc = ln_client_check(clnt);
+    if (rc != LN_OK)
+        return ln_set_error(NULL, rc, "invalid client handle");
+    if (!topic || !md_name || size == 0 || size > UINT32_MAX)
+        return ln_set_error(clnt, LN_EINVAL, "%s: topic and md name are required, size must be "
+                            "1..4 GiB", msg == LN_MSG_PUBLISH ? "ln_publish" : "ln_subscribe");
+    if (strlen(topic) >= sizeof(p->topic))
+        return ln_set_error(clnt, LN_EINVAL, "topic name longer than %zu bytes",
+                            sizeof(p->topic) - 1);
+    ln_wbuf body;
+    ln_rbuf reply;
+    uint16_t type = 0;
+    char segment[LN_RING_NAME_MAX];
+    ln_wbuf_init(&body);
+    ln_wbuf_str(&body, topic);
+    ln_wbuf_str(&body, md_name);
+    ln_wbuf_u64(&body, hash);
+    ln_wbuf_u32(&body, (uint32_t)size);
+    ln_wbuf_u32(&body, o->buffers);
+    ln_wbuf_u32(&body, o->flags);
+    rc = ln_client_request(clnt, msg, &body, &type, &reply);
+    ln_wbuf_free(&body);
+    if (rc != LN_OK)
+        return rc;
+    p->port_id = ln_rbuf_u32(&reply);
+    ln_rbuf_str(&reply, segment, sizeof(segment));
+    *reader_index = ln_rbuf_u32(&reply);
+    if (type != LN_MSG_PORT_OK || ln_rbuf_end(&reply) != LN_OK)
+        return ln_set_error(clnt, LN_EPROTOCOL, "unexpected answer %u to a port request", type);
+    p->clnt = clnt;
+    p->layout_hash = hash;
+    p->size = size;
+    snprintf(p->topic, sizeof(p->topic), "%s", topic);
+    rc = ln_ring_attach(&p->ring, segment, hash, size);
+    if (rc == LN_OK)
+        rc = follow(p);
+    if (rc != LN_OK) {
+        char why[512];
+        snprintf(why, sizeof(why), "%s", ln_last_error());
+        ln_ring_detach(&p->ring);
+        close_remote(p);
+        return ln_set_error(clnt, rc, "topic '%s': %s", topic, why);
+    }
+    return LN_OK;
+}
+
+static int close_port(ln_port_common* p);
+
+static void close_outport(void* port)
+{
+    ln_unpublish(port);
+}
+
+static void close_inport(void* port)
+{
+    ln_unsubscribe(port);
+}
+
+int ln_publish(ln_client* clnt, ln_outport** out, const char* topic, const char* md_name,
+               uint64_t layout_hash, size_t message_size, const ln_port_options* opts)
+{
+    if (!out)
+        return ln_set_error(clnt, LN_EINVAL, "ln_publish: out is NULL");
+    *out = NULL;
+    ln_outport* p = calloc(1, sizeof(*p));
+    if (!p)
+        return ln_set_error(clnt, LN_ENOMEM, "out of memory");
+    uint32_t reader = 0;
+    int rc = open_port(&p->c, clnt, LN_MSG_PUBLISH, topic, md_name, layout_hash, message_size,
+                       opts, &reader);
+    if (rc != LN_OK) {
+        free(p);
+        return rc;
+    }
+    p->flags = opts ? opts->flags : 0;
+    p->c.magic = LN_OUTPORT_MAGIC;
+    rc = ln_client_add_port(clnt, p, close_outport);
+    if (rc != LN_OK) {
+        close_port(&p->c);
+        return ln_set_error(clnt, rc, "out of memory");
+    }
+    *out = p;
+    return LN_OK;
+}
+
+int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char* md_name,
+                 uint64_t layout_hash, size_t message_size, const ln_port_options* opts)
+{
+    if (!out)
+        return ln_set_error(clnt, LN_EINVAL, "ln_subscribe: out is NULL");
+    *out = NULL;
+    ln_inport* p = calloc(1, sizeof(*p));
+    if (!p)
+        return ln_set_error(clnt, LN_ENOMEM, "out of memory");
+    uint32_t reader = 0;
+    int rc = open_port(&p->c, clnt, LN_MSG_SUBSCRIBE, topic, md_name, layout_hash, message_size,
+                       opts, &reader);
+    if (rc != LN_OK) {
+        free(p);
+        return rc;
+    }
+    p->cur.buffers = opts && opts->buffers > 1 ? opts->buffers : 1;
+    p->cur.reader = reader == LN_NO_READER || reader >= LN_RING_MAX_READERS ? -1 : (int)reader;
+    if (p->cur.buffers > 1 && p->cur.reader >= 0)
+        p->cur.next = atomic_load(&p->c.ring.hdr->readers[p->cur.reader].next_seq);
+    else
+        p->cur.next = 1; /* latest: the first read returns the newest sample there is */
+    p->c.magic = LN_INPORT_MAGIC;
+    rc = ln_client_add_port(clnt, p, close_inport);
+    if (rc != LN_OK) {
+        close_port(&p->c);
+        return ln_set_error(clnt, rc, "out of memory");
+    }
+    *out = p;
+    return LN_OK;
+}
+
+static int close_port(ln_port_common* p)
+{
+    int rc = close_remote(p); /* the manager also releases it when the connection is gone */
+    ln_ring_detach(&p->ring);
+    ln_client_remove_port(p->clnt, p);
+    p->magic = 0;
+    free(p);
+    return rc == LN_ECONNECTION ? LN_OK : rc;
+}
+
+int ln_unpublish(ln_outport* port)
+{
+    int rc = bad_port(port, LN_OUTPORT_MAGIC, "ln_unpublish");
+    if (rc != LN_OK)
+        return rc;
+    if (port->loan)
+        ln_write_abort(port);
+    return close_port(&port->c);
+}
+
+int ln_unsubscribe(ln_inport* port)
+{
+    int rc = bad_port(port, LN_INPORT_MAGIC, "ln_unsubscribe");
+    if (rc != LN_OK)
+        return rc;
+    return close_port(&port->c);
+}
+
+static int timeout_code(int rc, const ln_deadline* d)
+{
+    return rc == LN_ETIMEOUT && !d->forever && d->timeout == 0 ? LN_EAGAIN : rc;
+}
+
+/* Take the write side of the current ring, following retirements; with
+ * LN_PUBLISH_WAIT_FOR_SUBSCRIBERS also wait for room in every queued subscriber. */
+static int begin_write(ln_outport* p, ln_deadline* d, ln_ring_slot** slot)
+{
+    for (;;) {
+        int rc = ln_ring_lock(&p->c.ring, d);
+        if (rc != LN_OK)
+            return timeout_code(rc, d);
+        if (!atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire)) {
+            rc = p->flags & LN_PUBLISH_WAIT_FOR_SUBSCRIBERS ? ln_ring_wait_for_space(&p->c.ring, d)
+                                                            : LN_OK;
+            if (rc == LN_OK) {
+                *slot = ln_ring_begin(&p->c.ring);
+                return LN_OK;
+            }
+            if (rc != LN_ECLOSED) {
+                ln_ring_unlock(&p->c.ring);
+                return timeout_code(rc, d);
+            }
+        }
+        ln_ring_unlock(&p->c.ring);
+        rc = follow(&p->c);
+        if (rc != LN_OK)
+            return rc;
+    }
+}
+
+int ln_write(ln_outport* p, const void* data, size_t size, double timeout)
+{
+    int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_write");
+    if (rc != LN_OK)
+        return rc;
+    if (size != p->c.size || !data)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_write on '%s': %zu bytes given, messages "
+                            "are %llu bytes", p->c.topic, size, (unsigned long long)p->c.size);
+    if (p->loan)
+        return ln_set_error(p->c.clnt, LN_EBUSY, "ln_write on '%s': a loan is outstanding",
+                            p->c.topic);
+    ln_deadline d = ln_deadline_in(timeout);
+    ln_ring_slot* slot;
+    rc = begin_write(p, &d, &slot);
+    if (rc != LN_OK)
+        return rc;
+    memcpy(ln_ring_payload(slot), data, size);
+    ln_ring_commit(&p->c.ring, slot);
+    ln_ring_unlock(&p->c.ring);
+    return LN_OK;
+}
+
+int ln_write_loan(ln_outport* p, void** data, double timeout)
+{
+    int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_write_loan");
+    if (rc != LN_OK)
+        return rc;
+    if (!data)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_write_loan: data is NULL");
+    if (p->loan)
+        return ln_set_error(p->c.clnt, LN_EBUSY, "ln_write_loan on '%s': a loan is outstanding",
+                            p->c.topic);
+    ln_deadline d = ln_deadline_in(timeout);
+    rc = begin_write(p, &d, &p->loan);
+    if (rc != LN_OK)
+        return rc;
+    *data = ln_ring_payload(p->loan);
+    return LN_OK;
+}
+
+int ln_write_commit(ln_outport* p)
+{
+    int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_write_commit");
+    if (rc != LN_OK)
+        return rc;
+    if (!p->loan)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_write_commit on '%s': no loan",
+                            p->c.topic);
+    ln_ring_commit(&p->c.ring, p->loan);
+    p->loan = NULL;
+    ln_ring_unlock(&p->c.ring);
+    return LN_OK;
+}
+
+int ln_write_abort(ln_outport* p)
+{
+    int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_write_abort");
+    if (rc != LN_OK)
+        return rc;
+    if (!p->loan)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_write_abort on '%s': no loan", p->c.topic);
+    p->loan = NULL; /* the slot stays WRITING; the next write reuses its sequence number */
+    ln_ring_unlock(&p->c.ring);
+    return LN_OK;
+}
+
+/* Find the next sample for this subscriber, waiting per timeout; moves to successor rings. */
+static int next_sample(ln_inport* p, double timeout, ln_ring_slot** slot, uint64_t* word)
+{
+    ln_deadline d = ln_deadline_in(timeout);
+    for (;;) {
+        int rc = ln_ring_pick(&p->c.ring, &p->cur, slot, word);
+        if (rc != LN_EAGAIN)
+            return rc;
+        if (atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire)) {
+            rc = follow(&p->c);
+            if (rc != LN_OK)
+                return rc;
+            continue;
+        }
+        if (timeout == 0)
+            return LN_EAGAIN;
+        rc = ln_ring_wait_data(&p->c.ring, p->cur.next, &d);
+        if (rc == LN_ETIMEOUT)
+            return ln_set_error(p->c.clnt, LN_ETIMEOUT, "no sample on topic '%s' within %g s",
+                                p->c.topic, timeout);
+    }
+}
+
+static void fill_info(ln_inport* p, ln_ring_slot* slot, uint64_t word, int64_t ts,
+                      ln_sample_info* info)
+{
+    (void)slot;
+    p->cur.total += p->cur.pending;
+    if (info) {
+        info->seq = LN_SLOT_SEQ(word);
+        info->timestamp_ns = ts;
+        info->overruns = p->cur.pending;
+    }
+    p->cur.pending = 0;
+}
+
+int ln_read(ln_inport* p, void* data, size_t size, double timeout, ln_sample_info* info)
+{
+    int rc = bad_port(p, LN_INPORT_MAGIC, "ln_read");
+    if (rc != LN_OK)
+        return rc;
+    if (size != p->c.size || !data)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_read on '%s': buffer of %zu bytes, messages "
+                            "are %llu bytes", p->c.topic, size, (unsigned long long)p->c.size);
+    if (p->borrowed)
+        return ln_set_error(p->c.clnt, LN_EBUSY, "ln_read on '%s': a borrowed sample is not "
+                            "released", p->c.topic);
+    for (;;) {
+        ln_ring_slot* slot;
+        uint64_t word;
+        rc = next_sample(p, timeout, &slot, &word);
+        if (rc != LN_OK)
+            return rc;
+        memcpy(data, ln_ring_payload(slot), size);
+        int64_t ts = slot->timestamp_ns;
+        if (ln_ring_finish(&p->c.ring, &p->cur, slot, word) == LN_OK) {
+            fill_info(p, slot, word, ts, info);
+            return LN_OK;
+        }
+    }
+}
+
+int ln_read_borrow(ln_inport* p, const void** data, double timeout, ln_sample_info* info)
+{
+    int rc = bad_port(p, LN_INPORT_MAGIC, "ln_read_borrow");
+    if (rc != LN_OK)
+        return rc;
+    if (!data)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_read_borrow: data is NULL");
+    if (p->borrowed)
+        return ln_set_error(p->c.clnt, LN_EBUSY, "ln_read_borrow on '%s': already borrowed",
+                            p->c.topic);
+    ln_ring_slot* slot;
+    uint64_t word;
+    rc = next_sample(p, timeout, &slot, &word);
+    if (rc != LN_OK)
+        return rc;
+    p->borrowed = slot;
+    p->borrowed_word = word;
+    fill_info(p, slot, word, slot->timestamp_ns, info);
+    *data = ln_ring_payload(slot);
+    return LN_OK;
+}
+
+int ln_read_release(ln_inport* p)
+{
+    int rc = bad_port(p, LN_INPORT_MAGIC, "ln_read_release");
+    if (rc != LN_OK)
+        return rc;
+    if (!p->borrowed)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_read_release on '%s': nothing borrowed",
+                            p->c.topic);
+    rc = ln_ring_finish(&p->c.ring, &p->cur, p->borrowed, p->borrowed_word);
+    p->borrowed = NULL;
+    if (rc != LN_OK) {
+        p->cur.total += p->cur.pending;
+        p->cur.pending = 0;
+        return ln_set_error(p->c.clnt, LN_EOVERRUN, "topic '%s': sample %llu was overwritten "
+                            "while borrowed", p->c.topic,
+                            (unsigned long long)LN_SLOT_SEQ(p->borrowed_word));
+    }
+    return LN_OK;
+}
+
+int ln_outport_subscriber_count(const ln_outport* p)
+{
+    int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_outport_subscriber_count");
+    return rc != LN_OK ? rc : (int)atomic_load(&p->c.ring.hdr->subscribers);
+}
+
+int ln_inport_publisher_count(const ln_inport* p)
+{
+    int rc = bad_port(p, LN_INPORT_MAGIC, "ln_inport_publisher_count");
+    return rc != LN_OK ? rc : (int)atomic_load(&p->c.ring.hdr->publishers);
+}
+
+uint64_t ln_inport_overruns(const ln_inport* p)
+{
+    return bad_port(p, LN_INPORT_MAGIC, "ln_inport_overruns") != LN_OK ? 0 : p->cur.total;
+}

@@ -1,0 +1,281 @@
+/* ring.c — the lock-free reader and the serialized writer of a topic ring (see ring.h for the
+ * memory-ordering protocol).  Everything here runs in the publishing or subscribing process;
+ * the manager only creates, sizes and retires rings (ring_admin.c). */
+#include "ring.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "client_internal.h"
+#include "futex.h"
+
+uint64_t ln_ring_header_bytes(void)
+{
+    uint64_t page = 4096;
+    return (sizeof(ln_ring_header) + page - 1) / page * page;
+}
+
+uint32_t ln_ring_stride(uint64_t message_size)
+{
+    return (uint32_t)((sizeof(ln_ring_slot) + message_size + 63) / 64 * 64);
+}
+
+int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64_t message_size)
+{
+    uint64_t size = 0;
+    memset(ring, 0, sizeof(*ring));
+    int rc = ln_shm_open(name, 0, &ring->map, &size);
+    if (rc != LN_OK)
+        return rc;
+    ln_ring_header* h = ring->map.addr;
+    const char* why = NULL;
+    if (size < ln_ring_header_bytes())
+        why = "too small for a ring header";
+    else if (h->magic != LN_RING_MAGIC)
+        why = "no ring magic";
+    else if (h->version != LN_RING_VERSION)
+        why = "ring format version differs from this library's";
+    else if (h->slot_count < 2 || h->slot_count > LN_RING_MAX_SLOTS ||
+             h->slot_stride != ln_ring_stride(h->message_size) || h->segment_size != size ||
+             h->header_size != ln_ring_header_bytes() ||
+             h->header_size + (uint64_t)h->slot_count * h->slot_stride != size)
+        why = "inconsistent ring geometry";
+    if (why) {
+        ln_shm_unmap(&ring->map);
+        return ln_set_error(NULL, LN_EPROTOCOL, "shared memory '%s' is not a usable topic ring: %s",
+                            name, why);
+    }
+    if (h->layout_hash != layout_hash || h->message_size != message_size) {
+        rc = ln_set_error(NULL, LN_ELAYOUT,
+                          "topic '%.*s' in '%s' has md '%.*s' (hash 0x%016llx, %llu bytes), the "
+                          "port expects hash 0x%016llx, %llu bytes",
+                          LN_RING_NAME_MAX, h->topic, name, LN_RING_NAME_MAX, h->md_name,
+                          (unsigned long long)h->layout_hash,
+                          (unsigned long long)h->message_size, (unsigned long long)layout_hash,
+                          (unsigned long long)message_size);
+        ln_shm_unmap(&ring->map);
+        return rc;
+    }
+    ring->hdr = h;
+    ring->slots = (uint8_t*)h + h->header_size;
+    snprintf(ring->name, sizeof(ring->name), "%s", name);
+    return LN_OK;
+}
+
+void ln_ring_detach(ln_ring* ring)
+{
+    ln_shm_unmap(&ring->map);
+    ring->hdr = NULL;
+    ring->slots = NULL;
+}
+
+const struct timespec* ln_deadline_at(ln_deadline* d)
+{
+    if (!d->fixed) {
+        clock_gettime(CLOCK_MONOTONIC, &d->at);
+        double whole = (double)(long long)d->timeout;
+        d->at.tv_sec += (time_t)whole;
+        d->at.tv_nsec += (long)((d->timeout - whole) * 1e9);
+        if (d->at.tv_nsec >= 1000000000L) {
+            d->at.tv_sec += 1;
+            d->at.tv_nsec -= 1000000000L;
+        }
+        d->fixed = 1;
+    }
+    return &d->at;
+}
+
+int ln_deadline_left(ln_deadline* d, struct timespec* rel)
+{
+    if (d->forever)
+        return 0;
+    const struct timespec* at = ln_deadline_at(d);
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    rel->tv_sec = at->tv_sec - now.tv_sec;
+    rel->tv_nsec = at->tv_nsec - now.tv_nsec;
+    if (rel->tv_nsec < 0) {
+        rel->tv_sec -= 1;
+        rel->tv_nsec += 1000000000L;
+    }
+    if (rel->tv_sec < 0 || (rel->tv_sec == 0 && rel->tv_nsec == 0))
+        return ETIMEDOUT;
+    return 0;
+}
+
+/* The previous owner died holding the lock: finish what it provably completed. */
+static void recover(ln_ring* ring)
+{
+    ln_ring_header* h = ring->hdr;
+    uint64_t n = atomic_load_explicit(&h->write_seq, memory_order_relaxed) + 1;
+    uint64_t word = atomic_load_explicit(&ln_ring_slot_at(ring, n)->seq, memory_order_acquire);
+    if (word == LN_SLOT_WORD(n, LN_SLOT_COMMITTED)) {
+        atomic_store_explicit(&h->write_seq, n, memory_order_seq_cst);
+        ln_ring_wake_readers(ring);
+    }
+    /* A slot left WRITING is rewritten under the same number by the next writer. */
+}
+
+int ln_ring_lock(ln_ring* ring, ln_deadline* d)
+{
+    pthread_mutex_t* m = &ring->hdr->write_lock;
+    int rc = pthread_mutex_trylock(m);
+    if (rc == EBUSY)
+        rc = d->forever ? pthread_mutex_lock(m)
+                        : pthread_mutex_clocklock(m, CLOCK_MONOTONIC, ln_deadline_at(d));
+    if (rc == 0)
+        return LN_OK;
+    if (rc == EOWNERDEAD) {
+        if (ring->slots) /* the manager maps only the header; it never writes samples */
+            recover(ring);
+        pthread_mutex_consistent(m);
+        return LN_OK;
+    }
+    if (rc == ETIMEDOUT)
+        return ln_set_error(NULL, LN_ETIMEOUT,
+                            "topic '%.*s': another publisher holds the write side (a loan?)",
+                            LN_RING_NAME_MAX, ring->hdr->topic);
+    return ln_set_errno_error(NULL, rc, "topic '%.*s': write lock", LN_RING_NAME_MAX,
+                              ring->hdr->topic);
+}
+
+void ln_ring_unlock(ln_ring* ring)
+{
+    pthread_mutex_unlock(&ring->hdr->write_lock);
+}
+
+/* 1 if some queued reader would lose its oldest unread sample when sample n is written. */
+static int reader_full(const ln_ring_header* h, uint64_t n)
+{
+    for (uint32_t i = 0; i < LN_RING_MAX_READERS; i++) {
+        const ln_ring_reader* r = &h->readers[i];
+        if (!atomic_load_explicit(&r->active, memory_order_acquire))
+            continue;
+        uint32_t buffers = atomic_load_explicit(&r->buffers, memory_order_relaxed);
+        uint64_t next = atomic_load_explicit(&r->next_seq, memory_order_seq_cst);
+        if (buffers > 1 && n >= next && n - next >= buffers)
+            return 1;
+    }
+    return 0;
+}
+
+int ln_ring_wait_for_space(ln_ring* ring, ln_deadline* d)
+{
+    ln_ring_header* h = ring->hdr;
+    uint64_t n = atomic_load_explicit(&h->write_seq, memory_order_relaxed) + 1;
+    while (reader_full(h, n)) {
+        if (atomic_load_explicit(&h->retired, memory_order_acquire))
+            return LN_ECLOSED;
+        atomic_fetch_add_explicit(&h->space_waiters, 1, memory_order_seq_cst);
+        uint32_t v = atomic_load_explicit(&h->space_futex, memory_order_seq_cst);
+        struct timespec rel;
+        int err = 0;
+        if (reader_full(h, n) && (err = ln_deadline_left(d, &rel)) == 0)
+            err = ln_futex_wait(&h->space_futex, v, d->forever ? NULL : &rel);
+        atomic_fetch_sub_explicit(&h->space_waiters, 1, memory_order_seq_cst);
+        if (err == ETIMEDOUT)
+            return ln_set_error(NULL, LN_ETIMEOUT,
+                                "topic '%.*s': a queued subscriber has no free buffer",
+                                LN_RING_NAME_MAX, h->topic);
+    }
+    return LN_OK;
+}
+
+ln_ring_slot* ln_ring_begin(ln_ring* ring)
+{
+    uint64_t n = atomic_load_explicit(&ring->hdr->write_seq, memory_order_relaxed) + 1;
+    ln_ring_slot* slot = ln_ring_slot_at(ring, n);
+    atomic_store_explicit(&slot->seq, LN_SLOT_WORD(n, LN_SLOT_WRITING), memory_order_relaxed);
+    atomic_thread_fence(memory_order_release);
+    return slot;
+}
+
+void ln_ring_commit(ln_ring* ring, ln_ring_slot* slot)
+{
+    ln_ring_header* h = ring->hdr;
+    uint64_t n = atomic_load_explicit(&h->write_seq, memory_order_relaxed) + 1;
+    struct timespec now;
+    clock_gettime(CLOCK_REALTIME, &now);
+    slot->timestamp_ns = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
+    atomic_store_explicit(&slot->seq, LN_SLOT_WORD(n, LN_SLOT_COMMITTED), memory_order_release);
+    atomic_store_explicit(&h->write_seq, n, memory_order_seq_cst);
+    ln_ring_wake_readers(ring);
+}
+
+void ln_ring_wake_readers(ln_ring* ring)
+{
+    ln_ring_header* h = ring->hdr;
+    if (atomic_load_explicit(&h->data_waiters, memory_order_seq_cst) == 0)
+        return; /* the common case: no system call */
+    atomic_fetch_add_explicit(&h->data_futex, 1, memory_order_seq_cst);
+    ln_futex_wake_all(&h->data_futex);
+}
+
+int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t* word)
+{
+    ln_ring_header* h = ring->hdr;
+    for (;;) {
+        uint64_t w = atomic_load_explicit(&h->write_seq, memory_order_acquire);
+        if (w < c->next)
+            return LN_EAGAIN;
+        uint64_t n = w;
+        if (c->buffers > 1) {
+            if (w - c->next >= c->buffers) { /* more unread than buffers: drop the oldest */
+                c->pending += w - c->buffers + 1 - c->next;
+                c->next = w - c->buffers + 1;
+            }
+            n = c->next;
+        }
+        ln_ring_slot* s = ln_ring_slot_at(ring, n);
+        uint64_t got = atomic_load_explicit(&s->seq, memory_order_acquire);
+        if (got == LN_SLOT_WORD(n, LN_SLOT_COMMITTED)) {
+            *slot = s;
+            *word = got;
+            return LN_OK;
+        }
+        /* The slot moved on to a newer sample: n is gone. */
+        if (c->buffers > 1) {
+            c->pending += 1;
+            c->next = n + 1;
+        }
+    }
+}
+
+int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_t word)
+{
+    atomic_thread_fence(memory_order_acquire);
+    uint64_t n = LN_SLOT_SEQ(word);
+    if (atomic_load_explicit(&slot->seq, memory_order_relaxed) != word) {
+        if (c->buffers > 1) {
+            c->pending += 1;
+            c->next = n + 1;
+        }
+        return LN_EOVERRUN;
+    }
+    c->next = n + 1;
+    if (c->buffers > 1 && c->reader >= 0) {
+        ln_ring_header* h = ring->hdr;
+        atomic_store_explicit(&h->readers[c->reader].next_seq, c->next, memory_order_seq_cst);
+        if (atomic_load_explicit(&h->space_waiters, memory_order_seq_cst) > 0) {
+            atomic_fetch_add_explicit(&h->space_futex, 1, memory_order_seq_cst);
+            ln_futex_wake_all(&h->space_futex);
+        }
+    }
+    return LN_OK;
+}
+
+int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d)
+{
+    ln_ring_header* h = ring->hdr;
+    struct timespec rel;
+    int err = 0;
+    atomic_fetch_add_explicit(&h->data_waiters, 1, memory_order_seq_cst);
+    uint32_t v = atomic_load_explicit(&h->data_futex, memory_order_seq_cst);
+    if (atomic_load_explicit(&h->write_seq, memory_order_seq_cst) < seq &&
+        !atomic_load_explicit(&h->retired, memory_order_acquire) &&
+        (err = ln_deadline_left(d, &rel)) == 0)
+        err = ln_futex_wait(&h->data_futex, v, d->forever ? NULL : &rel);
+    atomic_fetch_sub_explicit(&h->data_waiters, 1, memory_order_seq_cst);
+    return err == ETIMEDOUT ? LN_ETIMEOUT : LN_OK;
+}

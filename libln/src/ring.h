@@ -1,0 +1,169 @@
+/* ring.h — layout of a topic's shared-memory ring and the reader/writer algorithms on it.
+ *
+ * One segment per topic and generation: a header, then slot_count slots of slot_stride bytes.
+ * Every slot starts with a sequence word `seq = (n << 2) | state` (n: publish sequence number,
+ * state: COMMITTED or WRITING) followed by the publish timestamp and the payload.
+ *
+ * Memory-ordering protocol (a seqlock per slot, C11 atomics):
+ *  writer (holding write_lock):  n = write_seq + 1; slot = n % slot_count
+ *      store(slot.seq, n|WRITING, relaxed); fence(release)      -- readers see WRITING first
+ *      copy payload, timestamp
+ *      store(slot.seq, n|COMMITTED, release)                     -- payload before seq
+ *      store(write_seq, n, seq_cst); if load(data_waiters, seq_cst) > 0: bump data_futex, wake
+ *  reader:  w = load(write_seq, acquire); pick n <= w; s1 = load(slot.seq, acquire)
+ *      s1 must be n|COMMITTED; copy payload; fence(acquire); s2 = load(slot.seq, relaxed)
+ *      s1 != s2 means a writer reused the slot meanwhile: the copy is discarded (never torn).
+ *  sleeping reader: fetch_add(data_waiters, seq_cst); v = load(data_futex); re-check
+ *      write_seq (seq_cst); futex_wait(data_futex, v).  The seq_cst pair write_seq/data_waiters
+ *      guarantees that either the writer sees the waiter or the waiter sees the new sample.
+ * Publishers are serialized by a robust process-shared mutex; a publisher killed while
+ * holding it is detected (EOWNERDEAD) by the next one: a slot it left WRITING is simply
+ * written again under the same sequence number (readers never saw that number, since
+ * write_seq was not advanced), one it had fully COMMITTED is published.  Readers never take
+ * a lock, so no publisher can block or corrupt a reader.
+ */
+#ifndef LN_RING_H
+#define LN_RING_H
+
+#include <pthread.h>
+#include <stdalign.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <time.h>
+
+#include "ln/ln.h"
+#include "shm.h"
+
+#define LN_RING_MAGIC 0x31474e49524e4c00ull /* "\0LNRING1" little-endian */
+#define LN_RING_VERSION 1u
+#define LN_RING_MAX_READERS 64u
+#define LN_RING_MAX_SLOTS 1025u /* 1,024 buffers + the one being written */
+#define LN_RING_NAME_MAX 256
+
+enum { LN_SLOT_COMMITTED = 0, LN_SLOT_WRITING = 1 };
+#define LN_SLOT_SEQ(word) ((word) >> 2)
+#define LN_SLOT_STATE(word) ((unsigned)((word) & 3u))
+#define LN_SLOT_WORD(seq, state) (((seq) << 2) | (uint64_t)(state))
+
+typedef struct ln_ring_reader {
+    _Atomic uint32_t active; /* 1 while a subscriber holds this slot */
+    _Atomic int32_t pid;
+    _Atomic uint32_t buffers;
+    uint32_t reserved0;
+    _Atomic uint64_t next_seq; /* next sequence number it will read (publishers that wait) */
+    uint8_t reserved[40];
+} ln_ring_reader;
+
+typedef struct ln_ring_header {
+    /* immutable after creation */
+    uint64_t magic;
+    uint32_t version;
+    uint32_t header_size;
+    uint64_t layout_hash;
+    uint64_t message_size;
+    uint64_t segment_size;
+    uint32_t slot_count;
+    uint32_t slot_stride;
+    char topic[LN_RING_NAME_MAX];
+    char md_name[LN_RING_NAME_MAX];
+    /* written by the manager */
+    alignas(64) _Atomic uint32_t publishers;
+    _Atomic uint32_t subscribers;
+    _Atomic uint32_t retired; /* 1: publishers and readers move to `successor` */
+    char successor[LN_RING_NAME_MAX];
+    /* publishers */
+    alignas(64) pthread_mutex_t write_lock;
+    alignas(64) _Atomic uint64_t write_seq; /* last committed sequence number, 0: none yet */
+    alignas(64) _Atomic uint32_t data_futex; /* bumped on commit when readers sleep */
+    _Atomic uint32_t data_waiters;
+    alignas(64) _Atomic uint32_t space_futex; /* bumped when a queued reader frees a buffer */
+    _Atomic uint32_t space_waiters;
+    alignas(64) ln_ring_reader readers[LN_RING_MAX_READERS];
+} ln_ring_header;
+
+typedef struct ln_ring_slot {
+    _Atomic uint64_t seq;
+    int64_t timestamp_ns;
+    uint8_t reserved[48];
+    /* payload follows, 64-byte aligned */
+} ln_ring_slot;
+
+/* Bytes of the header region (page aligned), of one slot, and of a whole segment. */
+uint64_t ln_ring_header_bytes(void);
+uint32_t ln_ring_stride(uint64_t message_size);
+
+/* A mapped ring as a port sees it. */
+typedef struct ln_ring {
+    ln_map map;
+    ln_ring_header* hdr;
+    uint8_t* slots;
+    char name[LN_RING_NAME_MAX];
+} ln_ring;
+
+/* Map segment `name` and check that it is a ring of this version for the expected layout. */
+int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64_t message_size);
+void ln_ring_detach(ln_ring* ring);
+
+static inline ln_ring_slot* ln_ring_slot_at(const ln_ring* ring, uint64_t seq)
+{
+    return (ln_ring_slot*)(ring->slots + (seq % ring->hdr->slot_count) * ring->hdr->slot_stride);
+}
+
+static inline void* ln_ring_payload(ln_ring_slot* slot)
+{
+    return (uint8_t*)slot + sizeof(ln_ring_slot);
+}
+
+/* A timeout in seconds (< 0: none) turned into a CLOCK_MONOTONIC deadline lazily, on the first
+ * wait, so calls that never wait never read the clock. */
+typedef struct ln_deadline {
+    int forever;
+    int fixed; /* `at` computed */
+    double timeout;
+    struct timespec at;
+} ln_deadline;
+
+static inline ln_deadline ln_deadline_in(double timeout)
+{
+    ln_deadline d = {.forever = timeout < 0, .fixed = 0, .timeout = timeout};
+    return d;
+}
+/* The absolute deadline (fixing it now if needed). */
+const struct timespec* ln_deadline_at(ln_deadline* d);
+/* Time left until the deadline into *rel; 0 if some is left, ETIMEDOUT if it passed. */
+int ln_deadline_left(ln_deadline* d, struct timespec* rel);
+
+/* Writer side (callers: port.c).  lock takes write_lock (recovering from a dead owner). */
+int ln_ring_lock(ln_ring* ring, ln_deadline* d);
+void ln_ring_unlock(ln_ring* ring);
+/* Under the lock: wait until every queued reader has room for one more sample.  LN_ECLOSED if
+ * the ring was retired meanwhile (unlock and move to the successor). */
+int ln_ring_wait_for_space(ln_ring* ring, ln_deadline* d);
+/* Under the lock: start sample write_seq+1 and return its slot (marked WRITING). */
+ln_ring_slot* ln_ring_begin(ln_ring* ring);
+/* Under the lock: publish the slot begun last, then wake sleeping readers. */
+void ln_ring_commit(ln_ring* ring, ln_ring_slot* slot);
+void ln_ring_wake_readers(ln_ring* ring);
+
+/* Reader side.  A cursor is one subscriber's position: `next` is the next sequence number it
+ * wants, `buffers` 1 for latest mode, N for queued mode (reader slot `reader` publishes
+ * `next` for publishers that wait). */
+typedef struct ln_ring_cursor {
+    uint64_t next;
+    uint32_t buffers;
+    int reader;          /* reader slot index, -1 if none */
+    uint64_t pending;    /* overruns not yet reported by a read */
+    uint64_t total;      /* overruns since subscribing */
+} ln_ring_cursor;
+
+/* Choose the sample to read now: LN_OK with *slot and *word (its seq word) set, LN_EAGAIN if
+ * there is none.  Samples a queued cursor can no longer get are counted in `pending`. */
+int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t* word);
+/* After the payload was copied or used: LN_OK if the slot still holds that sample (the cursor
+ * moves on), LN_EOVERRUN if a publisher reused the slot meanwhile (pick again). */
+int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_t word);
+/* Sleep until a sample >= seq is committed, the ring is retired, or the deadline passes
+ * (LN_ETIMEOUT).  May return LN_OK spuriously; callers pick again. */
+int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d);
+
+#endif /* LN_RING_H */
