@@ -1,24 +1,35 @@
 """links_and_nodes: Python bindings of libln, the links_and_nodes client library.
 
-Importing the package does not load libln.  The library is loaded (and its version
-checked) the first time something that needs it is used, e.g. one of the exception
-classes generated from libln's error table: ``ln.LnTimeoutError`` is the class for
-``LN_ETIMEOUT``; the rule is "Ln" + table name without its leading E, capitalised,
-+ "Error".  All of them derive from ``ln.LnError``.
+    import links_and_nodes as ln
+    clnt = ln.client("planner")
+    pub = clnt.publish("robot.state", "robot/joint_state")
+
+Importing the package does not load libln: generated message modules work without it.
+The library is loaded (and its version checked) the first time something that needs it
+is used: `ln.client`, or one of the exception classes generated from libln's error table
+(``ln.LnTimeoutError`` is the class for ``LN_ETIMEOUT``: "Ln" + table name without its
+leading E, capitalised, + "Error"; all derive from ``ln.LnError``).
 """
 
 from typing import Any
 
 from .errors import LibraryNotFoundError, LnError
+from .md_loader import add_message_definition_dir, message_class
 
 __version__ = "0.1.0"
 
-__all__ = ["LibraryNotFoundError", "LnError", "__version__"]
+__all__ = ["LibraryNotFoundError", "LnError", "__version__", "add_message_definition_dir",
+           "client", "message_class", "publisher", "subscriber"]
+
+_CLIENT_NAMES = ("client", "publisher", "subscriber")
 
 
 def __getattr__(name: str) -> Any:
-    # Generated exception classes come from the C table, so they exist only once libln
-    # is loaded; looking one up is what loads it.
+    # Names that need libln are resolved on first use, which is what loads it.
+    if name in _CLIENT_NAMES:
+        from . import _client as _client_module
+
+        return getattr(_client_module, name)
     if name.startswith("Ln") and name.endswith("Error"):
         from . import _libln
 

@@ -68,6 +68,35 @@ ln_version_check = _declare("ln_version_check", ctypes.c_int, [ctypes.c_int, cty
                             _check)
 
 
+# ---- topic segment administration (ln_manager) ------------------------------------------
+# A handle from ln_ring_admin_create maps only the segment's header and is freed by
+# ln_ring_admin_close; the segment itself lives until ln_ring_admin_unlink.
+class RingAdmin(ctypes.Structure):
+    """Opaque struct ln_ring_admin; only pointers to it cross the boundary."""
+
+
+RingAdminHandle = ctypes.POINTER(RingAdmin)
+
+ln_ring_admin_create = _declare("ln_ring_admin_create", ctypes.c_int, [
+    ctypes.POINTER(RingAdminHandle), ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p,
+    ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint32], _check)
+ln_ring_admin_close = _declare("ln_ring_admin_close", None, [RingAdminHandle])
+ln_ring_admin_unlink = _declare("ln_ring_admin_unlink", ctypes.c_int, [ctypes.c_char_p],
+                                _check)
+ln_ring_admin_set_counts = _declare("ln_ring_admin_set_counts", ctypes.c_int, [
+    RingAdminHandle, ctypes.c_uint32, ctypes.c_uint32], _check)
+ln_ring_admin_reserve_reader = _declare("ln_ring_admin_reserve_reader", ctypes.c_int, [
+    RingAdminHandle, ctypes.c_uint32, ctypes.c_int32, ctypes.c_uint32], _check)
+ln_ring_admin_release_reader = _declare("ln_ring_admin_release_reader", ctypes.c_int, [
+    RingAdminHandle, ctypes.c_uint32], _check)
+ln_ring_admin_retire = _declare("ln_ring_admin_retire", ctypes.c_int, [
+    RingAdminHandle, RingAdminHandle, ctypes.c_char_p, ctypes.c_double], _check)
+ln_ring_admin_purge_instance = _declare("ln_ring_admin_purge_instance", ctypes.c_int,
+                                        [ctypes.c_char_p], _check)
+ln_ring_segment_size = _declare("ln_ring_segment_size", ctypes.c_uint64,
+                                [ctypes.c_uint64, ctypes.c_uint32])
+
+
 def _read_table() -> list[tuple[int, str, str]]:
     """(code, name, text) of every error entry; codes run from -1 to -ln_error_count()."""
     table = []

@@ -1,0 +1,227 @@
+"""The Python client API: `ln.client`, publishers and subscribers (LN names and habits).
+
+    clnt = ln.client("planner")
+    pub = clnt.publish("robot.state", "robot/joint_state")
+    pub.packet.position[:] = q
+    pub.write()
+    sub = clnt.subscribe("robot.state", "robot/joint_state", buffers=16)
+    pkt = sub.read(timeout=1.0)   # None if nothing came within the timeout
+
+Everything runs through libln; these classes only hold handles and message objects.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+from . import _clientlib as C
+from ._libln import error_from_code
+from .md_loader import message_class
+from .md_types import LnStruct
+
+
+def _timeout(timeout: float | None) -> float:
+    return -1.0 if timeout is None else float(timeout)
+
+
+class client:  # noqa: N801 - the LN name
+    """A connection to the manager.  `ln_manager_or_args` is "HOST:PORT", an argv list
+    (searched for `-ln_manager HOST:PORT`), or None for $LN_MANAGER."""
+
+    def __init__(self, name: str, ln_manager_or_args: str | Sequence[str] | None = None,
+                 timeout: float = 10.0) -> None:
+        opts = C.ClientOptions()
+        C.ln_client_options_init(ctypes.byref(opts))
+        opts.timeout = timeout
+        self._argv_keep: Any = None
+        if isinstance(ln_manager_or_args, str):
+            opts.manager = ln_manager_or_args.encode()
+        elif ln_manager_or_args is not None:
+            args = [a.encode() for a in ln_manager_or_args]
+            self._argv_keep = (ctypes.c_char_p * (len(args) + 1))(*args, None)
+            opts.argc = len(args)
+            opts.argv = self._argv_keep
+        handle = ctypes.c_void_p()
+        C.ln_client_create(ctypes.byref(handle), name.encode(), ctypes.byref(opts))
+        self._handle: int | None = handle.value
+        self._ports: list[_Port] = []
+        self.name: str = C.ln_client_name(self._handle).decode()
+
+    @property
+    def handle(self) -> int:
+        if self._handle is None:
+            raise ValueError("client is closed")
+        return self._handle
+
+    def publish(self, topic_name: str, message_definition_name: str, buffers: int = 1,
+                wait_for_subscribers: bool = False) -> publisher:
+        port = publisher(self, topic_name, message_definition_name, buffers,
+                         wait_for_subscribers)
+        self._ports.append(port)
+        return port
+
+    def subscribe(self, topic_name: str, message_definition_name: str,
+                  buffers: int = 1) -> subscriber:
+        """buffers=1: *latest* mode; buffers=N > 1: *queued* mode with N buffers."""
+        port = subscriber(self, topic_name, message_definition_name, buffers)
+        self._ports.append(port)
+        return port
+
+    def unpublish(self, port: publisher) -> None:
+        port.close()
+
+    def unsubscribe(self, port: subscriber) -> None:
+        port.close()
+
+    def close(self) -> None:
+        """Close every port and the connection (idempotent)."""
+        for port in reversed(self._ports):
+            port._forget()  # libln closes them with the client
+        self._ports.clear()
+        if self._handle is not None:
+            handle, self._handle = self._handle, None
+            C.ln_client_destroy(handle)
+
+    def __enter__(self) -> client:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001 - interpreter shutdown
+            pass
+
+
+class _Port:
+    _close_fn: Any = None
+
+    def __init__(self, clnt: client, topic_name: str, md_name: str) -> None:
+        self.client = clnt
+        self.topic_name = topic_name
+        self.message_definition_name = md_name
+        self.message_class: type[LnStruct] = message_class(md_name)
+        self.packet: LnStruct = self.message_class()
+        self._handle: int | None = None
+
+    @property
+    def handle(self) -> int:
+        if self._handle is None:
+            raise ValueError(f"port of topic '{self.topic_name}' is closed")
+        return self._handle
+
+    def _open(self, fn: Any, buffers: int, flags: int) -> None:
+        opts = C.PortOptions(buffers, flags)
+        handle = ctypes.c_void_p()
+        cls = self.message_class
+        fn(self.client.handle, ctypes.byref(handle), self.topic_name.encode(),
+           self.message_definition_name.encode(), cls.LAYOUT_HASH, ctypes.sizeof(cls),
+           ctypes.byref(opts))
+        self._handle = handle.value
+
+    def _forget(self) -> None:
+        self._handle = None
+
+    def close(self) -> None:
+        if self._handle is not None:
+            handle, self._handle = self._handle, None
+            if self in self.client._ports:
+                self.client._ports.remove(self)
+            type(self)._close_fn(handle)
+
+    def __enter__(self) -> Any:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class publisher(_Port):  # noqa: N801
+    _close_fn = staticmethod(C.ln_unpublish)
+
+    def __init__(self, clnt: client, topic_name: str, md_name: str, buffers: int = 1,
+                 wait_for_subscribers: bool = False) -> None:
+        super().__init__(clnt, topic_name, md_name)
+        flags = C.LN_PUBLISH_WAIT_FOR_SUBSCRIBERS if wait_for_subscribers else 0
+        self._open(C.ln_publish, buffers, flags)
+
+    def write(self, packet: LnStruct | None = None, timeout: float | None = None) -> None:
+        """Publish `packet` (default: self.packet) by copying it into the topic."""
+        pkt = self.packet if packet is None else packet
+        C.ln_write(self.handle, ctypes.addressof(pkt), ctypes.sizeof(pkt), _timeout(timeout))
+
+    @contextmanager
+    def loan(self, timeout: float | None = None) -> Iterator[LnStruct]:
+        """Zero-copy write: fill the yielded message in place; it is published when the
+        block ends normally and dropped if it raises."""
+        ptr = ctypes.c_void_p()
+        C.ln_write_loan(self.handle, ctypes.byref(ptr), _timeout(timeout))
+        try:
+            yield self.message_class.from_address(ptr.value)
+        except BaseException:
+            C.ln_write_abort(self.handle)
+            raise
+        C.ln_write_commit(self.handle)
+
+    @property
+    def subscriber_count(self) -> int:
+        return C.ln_outport_subscriber_count(self.handle)
+
+
+class subscriber(_Port):  # noqa: N801
+    _close_fn = staticmethod(C.ln_unsubscribe)
+
+    def __init__(self, clnt: client, topic_name: str, md_name: str, buffers: int = 1) -> None:
+        super().__init__(clnt, topic_name, md_name)
+        self.buffers = buffers
+        self.info = C.SampleInfo()
+        self._open(C.ln_subscribe, buffers, 0)
+
+    def _result(self, rc: int) -> bool:
+        if rc in (C.LN_ETIMEOUT, C.LN_EAGAIN):
+            return False
+        if rc < 0:
+            raise error_from_code(rc, C.last_error())
+        return True
+
+    def read(self, timeout: float | None = None) -> LnStruct | None:
+        """The next sample (copied into self.packet), or None if none came in time.
+
+        timeout None blocks, 0 returns at once.  self.info has seq, timestamp_ns and the
+        overruns since the previous read."""
+        pkt = self.packet
+        rc = C.ln_read(self.handle, ctypes.addressof(pkt), ctypes.sizeof(pkt), _timeout(timeout),
+                       ctypes.byref(self.info))
+        return pkt if self._result(rc) else None
+
+    @contextmanager
+    def borrow(self, timeout: float | None = None) -> Iterator[LnStruct | None]:
+        """Zero-copy read: the yielded message lives in the topic's ring (None if nothing came
+        in time).  Raises LnOverrunError at the end of the block if a publisher overwrote it
+        meanwhile, so what was read from it must be discarded."""
+        ptr = ctypes.c_void_p()
+        rc = C.ln_read_borrow(self.handle, ctypes.byref(ptr), _timeout(timeout),
+                              ctypes.byref(self.info))
+        if not self._result(rc):
+            yield None
+            return
+        try:
+            yield self.message_class.from_address(ptr.value)
+        finally:
+            rc = C.ln_read_release(self.handle)
+        if rc < 0:
+            raise error_from_code(rc, C.last_error())
+
+    @property
+    def publisher_count(self) -> int:
+        return C.ln_inport_publisher_count(self.handle)
+
+    @property
+    def overruns(self) -> int:
+        """Samples lost since subscribing (queued mode)."""
+        return C.ln_inport_overruns(self.handle)

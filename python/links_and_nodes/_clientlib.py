@@ -1,0 +1,76 @@
+"""ctypes declarations of libln's client and topic functions (style: each C function once).
+
+Functions that return an LN_E* code get an errcheck that raises the exception class of
+that code with libln's thread-local last-error text as detail.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from typing import Any
+
+from ._libln import _declare, error_from_code
+
+c_double, c_int, c_size_t, c_uint32, c_uint64 = (
+    ctypes.c_double, ctypes.c_int, ctypes.c_size_t, ctypes.c_uint32, ctypes.c_uint64)
+c_char_p, c_void_p = ctypes.c_char_p, ctypes.c_void_p
+
+
+class ClientOptions(ctypes.Structure):
+    _fields_ = [("manager", c_char_p), ("argc", c_int), ("argv", ctypes.POINTER(c_char_p)),
+                ("timeout", c_double)]
+
+
+class PortOptions(ctypes.Structure):
+    _fields_ = [("buffers", c_uint32), ("flags", c_uint32)]
+
+
+class SampleInfo(ctypes.Structure):
+    _fields_ = [("seq", c_uint64), ("timestamp_ns", ctypes.c_int64), ("overruns", c_uint64)]
+
+
+ln_last_error = _declare("ln_last_error", c_char_p, [])
+
+
+def last_error() -> str:
+    text = ln_last_error()
+    return text.decode("utf-8", "replace") if text else ""
+
+
+def _check(result: int, func: Any, args: tuple[Any, ...]) -> int:
+    if result < 0:
+        raise error_from_code(result, last_error())
+    return result
+
+
+LN_EAGAIN = -4
+LN_ETIMEOUT = -3
+LN_EOVERRUN = -15
+LN_PUBLISH_WAIT_FOR_SUBSCRIBERS = 0x1
+
+ln_client_options_init = _declare("ln_client_options_init", None, [ctypes.POINTER(ClientOptions)])
+ln_client_create = _declare("ln_client_create", c_int, [ctypes.POINTER(c_void_p), c_char_p,
+                                                         ctypes.POINTER(ClientOptions)], _check)
+ln_client_destroy = _declare("ln_client_destroy", c_int, [c_void_p], _check)
+ln_client_name = _declare("ln_client_name", c_char_p, [c_void_p])
+ln_port_options_init = _declare("ln_port_options_init", None, [ctypes.POINTER(PortOptions)])
+_port_args = [c_void_p, ctypes.POINTER(c_void_p), c_char_p, c_char_p, c_uint64, c_size_t,
+              ctypes.POINTER(PortOptions)]
+ln_publish = _declare("ln_publish", c_int, _port_args, _check)
+ln_subscribe = _declare("ln_subscribe", c_int, _port_args, _check)
+ln_unpublish = _declare("ln_unpublish", c_int, [c_void_p], _check)
+ln_unsubscribe = _declare("ln_unsubscribe", c_int, [c_void_p], _check)
+ln_write = _declare("ln_write", c_int, [c_void_p, c_void_p, c_size_t, c_double], _check)
+ln_write_loan = _declare("ln_write_loan", c_int, [c_void_p, ctypes.POINTER(c_void_p), c_double],
+                         _check)
+ln_write_commit = _declare("ln_write_commit", c_int, [c_void_p], _check)
+ln_write_abort = _declare("ln_write_abort", c_int, [c_void_p], _check)
+# Reads return timeouts as values (None in Python), so they are checked by the caller.
+ln_read = _declare("ln_read", c_int, [c_void_p, c_void_p, c_size_t, c_double,
+                                      ctypes.POINTER(SampleInfo)])
+ln_read_borrow = _declare("ln_read_borrow", c_int, [c_void_p, ctypes.POINTER(c_void_p), c_double,
+                                                    ctypes.POINTER(SampleInfo)])
+ln_read_release = _declare("ln_read_release", c_int, [c_void_p])
+ln_outport_subscriber_count = _declare("ln_outport_subscriber_count", c_int, [c_void_p], _check)
+ln_inport_publisher_count = _declare("ln_inport_publisher_count", c_int, [c_void_p], _check)
+ln_inport_overruns = _declare("ln_inport_overruns", c_uint64, [c_void_p])

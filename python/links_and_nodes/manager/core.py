@@ -1,0 +1,178 @@
+"""The manager's answers: turns decoded requests of one connection into registry changes
+and segment operations, and those into reply messages.  Knows nothing of sockets or
+asyncio (server.py does the I/O); keeps registry and segments consistent, also when a
+segment operation fails halfway."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from .. import _libln
+from . import protocol as p
+from .registry import Client, Port, PortKind, PortRequest, Registry, RequestError, Topic
+from .segments import Segments
+
+log = logging.getLogger("ln_manager")
+
+_CODES = {cls.name: code for code, cls in _libln.ERRORS_BY_CODE.items()}
+_MAX_PID = (1 << 31) - 1  # pids travel as i32 into the reader slots
+
+
+def error_code(name: str) -> int:
+    """The LN_E* number of a table name ("ELIMIT" -> -11)."""
+    return _CODES[name]
+
+
+@dataclass(eq=False)
+class Session:
+    """One connection: its peer address and, after HELLO, its client."""
+
+    address: str
+    client: Client | None = None
+
+    @property
+    def label(self) -> str:
+        """How logs name the connection: `client NAME (ADDR)`."""
+        name = self.client.name if self.client else "?"
+        return f"client {name} ({self.address})"
+
+
+class HandshakeRefused(Exception):
+    """HELLO was answered with ERROR; the connection must be closed after sending it."""
+
+    def __init__(self, reply: p.Error) -> None:
+        super().__init__(reply.text)
+        self.reply = reply
+
+
+class Core:
+    def __init__(self, instance: str, registry: Registry, segments: Segments) -> None:
+        self.instance = instance
+        self.registry = registry
+        self.segments = segments
+
+    # ---- handshake ----------------------------------------------------------------------
+    def check_version(self, version: int) -> None:
+        if version != p.VERSION:
+            raise HandshakeRefused(p.Error(0, error_code("EVERSION"),
+                                           f"client speaks protocol {version}, manager "
+                                           f"speaks {p.VERSION}"))
+
+    def hello(self, session: Session, hello: p.Hello) -> p.Welcome:
+        """Register the client of a HELLO whose version was checked; HandshakeRefused if
+        its name or pid is unusable."""
+        self.check_version(hello.version)
+        try:
+            if hello.pid > _MAX_PID:
+                raise RequestError("EINVAL", f"pid {hello.pid} out of range")
+            client = self.registry.add_client(hello.client_name, hello.pid, session.address,
+                                              hello.library_version)
+        except RequestError as exc:
+            raise HandshakeRefused(p.Error(0, error_code(exc.code), exc.text)) from None
+        session.client = client
+        return p.Welcome(p.VERSION, client.id, client.name, self.instance)
+
+    # ---- requests -----------------------------------------------------------------------
+    def request(self, session: Session, msg: p.Message) -> p.Message:
+        """The reply to one request of a registered client; refusals become ERROR."""
+        assert session.client is not None
+        request_id = msg.request_id  # type: ignore[attr-defined]
+        try:
+            if isinstance(msg, p.Publish | p.Subscribe):
+                return self._open_port(session, msg)
+            if isinstance(msg, p.ClosePort):
+                port = self.registry.find_port(session.client, msg.port_id)
+                log.info("%s: closing port %d of topic %r", session.label, msg.port_id,
+                         port.topic.name)
+                self._close_port(port)
+                return p.Ok(request_id)
+            if isinstance(msg, p.TopicInfo):
+                topic = self.registry.topic(msg.topic)
+                return p.TopicInfoOk(request_id, topic.md_name, topic.layout_hash,
+                                     topic.message_size, topic.publishers, topic.subscribers)
+        except RequestError as exc:
+            # an unknown topic in TOPIC_INFO is an answer, not an event worth a line
+            level = logging.DEBUG if isinstance(msg, p.TopicInfo) else logging.INFO
+            log.log(level, "%s: %s refused: %s: %s", session.label, msg.TYPE.name, exc.code,
+                    exc.text)
+            return p.Error(request_id, error_code(exc.code), exc.text)
+        raise AssertionError(f"not a request: {msg.TYPE.name}")
+
+    def disconnect(self, session: Session) -> int:
+        """Release everything the session's client held; how many ports."""
+        client = session.client
+        if client is None:
+            return 0
+        ports = list(client.ports.values())
+        for port in ports:
+            self._close_port(port)
+        self.registry.remove_client(client)
+        return len(ports)
+
+    def shutdown(self) -> int:
+        """Release every client and unlink every segment; how many segments."""
+        for client in list(self.registry.clients.values()):
+            self.disconnect(Session(client.address, client))
+        return self.segments.remove_all()
+
+    # ---- ports --------------------------------------------------------------------------
+    def _open_port(self, session: Session, msg: p.Publish | p.Subscribe) -> p.PortOk:
+        assert session.client is not None
+        kind = PortKind.PUBLISHER if isinstance(msg, p.Publish) else PortKind.SUBSCRIBER
+        request = PortRequest(kind, msg.topic, msg.md_name, msg.layout_hash, msg.message_size,
+                              msg.buffers, msg.flags)
+        plan = self.registry.plan_port(session.client, request)
+        topic = plan.topic
+        if topic is None:
+            segment = self.segments.create(plan.topic_id, request.topic, request.md_name,
+                                           request.layout_hash, request.message_size,
+                                           plan.slots)
+            topic = self.registry.add_topic(plan)
+            log.info("topic %r created by %s: md %r (hash 0x%016x, %d bytes), %d slots in %s",
+                     topic.name, session.label, topic.md_name, topic.layout_hash,
+                     topic.message_size, topic.slots, segment)
+        elif plan.grow_to is not None:
+            segment = self.segments.grow(topic.id, topic.md_name, topic.layout_hash,
+                                         topic.message_size, plan.grow_to)
+            log.info("topic %r grown from %d to %d slots for %s: now %s", topic.name,
+                     topic.slots, plan.grow_to, session.label, segment)
+            self.registry.grow_topic(topic, plan.grow_to)
+        try:
+            if plan.reader_index is not None:
+                self.segments.reserve_reader(topic.id, plan.reader_index, session.client.pid,
+                                             request.buffers)
+        except RequestError:
+            self._drop_if_unused(topic)
+            raise
+        port = self.registry.add_port(plan, topic)
+        try:
+            self.segments.set_counts(topic.id, topic.publishers, topic.subscribers)
+        except RequestError:
+            self._close_port(port)
+            raise
+        segment = self.segments.current(topic.id)
+        log.info("%s: %s %r -> port %d, %s%s", session.label, kind.value, topic.name, port.id,
+                 segment, "" if port.reader_index is None else f" reader {port.reader_index}")
+        reader = p.NO_READER if port.reader_index is None else port.reader_index
+        return p.PortOk(msg.request_id, port.id, segment, reader)
+
+    def _close_port(self, port: Port) -> None:
+        topic = port.topic
+        if port.reader_index is not None:
+            self.segments.release_reader(topic.id, port.reader_index)
+        if self.registry.remove_port(port):
+            self._remove_segments(topic.id, topic.name)
+            return
+        try:
+            self.segments.set_counts(topic.id, topic.publishers, topic.subscribers)
+        except RequestError as exc:
+            log.warning("%s", exc.text)
+
+    def _drop_if_unused(self, topic: Topic) -> None:
+        if self.registry.drop_topic_if_unused(topic):
+            self._remove_segments(topic.id, topic.name)
+
+    def _remove_segments(self, topic_id: int, name: str) -> None:
+        removed = self.segments.remove(topic_id)
+        log.info("topic %r has no ports left: removed %s", name, ", ".join(removed))

@@ -1,0 +1,305 @@
+"""What the manager knows: connected clients, topics and their ports, and the checks a new
+port must pass (docs/protocol.md, "Requests").  Pure logic without I/O: shared memory is
+done by segments.py, which the caller drives with the plans this module makes.  Errors
+carry the LN_E* table name ("ELIMIT"), not the number, so this module needs no libln."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import Enum
+
+MAX_NAME = 255  # bytes of a topic, md or client name
+MAX_READERS = 64  # reader slots of a ring, hence subscribers of a topic
+_TOPIC_RE = re.compile(r"[A-Za-z0-9_.:/-]+\Z")
+_MD_COMPONENT_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+RingSize = Callable[[int, int], int]  # (message_size, slots) -> bytes of the segment
+
+
+class RequestError(Exception):
+    """A refused request: `code` is an LN_E* table name without the prefix ("ELIMIT")."""
+
+    def __init__(self, code: str, text: str) -> None:
+        super().__init__(text)
+        self.code = code
+        self.text = text
+
+
+class PortKind(Enum):
+    PUBLISHER = "publisher"
+    SUBSCRIBER = "subscriber"
+
+
+@dataclass(frozen=True)
+class Limits:
+    topics: int = 4096
+    subscribers_per_topic: int = MAX_READERS
+    message_size: int = 64 << 20
+    buffers: int = 1024
+    ring_memory: int = 1 << 30  # bytes of one topic's ring
+
+    def __post_init__(self) -> None:
+        if self.topics < 1:
+            raise ValueError(f"topic limit must be at least 1, not {self.topics}")
+        if not 1 <= self.subscribers_per_topic <= MAX_READERS:
+            raise ValueError(f"subscribers per topic must be 1..{MAX_READERS}")
+        if self.ring_memory < 1:
+            raise ValueError(f"ring memory limit must be positive, not {self.ring_memory}")
+
+
+@dataclass(eq=False)
+class Client:
+    id: int
+    name: str
+    pid: int
+    address: str
+    library_version: str
+    ports: dict[int, Port] = field(default_factory=dict)
+
+
+@dataclass(eq=False)
+class Topic:
+    id: int
+    name: str
+    md_name: str  # of the port that created the topic
+    layout_hash: int
+    message_size: int
+    slots: int
+    ports: dict[int, Port] = field(default_factory=dict)
+    readers: dict[int, int] = field(default_factory=dict)  # reader index -> port id
+
+    @property
+    def publishers(self) -> int:
+        return sum(p.kind is PortKind.PUBLISHER for p in self.ports.values())
+
+    @property
+    def subscribers(self) -> int:
+        return len(self.ports) - self.publishers
+
+
+@dataclass(eq=False)
+class Port:
+    id: int
+    client: Client
+    kind: PortKind
+    topic: Topic
+    md_name: str
+    buffers: int
+    flags: int
+    reader_index: int | None  # subscribers only
+
+
+@dataclass(frozen=True)
+class PortRequest:
+    kind: PortKind
+    topic: str
+    md_name: str
+    layout_hash: int
+    message_size: int
+    buffers: int
+    flags: int
+
+
+@dataclass(frozen=True)
+class PortPlan:
+    """What registering a port takes, decided before anything changes.
+
+    `topic` is None for a new topic, which gets id `topic_id` and a ring of `slots`;
+    `grow_to` is the slot count of the next ring generation when the existing one is too
+    small; `reader_index` is the reader slot a subscriber gets."""
+
+    client: Client
+    request: PortRequest
+    topic: Topic | None
+    topic_id: int
+    slots: int
+    grow_to: int | None
+    reader_index: int | None
+
+
+def topic_name_problem(name: str) -> str | None:
+    """Why `name` is not a valid topic name, or None."""
+    size = len(name.encode("utf-8"))
+    if not 1 <= size <= MAX_NAME:
+        return f"topic name of {size} bytes, must be 1..{MAX_NAME}"
+    if not _TOPIC_RE.match(name):
+        return f"topic name {name!r} may only contain A-Z a-z 0-9 _ . : / -"
+    if name.startswith("."):
+        return f"topic name {name!r} must not start with '.'"
+    return None
+
+
+def md_name_problem(name: str) -> str | None:
+    """Why `name` is not a valid md name ('/'-separated identifiers), or None."""
+    size = len(name.encode("utf-8"))
+    if not 1 <= size <= MAX_NAME:
+        return f"md name of {size} bytes, must be 1..{MAX_NAME}"
+    for part in name.split("/"):
+        if not _MD_COMPONENT_RE.match(part):
+            return (f"md name {name!r}: component {part!r} is not an identifier "
+                    "(letters, digits, '_', not starting with a digit)")
+    return None
+
+
+def client_name_problem(name: str) -> str | None:
+    """Why `name` cannot be a client name (it shows up in logs and tools), or None."""
+    size = len(name.encode("utf-8"))
+    if not 1 <= size <= MAX_NAME:
+        return f"client name of {size} bytes, must be 1..{MAX_NAME}"
+    if not name.isprintable():
+        return f"client name {name!r} contains control characters"
+    return None
+
+
+class Registry:
+    """Clients, topics and ports of one manager instance."""
+
+    def __init__(self, ring_size: RingSize, limits: Limits | None = None) -> None:
+        self.limits = limits or Limits()
+        self._ring_size = ring_size
+        self.clients: dict[int, Client] = {}
+        self.topics: dict[str, Topic] = {}
+        self._next_client_id = 1
+        self._next_port_id = 1
+        self._next_topic_id = 1
+
+    # ---- clients ------------------------------------------------------------------------
+    def add_client(self, name: str, pid: int, address: str, library_version: str) -> Client:
+        """Register a client under `name`, or `name-2`, `name-3`, ... if that is taken."""
+        problem = client_name_problem(name)
+        if problem:
+            raise RequestError("EINVAL", problem)
+        taken = {c.name for c in self.clients.values()}
+        unique, suffix = name, 2
+        while unique in taken:
+            unique, suffix = f"{name}-{suffix}", suffix + 1
+        client = Client(self._next_client_id, unique, pid, address, library_version)
+        self._next_client_id += 1
+        self.clients[client.id] = client
+        return client
+
+    def remove_client(self, client: Client) -> None:
+        """Forget a client; its ports must have been removed with remove_port first."""
+        assert not client.ports, "remove the client's ports first"
+        self.clients.pop(client.id, None)
+
+    # ---- ports --------------------------------------------------------------------------
+    def plan_port(self, client: Client, request: PortRequest) -> PortPlan:
+        """Check a PUBLISH/SUBSCRIBE in the documented order; raises RequestError."""
+        limits = self.limits
+        problem = topic_name_problem(request.topic) or md_name_problem(request.md_name)
+        if problem:
+            raise RequestError("EINVAL", problem)
+        if not 1 <= request.message_size <= limits.message_size:
+            raise RequestError("ELIMIT", f"topic {request.topic!r}: message size "
+                               f"{request.message_size} out of range 1..{limits.message_size}")
+        if not 1 <= request.buffers <= limits.buffers:
+            raise RequestError("ELIMIT", f"topic {request.topic!r}: {request.buffers} buffers "
+                               f"out of range 1..{limits.buffers}")
+        topic = self.topics.get(request.topic)
+        needed = max(request.buffers + 1, 2)
+        if topic is not None:
+            if (request.layout_hash, request.message_size) != (topic.layout_hash,
+                                                               topic.message_size):
+                raise RequestError("ELAYOUT", layout_mismatch(request, topic))
+        elif len(self.topics) >= limits.topics:
+            raise RequestError("ELIMIT", f"topic {request.topic!r}: the manager already has "
+                               f"{len(self.topics)} topics, its limit is {limits.topics}")
+        reader_index = None
+        if request.kind is PortKind.SUBSCRIBER:
+            readers = topic.readers if topic is not None else {}
+            if len(readers) >= limits.subscribers_per_topic:
+                raise RequestError("ELIMIT", f"topic {request.topic!r} already has "
+                                   f"{len(readers)} subscribers, the limit is "
+                                   f"{limits.subscribers_per_topic}")
+            reader_index = min(set(range(MAX_READERS)) - set(readers))
+        if topic is None:
+            self._check_ring(request, needed)
+            return PortPlan(client, request, None, self._next_topic_id, needed, None,
+                            reader_index)
+        grow_to = None
+        if needed > topic.slots:
+            # Doubling keeps a series of ever deeper subscribers from making a generation
+            # each; it never goes past the deepest ring a port can ask for.
+            grow_to = min(max(needed, 2 * topic.slots), limits.buffers + 1)
+            if self._ring_bytes(request.message_size, grow_to) > limits.ring_memory:
+                grow_to = needed
+            self._check_ring(request, grow_to)
+        return PortPlan(client, request, topic, topic.id, topic.slots, grow_to, reader_index)
+
+    def add_topic(self, plan: PortPlan) -> Topic:
+        """Register the new topic of `plan` (after its ring exists), still without ports."""
+        assert plan.topic is None and plan.topic_id == self._next_topic_id
+        request = plan.request
+        topic = Topic(plan.topic_id, request.topic, request.md_name, request.layout_hash,
+                      request.message_size, plan.slots)
+        self._next_topic_id += 1
+        self.topics[topic.name] = topic
+        return topic
+
+    def grow_topic(self, topic: Topic, slots: int) -> None:
+        """Record that the topic's ring was replaced by one with `slots` slots."""
+        assert slots > topic.slots
+        topic.slots = slots
+
+    def add_port(self, plan: PortPlan, topic: Topic) -> Port:
+        """Register the port of `plan` on `topic` (which now has a big enough ring)."""
+        request = plan.request
+        port = Port(self._next_port_id, plan.client, request.kind, topic, request.md_name,
+                    request.buffers, request.flags, plan.reader_index)
+        self._next_port_id += 1
+        topic.ports[port.id] = port
+        if port.reader_index is not None:
+            assert port.reader_index not in topic.readers
+            topic.readers[port.reader_index] = port.id
+        plan.client.ports[port.id] = port
+        return port
+
+    def find_port(self, client: Client, port_id: int) -> Port:
+        port = client.ports.get(port_id)
+        if port is None:
+            raise RequestError("ENOTFOUND", f"client {client.name!r} has no port {port_id}")
+        return port
+
+    def remove_port(self, port: Port) -> bool:
+        """Forget a port; True if its topic has no ports left and was removed too."""
+        topic = port.topic
+        port.client.ports.pop(port.id, None)
+        topic.ports.pop(port.id, None)
+        if port.reader_index is not None:
+            topic.readers.pop(port.reader_index, None)
+        return self.drop_topic_if_unused(topic)
+
+    def drop_topic_if_unused(self, topic: Topic) -> bool:
+        """Remove a topic without ports (also one whose first port failed); True if removed."""
+        if topic.ports or self.topics.get(topic.name) is not topic:
+            return False
+        del self.topics[topic.name]
+        return True
+
+    def topic(self, name: str) -> Topic:
+        topic = self.topics.get(name)
+        if topic is None:
+            raise RequestError("ENOTFOUND", f"no topic {name!r}")
+        return topic
+
+    # ---- internals ----------------------------------------------------------------------
+    def _ring_bytes(self, message_size: int, slots: int) -> int:
+        return self._ring_size(message_size, slots)
+
+    def _check_ring(self, request: PortRequest, slots: int) -> None:
+        size = self._ring_bytes(request.message_size, slots)
+        if size == 0 or size > self.limits.ring_memory:
+            raise RequestError("ELIMIT", f"topic {request.topic!r}: a ring of {slots} slots "
+                               f"of {request.message_size} bytes takes {size} bytes, the "
+                               f"limit per topic is {self.limits.ring_memory}")
+
+
+def layout_mismatch(request: PortRequest, topic: Topic) -> str:
+    """The LN_ELAYOUT text: both md names, hashes and sizes."""
+    return (f"topic '{request.topic}': layout of md '{request.md_name}' "
+            f"(hash 0x{request.layout_hash:016x}, {request.message_size} bytes) differs from "
+            f"the topic's md '{topic.md_name}' (hash 0x{topic.layout_hash:016x}, "
+            f"{topic.message_size} bytes)")

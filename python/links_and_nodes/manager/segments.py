@@ -1,0 +1,167 @@
+"""Shared-memory segments of topics, through libln's ln_ring_admin_* functions: naming,
+creating, growing into a next generation, reader slots, counts and unlinking.  The manager
+maps only segment headers; clients map the data.  Which ring a topic needs is decided by
+registry.py; this module only carries it out."""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import re
+from dataclasses import dataclass, field
+
+from .. import _libln
+from .._clientlib import last_error
+from ..errors import LnError
+from .registry import RequestError
+
+log = logging.getLogger("ln_manager")
+
+RETIRE_TIMEOUT = 1.0  # seconds ln_ring_admin_retire may wait for a publisher's loan
+_UNSAFE = re.compile(r"[^A-Za-z0-9_-]")
+
+
+def sanitize_instance(instance: str) -> str:
+    """The instance name as it appears in segment names: anything but A-Z a-z 0-9 _ -
+    becomes '_' (so no '.' can make one instance's prefix match another's segments)."""
+    return _UNSAFE.sub("_", instance)
+
+
+def segment_name(instance: str, topic_id: int, generation: int) -> str:
+    """`/ln.<instance>.<topic id>.<generation>`, instance already sanitized."""
+    return f"/ln.{instance}.{topic_id}.{generation}"
+
+
+def ring_segment_size(message_size: int, slots: int) -> int:
+    """Bytes of a ring segment, as libln lays it out."""
+    return int(_libln.ln_ring_segment_size(message_size, slots))
+
+
+def _failure(what: str, exc: LnError) -> RequestError:
+    """The refusal for a failed admin call, with libln's own account of it (errno etc.)."""
+    detail = last_error()
+    return RequestError(exc.name or "ESYS", f"{what}: {exc.name}: {detail or exc.text}")
+
+
+@dataclass
+class _TopicRings:
+    topic: str
+    names: list[str] = field(default_factory=list)  # every generation, oldest first
+    admin: object | None = None  # header mapping of the newest generation
+
+    @property
+    def current(self) -> str:
+        return self.names[-1]
+
+
+class Segments:
+    """The rings of every topic of one instance, keyed by topic id."""
+
+    def __init__(self, instance: str) -> None:
+        self.prefix = sanitize_instance(instance)
+        self._rings: dict[int, _TopicRings] = {}
+
+    def purge(self) -> int:
+        """Unlink every segment of this instance left by an earlier manager; how many."""
+        try:
+            return int(_libln.ln_ring_admin_purge_instance(self.prefix.encode()))
+        except LnError as exc:
+            raise _failure(f"removing stale segments /ln.{self.prefix}.*", exc) from None
+
+    def current(self, topic_id: int) -> str:
+        return self._rings[topic_id].current
+
+    def names(self, topic_id: int) -> list[str]:
+        return list(self._rings[topic_id].names)
+
+    def create(self, topic_id: int, topic: str, md_name: str, layout_hash: int,
+               message_size: int, slots: int) -> str:
+        """Create generation 1 of a new topic's ring; returns its name."""
+        assert topic_id not in self._rings
+        rings = _TopicRings(topic)
+        rings.admin = self._create(rings, topic_id, 1, md_name, layout_hash, message_size,
+                                   slots)
+        rings.names.append(segment_name(self.prefix, topic_id, 1))
+        self._rings[topic_id] = rings
+        return rings.current
+
+    def grow(self, topic_id: int, md_name: str, layout_hash: int, message_size: int,
+             slots: int) -> str:
+        """Replace a topic's ring by a next generation of `slots` slots and retire the old
+        one into it; the old segment stays linked until the topic is removed."""
+        rings = self._rings[topic_id]
+        generation = len(rings.names) + 1
+        successor = self._create(rings, topic_id, generation, md_name, layout_hash,
+                                 message_size, slots)
+        name = segment_name(self.prefix, topic_id, generation)
+        try:
+            _libln.ln_ring_admin_retire(rings.admin, successor, name.encode(), RETIRE_TIMEOUT)
+        except LnError as exc:
+            _libln.ln_ring_admin_close(successor)
+            self._unlink(name)
+            raise _failure(f"topic {rings.topic!r}: retiring {rings.current} into {name}",
+                           exc) from None
+        _libln.ln_ring_admin_close(rings.admin)
+        rings.admin = successor
+        rings.names.append(name)
+        return name
+
+    def reserve_reader(self, topic_id: int, index: int, pid: int, buffers: int) -> None:
+        rings = self._rings[topic_id]
+        try:
+            _libln.ln_ring_admin_reserve_reader(rings.admin, index, pid, buffers)
+        except LnError as exc:
+            raise _failure(f"topic {rings.topic!r}: reserving reader slot {index} in "
+                           f"{rings.current}", exc) from None
+
+    def release_reader(self, topic_id: int, index: int) -> None:
+        rings = self._rings[topic_id]
+        try:
+            _libln.ln_ring_admin_release_reader(rings.admin, index)
+        except LnError as exc:
+            log.warning("topic %r: releasing reader slot %d of %s failed: %s", rings.topic,
+                        index, rings.current, exc)
+
+    def set_counts(self, topic_id: int, publishers: int, subscribers: int) -> None:
+        rings = self._rings[topic_id]
+        try:
+            _libln.ln_ring_admin_set_counts(rings.admin, publishers, subscribers)
+        except LnError as exc:
+            raise _failure(f"topic {rings.topic!r}: setting port counts in {rings.current}",
+                           exc) from None
+
+    def remove(self, topic_id: int) -> list[str]:
+        """Unmap and unlink every generation of a topic's ring; the names unlinked."""
+        rings = self._rings.pop(topic_id, None)
+        if rings is None:
+            return []
+        if rings.admin is not None:
+            _libln.ln_ring_admin_close(rings.admin)
+            rings.admin = None
+        for name in rings.names:
+            self._unlink(name)
+        return rings.names
+
+    def remove_all(self) -> int:
+        """Remove the rings of every topic (manager shutdown); how many segments."""
+        return sum(len(self.remove(topic_id)) for topic_id in list(self._rings))
+
+    def _create(self, rings: _TopicRings, topic_id: int, generation: int, md_name: str,
+                layout_hash: int, message_size: int, slots: int) -> object:
+        name = segment_name(self.prefix, topic_id, generation)
+        handle = _libln.RingAdminHandle()
+        try:
+            _libln.ln_ring_admin_create(ctypes.byref(handle), name.encode(),
+                                        rings.topic.encode(), md_name.encode(), layout_hash,
+                                        message_size, slots)
+        except LnError as exc:
+            raise _failure(f"topic {rings.topic!r}: creating segment {name} with {slots} "
+                           f"slots of {message_size} bytes", exc) from None
+        return handle
+
+    @staticmethod
+    def _unlink(name: str) -> None:
+        try:
+            _libln.ln_ring_admin_unlink(name.encode())
+        except LnError as exc:
+            log.warning("unlinking segment %s failed: %s", name, exc)

@@ -1,0 +1,176 @@
+"""The manager's frame codec against docs/protocol.md: exact bytes of known frames, round
+trips of every message, and a precise ProtocolError for every way a frame can be wrong.
+Pure unit tests: no sockets, no libln."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from lnwire import frame, hello_body, port_body, s
+
+from links_and_nodes.manager import protocol as p
+
+U32 = st.integers(0, 0xFFFFFFFF)
+REQUEST_ID = st.integers(1, 0xFFFFFFFF)
+TEXT = st.text(max_size=200)
+
+MESSAGES = st.one_of(
+    st.builds(p.Hello, U32, st.integers(0, 0xFFFF), U32, TEXT, TEXT),
+    st.builds(p.Welcome, st.integers(0, 0xFFFF), U32, TEXT, TEXT),
+    st.builds(p.Error, U32, st.integers(-(1 << 31), (1 << 31) - 1), TEXT),
+    st.builds(p.Publish, REQUEST_ID, TEXT, TEXT, st.integers(0, (1 << 64) - 1), U32, U32, U32),
+    st.builds(p.Subscribe, REQUEST_ID, TEXT, TEXT, st.integers(0, (1 << 64) - 1), U32, U32,
+              U32),
+    st.builds(p.PortOk, U32, U32, TEXT, U32),
+    st.builds(p.ClosePort, REQUEST_ID, U32),
+    st.builds(p.Ok, U32),
+    st.builds(p.TopicInfo, REQUEST_ID, TEXT),
+    st.builds(p.TopicInfoOk, U32, TEXT, st.integers(0, (1 << 64) - 1), U32, U32, U32),
+)
+
+
+def body(msg: p.Message) -> bytes:
+    return p.encode(msg)[6:]
+
+
+def test_hello_bytes_match_the_document() -> None:
+    encoded = p.encode(p.Hello(p.MAGIC, 1, 4242, "ctl", "0.1.0"))
+    assert encoded == frame(1, hello_body("ctl", pid=4242))
+    assert encoded[:12] == struct.pack("<IHIH", len(encoded) - 4, 1, 0x504D4E4C, 1)
+    assert encoded[6:10] == b"LNMP"
+
+
+def test_port_request_bytes_match_the_document() -> None:
+    msg = p.Subscribe(7, "robot.state", "robot/joint_state", 0x0123456789ABCDEF, 184, 4, 0)
+    assert p.encode(msg) == frame(11, port_body(7, "robot.state", "robot/joint_state",
+                                                0x0123456789ABCDEF, 184, 4, 0))
+
+
+def test_replies_bytes() -> None:
+    assert p.encode(p.Ok(5)) == struct.pack("<IHI", 6, 14, 5)
+    assert p.encode(p.Error(0, -7, "v")) == struct.pack("<IHIiH", 13, 3, 0, -7, 1) + b"v"
+    assert p.encode(p.PortOk(1, 2, "/ln.a.1.1", p.NO_READER)) == frame(
+        12, struct.pack("<II", 1, 2) + s("/ln.a.1.1") + struct.pack("<I", 0xFFFFFFFF))
+
+
+# no deadline: a test must not fail because the machine is slow
+RELAXED = settings(deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+@RELAXED
+@given(MESSAGES)
+def test_round_trip(msg: p.Message) -> None:
+    assert p.decode_frame(p.encode(msg)) == msg
+
+
+@RELAXED
+@given(st.binary(max_size=64))
+def test_any_payload_decodes_or_raises_protocol_error(payload: bytes) -> None:
+    try:
+        msg = p.decode_payload(payload)
+    except p.ProtocolError:
+        return
+    assert p.encode(msg)[4:] == payload  # whatever decodes is exactly one message
+
+
+@pytest.mark.parametrize("length, ok", [(0, False), (1, False), (2, True), (1 << 20, True),
+                                        ((1 << 20) + 1, False), (1 << 31, False),
+                                        (0xFFFFFFFF, False)])
+def test_frame_length_range(length: int, ok: bool) -> None:
+    header = struct.pack("<I", length)
+    if ok:
+        assert p.frame_length(header) == length
+    else:
+        with pytest.raises(p.ProtocolError, match=f"frame length {length} out of range "
+                                                  "2..1048576"):
+            p.frame_length(header)
+
+
+def test_frame_length_needs_four_bytes() -> None:
+    with pytest.raises(p.ProtocolError, match="frame header has 3 bytes"):
+        p.frame_length(b"\x02\x00\x00")
+
+
+def test_unknown_type() -> None:
+    with pytest.raises(p.ProtocolError, match="unknown frame type 99"):
+        p.decode_payload(struct.pack("<H", 99))
+    with pytest.raises(p.ProtocolError, match="no type"):
+        p.decode_payload(b"\x01")
+
+
+def test_every_truncation_of_every_message_is_refused() -> None:
+    samples = [p.Hello(p.MAGIC, 1, 1, "n", "v"), p.Welcome(1, 1, "n", "i"),
+               p.Error(1, -1, "t"), p.Publish(1, "t", "m/d", 1, 2, 3, 0),
+               p.Subscribe(1, "t", "m/d", 1, 2, 3, 0), p.PortOk(1, 2, "/s", 3),
+               p.ClosePort(1, 2), p.Ok(1), p.TopicInfo(1, "t"),
+               p.TopicInfoOk(1, "m", 1, 2, 3, 4)]
+    for msg in samples:
+        full = body(msg)
+        for cut in range(len(full)):
+            with pytest.raises(p.ProtocolError, match=f"{msg.TYPE.name} body too short"):
+                p.decode_body(type(msg), full[:cut])
+
+
+def test_body_too_long() -> None:
+    with pytest.raises(p.ProtocolError,
+                       match="TOPIC_INFO body too long: 8 bytes, its fields take 7"):
+        p.decode_body(p.TopicInfo, body(p.TopicInfo(1, "t")) + b"\0")
+
+
+def test_str_must_be_utf8() -> None:
+    bad = struct.pack("<I", 1) + s(b"robot\xff")
+    with pytest.raises(p.ProtocolError, match=r"TOPIC_INFO.topic: not valid UTF-8 \(byte 5\)"):
+        p.decode_body(p.TopicInfo, bad)
+    surrogate = struct.pack("<I", 1) + s(b"\xed\xa0\x80")  # UTF-16 surrogate, not UTF-8
+    with pytest.raises(p.ProtocolError, match="not valid UTF-8"):
+        p.decode_body(p.TopicInfo, surrogate)
+
+
+def test_str_limit() -> None:
+    assert p.decode_body(p.TopicInfo, struct.pack("<I", 1) + s("x" * 1024)).topic == "x" * 1024
+    with pytest.raises(p.ProtocolError, match="TOPIC_INFO.topic: str of 1025 bytes, at most "
+                                              "1024"):
+        p.decode_body(p.TopicInfo, struct.pack("<I", 1) + s("x" * 1025))
+    with pytest.raises(ValueError, match="1025 bytes"):
+        p.encode(p.TopicInfo(1, "x" * 1025))
+    with pytest.raises(ValueError, match="1026 bytes"):
+        p.encode(p.TopicInfo(1, "ä" * 513))  # the limit counts bytes, not characters
+
+
+def test_requests_need_a_request_id() -> None:
+    with pytest.raises(p.ProtocolError, match="CLOSE_PORT with request id 0"):
+        p.decode_body(p.ClosePort, struct.pack("<II", 0, 5))
+    assert p.decode_body(p.Error, body(p.Error(0, -7, "x"))) == p.Error(0, -7, "x")
+
+
+def test_encode_checks_ranges() -> None:
+    with pytest.raises(ValueError, match="is not a u32"):
+        p.encode(p.Ok(1 << 32))
+    with pytest.raises(ValueError, match="is not a i32"):
+        p.encode(p.Error(1, 1 << 31, ""))
+    with pytest.raises(ValueError, match="str expected"):
+        p.encode(p.TopicInfo(1, b"bytes"))  # type: ignore[arg-type]
+
+
+def test_decode_frame_checks_the_length_field() -> None:
+    data = p.encode(p.Ok(1))
+    with pytest.raises(p.ProtocolError, match="length field says 6 bytes, 7 follow"):
+        p.decode_frame(data + b"\0")
+
+
+def test_hello_version_reads_only_magic_and_version() -> None:
+    assert p.hello_version(hello_body("n")) == 1
+    # another protocol version may have another HELLO layout after the version
+    assert p.hello_version(struct.pack("<IH", p.MAGIC, 2) + b"anything") == 2
+    with pytest.raises(p.ProtocolError, match="wrong magic 0x504d4e4d, expected 0x504d4e4c"):
+        p.hello_version(hello_body("n", magic=p.MAGIC + 1))
+    with pytest.raises(p.ProtocolError, match="HELLO body too short"):
+        p.hello_version(b"LNMP\x01")
+
+
+def test_direction_is_recorded() -> None:
+    from_client = {cls.TYPE.name for cls in p.MESSAGES.values() if cls.FROM_CLIENT}
+    assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "CLOSE_PORT", "TOPIC_INFO"}

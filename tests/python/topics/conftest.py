@@ -1,0 +1,86 @@
+"""Fixtures of the end-to-end topic tests: a private ln_manager per test (unique instance,
+free port, own runtime dir), the C/C++ tools built by SCons, and a check that no shared
+memory segment of the instance outlives the test."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+import uuid
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+import links_and_nodes as ln
+
+REPO = Path(__file__).resolve().parents[3]
+TOOLS = REPO / "build" / "release" / "tests" / "c" / "tools"
+TOPIC_MDS = REPO / "tests" / "md" / "topics"
+
+ln.add_message_definition_dir(TOPIC_MDS)
+
+
+def segments(instance: str) -> list[str]:
+    return sorted(n for n in os.listdir("/dev/shm") if n.startswith(f"ln.{instance}."))
+
+
+@dataclass
+class Manager:
+    instance: str
+    address: str
+    proc: subprocess.Popen[str]
+    env: dict[str, str]
+
+    def tool(self, *args: str, cpp: bool = False) -> subprocess.Popen[str]:
+        exe = TOOLS / ("topic_tool_cpp" if cpp else "topic_tool")
+        if not exe.exists():
+            pytest.fail(f"{exe} is missing: run scons first")
+        return subprocess.Popen([str(exe), *args], stdout=subprocess.PIPE, text=True,
+                                env=self.env)
+
+    def client(self, name: str = "test") -> ln.client:
+        return ln.client(name, self.address)
+
+
+def start_manager(instance: str, runtime: Path) -> Manager:
+    """Start ln_manager; its log goes to a file (a pipe nobody drains would stall it)."""
+    env = {**os.environ, "LN_RUNTIME_DIR": str(runtime)}
+    runtime.mkdir(parents=True, exist_ok=True)
+    log_path = runtime.parent / f"{instance}.log"
+    with open(log_path, "w") as log:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "links_and_nodes.manager", "--port", "0", "--instance",
+             instance], stdout=log, stderr=subprocess.STDOUT, text=True, env=env)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        for line in log_path.read_text().splitlines():
+            if "listening on" in line:
+                address = line.rsplit(" ", 1)[1].strip()
+                return Manager(instance, address, proc, {**env, "LN_MANAGER": address})
+        if proc.poll() is not None:
+            break
+        time.sleep(0.02)
+    proc.kill()
+    raise RuntimeError(f"manager did not start:\n{log_path.read_text()}")
+
+
+def wait_ready(proc: subprocess.Popen[str]) -> None:
+    assert proc.stdout is not None
+    line = proc.stdout.readline()
+    assert line.strip() == "ready", f"tool did not start: {line!r}, exit {proc.poll()}"
+
+
+@pytest.fixture
+def manager(tmp_path: Path) -> Iterator[Manager]:
+    instance = f"t{os.getpid()}x{uuid.uuid4().hex[:8]}"
+    mgr = start_manager(instance, tmp_path / "runtime")
+    try:
+        yield mgr
+    finally:
+        mgr.proc.terminate()
+        mgr.proc.wait(timeout=30)
+    assert segments(instance) == []
