@@ -85,13 +85,10 @@ class Error(Message):
     FROM_CLIENT = False
 
 
-_PORT_FIELDS = (("request_id", "u32"), ("topic", "str"), ("md_name", "str"),
-                ("layout_hash", "u64"), ("message_size", "u32"), ("buffers", "u32"),
-                ("flags", "u32"))
-
-
 @dataclass(frozen=True)
-class Publish(Message):
+class _PortRequest(Message):
+    """PUBLISH and SUBSCRIBE share their body."""
+
     request_id: int
     topic: str
     md_name: str
@@ -99,23 +96,20 @@ class Publish(Message):
     message_size: int
     buffers: int
     flags: int
+    FIELDS = (("request_id", "u32"), ("topic", "str"), ("md_name", "str"),
+              ("layout_hash", "u64"), ("message_size", "u32"), ("buffers", "u32"),
+              ("flags", "u32"))
+    FROM_CLIENT = True
+
+
+@dataclass(frozen=True)
+class Publish(_PortRequest):
     TYPE = MsgType.PUBLISH
-    FIELDS = _PORT_FIELDS
-    FROM_CLIENT = True
 
 
 @dataclass(frozen=True)
-class Subscribe(Message):
-    request_id: int
-    topic: str
-    md_name: str
-    layout_hash: int
-    message_size: int
-    buffers: int
-    flags: int
+class Subscribe(_PortRequest):
     TYPE = MsgType.SUBSCRIBE
-    FIELDS = _PORT_FIELDS
-    FROM_CLIENT = True
 
 
 @dataclass(frozen=True)
