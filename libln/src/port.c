@@ -1,6 +1,8 @@
 /* port.c — publishers (outports) and subscribers (inports): registration with the manager,
  * mapping the topic ring it names, and the copy and zero-copy write/read paths on it.
  * A port follows its topic to a bigger ring when the manager retires the old one. */
+#include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,6 +28,7 @@ struct ln_outport {
     ln_port_common c;
     uint32_t flags;
     ln_ring_slot* loan;
+    pthread_t loan_thread; /* the write lock belongs to the thread that took the loan */
 };
 
 struct ln_inport {
@@ -50,20 +53,45 @@ static int bad_port(const void* port, uint32_t magic, const char* what)
     return LN_OK;
 }
 
-/* Move to the successor ring while this one is retired. */
+#define LN_MAX_GENERATION_HOPS 64
+
+/* Move one generation on, to the successor of the current (retired) ring. */
+static int follow_once(ln_port_common* p)
+{
+    char next[LN_RING_NAME_MAX];
+    memcpy(next, p->ring.hdr->successor, sizeof(next));
+    next[sizeof(next) - 1] = '\0';
+    if (!next[0] || strcmp(next, p->ring.name) == 0)
+        return ln_set_error(p->clnt, LN_EPROTOCOL, "topic '%s': ring '%s' is retired without a "
+                            "valid successor", p->topic, p->ring.name);
+    ln_ring fresh;
+    int rc = ln_ring_attach(&fresh, next, p->layout_hash, p->size);
+    if (rc != LN_OK)
+        return rc;
+    ln_ring_detach(&p->ring);
+    p->ring = fresh;
+    return LN_OK;
+}
+
+/* Move to the newest generation (publishers: they only ever write the newest ring). */
 static int follow(ln_port_common* p)
 {
-    while (atomic_load_explicit(&p->ring.hdr->retired, memory_order_acquire)) {
-        char next[LN_RING_NAME_MAX];
-        memcpy(next, p->ring.hdr->successor, sizeof(next));
-        next[sizeof(next) - 1] = '\0';
-        ln_ring fresh;
-        int rc = ln_ring_attach(&fresh, next, p->layout_hash, p->size);
+    for (int hop = 0; atomic_load_explicit(&p->ring.hdr->retired, memory_order_acquire); hop++) {
+        if (hop == LN_MAX_GENERATION_HOPS)
+            return ln_set_error(p->clnt, LN_EPROTOCOL, "topic '%s': more than %d retired rings "
+                                "in a row (a cycle?)", p->topic, LN_MAX_GENERATION_HOPS);
+        int rc = follow_once(p);
         if (rc != LN_OK)
             return rc;
-        ln_ring_detach(&p->ring);
-        p->ring = fresh;
     }
+    return LN_OK;
+}
+
+/* NaN is the one timeout that means nothing. */
+static int check_timeout(ln_client* clnt, double timeout, const char* what)
+{
+    if (isnan(timeout))
+        return ln_set_error(clnt, LN_EINVAL, "%s: timeout is NaN", what);
     return LN_OK;
 }
 
@@ -223,8 +251,8 @@ int ln_unpublish(ln_outport* port)
     int rc = bad_port(port, LN_OUTPORT_MAGIC, "ln_unpublish");
     if (rc != LN_OK)
         return rc;
-    if (port->loan)
-        ln_write_abort(port);
+    if (port->loan && (rc = ln_write_abort(port)) != LN_OK)
+        return rc; /* unmapping under another thread's loan would wedge the topic's lock */
     return close_port(&port->c);
 }
 
@@ -241,30 +269,24 @@ static int timeout_code(int rc, const ln_deadline* d)
     return rc == LN_ETIMEOUT && !d->forever && d->timeout == 0 ? LN_EAGAIN : rc;
 }
 
-/* Take the write side of the current ring, following retirements; with
- * LN_PUBLISH_WAIT_FOR_SUBSCRIBERS also wait for room in every queued subscriber. */
+/* Take the write side of the newest ring; with LN_PUBLISH_WAIT_FOR_SUBSCRIBERS also wait,
+ * without holding the lock, until every queued subscriber has room. */
 static int begin_write(ln_outport* p, ln_deadline* d, ln_ring_slot** slot)
 {
     for (;;) {
         int rc = ln_ring_lock(&p->c.ring, d);
         if (rc != LN_OK)
             return timeout_code(rc, d);
-        if (!atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire)) {
-            rc = p->flags & LN_PUBLISH_WAIT_FOR_SUBSCRIBERS ? ln_ring_wait_for_space(&p->c.ring, d)
-                                                            : LN_OK;
-            if (rc == LN_OK) {
-                *slot = ln_ring_begin(&p->c.ring);
-                return LN_OK;
-            }
-            if (rc != LN_ECLOSED) {
-                ln_ring_unlock(&p->c.ring);
-                return timeout_code(rc, d);
-            }
+        int retired = atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire);
+        if (!retired && (!(p->flags & LN_PUBLISH_WAIT_FOR_SUBSCRIBERS) ||
+                         ln_ring_has_space(&p->c.ring))) {
+            *slot = ln_ring_begin(&p->c.ring);
+            return LN_OK;
         }
         ln_ring_unlock(&p->c.ring);
-        rc = follow(&p->c);
+        rc = retired ? follow(&p->c) : ln_ring_sleep_for_space(&p->c.ring, d);
         if (rc != LN_OK)
-            return rc;
+            return timeout_code(rc, d);
     }
 }
 
@@ -279,6 +301,8 @@ int ln_write(ln_outport* p, const void* data, size_t size, double timeout)
     if (p->loan)
         return ln_set_error(p->c.clnt, LN_EBUSY, "ln_write on '%s': a loan is outstanding",
                             p->c.topic);
+    if ((rc = check_timeout(p->c.clnt, timeout, "ln_write")) != LN_OK)
+        return rc;
     ln_deadline d = ln_deadline_in(timeout);
     ln_ring_slot* slot;
     rc = begin_write(p, &d, &slot);
@@ -286,8 +310,7 @@ int ln_write(ln_outport* p, const void* data, size_t size, double timeout)
         return rc;
     memcpy(ln_ring_payload(slot), data, size);
     ln_ring_commit(&p->c.ring, slot);
-    ln_ring_unlock(&p->c.ring);
-    return LN_OK;
+    return ln_ring_unlock(&p->c.ring);
 }
 
 int ln_write_loan(ln_outport* p, void** data, double timeout)
@@ -300,11 +323,25 @@ int ln_write_loan(ln_outport* p, void** data, double timeout)
     if (p->loan)
         return ln_set_error(p->c.clnt, LN_EBUSY, "ln_write_loan on '%s': a loan is outstanding",
                             p->c.topic);
+    if ((rc = check_timeout(p->c.clnt, timeout, "ln_write_loan")) != LN_OK)
+        return rc;
     ln_deadline d = ln_deadline_in(timeout);
     rc = begin_write(p, &d, &p->loan);
     if (rc != LN_OK)
         return rc;
+    p->loan_thread = pthread_self();
     *data = ln_ring_payload(p->loan);
+    return LN_OK;
+}
+
+/* Commit and abort must come from the thread that holds the write lock. */
+static int check_loan(ln_outport* p, const char* what)
+{
+    if (!p->loan)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "%s on '%s': no loan", what, p->c.topic);
+    if (!pthread_equal(p->loan_thread, pthread_self()))
+        return ln_set_error(p->c.clnt, LN_EBUSY, "%s on '%s': the loan belongs to another "
+                            "thread; commit or abort it there", what, p->c.topic);
     return LN_OK;
 }
 
@@ -313,13 +350,11 @@ int ln_write_commit(ln_outport* p)
     int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_write_commit");
     if (rc != LN_OK)
         return rc;
-    if (!p->loan)
-        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_write_commit on '%s': no loan",
-                            p->c.topic);
+    if ((rc = check_loan(p, "ln_write_commit")) != LN_OK)
+        return rc;
     ln_ring_commit(&p->c.ring, p->loan);
     p->loan = NULL;
-    ln_ring_unlock(&p->c.ring);
-    return LN_OK;
+    return ln_ring_unlock(&p->c.ring);
 }
 
 int ln_write_abort(ln_outport* p)
@@ -327,25 +362,32 @@ int ln_write_abort(ln_outport* p)
     int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_write_abort");
     if (rc != LN_OK)
         return rc;
-    if (!p->loan)
-        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_write_abort on '%s': no loan", p->c.topic);
+    if ((rc = check_loan(p, "ln_write_abort")) != LN_OK)
+        return rc;
     p->loan = NULL; /* the slot stays WRITING; the next write reuses its sequence number */
-    ln_ring_unlock(&p->c.ring);
-    return LN_OK;
+    return ln_ring_unlock(&p->c.ring);
 }
 
-/* Find the next sample for this subscriber, waiting per timeout; moves to successor rings. */
+/* Find the next sample for this subscriber, waiting per timeout.  A retired ring is left only
+ * once nothing more can come from it, one generation at a time, so queued readers lose
+ * nothing across ring growth. */
 static int next_sample(ln_inport* p, double timeout, ln_ring_slot** slot, uint64_t* word)
 {
+    int rc = check_timeout(p->c.clnt, timeout, "ln_read");
+    if (rc != LN_OK)
+        return rc;
     ln_deadline d = ln_deadline_in(timeout);
     for (;;) {
-        int rc = ln_ring_pick(&p->c.ring, &p->cur, slot, word);
+        /* Read `retired` first: a sample committed before the retirement is then seen by the
+         * pick below. */
+        int retired = atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire);
+        rc = ln_ring_pick(&p->c.ring, &p->cur, slot, word);
         if (rc != LN_EAGAIN)
             return rc;
-        if (atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire)) {
-            rc = follow(&p->c);
-            if (rc != LN_OK)
+        if (retired) {
+            if ((rc = follow_once(&p->c)) != LN_OK)
                 return rc;
+            ln_ring_publish_cursor(&p->c.ring, &p->cur); /* its progress, in the new ring */
             continue;
         }
         if (timeout == 0)
@@ -389,7 +431,7 @@ int ln_read(ln_inport* p, void* data, size_t size, double timeout, ln_sample_inf
             return rc;
         memcpy(data, ln_ring_payload(slot), size);
         int64_t ts = slot->timestamp_ns;
-        if (ln_ring_finish(&p->c.ring, &p->cur, slot, word) == LN_OK) {
+        if (ln_ring_finish(&p->c.ring, &p->cur, slot, word, 1) == LN_OK) {
             fill_info(p, slot, word, ts, info);
             return LN_OK;
         }
@@ -426,11 +468,9 @@ int ln_read_release(ln_inport* p)
     if (!p->borrowed)
         return ln_set_error(p->c.clnt, LN_EINVAL, "ln_read_release on '%s': nothing borrowed",
                             p->c.topic);
-    rc = ln_ring_finish(&p->c.ring, &p->cur, p->borrowed, p->borrowed_word);
+    rc = ln_ring_finish(&p->c.ring, &p->cur, p->borrowed, p->borrowed_word, 0);
     p->borrowed = NULL;
     if (rc != LN_OK) {
-        p->cur.total += p->cur.pending;
-        p->cur.pending = 0;
         return ln_set_error(p->c.clnt, LN_EOVERRUN, "topic '%s': sample %llu was overwritten "
                             "while borrowed", p->c.topic,
                             (unsigned long long)LN_SLOT_SEQ(p->borrowed_word));
@@ -438,19 +478,48 @@ int ln_read_release(ln_inport* p)
     return LN_OK;
 }
 
+/* The manager keeps the port counts in the newest generation of a topic's ring. */
+static int newest_counts(const ln_port_common* p, uint32_t* publishers, uint32_t* subscribers)
+{
+    const ln_ring_header* h = p->ring.hdr;
+    if (!atomic_load_explicit(&h->retired, memory_order_acquire)) {
+        *publishers = atomic_load(&h->publishers);
+        *subscribers = atomic_load(&h->subscribers);
+        return LN_OK;
+    }
+    ln_port_common peek = *p; /* a private walk along the successors */
+    int rc = ln_ring_attach(&peek.ring, p->ring.name, p->layout_hash, p->size);
+    if (rc == LN_OK)
+        rc = follow(&peek);
+    if (rc == LN_OK) {
+        *publishers = atomic_load(&peek.ring.hdr->publishers);
+        *subscribers = atomic_load(&peek.ring.hdr->subscribers);
+    }
+    ln_ring_detach(&peek.ring);
+    return rc;
+}
+
 int ln_outport_subscriber_count(const ln_outport* p)
 {
+    uint32_t pubs = 0, subs = 0;
     int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_outport_subscriber_count");
-    return rc != LN_OK ? rc : (int)atomic_load(&p->c.ring.hdr->subscribers);
+    if (rc == LN_OK)
+        rc = newest_counts(&p->c, &pubs, &subs);
+    return rc != LN_OK ? rc : (int)subs;
 }
 
 int ln_inport_publisher_count(const ln_inport* p)
 {
+    uint32_t pubs = 0, subs = 0;
     int rc = bad_port(p, LN_INPORT_MAGIC, "ln_inport_publisher_count");
-    return rc != LN_OK ? rc : (int)atomic_load(&p->c.ring.hdr->publishers);
+    if (rc == LN_OK)
+        rc = newest_counts(&p->c, &pubs, &subs);
+    return rc != LN_OK ? rc : (int)pubs;
 }
 
 uint64_t ln_inport_overruns(const ln_inport* p)
 {
-    return bad_port(p, LN_INPORT_MAGIC, "ln_inport_overruns") != LN_OK ? 0 : p->cur.total;
+    if (bad_port(p, LN_INPORT_MAGIC, "ln_inport_overruns") != LN_OK)
+        return 0;
+    return p->cur.total + p->cur.pending; /* pending: found lost, not yet reported by a read */
 }

@@ -16,9 +16,11 @@ uint64_t ln_ring_header_bytes(void)
     return (sizeof(ln_ring_header) + page - 1) / page * page;
 }
 
-uint32_t ln_ring_stride(uint64_t message_size)
+uint64_t ln_ring_stride(uint64_t message_size)
 {
-    return (uint32_t)((sizeof(ln_ring_slot) + message_size + 63) / 64 * 64);
+    if (message_size > UINT32_MAX)
+        return 0; /* never a valid stride: rejected by create and attach */
+    return (sizeof(ln_ring_slot) + message_size + 63) / 64 * 64;
 }
 
 int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64_t message_size)
@@ -36,8 +38,9 @@ int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64
         why = "no ring magic";
     else if (h->version != LN_RING_VERSION)
         why = "ring format version differs from this library's";
-    else if (h->slot_count < 2 || h->slot_count > LN_RING_MAX_SLOTS ||
-             h->slot_stride != ln_ring_stride(h->message_size) || h->segment_size != size ||
+    else if (h->slot_count < 2 || h->slot_count > LN_RING_MAX_SLOTS || h->message_size == 0 ||
+             h->slot_stride == 0 || h->slot_stride != ln_ring_stride(h->message_size) ||
+             h->segment_size != size ||
              h->header_size != ln_ring_header_bytes() ||
              h->header_size + (uint64_t)h->slot_count * h->slot_stride != size)
         why = "inconsistent ring geometry";
@@ -59,6 +62,8 @@ int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64
     }
     ring->hdr = h;
     ring->slots = (uint8_t*)h + h->header_size;
+    ring->slot_count = h->slot_count;
+    ring->stride = h->slot_stride;
     snprintf(ring->name, sizeof(ring->name), "%s", name);
     return LN_OK;
 }
@@ -108,6 +113,8 @@ int ln_deadline_left(ln_deadline* d, struct timespec* rel)
 static void recover(ln_ring* ring)
 {
     ln_ring_header* h = ring->hdr;
+    if (atomic_load_explicit(&h->retired, memory_order_acquire))
+        return; /* its sequence numbers live on in the successor */
     uint64_t n = atomic_load_explicit(&h->write_seq, memory_order_relaxed) + 1;
     uint64_t word = atomic_load_explicit(&ln_ring_slot_at(ring, n)->seq, memory_order_acquire);
     if (word == LN_SLOT_WORD(n, LN_SLOT_COMMITTED)) {
@@ -117,11 +124,26 @@ static void recover(ln_ring* ring)
     /* A slot left WRITING is rewritten under the same number by the next writer. */
 }
 
+static inline void cpu_relax(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#elif defined(__aarch64__)
+    __asm__ volatile("yield");
+#endif
+}
+
 int ln_ring_lock(ln_ring* ring, ln_deadline* d)
 {
     pthread_mutex_t* m = &ring->hdr->write_lock;
     int rc = pthread_mutex_trylock(m);
-    if (rc == EBUSY)
+    /* Another publisher's write takes well under a microsecond: wait that out even when the
+     * caller does not want to wait, before blocking or giving up. */
+    for (int spin = 0; rc == EBUSY && spin < 2000; spin++) {
+        cpu_relax();
+        rc = pthread_mutex_trylock(m);
+    }
+    if (rc == EBUSY && (d->forever || d->timeout > 0))
         rc = d->forever ? pthread_mutex_lock(m)
                         : pthread_mutex_clocklock(m, CLOCK_MONOTONIC, ln_deadline_at(d));
     if (rc == 0)
@@ -132,7 +154,7 @@ int ln_ring_lock(ln_ring* ring, ln_deadline* d)
         pthread_mutex_consistent(m);
         return LN_OK;
     }
-    if (rc == ETIMEDOUT)
+    if (rc == ETIMEDOUT || rc == EBUSY)
         return ln_set_error(NULL, LN_ETIMEOUT,
                             "topic '%.*s': another publisher holds the write side (a loan?)",
                             LN_RING_NAME_MAX, ring->hdr->topic);
@@ -140,9 +162,13 @@ int ln_ring_lock(ln_ring* ring, ln_deadline* d)
                               ring->hdr->topic);
 }
 
-void ln_ring_unlock(ln_ring* ring)
+int ln_ring_unlock(ln_ring* ring)
 {
-    pthread_mutex_unlock(&ring->hdr->write_lock);
+    int rc = pthread_mutex_unlock(&ring->hdr->write_lock);
+    if (rc != 0)
+        return ln_set_errno_error(NULL, rc, "topic '%.*s': releasing the write lock",
+                                  LN_RING_NAME_MAX, ring->hdr->topic);
+    return LN_OK;
 }
 
 /* 1 if some queued reader would lose its oldest unread sample when sample n is written. */
@@ -160,25 +186,27 @@ static int reader_full(const ln_ring_header* h, uint64_t n)
     return 0;
 }
 
-int ln_ring_wait_for_space(ln_ring* ring, ln_deadline* d)
+int ln_ring_has_space(const ln_ring* ring)
+{
+    uint64_t n = atomic_load_explicit(&ring->hdr->write_seq, memory_order_relaxed) + 1;
+    return !reader_full(ring->hdr, n);
+}
+
+int ln_ring_sleep_for_space(ln_ring* ring, ln_deadline* d)
 {
     ln_ring_header* h = ring->hdr;
-    uint64_t n = atomic_load_explicit(&h->write_seq, memory_order_relaxed) + 1;
-    while (reader_full(h, n)) {
-        if (atomic_load_explicit(&h->retired, memory_order_acquire))
-            return LN_ECLOSED;
-        atomic_fetch_add_explicit(&h->space_waiters, 1, memory_order_seq_cst);
-        uint32_t v = atomic_load_explicit(&h->space_futex, memory_order_seq_cst);
-        struct timespec rel;
-        int err = 0;
-        if (reader_full(h, n) && (err = ln_deadline_left(d, &rel)) == 0)
-            err = ln_futex_wait(&h->space_futex, v, d->forever ? NULL : &rel);
-        atomic_fetch_sub_explicit(&h->space_waiters, 1, memory_order_seq_cst);
-        if (err == ETIMEDOUT)
-            return ln_set_error(NULL, LN_ETIMEOUT,
-                                "topic '%.*s': a queued subscriber has no free buffer",
-                                LN_RING_NAME_MAX, h->topic);
-    }
+    uint32_t v = ln_futex_announce(&h->space_futex);
+    uint64_t n = atomic_load_explicit(&h->write_seq, memory_order_seq_cst) + 1;
+    if (!reader_full(h, n) || atomic_load_explicit(&h->retired, memory_order_acquire))
+        return LN_OK;
+    struct timespec rel;
+    int err = ln_deadline_left(d, &rel);
+    if (err == 0)
+        err = ln_futex_wait(&h->space_futex, v, d->forever ? NULL : &rel);
+    if (err == ETIMEDOUT)
+        return ln_set_error(NULL, LN_ETIMEOUT,
+                            "topic '%.*s': a queued subscriber has no free buffer",
+                            LN_RING_NAME_MAX, h->topic);
     return LN_OK;
 }
 
@@ -205,11 +233,7 @@ void ln_ring_commit(ln_ring* ring, ln_ring_slot* slot)
 
 void ln_ring_wake_readers(ln_ring* ring)
 {
-    ln_ring_header* h = ring->hdr;
-    if (atomic_load_explicit(&h->data_waiters, memory_order_seq_cst) == 0)
-        return; /* the common case: no system call */
-    atomic_fetch_add_explicit(&h->data_futex, 1, memory_order_seq_cst);
-    ln_futex_wake_all(&h->data_futex);
+    ln_futex_wake_sleepers(&ring->hdr->data_futex); /* no system call unless one sleeps */
 }
 
 int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t* word)
@@ -234,7 +258,13 @@ int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t
             *word = got;
             return LN_OK;
         }
-        /* The slot moved on to a newer sample: n is gone. */
+        if (LN_SLOT_SEQ(got) < n && c->buffers == 1) {
+            /* The slot never held n in this ring: a successor ring starts with the old ring's
+             * sequence number but no samples.  A latest reader waits for the next one. */
+            c->next = n + 1;
+            return LN_EAGAIN;
+        }
+        /* The slot moved on to a newer sample (or never had n): n is gone. */
         if (c->buffers > 1) {
             c->pending += 1;
             c->next = n + 1;
@@ -242,26 +272,29 @@ int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t
     }
 }
 
-int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_t word)
+void ln_ring_publish_cursor(ln_ring* ring, const ln_ring_cursor* c)
+{
+    if (c->buffers <= 1 || c->reader < 0)
+        return;
+    ln_ring_header* h = ring->hdr;
+    atomic_store_explicit(&h->readers[c->reader].next_seq, c->next, memory_order_seq_cst);
+    ln_futex_wake_sleepers(&h->space_futex);
+}
+
+int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_t word,
+                   int count_loss)
 {
     atomic_thread_fence(memory_order_acquire);
     uint64_t n = LN_SLOT_SEQ(word);
     if (atomic_load_explicit(&slot->seq, memory_order_relaxed) != word) {
         if (c->buffers > 1) {
-            c->pending += 1;
+            c->pending += count_loss ? 1 : 0;
             c->next = n + 1;
         }
         return LN_EOVERRUN;
     }
     c->next = n + 1;
-    if (c->buffers > 1 && c->reader >= 0) {
-        ln_ring_header* h = ring->hdr;
-        atomic_store_explicit(&h->readers[c->reader].next_seq, c->next, memory_order_seq_cst);
-        if (atomic_load_explicit(&h->space_waiters, memory_order_seq_cst) > 0) {
-            atomic_fetch_add_explicit(&h->space_futex, 1, memory_order_seq_cst);
-            ln_futex_wake_all(&h->space_futex);
-        }
-    }
+    ln_ring_publish_cursor(ring, c);
     return LN_OK;
 }
 
@@ -270,12 +303,10 @@ int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d)
     ln_ring_header* h = ring->hdr;
     struct timespec rel;
     int err = 0;
-    atomic_fetch_add_explicit(&h->data_waiters, 1, memory_order_seq_cst);
-    uint32_t v = atomic_load_explicit(&h->data_futex, memory_order_seq_cst);
+    uint32_t v = ln_futex_announce(&h->data_futex);
     if (atomic_load_explicit(&h->write_seq, memory_order_seq_cst) < seq &&
         !atomic_load_explicit(&h->retired, memory_order_acquire) &&
         (err = ln_deadline_left(d, &rel)) == 0)
         err = ln_futex_wait(&h->data_futex, v, d->forever ? NULL : &rel);
-    atomic_fetch_sub_explicit(&h->data_waiters, 1, memory_order_seq_cst);
     return err == ETIMEDOUT ? LN_ETIMEOUT : LN_OK;
 }

@@ -9,13 +9,15 @@
  *      store(slot.seq, n|WRITING, relaxed); fence(release)      -- readers see WRITING first
  *      copy payload, timestamp
  *      store(slot.seq, n|COMMITTED, release)                     -- payload before seq
- *      store(write_seq, n, seq_cst); if load(data_waiters, seq_cst) > 0: bump data_futex, wake
+ *      store(write_seq, n, seq_cst); if the sleepers bit of data_futex is set (seq_cst load):
+ *      change data_futex, clear the bit, FUTEX_WAKE
  *  reader:  w = load(write_seq, acquire); pick n <= w; s1 = load(slot.seq, acquire)
  *      s1 must be n|COMMITTED; copy payload; fence(acquire); s2 = load(slot.seq, relaxed)
  *      s1 != s2 means a writer reused the slot meanwhile: the copy is discarded (never torn).
- *  sleeping reader: fetch_add(data_waiters, seq_cst); v = load(data_futex); re-check
- *      write_seq (seq_cst); futex_wait(data_futex, v).  The seq_cst pair write_seq/data_waiters
- *      guarantees that either the writer sees the waiter or the waiter sees the new sample.
+ *  sleeping reader: v = fetch_or(data_futex, SLEEPERS) (seq_cst); re-check write_seq
+ *      (seq_cst); futex_wait(data_futex, v).  The seq_cst pairs (write_seq store, futex load)
+ *      and (futex fetch_or, write_seq load) guarantee that either the writer sees the sleeper
+ *      or the sleeper sees the new sample.
  * Publishers are serialized by a robust process-shared mutex; a publisher killed while
  * holding it is detected (EOWNERDEAD) by the next one: a slot it left WRITING is simply
  * written again under the same sequence number (readers never saw that number, since
@@ -74,10 +76,8 @@ typedef struct ln_ring_header {
     /* publishers */
     alignas(64) pthread_mutex_t write_lock;
     alignas(64) _Atomic uint64_t write_seq; /* last committed sequence number, 0: none yet */
-    alignas(64) _Atomic uint32_t data_futex; /* bumped on commit when readers sleep */
-    _Atomic uint32_t data_waiters;
-    alignas(64) _Atomic uint32_t space_futex; /* bumped when a queued reader frees a buffer */
-    _Atomic uint32_t space_waiters;
+    alignas(64) _Atomic uint32_t data_futex;  /* readers sleep here (futex.h) */
+    alignas(64) _Atomic uint32_t space_futex; /* publishers waiting for queued readers */
     alignas(64) ln_ring_reader readers[LN_RING_MAX_READERS];
 } ln_ring_header;
 
@@ -88,15 +88,18 @@ typedef struct ln_ring_slot {
     /* payload follows, 64-byte aligned */
 } ln_ring_slot;
 
-/* Bytes of the header region (page aligned), of one slot, and of a whole segment. */
+/* Bytes of the header region (page aligned) and of one slot (header + payload, 64-aligned). */
 uint64_t ln_ring_header_bytes(void);
-uint32_t ln_ring_stride(uint64_t message_size);
+uint64_t ln_ring_stride(uint64_t message_size);
 
-/* A mapped ring as a port sees it. */
+/* A mapped ring as a port sees it.  The geometry is copied at attach and never re-read from
+ * shared memory, so a corrupted header cannot send a client out of bounds. */
 typedef struct ln_ring {
     ln_map map;
     ln_ring_header* hdr;
     uint8_t* slots;
+    uint32_t slot_count;
+    uint32_t stride;
     char name[LN_RING_NAME_MAX];
 } ln_ring;
 
@@ -106,7 +109,7 @@ void ln_ring_detach(ln_ring* ring);
 
 static inline ln_ring_slot* ln_ring_slot_at(const ln_ring* ring, uint64_t seq)
 {
-    return (ln_ring_slot*)(ring->slots + (seq % ring->hdr->slot_count) * ring->hdr->slot_stride);
+    return (ln_ring_slot*)(ring->slots + (seq % ring->slot_count) * (uint64_t)ring->stride);
 }
 
 static inline void* ln_ring_payload(ln_ring_slot* slot)
@@ -125,7 +128,8 @@ typedef struct ln_deadline {
 
 static inline ln_deadline ln_deadline_in(double timeout)
 {
-    ln_deadline d = {.forever = timeout < 0, .fixed = 0, .timeout = timeout};
+    /* negative, infinite or beyond ~30 years: no deadline (NaN is refused by the API) */
+    ln_deadline d = {.forever = timeout < 0 || timeout > 1e9, .fixed = 0, .timeout = timeout};
     return d;
 }
 /* The absolute deadline (fixing it now if needed). */
@@ -133,12 +137,16 @@ const struct timespec* ln_deadline_at(ln_deadline* d);
 /* Time left until the deadline into *rel; 0 if some is left, ETIMEDOUT if it passed. */
 int ln_deadline_left(ln_deadline* d, struct timespec* rel);
 
-/* Writer side (callers: port.c).  lock takes write_lock (recovering from a dead owner). */
+/* Writer side (callers: port.c).  lock takes write_lock (recovering from a dead owner); with
+ * a zero timeout it still tries for a few microseconds, so a publisher does not drop a sample
+ * just because another one is in the middle of a write. */
 int ln_ring_lock(ln_ring* ring, ln_deadline* d);
-void ln_ring_unlock(ln_ring* ring);
-/* Under the lock: wait until every queued reader has room for one more sample.  LN_ECLOSED if
- * the ring was retired meanwhile (unlock and move to the successor). */
-int ln_ring_wait_for_space(ln_ring* ring, ln_deadline* d);
+int ln_ring_unlock(ln_ring* ring);
+/* Under the lock: 1 if every queued reader has room for one more sample. */
+int ln_ring_has_space(const ln_ring* ring);
+/* Without the lock: sleep until a queued reader frees a buffer (or the ring is retired, or
+ * the deadline passes: LN_ETIMEOUT).  May return LN_OK spuriously; callers re-check. */
+int ln_ring_sleep_for_space(ln_ring* ring, ln_deadline* d);
 /* Under the lock: start sample write_seq+1 and return its slot (marked WRITING). */
 ln_ring_slot* ln_ring_begin(ln_ring* ring);
 /* Under the lock: publish the slot begun last, then wake sleeping readers. */
@@ -160,8 +168,12 @@ typedef struct ln_ring_cursor {
  * there is none.  Samples a queued cursor can no longer get are counted in `pending`. */
 int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t* word);
 /* After the payload was copied or used: LN_OK if the slot still holds that sample (the cursor
- * moves on), LN_EOVERRUN if a publisher reused the slot meanwhile (pick again). */
-int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_t word);
+ * moves on), LN_EOVERRUN if a publisher reused the slot meanwhile (pick again).  count_loss: a
+ * queued cursor counts the sample as lost (0 when it was already handed out, as a borrow). */
+int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_t word,
+                   int count_loss);
+/* Publish a queued cursor's position in its reader slot of `ring` (for waiting publishers). */
+void ln_ring_publish_cursor(ln_ring* ring, const ln_ring_cursor* c);
 /* Sleep until a sample >= seq is committed, the ring is retired, or the deadline passes
  * (LN_ETIMEOUT).  May return LN_OK spuriously; callers pick again. */
 int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d);

@@ -56,7 +56,7 @@ int ln_ring_admin_create(ln_ring_admin** out, const char* shm_name, const char* 
         return ln_set_error(NULL, LN_EINVAL, "topic or md name longer than %d bytes",
                             LN_RING_NAME_MAX - 1);
     if (slots < 2 || slots > LN_RING_MAX_SLOTS || message_size == 0 ||
-        message_size > UINT32_MAX - 4096)
+        ln_ring_stride(message_size) == 0 || ln_ring_stride(message_size) > UINT32_MAX)
         return ln_set_error(NULL, LN_ELIMIT, "ring of %u slots of %llu bytes is out of range",
                             slots, (unsigned long long)message_size);
     ln_ring_admin* a = calloc(1, sizeof(*a));
@@ -75,7 +75,7 @@ int ln_ring_admin_create(ln_ring_admin** out, const char* shm_name, const char* 
     h->message_size = message_size;
     h->segment_size = size;
     h->slot_count = slots;
-    h->slot_stride = ln_ring_stride(message_size);
+    h->slot_stride = (uint32_t)ln_ring_stride(message_size);
     snprintf(h->topic, sizeof(h->topic), "%s", topic);
     snprintf(h->md_name, sizeof(h->md_name), "%s", md_name);
     rc = init_mutex(&h->write_lock);
@@ -140,8 +140,7 @@ int ln_ring_admin_reserve_reader(ln_ring_admin* a, uint32_t index, int32_t pid, 
 
 static void wake_publishers(ln_ring_header* h)
 {
-    atomic_fetch_add_explicit(&h->space_futex, 1, memory_order_seq_cst);
-    ln_futex_wake_all(&h->space_futex);
+    ln_futex_bump_wake(&h->space_futex);
 }
 
 int ln_ring_admin_release_reader(ln_ring_admin* a, uint32_t index)
@@ -190,8 +189,7 @@ int ln_ring_admin_retire(ln_ring_admin* a, ln_ring_admin* successor, const char*
     atomic_store_explicit(&old->retired, 1, memory_order_seq_cst);
     ln_ring_unlock(&ring);
     /* Sleeping readers and waiting publishers must notice the move. */
-    atomic_fetch_add_explicit(&old->data_futex, 1, memory_order_seq_cst);
-    ln_futex_wake_all(&old->data_futex);
+    ln_futex_bump_wake(&old->data_futex);
     wake_publishers(old);
     return LN_OK;
 }

@@ -96,8 +96,9 @@ LN_EXPORT int ln_version_check(int major, int minor);
  * port handles must not be used after their client is gone.  Setup calls (create, publish,
  * subscribe, unpublish, unsubscribe, destroy) must come from one thread at a time; ln_write,
  * ln_read and the zero-copy calls may be used from any thread, one thread per port at a time.
- * Timeouts are in seconds: < 0 waits forever, 0 does not wait (LN_EAGAIN), > 0 waits at
- * most that long (LN_ETIMEOUT). */
+ * Timeouts are in seconds: < 0 (or infinity) waits forever, 0 does not wait (LN_EAGAIN), > 0
+ * waits at most that long (LN_ETIMEOUT), NaN is LN_EINVAL.  A port must not be used after it
+ * was closed or its client destroyed. */
 typedef struct ln_client ln_client;
 typedef struct ln_outport ln_outport;
 typedef struct ln_inport ln_inport;
@@ -161,7 +162,8 @@ typedef struct ln_sample_info {
  * port has LN_PUBLISH_WAIT_FOR_SUBSCRIBERS or another publisher of the topic holds a loan. */
 LN_EXPORT int ln_write(ln_outport* port, const void* data, size_t size, double timeout);
 /* Zero-copy write: *data points at the next slot; fill it, then commit (publishes it) or
- * abort (publishes nothing).  Other publishers of the topic wait until then. */
+ * abort (publishes nothing), on the same thread.  Other publishers of the topic wait until
+ * then; from another thread commit and abort fail with LN_EBUSY. */
 LN_EXPORT int ln_write_loan(ln_outport* port, void** data, double timeout);
 LN_EXPORT int ln_write_commit(ln_outport* port);
 LN_EXPORT int ln_write_abort(ln_outport* port);
