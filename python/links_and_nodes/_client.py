@@ -98,6 +98,29 @@ class client:  # noqa: N801 - the LN name
             pass
 
 
+_ln_read = C.ln_read
+_ln_write = C.ln_write
+
+
+class _CallArgs:
+    """A port's handle, packet address and size as ctypes objects, and the last timeout."""
+
+    __slots__ = ("handle", "data", "size", "_timeout", "_timeout_c")
+
+    def __init__(self, handle: int, packet: LnStruct) -> None:
+        self.handle = ctypes.c_void_p(handle)
+        self.data = ctypes.c_void_p(ctypes.addressof(packet))
+        self.size = ctypes.c_size_t(ctypes.sizeof(packet))
+        self._timeout: float | None = None
+        self._timeout_c = ctypes.c_double(-1.0)
+
+    def timeout(self, timeout: float | None) -> ctypes.c_double:
+        if timeout != self._timeout:
+            self._timeout = timeout
+            self._timeout_c = ctypes.c_double(_timeout(timeout))
+        return self._timeout_c
+
+
 class _Port:
     _close_fn: Any = None
 
@@ -149,11 +172,17 @@ class publisher(_Port):  # noqa: N801
         super().__init__(clnt, topic_name, md_name)
         flags = C.LN_PUBLISH_WAIT_FOR_SUBSCRIBERS if wait_for_subscribers else 0
         self._open(C.ln_publish, buffers, flags)
+        # ctypes arguments of the hot path, converted once (halves the cost of a call)
+        self._args = _CallArgs(self.handle, self.packet)
 
     def write(self, packet: LnStruct | None = None, timeout: float | None = None) -> None:
         """Publish `packet` (default: self.packet) by copying it into the topic."""
-        pkt = self.packet if packet is None else packet
-        C.ln_write(self.handle, ctypes.addressof(pkt), ctypes.sizeof(pkt), _timeout(timeout))
+        a = self._args
+        if packet is None or packet is self.packet:
+            _ln_write(a.handle, a.data, a.size, a.timeout(timeout))
+        else:
+            _ln_write(a.handle, ctypes.addressof(packet), ctypes.sizeof(packet),
+                      _timeout(timeout))
 
     @contextmanager
     def loan(self, timeout: float | None = None) -> Iterator[LnStruct]:
@@ -181,6 +210,8 @@ class subscriber(_Port):  # noqa: N801
         self.buffers = buffers
         self.info = C.SampleInfo()
         self._open(C.ln_subscribe, buffers, 0)
+        self._args = _CallArgs(self.handle, self.packet)
+        self._info_ref = ctypes.byref(self.info)
 
     def _result(self, rc: int) -> bool:
         if rc in (C.LN_ETIMEOUT, C.LN_EAGAIN):
@@ -194,10 +225,11 @@ class subscriber(_Port):  # noqa: N801
 
         timeout None blocks, 0 returns at once.  self.info has seq, timestamp_ns and the
         overruns since the previous read."""
-        pkt = self.packet
-        rc = C.ln_read(self.handle, ctypes.addressof(pkt), ctypes.sizeof(pkt), _timeout(timeout),
-                       ctypes.byref(self.info))
-        return pkt if self._result(rc) else None
+        a = self._args
+        rc = _ln_read(a.handle, a.data, a.size, a.timeout(timeout), self._info_ref)
+        if rc == 0:
+            return self.packet
+        return self.packet if self._result(rc) else None
 
     @contextmanager
     def borrow(self, timeout: float | None = None) -> Iterator[LnStruct | None]:
