@@ -1,0 +1,80 @@
+/* bench_common.h — code shared by the topic benchmark programs: the clock, the benchmark
+ * md for a payload size, round-trip output for the driver and error exits.  Header-only, so
+ * each program stays one translation unit. */
+#ifndef LN_BENCH_COMMON_H
+#define LN_BENCH_COMMON_H
+
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <ln/ln.h>
+
+#include "bench_messages.h"
+
+typedef struct bench_md {
+    size_t size;
+    const char* name;
+    uint64_t hash;
+} bench_md;
+
+static inline uint64_t bench_now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+/* The benchmark md whose message is exactly `size` bytes; exits if there is none. */
+static inline bench_md bench_md_for(size_t size)
+{
+    static const bench_md table[] = {
+        {sizeof(lnbench_sample_64_t), LNBENCH_SAMPLE_64_MD_NAME, LNBENCH_SAMPLE_64_LAYOUT_HASH},
+        {sizeof(lnbench_sample_4k_t), LNBENCH_SAMPLE_4K_MD_NAME, LNBENCH_SAMPLE_4K_LAYOUT_HASH},
+        {sizeof(lnbench_sample_1m_t), LNBENCH_SAMPLE_1M_MD_NAME, LNBENCH_SAMPLE_1M_LAYOUT_HASH},
+        {sizeof(lnbench_sample_4m_t), LNBENCH_SAMPLE_4M_MD_NAME, LNBENCH_SAMPLE_4M_LAYOUT_HASH},
+    };
+    for (size_t i = 0; i < sizeof(table) / sizeof(table[0]); i++)
+        if (table[i].size == size)
+            return table[i];
+    fprintf(stderr, "no benchmark md of %zu bytes (64, 4096, 1048576, 4194304)\n", size);
+    exit(2);
+}
+
+static inline void bench_fail(const char* what, int rc)
+{
+    fprintf(stderr, "%s: %s: %s\n", what, ln_error_name(rc), ln_last_error());
+    exit(2);
+}
+
+static inline void* bench_alloc(size_t size)
+{
+    void* p = aligned_alloc(64, (size + 63) / 64 * 64);
+    if (!p) {
+        fprintf(stderr, "out of memory (%zu bytes)\n", size);
+        exit(2);
+    }
+    memset(p, 0x5a, size); /* touch every page before timing */
+    return p;
+}
+
+/* Round trips in ns as raw little-endian uint64 values: the driver computes percentiles
+ * for every transport the same way. */
+static inline void bench_write_samples(const char* path, const uint64_t* rtt, size_t n)
+{
+    FILE* f = fopen(path, "wb");
+    if (!f || fwrite(rtt, sizeof(*rtt), n, f) != n || fclose(f) != 0) {
+        perror(path);
+        exit(2);
+    }
+}
+
+static inline void bench_ready(void)
+{
+    printf("ready\n");
+    fflush(stdout);
+}
+
+#endif /* LN_BENCH_COMMON_H */

@@ -1,0 +1,241 @@
+"""Benchmark of topics: latency, throughput and publish cost of links_and_nodes beside a raw
+futex floor and pyzmq, in one run with its own ln_manager (builds nothing: run scons first).
+Prints tables and the goals with PASS/MISS, writes bench/results/topics.json, exits 0 either way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.metadata
+import importlib.util
+import json
+import os
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import topics_report as report
+from topics_run import CaseError, Manager, Runner, can_pin
+
+REPO = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent
+PROGRAMS = ("lat_ln", "lat_futex", "thr_ln", "pub_cost")
+SIZES = [64, 4096, 1 << 20, 4 << 20]
+# size -> (round trips, warm-up); fewer for MiB sizes, where each one takes milliseconds
+LAT_ITERATIONS = {64: (20000, 2000), 4096: (20000, 2000), 1 << 20: (2000, 200),
+                  4 << 20: (1000, 100)}
+THR_SIZES = [64, 4096, 1 << 20]
+THR_COUNT_C = {64: 2_000_000, 4096: 400_000, 1 << 20: 4000}
+THR_COUNT_PY = {64: 300_000, 4096: 150_000, 1 << 20: 3000}
+THR_BUFFERS = {64: 1024, 4096: 1024, 1 << 20: 64}
+PUB_COST = (2_000_000, 7)  # writes per round, rounds
+Record = dict[str, Any]
+Cpus = tuple[int | None, int | None]  # (server/pong, client/ping); None: the scheduler's choice
+
+
+def log(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+class Bench:
+    """The cases: each starts its programs through the runner and returns one record."""
+
+    def __init__(self, args: argparse.Namespace, runner: Runner, zmq: bool) -> None:
+        self.bin = args.build_dir / "bench" / "topics"
+        self.scale = 10 if args.quick else 1
+        self.runner = runner
+        self.zmq = zmq
+        self.py = [sys.executable]
+
+    def n(self, count: int, floor: int = 10) -> int:
+        return max(floor, count // self.scale)
+
+    def latency_case(self, key: str, size: int, cpus: Cpus) -> Record:
+        count, warmup = (self.n(c) for c in LAT_ITERATIONS[size])
+        out = self.runner.path("rtt")
+        name = f"bench.lat{self.runner.serial}"
+        total = str(count + warmup)
+        tail = [str(count), str(warmup), str(out)]
+        if key == "futex":
+            pong_cpu = [] if cpus[0] is None or cpus[0] == cpus[1] else [str(cpus[0])]
+            self.runner.single([str(self.bin / "lat_futex"), str(size), *tail, *pong_cpu],
+                               cpus[1])
+        elif key in ("ln_c", "ln_c_zc"):
+            prog, mode = str(self.bin / "lat_ln"), "zc" if key == "ln_c_zc" else "copy"
+            self.runner.pair([prog, "pong", name, str(size), mode, total],
+                             [prog, "ping", name, str(size), mode, *tail], cpus, key)
+        else:
+            script = str(HERE / ("py_ln.py" if key == "ln_py" else "py_zmq.py"))
+            where = name if key == "ln_py" else f"ipc://{self.runner.path('zmq')}.sock"
+            self.runner.pair([*self.py, script, "pong", where, str(size), total],
+                             [*self.py, script, "ping", where, str(size), *tail], cpus, key)
+        return {**report.one_way_stats(out), "warmup": warmup,
+                "same_cpu": self.runner.same_cpu}
+
+    def throughput_case(self, key: str, mode: str, size: int) -> Record:
+        count = self.n(THR_COUNT_C[size] if key == "ln_c" else THR_COUNT_PY[size], 100)
+        name = f"bench.thr{self.runner.serial}"
+        self.runner.serial += 1
+        if key == "ln_c":
+            prog = str(self.bin / "thr_ln")
+            sub = [prog, "sub", name, str(size), str(count), str(THR_BUFFERS[size])]
+            pub = [prog, "pub", name, str(size), str(count), mode]
+        elif key == "ln_py":
+            script = str(HERE / "py_ln.py")
+            sub = [*self.py, script, "sub", name, str(size), str(count), str(THR_BUFFERS[size])]
+            pub = [*self.py, script, "pub", name, str(size), str(count), mode]
+        else:
+            script, addr = str(HERE / "py_zmq.py"), f"ipc://{self.runner.path('zmq')}.sock"
+            recv_role = "pull" if mode == "push" else "sub"
+            sub = [*self.py, script, recv_role, addr, str(size), str(count)]
+            pub = [*self.py, script, mode, addr, str(size), str(count)]
+        sub_out, pub_out = self.runner.pair(sub, pub, (None, None), f"{key} {mode}")
+        got = json.loads(sub_out.strip().splitlines()[-1])
+        sent = json.loads(pub_out.strip().splitlines()[-1])
+        rate = got["received"] / got["elapsed_s"] if got["elapsed_s"] > 0 else 0.0
+        return {"sent": sent["sent"], "received": got["received"],
+                "lost": sent["sent"] - got["received"], "overruns": got["overruns"],
+                "disorder": got["disorder"], "elapsed_s": got["elapsed_s"], "recv_rate": rate,
+                "gb_per_s": rate * size / 1e9, "send_rate": sent["sent"] / sent["elapsed_s"],
+                "buffers": THR_BUFFERS[size] if key != "zmq" else None}
+
+    def pub_cost(self) -> Record:
+        count, rounds = self.n(PUB_COST[0], 1000), PUB_COST[1] if self.scale == 1 else 3
+        argv = [str(self.bin / "pub_cost"), "bench.cost", "64", str(count), str(rounds)]
+        out = self.runner.finish(self.runner.spawn(argv, None), "pub_cost")
+        return {**json.loads(out.strip().splitlines()[-1]), "count": count, "rounds": rounds}
+
+
+def attempt(what: str, fn: Any, *args: Any) -> Record:
+    t0 = time.monotonic()
+    try:
+        rec = fn(*args)
+    except (CaseError, ValueError, KeyError, IndexError, OSError) as exc:
+        log(f"  {what}: ERROR {exc}")
+        return {"error": str(exc)}
+    log(f"  {what}: {time.monotonic() - t0:.1f} s")
+    return rec
+
+
+def placements(usable: list[int], pin_cpu: int) -> tuple[dict[str, tuple[Cpus, list[int]]], str]:
+    """Where the two processes of a latency case run: name -> (cpus, sizes); and a note."""
+    result: dict[str, tuple[Cpus, list[int]]] = {"sched": ((None, None), SIZES)}
+    other = [c for c in usable if c != pin_cpu]
+    why_not = can_pin([pin_cpu, *other[:1]])
+    if why_not:
+        return result, f"pinning unavailable: {why_not}"
+    result["pinned"] = ((pin_cpu, pin_cpu), SIZES)
+    if other:  # context: what a wake-up across CPUs costs here
+        result["split"] = ((other[0], pin_cpu), SIZES[:1])
+    return result, "available (sched_setaffinity)"
+
+
+def run_all(bench: Bench, where: dict[str, tuple[Cpus, list[int]]]
+            ) -> tuple[list[Record], list[Record], Record]:
+    log("publish cost")
+    cost = attempt("pub_cost", bench.pub_cost)
+    latency: list[Record] = []
+    for placement, (cpus, sizes) in where.items():
+        log(f"latency, {placement}")
+        for size in sizes:  # all transports of one size close together in time
+            for key in report.LATENCY:
+                if key == "zmq" and not bench.zmq:
+                    continue
+                rec = attempt(f"{report.size_label(size)} {key}", bench.latency_case, key, size,
+                              cpus)
+                latency.append({"size": size, "transport": key, "placement": placement, **rec})
+    log("throughput")
+    throughput: list[Record] = []
+    for size in THR_SIZES:
+        for key, mode in report.THROUGHPUT:
+            if key == "zmq" and not bench.zmq:
+                continue
+            rec = attempt(f"{report.size_label(size)} {key} {mode}", bench.throughput_case,
+                          key, mode, size)
+            throughput.append({"size": size, "transport": key, "mode": mode, **rec})
+    return latency, throughput, cost
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=" ".join(__doc__.split()))
+    parser.add_argument("--quick", action="store_true",
+                        help="a tenth of the iterations: a smoke run, not a measurement")
+    parser.add_argument("--cpu", type=int, help="CPU for the pinned runs (default: the last)")
+    parser.add_argument("--build-dir", type=Path, default=REPO / "build" / "release",
+                        help="SCons variant directory with bench/topics/ (build/release)")
+    parser.add_argument("--json", type=Path, default=REPO / "bench" / "results" / "topics.json",
+                        help="where the results go (bench/results/topics.json)")
+    args = parser.parse_args()
+
+    missing = [p for p in PROGRAMS if not (args.build_dir / "bench" / "topics" / p).exists()]
+    if missing:
+        print(f"bench_topics: {', '.join(missing)} missing under {args.build_dir}/bench/topics: "
+              "build them first with `scons -j2`", file=sys.stderr)
+        return 2
+    has_zmq = importlib.util.find_spec("zmq") is not None
+    usable = sorted(os.sched_getaffinity(0))
+    pin_cpu = args.cpu if args.cpu is not None else usable[-1]
+    if pin_cpu not in usable:
+        parser.error(f"--cpu {pin_cpu} is not one of the usable CPUs {usable}")
+    where, pin_text = placements(usable, pin_cpu)
+    names = {"sched": "the scheduler's placement", "pinned": f"both on CPU {pin_cpu}"}
+    if "split" in where:
+        names["split"] = f"pong on CPU {where['split'][0][0]}, ping on CPU {pin_cpu}"
+    load_start = os.getloadavg()
+    started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+
+    with tempfile.TemporaryDirectory(prefix="ln_bench_topics_") as tmp_name:
+        tmp = Path(tmp_name)
+        manager = Manager.start(tmp)
+        env = {**os.environ, "LN_MANAGER": manager.address,
+               "LN_RUNTIME_DIR": str(tmp / "runtime")}
+        runner = Runner(tmp, env)
+        try:
+            latency, throughput, cost = run_all(Bench(args, runner, has_zmq), where)
+        finally:
+            runner.kill_all()
+            leftover = manager.stop()
+    goals = report.goals(latency, throughput, cost)
+    zmq_version = importlib.metadata.version("pyzmq") if has_zmq else None
+
+    print("goals: C 64 B p50 <= 1.2x futex floor; zero-copy 4 MiB p50 <= 2x zero-copy 64 B; "
+          "Python 64 B p50 <= 0.5x pyzmq;\n       Python 64 B queued throughput >= 2x pyzmq "
+          "with zero loss; publish with no waiting reader <= 100 ns")
+    print(f"cpu: os.cpu_count()={os.cpu_count()}, usable={len(usable)} {usable}; "
+          f"pinning: {pin_text}")
+    perf = cost.get("perf_counters")
+    print(f"perf counters: {'available' if perf else 'unavailable'}"
+          + (f" ({cost.get('perf_counters_error')})" if perf is False else "")
+          + f"; load average at start {load_start[0]:.2f}, at end {os.getloadavg()[0]:.2f}")
+    print(f"python {platform.python_version()}, "
+          + (f"pyzmq {zmq_version}" if has_zmq else "pyzmq not installed: its rows are missing")
+          + ("; --quick: a smoke run, the numbers are not a measurement" if args.quick else ""))
+    for lines in (report.latency_tables(latency, SIZES, {k: names[k] for k in where}),
+                  report.throughput_table(throughput), report.pub_cost_table(cost),
+                  report.goals_table(goals)):
+        print()
+        print("\n".join(lines))
+    if leftover:
+        print(f"\nwarning: the manager left {len(leftover)} segment(s) behind (removed): "
+              f"{', '.join(leftover)}")
+
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps({
+        "started": started, "quick": args.quick, "machine": platform.machine(),
+        "kernel": platform.release(), "python_version": platform.python_version(),
+        "cpu_count": os.cpu_count(), "usable_cpus": usable, "pinning": pin_text,
+        "placements": {k: {"cpus": v[0], "sizes": v[1], "what": names[k]} for k, v in where.items()},
+        "perf_counters": perf, "loadavg_start": load_start, "loadavg_end": os.getloadavg(),
+        "pyzmq": zmq_version,
+        "latency": latency, "throughput": throughput, "publish_cost": cost, "goals": goals,
+        "leftover_segments": leftover,
+    }, indent=2) + "\n")
+    print(f"\nwrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
