@@ -34,6 +34,7 @@ struct ln_outport {
 struct ln_inport {
     ln_port_common c;
     ln_ring_cursor cur;
+    uint32_t spin_us;
     ln_ring_slot* borrowed;
     uint64_t borrowed_word;
 };
@@ -43,6 +44,7 @@ void ln_port_options_init(ln_port_options* opts)
     if (opts) {
         opts->buffers = 1;
         opts->flags = 0;
+        opts->spin_us = LN_DEFAULT_SPIN_US;
     }
 }
 
@@ -221,6 +223,7 @@ int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char
         return rc;
     }
     p->cur.buffers = opts && opts->buffers > 1 ? opts->buffers : 1;
+    p->spin_us = opts ? opts->spin_us : LN_DEFAULT_SPIN_US;
     p->cur.reader = reader == LN_NO_READER || reader >= LN_RING_MAX_READERS ? -1 : (int)reader;
     if (p->cur.buffers > 1 && p->cur.reader >= 0)
         p->cur.next = atomic_load(&p->c.ring.hdr->readers[p->cur.reader].next_seq);
@@ -377,6 +380,7 @@ static int next_sample(ln_inport* p, double timeout, ln_ring_slot** slot, uint64
     if (rc != LN_OK)
         return rc;
     ln_deadline d = ln_deadline_in(timeout);
+    int spun = 0;
     for (;;) {
         /* Read `retired` first: a sample committed before the retirement is then seen by the
          * pick below. */
@@ -392,6 +396,11 @@ static int next_sample(ln_inport* p, double timeout, ln_ring_slot** slot, uint64
         }
         if (timeout == 0)
             return LN_EAGAIN;
+        if (!spun) {
+            spun = 1;
+            if (ln_ring_spin_data(&p->c.ring, p->cur.next, p->spin_us))
+                continue;
+        }
         rc = ln_ring_wait_data(&p->c.ring, p->cur.next, &d);
         if (rc == LN_ETIMEOUT)
             return ln_set_error(p->c.clnt, LN_ETIMEOUT, "no sample on topic '%s' within %g s",

@@ -4,6 +4,7 @@
 #include "ring.h"
 
 #include <errno.h>
+#include <sched.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -296,6 +297,28 @@ int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_
     c->next = n + 1;
     ln_ring_publish_cursor(ring, c);
     return LN_OK;
+}
+
+int ln_ring_spin_data(const ln_ring* ring, uint64_t seq, uint32_t spin_us)
+{
+    const ln_ring_header* h = ring->hdr;
+    if (spin_us == 0)
+        return 0;
+    struct timespec start, now;
+    clock_gettime(CLOCK_MONOTONIC, &start);
+    int64_t limit = (int64_t)spin_us * 1000;
+    for (;;) {
+        for (int i = 0; i < 8; i++) {
+            if (atomic_load_explicit(&h->write_seq, memory_order_acquire) >= seq ||
+                atomic_load_explicit(&h->retired, memory_order_acquire))
+                return 1;
+            /* Yield, not just pause: a publisher on this CPU gets to run right away. */
+            sched_yield();
+        }
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        if ((now.tv_sec - start.tv_sec) * 1000000000LL + (now.tv_nsec - start.tv_nsec) >= limit)
+            return 0;
+    }
 }
 
 int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d)

@@ -174,6 +174,9 @@ int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_
                    int count_loss);
 /* Publish a queued cursor's position in its reader slot of `ring` (for waiting publishers). */
 void ln_ring_publish_cursor(ln_ring* ring, const ln_ring_cursor* c);
+/* Poll (yielding the CPU) for up to spin_us until a sample >= seq is committed or the ring is
+ * retired; 1 if that happened. */
+int ln_ring_spin_data(const ln_ring* ring, uint64_t seq, uint32_t spin_us);
 /* Sleep until a sample >= seq is committed, the ring is retired, or the deadline passes
  * (LN_ETIMEOUT).  May return LN_OK spuriously; callers pick again. */
 int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d);

@@ -64,9 +64,10 @@ class client:  # noqa: N801 - the LN name
         return port
 
     def subscribe(self, topic_name: str, message_definition_name: str,
-                  buffers: int = 1) -> subscriber:
-        """buffers=1: *latest* mode; buffers=N > 1: *queued* mode with N buffers."""
-        port = subscriber(self, topic_name, message_definition_name, buffers)
+                  buffers: int = 1, spin_us: int | None = None) -> subscriber:
+        """buffers=1: *latest* mode; buffers=N > 1: *queued* mode with N buffers.  spin_us:
+        how long a blocking read polls before it sleeps (default: libln's, 20 us)."""
+        port = subscriber(self, topic_name, message_definition_name, buffers, spin_us)
         self._ports.append(port)
         return port
 
@@ -138,8 +139,12 @@ class _Port:
             raise ValueError(f"port of topic '{self.topic_name}' is closed")
         return self._handle
 
-    def _open(self, fn: Any, buffers: int, flags: int) -> None:
-        opts = C.PortOptions(buffers, flags)
+    def _open(self, fn: Any, buffers: int, flags: int, spin_us: int | None = None) -> None:
+        opts = C.PortOptions()
+        C.ln_port_options_init(ctypes.byref(opts))
+        opts.buffers, opts.flags = buffers, flags
+        if spin_us is not None:
+            opts.spin_us = spin_us
         handle = ctypes.c_void_p()
         cls = self.message_class
         fn(self.client.handle, ctypes.byref(handle), self.topic_name.encode(),
@@ -205,11 +210,12 @@ class publisher(_Port):  # noqa: N801
 class subscriber(_Port):  # noqa: N801
     _close_fn = staticmethod(C.ln_unsubscribe)
 
-    def __init__(self, clnt: client, topic_name: str, md_name: str, buffers: int = 1) -> None:
+    def __init__(self, clnt: client, topic_name: str, md_name: str, buffers: int = 1,
+                 spin_us: int | None = None) -> None:
         super().__init__(clnt, topic_name, md_name)
         self.buffers = buffers
         self.info = C.SampleInfo()
-        self._open(C.ln_subscribe, buffers, 0)
+        self._open(C.ln_subscribe, buffers, 0, spin_us)
         self._args = _CallArgs(self.handle, self.packet)
         self._info_ref = ctypes.byref(self.info)
 

@@ -22,7 +22,7 @@ class ClientOptions(ctypes.Structure):
 
 
 class PortOptions(ctypes.Structure):
-    _fields_ = [("buffers", c_uint32), ("flags", c_uint32)]
+    _fields_ = [("buffers", c_uint32), ("flags", c_uint32), ("spin_us", c_uint32)]
 
 
 class SampleInfo(ctypes.Structure):

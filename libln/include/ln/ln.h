@@ -131,9 +131,15 @@ LN_EXPORT const char* ln_last_error(void);
  * wait (up to its timeout) while a queued subscriber has no free buffer, instead of dropping
  * that subscriber's oldest sample. */
 #define LN_PUBLISH_WAIT_FOR_SUBSCRIBERS 0x1u
+/* Before a blocking read sleeps, it polls (yielding the CPU) for up to spin_us: a sample that
+ * comes within that time is seen without a futex wake-up, which costs tens of microseconds when
+ * it crosses CPUs.  0 sleeps at once; the cost is at most spin_us of CPU per blocking read that
+ * waits longer. */
+#define LN_DEFAULT_SPIN_US 20u
 typedef struct ln_port_options {
     uint32_t buffers; /* 1 .. 1024, default 1 */
     uint32_t flags;   /* LN_PUBLISH_* */
+    uint32_t spin_us; /* subscribers: poll before sleeping, default LN_DEFAULT_SPIN_US */
 } ln_port_options;
 
 LN_EXPORT void ln_port_options_init(ln_port_options* opts);
