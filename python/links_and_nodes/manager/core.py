@@ -67,7 +67,7 @@ class Core:
             if hello.pid > _MAX_PID:
                 raise RequestError("EINVAL", f"pid {hello.pid} out of range")
             client = self.registry.add_client(hello.client_name, hello.pid, session.address,
-                                              hello.library_version)
+                                              hello.libln_version)
         except RequestError as exc:
             raise HandshakeRefused(p.Error(0, error_code(exc.code), exc.text)) from None
         session.client = client

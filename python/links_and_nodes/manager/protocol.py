@@ -56,10 +56,10 @@ class Hello(Message):
     version: int
     pid: int
     client_name: str
-    library_version: str
+    libln_version: str
     TYPE = MsgType.HELLO
     FIELDS = (("magic", "u32"), ("version", "u16"), ("pid", "u32"),
-              ("client_name", "str"), ("library_version", "str"))
+              ("client_name", "str"), ("libln_version", "str"))
     FROM_CLIENT = True
 
 

@@ -55,7 +55,7 @@ class Client:
     name: str
     pid: int
     address: str
-    library_version: str
+    libln_version: str
     ports: dict[int, Port] = field(default_factory=dict)
 
 
@@ -166,7 +166,7 @@ class Registry:
         self._next_topic_id = 1
 
     # ---- clients ------------------------------------------------------------------------
-    def add_client(self, name: str, pid: int, address: str, library_version: str) -> Client:
+    def add_client(self, name: str, pid: int, address: str, libln_version: str) -> Client:
         """Register a client under `name`, or `name-2`, `name-3`, ... if that is taken."""
         problem = client_name_problem(name)
         if problem:
@@ -175,7 +175,7 @@ class Registry:
         unique, suffix = name, 2
         while unique in taken:
             unique, suffix = f"{name}-{suffix}", suffix + 1
-        client = Client(self._next_client_id, unique, pid, address, library_version)
+        client = Client(self._next_client_id, unique, pid, address, libln_version)
         self._next_client_id += 1
         self.clients[client.id] = client
         return client

@@ -120,7 +120,7 @@ class Server:
         client = session.client
         assert client is not None
         log.info("%s: connected (pid %d, library %s)", session.label, client.pid,
-                 client.library_version)
+                 client.libln_version)
         while True:
             frame = await self._read(reader)
             if frame is None:
