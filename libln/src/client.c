@@ -30,6 +30,20 @@ void ln_client_store_error(ln_client* clnt, int code, const char* text)
     pthread_mutex_unlock(&clnt->state_lock);
 }
 
+int ln_client_last_error(const ln_client* clnt, char* text, size_t size)
+{
+    int rc = ln_client_check(clnt);
+    if (rc != LN_OK)
+        return rc;
+    ln_client* c = (ln_client*)clnt; /* the lock is not part of the logical state */
+    pthread_mutex_lock(&c->state_lock);
+    rc = c->last_code;
+    if (text && size)
+        snprintf(text, size, "%s", c->last_error);
+    pthread_mutex_unlock(&c->state_lock);
+    return rc;
+}
+
 pid_t ln_client_pid(const ln_client* clnt)
 {
     assert(clnt != NULL);

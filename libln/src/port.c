@@ -293,6 +293,14 @@ static int begin_write(ln_outport* p, ln_deadline* d, ln_ring_slot** slot)
     }
 }
 
+/* Failures inside the ring are recorded per thread; keep them on the client as well. */
+static int on_client(ln_port_common* p, int rc)
+{
+    if (rc < 0 && rc != LN_EAGAIN)
+        ln_client_store_error(p->clnt, rc, ln_last_error());
+    return rc;
+}
+
 int ln_write(ln_outport* p, const void* data, size_t size, double timeout)
 {
     int rc = bad_port(p, LN_OUTPORT_MAGIC, "ln_write");
@@ -310,7 +318,7 @@ int ln_write(ln_outport* p, const void* data, size_t size, double timeout)
     ln_ring_slot* slot;
     rc = begin_write(p, &d, &slot);
     if (rc != LN_OK)
-        return rc;
+        return on_client(&p->c, rc);
     memcpy(ln_ring_payload(slot), data, size);
     ln_ring_commit(&p->c.ring, slot);
     return ln_ring_unlock(&p->c.ring);
@@ -331,7 +339,7 @@ int ln_write_loan(ln_outport* p, void** data, double timeout)
     ln_deadline d = ln_deadline_in(timeout);
     rc = begin_write(p, &d, &p->loan);
     if (rc != LN_OK)
-        return rc;
+        return on_client(&p->c, rc);
     p->loan_thread = pthread_self();
     *data = ln_ring_payload(p->loan);
     return LN_OK;
@@ -437,7 +445,7 @@ int ln_read(ln_inport* p, void* data, size_t size, double timeout, ln_sample_inf
         uint64_t word;
         rc = next_sample(p, timeout, &slot, &word);
         if (rc != LN_OK)
-            return rc;
+            return on_client(&p->c, rc);
         memcpy(data, ln_ring_payload(slot), size);
         int64_t ts = slot->timestamp_ns;
         if (ln_ring_finish(&p->c.ring, &p->cur, slot, word, 1) == LN_OK) {
@@ -461,7 +469,7 @@ int ln_read_borrow(ln_inport* p, const void** data, double timeout, ln_sample_in
     uint64_t word;
     rc = next_sample(p, timeout, &slot, &word);
     if (rc != LN_OK)
-        return rc;
+        return on_client(&p->c, rc);
     p->borrowed = slot;
     p->borrowed_word = word;
     fill_info(p, slot, word, slot->timestamp_ns, info);

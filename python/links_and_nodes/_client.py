@@ -71,6 +71,13 @@ class client:  # noqa: N801 - the LN name
         self._ports.append(port)
         return port
 
+    @property
+    def last_error(self) -> tuple[int, str]:
+        """(code, text) of the last error on this client or its ports, from any thread."""
+        buf = ctypes.create_string_buffer(2048)
+        code = C.ln_client_last_error(self.handle, buf, len(buf))
+        return code, buf.value.decode("utf-8", "replace")
+
     def unpublish(self, port: publisher) -> None:
         port.close()
 

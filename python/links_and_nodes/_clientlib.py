@@ -53,6 +53,7 @@ ln_client_create = _declare("ln_client_create", c_int, [ctypes.POINTER(c_void_p)
                                                          ctypes.POINTER(ClientOptions)], _check)
 ln_client_destroy = _declare("ln_client_destroy", c_int, [c_void_p], _check)
 ln_client_name = _declare("ln_client_name", c_char_p, [c_void_p])
+ln_client_last_error = _declare("ln_client_last_error", c_int, [c_void_p, c_char_p, c_size_t])
 ln_port_options_init = _declare("ln_port_options_init", None, [ctypes.POINTER(PortOptions)])
 _port_args = [c_void_p, ctypes.POINTER(c_void_p), c_char_p, c_char_p, c_uint64, c_size_t,
               ctypes.POINTER(PortOptions)]

@@ -125,6 +125,10 @@ LN_EXPORT const char* ln_client_name(const ln_client* clnt);
  * Valid until the thread's next libln call that fails; never NULL. */
 LN_EXPORT const char* ln_last_error(void);
 
+/* The last error of any call on this client or its ports, from whichever thread: copies its
+ * text into text[size] (NUL-terminated, may be NULL/0) and returns its code (LN_OK if none). */
+LN_EXPORT int ln_client_last_error(const ln_client* clnt, char* text, size_t size);
+
 /* Port options: buffers = 1 is a *latest* subscriber (always the newest sample), N > 1 a
  * *queued* one that sees every sample while it is at most N behind (older ones are dropped
  * and counted as overruns).  For publishers, LN_PUBLISH_WAIT_FOR_SUBSCRIBERS makes ln_write

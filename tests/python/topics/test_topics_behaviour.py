@@ -62,8 +62,11 @@ def test_read_timeout_and_nonblocking(manager: Manager) -> None:
     with manager.client() as clnt:
         sub = clnt.subscribe("t.quiet", "robot/joint_state", buffers=4)
         assert sub.read(timeout=0) is None
+        assert clnt.last_error == (0, "")  # "nothing yet" is not an error
         assert sub.read(timeout=0.05) is None
         assert "no sample on topic 't.quiet'" in ln._clientlib.last_error()
+        code, text = clnt.last_error  # kept on the client too, for other threads
+        assert code == ln.LnTimeoutError.code and "t.quiet" in text
 
 
 def test_zero_copy_write_and_read(manager: Manager) -> None:
