@@ -16,13 +16,14 @@ def main() -> int:
     expected = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
     clnt = ln.client("planner", sys.argv)
     command = clnt.publish("robot.command", "robot/command")
-    state = clnt.subscribe("robot.state", "robot/joint_state", buffers=256)
+    # Queued: every cycle, with up to about a second of slack at 1 kHz.
+    state = clnt.subscribe("robot.state", "robot/joint_state", buffers=min(1024, expected))
     print("planner: waiting for the arm controller", flush=True)
     received, last_cycle, gaps = 0, 0, 0
     while received < expected:
-        pkt = state.read(timeout=5.0)
+        pkt = state.read(timeout=30.0)
         if pkt is None:
-            print("planner: no joint state for 5 s, giving up", file=sys.stderr)
+            print("planner: no joint state for 30 s, giving up", file=sys.stderr)
             return 1
         received += 1
         gaps += pkt.cycle - last_cycle - 1 if last_cycle else 0

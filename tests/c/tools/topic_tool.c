@@ -2,8 +2,10 @@
  * and crash tests).  The manager comes from $LN_MANAGER.
  *   topic_tool pub-joint TOPIC COUNT            robot/joint_state samples with values from i
  *   topic_tool sub-joint TOPIC COUNT TIMEOUT    print "cycle timestamp pos0..6" per sample
- *   topic_tool pub-pattern TOPIC COUNT|0 [wait] pattern samples (0: forever, for kill tests)
- *   topic_tool sub-pattern TOPIC COUNT BUFFERS TIMEOUT   count, check order and tearing */
+ *   topic_tool pub-pattern TOPIC COUNT|0 [wait|nowait [FIRST]]   pattern samples with values
+ *                                   FIRST, FIRST+1, ... (0: forever, for kill tests)
+ *   topic_tool sub-pattern TOPIC COUNT BUFFERS TIMEOUT [STOP]   count, check order and tearing;
+ *                                   stops early at a sample whose value is STOP */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -72,7 +74,8 @@ static int sub_joint(ln_client* c, const char* topic, uint64_t count, double tim
     return 0;
 }
 
-static int pub_pattern(ln_client* c, const char* topic, uint64_t count, int wait)
+static int pub_pattern(ln_client* c, const char* topic, uint64_t count, int wait,
+                       uint64_t first)
 {
     ln_outport* p;
     ln_port_options o;
@@ -89,7 +92,7 @@ static int pub_pattern(ln_client* c, const char* topic, uint64_t count, int wait
             return fail("loan", rc);
         lntest_pattern_t* m = slot;
         for (int k = 0; k < 512; k++)
-            m->word[k] = i;
+            m->word[k] = first + i - 1;
         if ((rc = ln_write_commit(p)) < 0)
             return fail("commit", rc);
     }
@@ -97,7 +100,7 @@ static int pub_pattern(ln_client* c, const char* topic, uint64_t count, int wait
 }
 
 static int sub_pattern(ln_client* c, const char* topic, uint64_t count, uint32_t buffers,
-                       double timeout)
+                       double timeout, uint64_t stop)
 {
     ln_inport* s;
     ln_port_options o;
@@ -109,7 +112,7 @@ static int sub_pattern(ln_client* c, const char* topic, uint64_t count, uint32_t
     printf("ready\n");
     fflush(stdout);
     static lntest_pattern_t m;
-    uint64_t got = 0, torn = 0, disorder = 0, last_seq = 0, timeouts = 0;
+    uint64_t got = 0, torn = 0, disorder = 0, last_seq = 0, timeouts = 0, value = 0;
     ln_sample_info info;
     while (got < count) {
         rc = ln_read(s, &m, sizeof m, timeout, &info);
@@ -128,10 +131,13 @@ static int sub_pattern(ln_client* c, const char* topic, uint64_t count, uint32_t
         if (info.seq <= last_seq)
             disorder++;
         last_seq = info.seq;
+        value = m.word[0];
+        if (stop && value == stop)
+            break;
     }
     printf("received %" PRIu64 " torn %" PRIu64 " disorder %" PRIu64 " overruns %" PRIu64
-           " timeouts %" PRIu64 " last %" PRIu64 "\n",
-           got, torn, disorder, ln_inport_overruns(s), timeouts, last_seq);
+           " timeouts %" PRIu64 " last %" PRIu64 " value %" PRIu64 "\n",
+           got, torn, disorder, ln_inport_overruns(s), timeouts, last_seq, value);
     return 0;
 }
 
@@ -153,9 +159,11 @@ int main(int argc, char** argv)
     else if (!strcmp(mode, "sub-joint") && argc > 4)
         rc = sub_joint(c, topic, count, atof(argv[4]));
     else if (!strcmp(mode, "pub-pattern"))
-        rc = pub_pattern(c, topic, count, argc > 4 && !strcmp(argv[4], "wait"));
+        rc = pub_pattern(c, topic, count, argc > 4 && !strcmp(argv[4], "wait"),
+                         argc > 5 ? strtoull(argv[5], NULL, 10) : 1);
     else if (!strcmp(mode, "sub-pattern") && argc > 5)
-        rc = sub_pattern(c, topic, count, (uint32_t)atoi(argv[4]), atof(argv[5]));
+        rc = sub_pattern(c, topic, count, (uint32_t)atoi(argv[4]), atof(argv[5]),
+                         argc > 6 ? strtoull(argv[6], NULL, 10) : 0);
     else {
         fprintf(stderr, "topic_tool: bad arguments\n");
         rc = 2;

@@ -5,12 +5,13 @@ memory segment of the instance outlives the test."""
 from __future__ import annotations
 
 import os
+import selectors
 import subprocess
 import sys
 import time
 import uuid
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
@@ -34,13 +35,16 @@ class Manager:
     address: str
     proc: subprocess.Popen[str]
     env: dict[str, str]
+    tools: list[subprocess.Popen[str]] = field(default_factory=list)
 
     def tool(self, *args: str, cpp: bool = False) -> subprocess.Popen[str]:
         exe = TOOLS / ("topic_tool_cpp" if cpp else "topic_tool")
         if not exe.exists():
             pytest.fail(f"{exe} is missing: run scons first")
-        return subprocess.Popen([str(exe), *args], stdout=subprocess.PIPE, text=True,
+        proc = subprocess.Popen([str(exe), *args], stdout=subprocess.PIPE, text=True,
                                 env=self.env)
+        self.tools.append(proc)
+        return proc
 
     def client(self, name: str = "test") -> ln.client:
         return ln.client(name, self.address)
@@ -68,8 +72,14 @@ def start_manager(instance: str, runtime: Path) -> Manager:
     raise RuntimeError(f"manager did not start:\n{log_path.read_text()}")
 
 
-def wait_ready(proc: subprocess.Popen[str]) -> None:
+def wait_ready(proc: subprocess.Popen[str], limit: float = 60.0) -> None:
+    """Wait (at most `limit` s, an upper bound, not a measurement) for the tool's "ready"."""
     assert proc.stdout is not None
+    with selectors.DefaultSelector() as sel:
+        sel.register(proc.stdout, selectors.EVENT_READ)
+        if not sel.select(timeout=limit):
+            proc.kill()
+            pytest.fail(f"tool did not say ready within {limit} s")
     line = proc.stdout.readline()
     assert line.strip() == "ready", f"tool did not start: {line!r}, exit {proc.poll()}"
 
@@ -81,6 +91,15 @@ def manager(tmp_path: Path) -> Iterator[Manager]:
     try:
         yield mgr
     finally:
+        for tool in mgr.tools:  # whatever a failed test left running
+            if tool.poll() is None:
+                tool.kill()
+                tool.wait()
         mgr.proc.terminate()
-        mgr.proc.wait(timeout=30)
+        try:
+            code = mgr.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            mgr.proc.kill()
+            raise
+    assert code in (0, -9)  # a clean exit, or a test that SIGKILLed it on purpose
     assert segments(instance) == []

@@ -21,7 +21,7 @@ def test_sixteen_queued_subscribers_lose_nothing(manager: Manager) -> None:
         out, _ = s.communicate(timeout=600)
         assert s.returncode == 0
         assert out.split() == ["received", str(n), "torn", "0", "disorder", "0", "overruns", "0",
-                               "timeouts", "0", "last", str(n)]
+                               "timeouts", "0", "last", str(n), "value", str(n)]
 
 
 def test_too_few_buffers_count_overruns_exactly(manager: Manager) -> None:

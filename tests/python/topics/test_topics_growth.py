@@ -1,5 +1,5 @@
 """Regression tests for ring growth and waiting publishers: queued readers lose nothing
-across several generations, nobody deadlocks or spins, a waiting publisher does not block
+across several generations, nobody deadlocks, a waiting publisher does not block
 other publishers, and loans stay with their thread."""
 
 from __future__ import annotations
@@ -66,7 +66,7 @@ def test_waiting_publisher_and_queued_reader_across_growth(manager: Manager) -> 
         assert got == [1, 2, 3]
 
 
-def test_latest_subscriber_after_growth_does_not_spin(manager: Manager) -> None:
+def test_latest_subscriber_after_growth_waits_for_the_next_sample(manager: Manager) -> None:
     with manager.client() as clnt:
         pub = clnt.publish("g.latest", MD)
         write(pub, 1)
