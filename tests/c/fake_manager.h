@@ -53,17 +53,20 @@ struct fake {
         }                                                                                     \
     } while (0)
 
-/* 0 once all len bytes arrived, -1 at EOF, on an error or after FAKE_WAIT_MS. */
+/* 0 once all len bytes arrived, -1 at EOF (the client closed), -2 on an error or when
+ * nothing came for FAKE_WAIT_MS (the client hangs or leaked the connection). */
 FAKE_FN int fake_read_exact(int fd, void* buf, size_t len)
 {
     uint8_t* p = buf;
     while (len > 0) {
         struct pollfd pfd = {.fd = fd, .events = POLLIN, .revents = 0};
         if (poll(&pfd, 1, FAKE_WAIT_MS) <= 0)
-            return -1;
+            return -2;
         ssize_t n = recv(fd, p, len, 0);
-        if (n <= 0)
+        if (n == 0 || (n < 0 && errno == ECONNRESET)) /* closed (with unread data: a reset) */
             return -1;
+        if (n < 0)
+            return -2;
         p += n;
         len -= (size_t)n;
     }
@@ -75,8 +78,9 @@ FAKE_FN int fake_recv(struct fake* f, int fd, uint16_t* type, ln_rbuf* body)
 {
     uint8_t header[LN_PROTO_HEADER_SIZE];
     uint32_t len = 0;
-    if (fake_read_exact(fd, header, sizeof header) != 0) {
-        f->saw_eof = 1;
+    int rc = fake_read_exact(fd, header, sizeof header);
+    if (rc != 0) {
+        f->saw_eof = rc == -1; /* only a real end of stream counts as the client closing */
         return 0;
     }
     FAKE_CHECK(f, ln_proto_parse_header(header, &len, type) == LN_OK);

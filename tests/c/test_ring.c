@@ -79,6 +79,12 @@ static void test_geometry_and_layout_check(void)
     LN_CHECK_EQ(ln_ring_attach(&r, seg_name, 0x1234, MSG + 1), LN_ELAYOUT);
     attach(&r, seg_name);
     LN_CHECK_EQ(r.hdr->slot_count, 4);
+    /* By hand, from the documented layout: a page-aligned header, then slots of a 64-byte
+     * slot header plus the payload rounded up to 64 bytes (256 -> 320). */
+    LN_CHECK_EQ(r.hdr->slot_stride, 320);
+    LN_CHECK_EQ(r.hdr->header_size % 4096, 0);
+    LN_CHECK(r.hdr->header_size >= sizeof(ln_ring_header));
+    LN_CHECK_EQ(r.hdr->segment_size, r.hdr->header_size + 4 * 320);
     LN_CHECK_EQ(r.hdr->segment_size, ln_ring_segment_size(MSG, 4));
     ln_ring_detach(&r);
     LN_CHECK(ln_ring_attach(&r, "/ln.test.does.not.exist", 0x1234, MSG) < 0);
