@@ -416,10 +416,8 @@ static int next_sample(ln_inport* p, double timeout, ln_ring_slot** slot, uint64
     }
 }
 
-static void fill_info(ln_inport* p, ln_ring_slot* slot, uint64_t word, int64_t ts,
-                      ln_sample_info* info)
+static void fill_info(ln_inport* p, uint64_t word, int64_t ts, ln_sample_info* info)
 {
-    (void)slot;
     p->cur.total += p->cur.pending;
     if (info) {
         info->seq = LN_SLOT_SEQ(word);
@@ -449,7 +447,7 @@ int ln_read(ln_inport* p, void* data, size_t size, double timeout, ln_sample_inf
         memcpy(data, ln_ring_payload(slot), size);
         int64_t ts = slot->timestamp_ns;
         if (ln_ring_finish(&p->c.ring, &p->cur, slot, word, 1) == LN_OK) {
-            fill_info(p, slot, word, ts, info);
+            fill_info(p, word, ts, info);
             return LN_OK;
         }
     }
@@ -472,7 +470,7 @@ int ln_read_borrow(ln_inport* p, const void** data, double timeout, ln_sample_in
         return on_client(&p->c, rc);
     p->borrowed = slot;
     p->borrowed_word = word;
-    fill_info(p, slot, word, slot->timestamp_ns, info);
+    fill_info(p, word, slot->timestamp_ns, info);
     *data = ln_ring_payload(slot);
     return LN_OK;
 }
