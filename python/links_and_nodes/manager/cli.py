@@ -12,6 +12,8 @@ import sys
 
 from .registry import Limits, RequestError
 from .runtime import InstanceLock, RuntimeDirError, prepare, runtime_dir
+from .services import DEFAULT_LIMIT as SERVICE_LIMIT
+from .services import Services
 
 log = logging.getLogger("ln_manager")
 
@@ -36,6 +38,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--ring-memory-limit", type=int, default=Limits.ring_memory,
                         metavar="BYTES",
                         help=f"most bytes of one topic's ring (default {Limits.ring_memory})")
+    parser.add_argument("--service-limit", type=int, default=SERVICE_LIMIT, metavar="N",
+                        help=f"most services at a time (default {SERVICE_LIMIT})")
     parser.add_argument("--log-level", choices=LOG_LEVELS, default="info",
                         help="least severe log messages shown on stderr (default info)")
     return parser
@@ -51,6 +55,8 @@ def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         parser.error("--topic-limit must be at least 1")
     if args.ring_memory_limit < 1:
         parser.error("--ring-memory-limit must be positive")
+    if args.service_limit < 1:
+        parser.error("--service-limit must be at least 1")
 
 
 def _address(host: str, port: int) -> str:
@@ -74,7 +80,8 @@ async def _serve(args: argparse.Namespace) -> int:
         log.info("removed %d stale segment%s of instance %r", purged,
                  "" if purged == 1 else "s", args.instance)
     limits = Limits(topics=args.topic_limit, ring_memory=args.ring_memory_limit)
-    core = Core(args.instance, Registry(ring_segment_size, limits), segments)
+    core = Core(args.instance, Registry(ring_segment_size, limits), segments,
+                Services(args.service_limit))
     try:
         sock = listen_socket(args.host, args.port)
     except OSError as exc:

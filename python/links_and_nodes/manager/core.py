@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from typing import Any
 
 from .. import _libln
 from . import protocol as p
 from .registry import Client, Port, PortKind, PortRequest, Registry, RequestError, Topic
 from .segments import Segments
+from .services import ServiceOffer, Services
 
 log = logging.getLogger("ln_manager")
 
@@ -47,10 +49,12 @@ class HandshakeRefused(Exception):
 
 
 class Core:
-    def __init__(self, instance: str, registry: Registry, segments: Segments) -> None:
+    def __init__(self, instance: str, registry: Registry, segments: Segments,
+                 services: Services | None = None) -> None:
         self.instance = instance
         self.registry = registry
         self.segments = segments
+        self.service_registry = services if services is not None else Services()
 
     # ---- handshake ----------------------------------------------------------------------
     def check_version(self, version: int) -> None:
@@ -91,9 +95,13 @@ class Core:
                 topic = self.registry.topic(msg.topic)
                 return p.TopicInfoOk(request_id, topic.md_name, topic.layout_hash,
                                      topic.message_size, topic.publishers, topic.subscribers)
+            if isinstance(msg, p.RegisterService | p.UnregisterService | p.FindService
+                          | p.ServiceCalled):
+                return self._service_request(session, msg)
         except RequestError as exc:
-            # an unknown topic in TOPIC_INFO is an answer, not an event worth a line
-            level = logging.DEBUG if isinstance(msg, p.TopicInfo) else logging.INFO
+            # an unknown topic or service asked for is an answer, not an event worth a line
+            level = (logging.DEBUG if isinstance(msg, p.TopicInfo | p.FindService)
+                     and exc.code == "ENOTFOUND" else logging.INFO)
             log.log(level, "%s: %s refused: %s: %s", session.label, msg.TYPE.name, exc.code,
                     exc.text)
             return p.Error(request_id, error_code(exc.code), exc.text)
@@ -104,6 +112,9 @@ class Core:
         client = session.client
         if client is None:
             return 0
+        for service in self.service_registry.remove_client(client):
+            log.info("service %r of %s removed: its client disconnected (%d calls, %d "
+                     "errors)", service.name, session.label, service.calls, service.errors)
         ports = list(client.ports.values())
         for port in ports:
             self._close_port(port)
@@ -115,6 +126,43 @@ class Core:
         for client in list(self.registry.clients.values()):
             self.disconnect(Session(client.address, client))
         return self.segments.remove_all()
+
+    def services(self) -> list[dict[str, Any]]:
+        """Every registered service as plain data (docs/manager.md, "Services"), by name."""
+        return self.service_registry.listing()
+
+    # ---- services -----------------------------------------------------------------------
+    def _service_request(self, session: Session,
+                         msg: p.RegisterService | p.UnregisterService | p.FindService
+                         | p.ServiceCalled) -> p.Message:
+        client = session.client
+        assert client is not None
+        services = self.service_registry
+        if isinstance(msg, p.RegisterService):
+            offer = ServiceOffer(msg.name, msg.md_name, msg.layout_hash, msg.signature,
+                                 msg.group, msg.unix_path, msg.tcp_host, msg.tcp_port)
+            _, old = services.register(client, offer)
+            where = ", ".join(([f"unix {offer.unix_path}"] if offer.unix_path else [])
+                              + ([f"tcp {offer.tcp_host}:{offer.tcp_port}"]
+                                 if offer.tcp_port else []))
+            log.info("%s: service %r %s: md %r (hash 0x%016x), signature %r, group %r, %s",
+                     session.label, offer.name, "re-registered" if old else "registered",
+                     offer.md_name, offer.layout_hash, offer.signature, offer.group, where)
+            return p.Ok(msg.request_id)
+        if isinstance(msg, p.UnregisterService):
+            service = services.unregister(client, msg.name)
+            log.info("%s: service %r unregistered (%d calls, %d errors)", session.label,
+                     service.name, service.calls, service.errors)
+            return p.Ok(msg.request_id)
+        if isinstance(msg, p.FindService):
+            service = services.find(msg.name, msg.md_name, msg.layout_hash)
+            o = service.offer
+            return p.ServiceInfo(msg.request_id, service.provider.name, o.unix_path,
+                                 o.tcp_host, o.tcp_port, o.signature)
+        service = services.called(client, msg.name, msg.calls, msg.errors)
+        log.debug("%s: service %r: %d calls, %d errors", session.label, service.name,
+                  service.calls, service.errors)
+        return p.Ok(msg.request_id)
 
     # ---- ports --------------------------------------------------------------------------
     def _open_port(self, session: Session, msg: p.Publish | p.Subscribe) -> p.PortOk:

@@ -33,6 +33,11 @@ class MsgType(IntEnum):
     OK = 14
     TOPIC_INFO = 15
     TOPIC_INFO_OK = 16
+    REGISTER_SERVICE = 20
+    UNREGISTER_SERVICE = 21
+    FIND_SERVICE = 22
+    SERVICE_INFO = 23
+    SERVICE_CALLED = 24
 
 
 # Field kinds: struct format of the fixed-width ones; "str" is u16 length + UTF-8.
@@ -164,9 +169,74 @@ class TopicInfoOk(Message):
     FROM_CLIENT = False
 
 
+@dataclass(frozen=True)
+class RegisterService(Message):
+    request_id: int
+    name: str
+    md_name: str
+    layout_hash: int
+    signature: str
+    group: str
+    unix_path: str
+    tcp_host: str
+    tcp_port: int
+    TYPE = MsgType.REGISTER_SERVICE
+    FIELDS = (("request_id", "u32"), ("name", "str"), ("md_name", "str"),
+              ("layout_hash", "u64"), ("signature", "str"), ("group", "str"),
+              ("unix_path", "str"), ("tcp_host", "str"), ("tcp_port", "u16"))
+    FROM_CLIENT = True
+
+
+@dataclass(frozen=True)
+class UnregisterService(Message):
+    request_id: int
+    name: str
+    TYPE = MsgType.UNREGISTER_SERVICE
+    FIELDS = (("request_id", "u32"), ("name", "str"))
+    FROM_CLIENT = True
+
+
+@dataclass(frozen=True)
+class FindService(Message):
+    request_id: int
+    name: str
+    md_name: str
+    layout_hash: int
+    TYPE = MsgType.FIND_SERVICE
+    FIELDS = (("request_id", "u32"), ("name", "str"), ("md_name", "str"),
+              ("layout_hash", "u64"))
+    FROM_CLIENT = True
+
+
+@dataclass(frozen=True)
+class ServiceInfo(Message):
+    request_id: int
+    provider: str
+    unix_path: str
+    tcp_host: str
+    tcp_port: int
+    signature: str
+    TYPE = MsgType.SERVICE_INFO
+    FIELDS = (("request_id", "u32"), ("provider", "str"), ("unix_path", "str"),
+              ("tcp_host", "str"), ("tcp_port", "u16"), ("signature", "str"))
+    FROM_CLIENT = False
+
+
+@dataclass(frozen=True)
+class ServiceCalled(Message):
+    request_id: int
+    name: str
+    calls: int
+    errors: int
+    TYPE = MsgType.SERVICE_CALLED
+    FIELDS = (("request_id", "u32"), ("name", "str"), ("calls", "u64"), ("errors", "u64"))
+    FROM_CLIENT = True
+
+
 MESSAGES: dict[int, type[Message]] = {
     cls.TYPE: cls for cls in (Hello, Welcome, Error, Publish, Subscribe, PortOk, ClosePort,
-                              Ok, TopicInfo, TopicInfoOk)}
+                              Ok, TopicInfo, TopicInfoOk, RegisterService, UnregisterService,
+                              FindService, ServiceInfo, ServiceCalled)}
 
 
 def frame_length(header: bytes) -> int:

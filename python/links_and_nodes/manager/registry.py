@@ -119,15 +119,16 @@ class PortPlan:
     reader_index: int | None
 
 
-def topic_name_problem(name: str) -> str | None:
-    """Why `name` is not a valid topic name, or None."""
+def topic_name_problem(name: str, what: str = "topic") -> str | None:
+    """Why `name` is not a valid topic name, or None; `what` names the kind of name in the
+    text (services follow the same rules)."""
     size = len(name.encode("utf-8"))
     if not 1 <= size <= MAX_NAME:
-        return f"topic name of {size} bytes, must be 1..{MAX_NAME}"
+        return f"{what} name of {size} bytes, must be 1..{MAX_NAME}"
     if not _TOPIC_RE.match(name):
-        return f"topic name {name!r} may only contain A-Z a-z 0-9 _ . : / -"
+        return f"{what} name {name!r} may only contain A-Z a-z 0-9 _ . : / -"
     if name.startswith("."):
-        return f"topic name {name!r} must not start with '.'"
+        return f"{what} name {name!r} must not start with '.'"
     return None
 
 

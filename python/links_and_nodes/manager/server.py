@@ -16,7 +16,8 @@ from .core import Core, HandshakeRefused, Session
 log = logging.getLogger("ln_manager")
 
 _REQUESTS = (p.MsgType.PUBLISH, p.MsgType.SUBSCRIBE, p.MsgType.CLOSE_PORT,
-             p.MsgType.TOPIC_INFO)
+             p.MsgType.TOPIC_INFO, p.MsgType.REGISTER_SERVICE, p.MsgType.UNREGISTER_SERVICE,
+             p.MsgType.FIND_SERVICE, p.MsgType.SERVICE_CALLED)
 
 
 class Closing(Exception):

@@ -15,6 +15,8 @@ VERSION = 1
 NO_READER = 0xFFFFFFFF
 HELLO, WELCOME, ERROR = 1, 2, 3
 PUBLISH, SUBSCRIBE, PORT_OK, CLOSE_PORT, OK, TOPIC_INFO, TOPIC_INFO_OK = range(10, 17)
+(REGISTER_SERVICE, UNREGISTER_SERVICE, FIND_SERVICE, SERVICE_INFO,
+ SERVICE_CALLED) = range(20, 25)
 TIMEOUT = 60.0  # seconds; only an upper bound for a reply that is expected to come
 
 
@@ -38,6 +40,23 @@ def port_body(request_id: int, topic: str | bytes, md: str, layout_hash: int, si
               buffers: int = 1, flags: int = 0) -> bytes:
     return (struct.pack("<I", request_id) + s(topic) + s(md)
             + struct.pack("<QIII", layout_hash, size, buffers, flags))
+
+
+def register_service_body(request_id: int, name: str | bytes, md: str | bytes,
+                          layout_hash: int, signature: str | bytes, group: str = "",
+                          unix_path: str | bytes = "", tcp_host: str = "",
+                          tcp_port: int = 0) -> bytes:
+    return (struct.pack("<I", request_id) + s(name) + s(md) + struct.pack("<Q", layout_hash)
+            + s(signature) + s(group) + s(unix_path) + s(tcp_host)
+            + struct.pack("<H", tcp_port))
+
+
+def find_service_body(request_id: int, name: str, md: str, layout_hash: int) -> bytes:
+    return struct.pack("<I", request_id) + s(name) + s(md) + struct.pack("<Q", layout_hash)
+
+
+def service_called_body(request_id: int, name: str, calls: int, errors: int) -> bytes:
+    return struct.pack("<I", request_id) + s(name) + struct.pack("<QQ", calls, errors)
 
 
 @dataclass
@@ -80,6 +99,8 @@ _LAYOUTS = {
     OK: [("request_id", "<I")],
     TOPIC_INFO_OK: [("request_id", "<I"), ("md_name", "s"), ("layout_hash", "<Q"),
                     ("message_size", "<I"), ("publishers", "<I"), ("subscribers", "<I")],
+    SERVICE_INFO: [("request_id", "<I"), ("provider", "s"), ("unix_path", "s"),
+                   ("tcp_host", "s"), ("tcp_port", "<H"), ("signature", "s")],
 }
 
 
@@ -166,6 +187,27 @@ class WireClient:
         reply = self.recv()
         assert reply.request_id == rid
         return reply
+
+    def _call(self, type_: int, body_after_id: bytes) -> Reply:
+        rid = self.request_id()
+        self.send(type_, struct.pack("<I", rid) + body_after_id)
+        reply = self.recv()
+        assert reply.request_id == rid
+        return reply
+
+    def register_service(self, name: str, md: str, layout_hash: int, signature: str,
+                         **kwargs: Any) -> Reply:
+        body = register_service_body(0, name, md, layout_hash, signature, **kwargs)
+        return self._call(REGISTER_SERVICE, body[4:])
+
+    def unregister_service(self, name: str) -> Reply:
+        return self._call(UNREGISTER_SERVICE, s(name))
+
+    def find_service(self, name: str, md: str, layout_hash: int) -> Reply:
+        return self._call(FIND_SERVICE, find_service_body(0, name, md, layout_hash)[4:])
+
+    def service_called(self, name: str, calls: int, errors: int) -> Reply:
+        return self._call(SERVICE_CALLED, service_called_body(0, name, calls, errors)[4:])
 
     def __enter__(self) -> WireClient:
         return self

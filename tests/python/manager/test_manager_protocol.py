@@ -9,7 +9,15 @@ import struct
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from lnwire import frame, hello_body, port_body, s
+from lnwire import (
+    find_service_body,
+    frame,
+    hello_body,
+    port_body,
+    register_service_body,
+    s,
+    service_called_body,
+)
 
 from links_and_nodes.manager import protocol as p
 
@@ -29,6 +37,13 @@ MESSAGES = st.one_of(
     st.builds(p.Ok, U32),
     st.builds(p.TopicInfo, REQUEST_ID, TEXT),
     st.builds(p.TopicInfoOk, U32, TEXT, st.integers(0, (1 << 64) - 1), U32, U32, U32),
+    st.builds(p.RegisterService, REQUEST_ID, TEXT, TEXT, st.integers(0, (1 << 64) - 1), TEXT,
+              TEXT, TEXT, TEXT, st.integers(0, 0xFFFF)),
+    st.builds(p.UnregisterService, REQUEST_ID, TEXT),
+    st.builds(p.FindService, REQUEST_ID, TEXT, TEXT, st.integers(0, (1 << 64) - 1)),
+    st.builds(p.ServiceInfo, U32, TEXT, TEXT, TEXT, st.integers(0, 0xFFFF), TEXT),
+    st.builds(p.ServiceCalled, REQUEST_ID, TEXT, st.integers(0, (1 << 64) - 1),
+              st.integers(0, (1 << 64) - 1)),
 )
 
 
@@ -54,6 +69,22 @@ def test_replies_bytes() -> None:
     assert p.encode(p.Error(0, -7, "v")) == struct.pack("<IHIiH", 13, 3, 0, -7, 1) + b"v"
     assert p.encode(p.PortOk(1, 2, "/ln.a.1.1", p.NO_READER)) == frame(
         12, struct.pack("<II", 1, 2) + s("/ln.a.1.1") + struct.pack("<I", 0xFFFFFFFF))
+
+
+def test_service_bytes_match_the_document() -> None:
+    msg = p.RegisterService(9, "arm.move", "robot/move", 0xFEDCBA9876543210, "a/req|a/resp",
+                            "arm", "/run/arm.sock", "host", 4711)
+    assert p.encode(msg) == frame(20, register_service_body(
+        9, "arm.move", "robot/move", 0xFEDCBA9876543210, "a/req|a/resp", "arm",
+        "/run/arm.sock", "host", 4711))
+    assert p.encode(p.UnregisterService(3, "x")) == frame(21, struct.pack("<I", 3) + s("x"))
+    assert p.encode(p.FindService(4, "x", "m/d", 5)) == frame(
+        22, find_service_body(4, "x", "m/d", 5))
+    assert p.encode(p.ServiceInfo(4, "prov", "/u", "h", 80, "a|b")) == frame(
+        23, struct.pack("<I", 4) + s("prov") + s("/u") + s("h") + struct.pack("<H", 80)
+        + s("a|b"))
+    assert p.encode(p.ServiceCalled(5, "x", 1 << 40, 3)) == frame(
+        24, service_called_body(5, "x", 1 << 40, 3))
 
 
 # no deadline: a test must not fail because the machine is slow
@@ -106,7 +137,10 @@ def test_every_truncation_of_every_message_is_refused() -> None:
                p.Error(1, -1, "t"), p.Publish(1, "t", "m/d", 1, 2, 3, 0),
                p.Subscribe(1, "t", "m/d", 1, 2, 3, 0), p.PortOk(1, 2, "/s", 3),
                p.ClosePort(1, 2), p.Ok(1), p.TopicInfo(1, "t"),
-               p.TopicInfoOk(1, "m", 1, 2, 3, 4)]
+               p.TopicInfoOk(1, "m", 1, 2, 3, 4),
+               p.RegisterService(1, "n", "m", 1, "a|b", "g", "/u", "h", 2),
+               p.UnregisterService(1, "n"), p.FindService(1, "n", "m", 1),
+               p.ServiceInfo(1, "p", "/u", "h", 2, "a|b"), p.ServiceCalled(1, "n", 1, 2)]
     for msg in samples:
         full = body(msg)
         for cut in range(len(full)):
@@ -173,4 +207,6 @@ def test_hello_version_reads_only_magic_and_version() -> None:
 
 def test_direction_is_recorded() -> None:
     from_client = {cls.TYPE.name for cls in p.MESSAGES.values() if cls.FROM_CLIENT}
-    assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "CLOSE_PORT", "TOPIC_INFO"}
+    assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "CLOSE_PORT", "TOPIC_INFO",
+                           "REGISTER_SERVICE", "UNREGISTER_SERVICE", "FIND_SERVICE",
+                           "SERVICE_CALLED"}

@@ -1,0 +1,240 @@
+"""REGISTER_SERVICE, UNREGISTER_SERVICE, FIND_SERVICE and SERVICE_CALLED against a running
+ln_manager: round trips, every refusal with its code and text, one provider per name,
+removal with the provider's connection, call counts, malformed bodies and the limit."""
+
+from __future__ import annotations
+
+import re
+import socket
+import struct
+from collections.abc import Callable
+
+import lnwire
+import pytest
+from lnwire import frame, s
+from mgrproc import Manager, require_manager_library
+
+require_manager_library()
+
+import links_and_nodes as ln  # noqa: E402  (after the skip check)
+from links_and_nodes.manager import protocol as p  # noqa: E402
+from links_and_nodes.manager.core import Core, Session  # noqa: E402
+from links_and_nodes.manager.registry import Registry  # noqa: E402
+from links_and_nodes.manager.services import Services  # noqa: E402
+
+Start = Callable[..., Manager]
+MD = "robot/move"
+HASH = 0x0123456789ABCDEF
+SIG = "robot/move_request|robot/move_response"
+NOTFOUND = ln.LnNotfoundError.code
+
+
+def register(client: lnwire.WireClient, name: str = "arm.move", md: str = MD,
+             layout_hash: int = HASH, signature: str = SIG,
+             **kwargs: object) -> lnwire.Reply:
+    kwargs.setdefault("unix_path", f"/tmp/{name}.sock")
+    return client.register_service(name, md, layout_hash, signature, **kwargs)
+
+
+def test_register_and_find(manager: Manager) -> None:
+    with manager.client("prov") as prov, manager.client("user") as user:
+        reply = register(prov, group="arm", unix_path="/tmp/arm.sock", tcp_host="10.0.0.5",
+                         tcp_port=4711)
+        assert (reply.type, reply.fields) == (lnwire.OK, {"request_id": reply.request_id})
+        info = user.find_service("arm.move", MD, HASH)
+        assert info.type == lnwire.SERVICE_INFO
+        assert (info.provider, info.unix_path, info.tcp_host, info.tcp_port,
+                info.signature) == ("prov", "/tmp/arm.sock", "10.0.0.5", 4711, SIG)
+        # another md name with the same layout is fine, as for topics
+        assert user.find_service("arm.move", "other/name", HASH).type == lnwire.SERVICE_INFO
+        tcp_only = register(prov, "arm.stop", unix_path="", tcp_host="h", tcp_port=1)
+        assert tcp_only.type == lnwire.OK
+        assert user.find_service("arm.stop", MD, HASH).unix_path == ""
+    manager.wait_log(r"client prov \(.*\): service 'arm.move' registered: md 'robot/move' "
+                     r"\(hash 0x0123456789abcdef\), signature '[^']*', group 'arm', "
+                     r"unix /tmp/arm.sock, tcp 10.0.0.5:4711$")
+
+
+@pytest.mark.parametrize("kwargs, code, text", [
+    ({"name": ".hidden"}, "EINVAL", "service name '.hidden' must not start with '.'"),
+    ({"name": "sp ace"}, "EINVAL", "may only contain A-Z a-z 0-9 _ . : / -"),
+    ({"name": "s" * 256}, "EINVAL", "service name of 256 bytes, must be 1..255"),
+    ({"md": "robot/1st"}, "EINVAL", "md name 'robot/1st'"),
+    ({"signature": ""}, "EMD", "signature of 0 bytes"),
+    ({"signature": "no_bar"}, "EMD", "must contain exactly one '|'"),
+    ({"signature": "a|b|c"}, "EMD", "must contain exactly one '|'"),
+    ({"unix_path": ""}, "EINVAL", "neither a unix path nor a tcp port given"),
+    ({"unix_path": "relative.sock"}, "EINVAL", "is not an absolute path"),
+    ({"unix_path": "/" + "p" * 107}, "EINVAL", "unix path of 108 bytes, at most 107"),
+])
+def test_register_refusals(manager: Manager, kwargs: dict[str, object], code: str,
+                           text: str) -> None:
+    with manager.client("prov") as prov:
+        reply = register(prov, **kwargs)
+        assert reply.type == lnwire.ERROR
+        assert reply.code == getattr(ln, f"Ln{code[1:].capitalize()}Error").code
+        assert text in reply.text
+        # refused, so nothing is registered, and the connection stays usable
+        assert prov.find_service("arm.move", MD, HASH).code == NOTFOUND
+
+
+def test_one_provider_per_name(manager: Manager) -> None:
+    with manager.client("prov") as prov, manager.client("rival") as rival:
+        assert register(prov).type == lnwire.OK
+        reply = register(rival, unix_path="/tmp/rival.sock")
+        assert (reply.type, reply.code) == (lnwire.ERROR, ln.LnExistError.code)
+        assert re.fullmatch(r"service 'arm.move' is already provided by client 'prov' "
+                            r"\(127\.0\.0\.1:\d+\)", reply.text), reply.text
+        # the same provider replaces its own registration
+        assert register(prov, unix_path="/tmp/new.sock", signature="x|y").type == lnwire.OK
+        info = rival.find_service("arm.move", MD, HASH)
+        assert (info.provider, info.unix_path, info.signature) == ("prov", "/tmp/new.sock",
+                                                                   "x|y")
+    manager.wait_log(r"service 'arm.move' re-registered")
+
+
+def test_unregister(manager: Manager) -> None:
+    with manager.client("prov") as prov, manager.client("other") as other:
+        assert register(prov).type == lnwire.OK
+        reply = other.unregister_service("arm.move")
+        assert (reply.type, reply.code, reply.text) == (
+            lnwire.ERROR, NOTFOUND, "client 'other' does not provide service 'arm.move'")
+        assert prov.unregister_service("arm.move").type == lnwire.OK
+        info = other.find_service("arm.move", MD, HASH)
+        assert (info.code, info.text) == (NOTFOUND, "service 'arm.move' is not provided")
+        assert prov.unregister_service("arm.move").code == NOTFOUND
+        assert register(other).type == lnwire.OK  # the name is free again
+    manager.wait_log(r"client prov \(.*\): service 'arm.move' unregistered \(0 calls, "
+                     r"0 errors\)$")
+
+
+def test_find_with_another_layout(manager: Manager) -> None:
+    with manager.client("prov") as prov:
+        assert register(prov).type == lnwire.OK
+        reply = prov.find_service("arm.move", "robot/move_v2", 0xBAD)
+        assert (reply.type, reply.code) == (lnwire.ERROR, ln.LnLayoutError.code)
+        assert reply.text == ("service 'arm.move': layout of md 'robot/move_v2' (hash "
+                              "0x0000000000000bad) differs from the service's md "
+                              "'robot/move' (hash 0x0123456789abcdef)")
+
+
+def test_provider_disconnect_removes_its_services(manager: Manager) -> None:
+    user = manager.client("user")
+    prov = manager.client("prov")
+    assert register(prov, "s1").type == lnwire.OK
+    assert register(prov, "s2").type == lnwire.OK
+    assert register(user, "mine").type == lnwire.OK
+    prov.close()
+    manager.wait_log(r"client prov \(.*\): disconnected")
+    for name in ("s1", "s2"):
+        assert user.find_service(name, MD, HASH).code == NOTFOUND
+    assert user.find_service("mine", MD, HASH).provider == "user"
+    log = manager.log()
+    for name in ("s1", "s2"):
+        assert re.search(rf"service '{name}' of client prov \(.*\) removed: its client "
+                         r"disconnected \(0 calls, 0 errors\)", log)
+    # a new client may now provide the names
+    with manager.client("prov") as again:
+        assert register(again, "s1").type == lnwire.OK
+    user.close()
+
+
+def test_call_counts(start_manager: Start, instance: str) -> None:
+    manager = start_manager(instance, "--log-level", "debug")
+    with manager.client("prov") as prov, manager.client("other") as other:
+        assert register(prov).type == lnwire.OK
+        assert prov.service_called("arm.move", 3, 1).type == lnwire.OK
+        assert prov.service_called("arm.move", (1 << 64) - 1, 2).type == lnwire.OK
+        reply = other.service_called("arm.move", 99, 99)  # only the provider reports
+        assert (reply.code, reply.text) == (
+            NOTFOUND, "client 'other' does not provide service 'arm.move'")
+        assert prov.service_called("nope", 1, 0).code == NOTFOUND
+        assert prov.unregister_service("arm.move").type == lnwire.OK
+    manager.wait_log(r"client prov \(.*\): service 'arm.move': 3 calls, 1 errors$")
+    # counts are cumulative: the last report is what the manager keeps
+    manager.wait_log(r"client prov \(.*\): service 'arm.move' unregistered "
+                     r"\(18446744073709551615 calls, 2 errors\)$")
+
+
+class _NoSegments:
+    """Service requests never touch segments; this stands in for them."""
+
+
+def test_core_listing() -> None:
+    registry = Registry(lambda size, slots: size * slots)
+    core = Core("inst", registry, _NoSegments(), Services())  # type: ignore[arg-type]
+    session = Session("127.0.0.1:9")
+    core.hello(session, p.Hello(p.MAGIC, p.VERSION, 42, "prov", "0.1.0"))
+    reply = core.request(session, p.RegisterService(1, "b.svc", MD, HASH, SIG, "grp",
+                                                    "/tmp/b.sock", "", 0))
+    assert reply == p.Ok(1)
+    core.request(session, p.RegisterService(2, "a.svc", MD, 7, "x|y", "", "", "h", 9))
+    assert core.request(session, p.ServiceCalled(3, "b.svc", 12, 2)) == p.Ok(3)
+    listing = core.services()
+    assert [e["name"] for e in listing] == ["a.svc", "b.svc"]
+    assert listing[1] == {"name": "b.svc", "md_name": MD, "layout_hash": HASH,
+                          "signature": SIG, "group": "grp", "provider": "prov",
+                          "provider_id": session.client.id,  # type: ignore[union-attr]
+                          "unix_path": "/tmp/b.sock", "tcp_host": "", "tcp_port": 0,
+                          "calls": 12, "errors": 2}
+    found = core.request(session, p.FindService(4, "a.svc", "m/d", 7))
+    assert found == p.ServiceInfo(4, "prov", "", "h", 9, "x|y")
+    assert core.disconnect(session) == 0
+    assert core.services() == []
+
+
+def test_service_limit(start_manager: Start, instance: str) -> None:
+    manager = start_manager(instance, "--service-limit", "2")
+    with manager.client("a") as a, manager.client("b") as b:
+        assert register(a, "s1").type == lnwire.OK
+        assert register(b, "s2").type == lnwire.OK
+        reply = register(a, "s3")
+        assert (reply.code, reply.text) == (
+            ln.LnLimitError.code,
+            "service 's3': the manager already has 2 services, its limit is 2")
+        assert register(a, "s1", group="again").type == lnwire.OK  # replacing is no new one
+        assert b.unregister_service("s2").type == lnwire.OK
+        assert register(a, "s3").type == lnwire.OK
+
+
+def test_service_limit_option_is_checked(start_manager: Start, instance: str) -> None:
+    manager = start_manager(instance, "--service-limit", "0", ready=False)
+    assert manager.proc.wait(60) == 2
+    assert "--service-limit must be at least 1" in manager.log()
+
+
+_REG = lnwire.register_service_body(1, "x", MD, 1, "a|b", "", "/tmp/x")
+BAD = [
+    ("register-short", frame(lnwire.REGISTER_SERVICE, _REG[:-1]),
+     f"REGISTER_SERVICE body too short: {len(_REG) - 1} bytes, ends inside tcp_port"),
+    ("register-long", frame(lnwire.REGISTER_SERVICE, _REG + b"\0"),
+     f"REGISTER_SERVICE body too long: {len(_REG) + 1} bytes, its fields take {len(_REG)}"),
+    ("register-utf8", frame(lnwire.REGISTER_SERVICE, lnwire.register_service_body(
+        1, "x", MD, 1, b"a|\xff", "", "/tmp/x")),
+     r"REGISTER_SERVICE.signature: not valid UTF-8 \(byte 2\)"),
+    ("unregister-long", frame(lnwire.UNREGISTER_SERVICE, struct.pack("<I", 1) + s("x") + b"!"),
+     "UNREGISTER_SERVICE body too long: 8 bytes, its fields take 7"),
+    ("find-short", frame(lnwire.FIND_SERVICE, lnwire.find_service_body(1, "x", MD, 1)[:-3]),
+     "FIND_SERVICE body too short: .* bytes, ends inside layout_hash"),
+    ("called-id-0", frame(lnwire.SERVICE_CALLED, lnwire.service_called_body(0, "x", 1, 0)),
+     r"SERVICE_CALLED with request id 0 \(must be non-zero\)"),
+    ("service-info", frame(lnwire.SERVICE_INFO, b""),
+     "unexpected SERVICE_INFO frame from a client"),
+]
+
+
+@pytest.mark.parametrize("data, reason", [b[1:] for b in BAD], ids=[b[0] for b in BAD])
+def test_malformed_bodies_close_only_that_connection(manager: Manager, data: bytes,
+                                                     reason: str) -> None:
+    with manager.client("calm") as calm:
+        assert register(calm, "calm.svc").type == lnwire.OK
+        evil = manager.client("evil")
+        assert register(evil, "evil.svc").type == lnwire.OK
+        evil.send_raw(data)
+        evil.sock.shutdown(socket.SHUT_WR)
+        assert evil.closed_by_peer()
+        evil.close()
+        manager.wait_log(rf"^.* client evil \(127\.0\.0\.1:\d+\): closing: {reason}$")
+        manager.wait_log(r"client evil \(.*\): disconnected")
+        assert calm.find_service("evil.svc", MD, HASH).code == NOTFOUND
+        assert calm.find_service("calm.svc", MD, HASH).provider == "calm"
