@@ -1,5 +1,7 @@
 // topic_tool_cpp.cpp — the C++ side of the cross-language topic tests, through ln.hpp:
-//   topic_tool_cpp pub-joint TOPIC COUNT    same values as topic_tool.c's pub-joint
+//   topic_tool_cpp pub-joint TOPIC COUNT           same values as topic_tool.c's pub-joint
+//   topic_tool_cpp sub-joint TOPIC COUNT TIMEOUT   queued; prints like topic_tool.c's sub-joint,
+//                                                  odd samples by copy, even ones borrowed
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -8,10 +10,53 @@
 
 #include "topic_messages.hpp"
 
+static void print_joint(const robot::joint_state_t& js)
+{
+    std::printf("%u %.17g", static_cast<unsigned>(js.cycle), js.timestamp);
+    for (int j = 0; j < 7; j++)
+        std::printf(" %.17g %.17g %.17g", js.position[j], js.velocity[j], js.effort[j]);
+    std::printf("\n");
+}
+
+static int sub_joint(const char* topic, unsigned long long count, double timeout)
+{
+    ln::client clnt("topic_tool_cpp");
+    auto sub = clnt.subscribe<robot::joint_state_t>(topic, 1024);
+    std::printf("ready\n");
+    std::fflush(stdout);
+    for (unsigned long long n = 1; n <= count; n++) {
+        if (n % 2) {
+            robot::joint_state_t js;
+            if (!sub.read(js, timeout))
+                return std::fprintf(stderr, "topic_tool_cpp: no sample %llu\n", n), 3;
+            print_joint(js);
+        } else {
+            auto view = sub.borrow(timeout);
+            if (!view)
+                return std::fprintf(stderr, "topic_tool_cpp: no sample %llu\n", n), 3;
+            robot::joint_state_t js = *view;
+            if (!view.release())
+                return std::fprintf(stderr, "topic_tool_cpp: sample %llu overwritten\n", n), 3;
+            print_joint(js);
+        }
+    }
+    std::printf("overruns %llu publishers %d\n",
+                static_cast<unsigned long long>(sub.overruns()), sub.publisher_count());
+    return 0;
+}
+
 int main(int argc, char** argv)
 {
+    if (argc == 5 && std::strcmp(argv[1], "sub-joint") == 0) {
+        try {
+            return sub_joint(argv[2], std::strtoull(argv[3], nullptr, 10), std::atof(argv[4]));
+        } catch (const ln::error& e) {
+            std::fprintf(stderr, "topic_tool_cpp: %s (%d)\n", e.what(), e.code());
+            return 2;
+        }
+    }
     if (argc != 4 || std::strcmp(argv[1], "pub-joint") != 0) {
-        std::fprintf(stderr, "usage: topic_tool_cpp pub-joint TOPIC COUNT\n");
+        std::fprintf(stderr, "usage: see the top of topic_tool_cpp.cpp\n");
         return 2;
     }
     try {

@@ -90,3 +90,18 @@ def test_cpp_publisher_c_subscriber(manager: Manager) -> None:
     assert sub.returncode == 0
     lines = out.splitlines()  # "ready" was read by wait_ready
     assert [parse_c_line(line) for line in lines] == [expected(i) for i in range(1, N + 1)]
+
+
+def test_python_publisher_cpp_subscriber(manager: Manager) -> None:
+    sub = manager.tool("sub-joint", "robot.state", str(N), "10", cpp=True)
+    wait_ready(sub)
+    with manager.client("py_pub_for_cpp") as clnt:
+        pub = clnt.publish("robot.state", "robot/joint_state")
+        for i in range(1, N + 1):
+            fill(pub.packet, i)
+            pub.write()
+        out, _ = sub.communicate(timeout=60)
+    assert sub.returncode == 0
+    *lines, summary = out.splitlines()
+    assert [parse_c_line(line) for line in lines] == [expected(i) for i in range(1, N + 1)]
+    assert summary == "overruns 0 publishers 1"
