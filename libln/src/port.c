@@ -179,31 +179,54 @@ static void close_inport(void* port)
     ln_unsubscribe(port);
 }
 
+/* Allocate a port of `size` bytes (an ln_port_common first) and register it with the
+ * manager; NULL with *rc set on failure. */
+static ln_port_common* new_port(ln_client* clnt, size_t size, uint16_t msg, const char* topic,
+                                const char* md_name, uint64_t hash, size_t message_size,
+                                const ln_port_options* opts, uint32_t* reader, int* rc)
+{
+    ln_port_common* p = calloc(1, size);
+    if (!p) {
+        *rc = ln_set_error(clnt, LN_ENOMEM, "out of memory");
+        return NULL;
+    }
+    *rc = open_port(p, clnt, msg, topic, md_name, hash, message_size, opts, reader);
+    if (*rc != LN_OK) {
+        free(p);
+        return NULL;
+    }
+    return p;
+}
+
+/* Make a set-up port usable and hand it to its client, which closes it on destroy. */
+static int adopt_port(ln_port_common* p, uint32_t magic, void (*close_fn)(void*))
+{
+    ln_client* clnt = p->clnt;
+    p->magic = magic;
+    int rc = ln_client_add_port(clnt, p, close_fn);
+    if (rc != LN_OK) {
+        close_port(p);
+        return ln_set_error(clnt, rc, "out of memory");
+    }
+    return LN_OK;
+}
+
 int ln_publish(ln_client* clnt, ln_outport** out, const char* topic, const char* md_name,
                uint64_t layout_hash, size_t message_size, const ln_port_options* opts)
 {
     if (!out)
         return ln_set_error(clnt, LN_EINVAL, "ln_publish: out is NULL");
     *out = NULL;
-    ln_outport* p = calloc(1, sizeof(*p));
-    if (!p)
-        return ln_set_error(clnt, LN_ENOMEM, "out of memory");
     uint32_t reader = 0;
-    int rc = open_port(&p->c, clnt, LN_MSG_PUBLISH, topic, md_name, layout_hash, message_size,
-                       opts, &reader);
-    if (rc != LN_OK) {
-        free(p);
+    int rc;
+    ln_outport* p = (ln_outport*)new_port(clnt, sizeof(ln_outport), LN_MSG_PUBLISH, topic,
+                                          md_name, layout_hash, message_size, opts, &reader, &rc);
+    if (!p)
         return rc;
-    }
     p->flags = opts ? opts->flags : 0;
-    p->c.magic = LN_OUTPORT_MAGIC;
-    rc = ln_client_add_port(clnt, p, close_outport);
-    if (rc != LN_OK) {
-        close_port(&p->c);
-        return ln_set_error(clnt, rc, "out of memory");
-    }
-    *out = p;
-    return LN_OK;
+    if ((rc = adopt_port(&p->c, LN_OUTPORT_MAGIC, close_outport)) == LN_OK)
+        *out = p;
+    return rc;
 }
 
 int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char* md_name,
@@ -212,16 +235,12 @@ int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char
     if (!out)
         return ln_set_error(clnt, LN_EINVAL, "ln_subscribe: out is NULL");
     *out = NULL;
-    ln_inport* p = calloc(1, sizeof(*p));
-    if (!p)
-        return ln_set_error(clnt, LN_ENOMEM, "out of memory");
     uint32_t reader = 0;
-    int rc = open_port(&p->c, clnt, LN_MSG_SUBSCRIBE, topic, md_name, layout_hash, message_size,
-                       opts, &reader);
-    if (rc != LN_OK) {
-        free(p);
+    int rc;
+    ln_inport* p = (ln_inport*)new_port(clnt, sizeof(ln_inport), LN_MSG_SUBSCRIBE, topic,
+                                        md_name, layout_hash, message_size, opts, &reader, &rc);
+    if (!p)
         return rc;
-    }
     p->cur.buffers = opts && opts->buffers > 1 ? opts->buffers : 1;
     p->spin_us = opts ? opts->spin_us : LN_DEFAULT_SPIN_US;
     p->cur.reader = reader == LN_NO_READER || reader >= LN_RING_MAX_READERS ? -1 : (int)reader;
@@ -229,14 +248,9 @@ int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char
         p->cur.next = atomic_load(&p->c.ring.hdr->readers[p->cur.reader].next_seq);
     else
         p->cur.next = 1; /* latest: the first read returns the newest sample there is */
-    p->c.magic = LN_INPORT_MAGIC;
-    rc = ln_client_add_port(clnt, p, close_inport);
-    if (rc != LN_OK) {
-        close_port(&p->c);
-        return ln_set_error(clnt, rc, "out of memory");
-    }
-    *out = p;
-    return LN_OK;
+    if ((rc = adopt_port(&p->c, LN_INPORT_MAGIC, close_inport)) == LN_OK)
+        *out = p;
+    return rc;
 }
 
 static int close_port(ln_port_common* p)
