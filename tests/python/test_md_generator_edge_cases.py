@@ -6,14 +6,13 @@ produce C, C++ and Python that compile (strict and GNU modes) and behave.
 
 from __future__ import annotations
 
-import importlib.util
 import subprocess
 from pathlib import Path
-from types import ModuleType
 
 import pytest
 
 import ln_generate
+from gen_modules import load_module
 from ln_generate import (
     MdError,
     MdRegistry,
@@ -32,14 +31,6 @@ COMPILERS = [
     ["g++", "-std=c++17", "-Wall", "-Wextra", "-Werror", "-x", "c++"],
     ["g++", "-std=gnu++17", "-Wall", "-Wextra", "-Werror", "-x", "c++"],
 ]
-
-
-def load_module(name: str, path: Path) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def cpp_type(md: MessageDef, section: str) -> str:

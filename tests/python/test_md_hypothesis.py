@@ -9,18 +9,17 @@ two definitions get the same layout hash exactly when their canonical layouts ag
 from __future__ import annotations
 
 import ctypes
-import importlib.util
 import random
 import subprocess
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
-from types import ModuleType
 
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 import ln_generate
+from gen_modules import load_module
 from ln_generate import (
     MdRegistry,
     MessageDef,
@@ -232,14 +231,6 @@ def check_struct(s: Struct, fields: tuple[FieldSpec, ...], spec: MdSpec) -> int:
         offset += 4 + 8 if want.kind == "dynamic" else elem * want.count
     assert s.size == offset
     return offset
-
-
-def load_module(name: str, path: Path) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def compile_ok(cmd: list[str], src: Path) -> None:

@@ -10,7 +10,6 @@ values then cross the language boundary in both directions, checked leaf by leaf
 from __future__ import annotations
 
 import ctypes
-import importlib.util
 import math
 import os
 import random
@@ -28,6 +27,7 @@ import pytest
 from cffi import FFI
 
 import ln_generate
+from gen_modules import load_module
 from ln_generate import (
     MdRegistry,
     MessageDef,
@@ -228,14 +228,6 @@ class Built:
     ffi: FFI
     py: dict[str, ModuleType]  # md name -> generated Python module
     gen_dir: Path
-
-
-def load_module(name: str, path: Path) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def build(tag: str, root: Path, tmp: Path) -> Built:

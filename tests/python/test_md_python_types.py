@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import ctypes
 import gc
-import importlib.util
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import numpy as np
 import pytest
 
+from gen_modules import load_module
 from ln_generate.cli import main
 
 NAMES = ["robot/joint_state", "robot/tool_state", "robot/set_gains", "robot/plan_path",
@@ -25,12 +24,7 @@ def m(tmp_path_factory: pytest.TempPathFactory) -> ModuleType:
     (root / "md" / "t" / "chars").write_text("char label[8]\nchar initial\nint16_t ids[3]\n")
     out = root / "gen_pytypes.py"
     assert main(["-o", str(out), "--md-dir", str(root / "md"), *NAMES]) == 0
-    spec = importlib.util.spec_from_file_location("gen_pytypes", out)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["gen_pytypes"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_module("gen_pytypes", out, register=True)
 
 
 def test_array_fields_are_writable_views(m: ModuleType) -> None:

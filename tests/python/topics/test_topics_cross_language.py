@@ -5,6 +5,10 @@ the sample index i, computed the same way on both sides."""
 
 from __future__ import annotations
 
+import subprocess
+from collections.abc import Iterator
+from contextlib import contextmanager
+
 import numpy as np
 
 from .conftest import Manager, wait_ready
@@ -67,41 +71,46 @@ def test_c_publisher_python_subscriber(manager: Manager) -> None:
         assert sub.overruns == 0
 
 
-def test_python_publisher_c_subscriber(manager: Manager) -> None:
-    sub = manager.tool("sub-joint", "robot.state", str(N), "10")
+def start_subscriber(manager: Manager, cpp: bool = False) -> subprocess.Popen[str]:
+    sub = manager.tool("sub-joint", "robot.state", str(N), "10", cpp=cpp)
     wait_ready(sub)
+    return sub
+
+
+@contextmanager
+def python_publisher(manager: Manager) -> Iterator[None]:
+    """Publish samples 1..N from Python; the publisher stays connected inside the block."""
     with manager.client("py_pub") as clnt:
         pub = clnt.publish("robot.state", "robot/joint_state")
         for i in range(1, N + 1):
             fill(pub.packet, i)
             pub.write()
-        out, _ = sub.communicate(timeout=60)
+        yield
+
+
+def received(sub: subprocess.Popen[str]) -> list[str]:
+    """The subscriber's sample lines ("ready" was read by wait_ready), all N of them."""
+    out, _ = sub.communicate(timeout=60)
     assert sub.returncode == 0
-    lines = out.splitlines()  # "ready" was read by wait_ready
-    assert [parse_c_line(line) for line in lines] == [expected(i) for i in range(1, N + 1)]
+    lines = out.splitlines()
+    assert [parse_c_line(line) for line in lines[:N]] == [expected(i) for i in range(1, N + 1)]
+    return lines[N:]
+
+
+def test_python_publisher_c_subscriber(manager: Manager) -> None:
+    sub = start_subscriber(manager)
+    with python_publisher(manager):
+        assert received(sub) == []
 
 
 def test_cpp_publisher_c_subscriber(manager: Manager) -> None:
-    sub = manager.tool("sub-joint", "robot.state", str(N), "10")
-    wait_ready(sub)
+    sub = start_subscriber(manager)
     pub = manager.tool("pub-joint", "robot.state", str(N), cpp=True)
     assert pub.wait(timeout=60) == 0
-    out, _ = sub.communicate(timeout=60)
-    assert sub.returncode == 0
-    lines = out.splitlines()  # "ready" was read by wait_ready
-    assert [parse_c_line(line) for line in lines] == [expected(i) for i in range(1, N + 1)]
+    assert received(sub) == []
 
 
 def test_python_publisher_cpp_subscriber(manager: Manager) -> None:
-    sub = manager.tool("sub-joint", "robot.state", str(N), "10", cpp=True)
-    wait_ready(sub)
-    with manager.client("py_pub_for_cpp") as clnt:
-        pub = clnt.publish("robot.state", "robot/joint_state")
-        for i in range(1, N + 1):
-            fill(pub.packet, i)
-            pub.write()
-        out, _ = sub.communicate(timeout=60)
-    assert sub.returncode == 0
-    *lines, summary = out.splitlines()
-    assert [parse_c_line(line) for line in lines] == [expected(i) for i in range(1, N + 1)]
-    assert summary == "overruns 0 publishers 1"
+    sub = start_subscriber(manager, cpp=True)
+    with python_publisher(manager):  # still connected when the subscriber reports
+        assert received(sub) == ["overruns 0 publishers 1"]
