@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
 import time
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+
+from links_and_nodes.manager.launch import ManagerProcess, segments, start_manager
 
 CHILD_TIMEOUT = 600.0  # seconds for one child; a stuck case is killed and reported
 SAMPLE_PERIOD = 0.02  # seconds between looks at which CPU each side of a pair last ran on
@@ -21,49 +22,27 @@ class CaseError(Exception):
     """One measurement failed; the run goes on and the report says why."""
 
 
-def segments(instance: str) -> list[str]:
-    return sorted(n for n in os.listdir("/dev/shm") if n.startswith(f"ln.{instance}."))
-
-
 @dataclass
 class Manager:
-    instance: str
-    address: str
-    proc: subprocess.Popen[bytes]
-    log: Path
+    """The benchmark's private manager (a thin layer over links_and_nodes.manager.launch)."""
+
+    process: ManagerProcess
+
+    @property
+    def address(self) -> str:
+        return self.process.address
 
     @classmethod
     def start(cls, tmp: Path) -> Manager:
         instance = f"bench{os.getpid()}x{uuid.uuid4().hex[:8]}"
-        runtime = tmp / "runtime"
-        runtime.mkdir()
-        log = tmp / "manager.log"
-        env = {**os.environ, "LN_RUNTIME_DIR": str(runtime)}
-        with open(log, "wb") as out:  # a file, never a pipe nobody drains
-            proc = subprocess.Popen(
-                [sys.executable, "-m", "links_and_nodes.manager", "--port", "0",
-                 "--instance", instance, "--log-level", "warning"],
-                stdout=out, stderr=subprocess.STDOUT, env=env)
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and proc.poll() is None:
-            for line in log.read_text(errors="replace").splitlines():
-                if "listening on" in line:
-                    return cls(instance, line.rsplit(" ", 1)[1].strip(), proc, log)
-            time.sleep(0.02)
-        proc.kill()
-        proc.wait()
-        raise RuntimeError(f"ln_manager did not start:\n{log.read_text(errors='replace')}")
+        return cls(start_manager(instance, tmp / "runtime", tmp / "manager.log",
+                                 "--log-level", "warning"))
 
     def stop(self) -> list[str]:
         """Terminate the manager; returns the segments of the instance it left behind
         (removed here, so a bug does not leak memory)."""
-        self.proc.terminate()
-        try:
-            self.proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-        left = segments(self.instance)
+        self.process.stop()
+        left = segments(self.process.instance)
         for name in left:
             Path("/dev/shm", name).unlink(missing_ok=True)
         return left

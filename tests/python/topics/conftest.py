@@ -7,8 +7,6 @@ from __future__ import annotations
 import os
 import selectors
 import subprocess
-import sys
-import time
 import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -17,6 +15,8 @@ from pathlib import Path
 import pytest
 
 import links_and_nodes as ln
+from links_and_nodes.manager import launch
+from links_and_nodes.manager.launch import ManagerProcess, segments
 
 REPO = Path(__file__).resolve().parents[3]
 TOOLS = REPO / "build" / "release" / "tests" / "c" / "tools"
@@ -25,17 +25,28 @@ TOPIC_MDS = REPO / "tests" / "md" / "topics"
 ln.add_message_definition_dir(TOPIC_MDS)
 
 
-def segments(instance: str) -> list[str]:
-    return sorted(n for n in os.listdir("/dev/shm") if n.startswith(f"ln.{instance}."))
-
-
 @dataclass
 class Manager:
-    instance: str
-    address: str
-    proc: subprocess.Popen[str]
-    env: dict[str, str]
+    """A test's manager and the tools it started against it."""
+
+    process: ManagerProcess
     tools: list[subprocess.Popen[str]] = field(default_factory=list)
+
+    @property
+    def instance(self) -> str:
+        return self.process.instance
+
+    @property
+    def address(self) -> str:
+        return self.process.address
+
+    @property
+    def proc(self) -> subprocess.Popen[bytes]:
+        return self.process.proc
+
+    @property
+    def env(self) -> dict[str, str]:
+        return self.process.env
 
     def tool(self, *args: str, cpp: bool = False) -> subprocess.Popen[str]:
         exe = TOOLS / ("topic_tool_cpp" if cpp else "topic_tool")
@@ -51,25 +62,7 @@ class Manager:
 
 
 def start_manager(instance: str, runtime: Path) -> Manager:
-    """Start ln_manager; its log goes to a file (a pipe nobody drains would stall it)."""
-    env = {**os.environ, "LN_RUNTIME_DIR": str(runtime)}
-    runtime.mkdir(parents=True, exist_ok=True)
-    log_path = runtime.parent / f"{instance}.log"
-    with open(log_path, "w") as log:
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "links_and_nodes.manager", "--port", "0", "--instance",
-             instance], stdout=log, stderr=subprocess.STDOUT, text=True, env=env)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:
-        for line in log_path.read_text().splitlines():
-            if "listening on" in line:
-                address = line.rsplit(" ", 1)[1].strip()
-                return Manager(instance, address, proc, {**env, "LN_MANAGER": address})
-        if proc.poll() is not None:
-            break
-        time.sleep(0.02)
-    proc.kill()
-    raise RuntimeError(f"manager did not start:\n{log_path.read_text()}")
+    return Manager(launch.start_manager(instance, runtime, runtime.parent / f"{instance}.log"))
 
 
 def wait_ready(proc: subprocess.Popen[str], limit: float = 60.0) -> None:
@@ -95,11 +88,6 @@ def manager(tmp_path: Path) -> Iterator[Manager]:
             if tool.poll() is None:
                 tool.kill()
                 tool.wait()
-        mgr.proc.terminate()
-        try:
-            code = mgr.proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            mgr.proc.kill()
-            raise
+        code = mgr.process.stop()
     assert code in (0, -9)  # a clean exit, or a test that SIGKILLed it on purpose
     assert segments(instance) == []
