@@ -195,6 +195,104 @@ LN_EXPORT int ln_inport_publisher_count(const ln_inport* port);
 /* Total samples this subscriber lost since it subscribed. */
 LN_EXPORT uint64_t ln_inport_overruns(const ln_inport* port);
 
+/* ==== services ==============================================================================
+ * A service is a named request/response call typed by a service md (docs/services.md).  The
+ * provider registers it with the manager and serves it on its own sockets: a Unix domain socket
+ * for callers on its host, TCP for the others.  Callers look it up in the manager once and then
+ * talk to the provider directly, over a connection kept open between calls.
+ *
+ * Both sides pass the service md as name, layout hash and signature; generated headers give the
+ * three as NAME_SERVICE (e.g. ROBOT_SET_GAINS_SERVICE).  Request and response are the generated
+ * `..._request_t` / `..._response_t` structs; a dynamic field is its `_len` count plus a pointer
+ * to that many packed elements.  Requests and responses travel in a pointer-free wire form
+ * checked against the signature: every length is checked before anything is allocated, and a
+ * message longer than the maximum size (default LN_SERVICE_DEFAULT_MAX_SIZE) is refused with
+ * LN_ETOOBIG. */
+typedef struct ln_service ln_service;                   /* the caller's handle */
+typedef struct ln_service_provider ln_service_provider; /* the provider's handle */
+typedef struct ln_service_request ln_service_request;   /* one call, inside a handler */
+
+#define LN_SERVICE_DEFAULT_MAX_SIZE ((size_t)16 << 20)
+
+/* ---- callers ----
+ * ln_get_service makes a handle without contacting anyone; the first call looks the service up
+ * and connects.  ln_service_call sends *request (the struct of the request section) and fills
+ * *response; dynamic fields of the response point into memory of the handle, valid until the
+ * next call on it or ln_service_release.  One call at a time per handle (concurrent calls on
+ * one handle are serialized); use one handle per thread for parallel calls.  Errors:
+ *   LN_ESERVICE   the provider answered with an error: ln_last_error() has its text;
+ *   LN_ENOTFOUND  nobody provides the service; LN_ELAYOUT: provided with another layout;
+ *   LN_ECONNECTION the provider could not be reached or closed the connection during the call
+ *                 (the call may or may not have been executed);
+ *   LN_ETIMEOUT   no response within `timeout` seconds (the connection is dropped, so a late
+ *                 response can never be taken for the next call's);
+ *   LN_ETOOBIG / LN_EINVAL  the request cannot be encoded (too big, NULL dynamic pointer);
+ *   LN_EPROTOCOL  the provider's response is malformed.
+ * After any error the next call starts afresh: it looks the service up again and reconnects,
+ * so a restarted provider is found by itself. */
+LN_EXPORT int ln_get_service(ln_client* clnt, ln_service** out, const char* name,
+                             const char* md_name, uint64_t layout_hash, const char* signature);
+LN_EXPORT int ln_service_call(ln_service* svc, const void* request, void* response,
+                              double timeout);
+/* Largest response (wire bytes and decoded dynamic data) this caller accepts. */
+LN_EXPORT int ln_service_set_max_size(ln_service* svc, size_t max_bytes);
+/* Closes the connection and frees the handle (ln_client_destroy releases the remaining ones). */
+LN_EXPORT int ln_service_release(ln_service* svc);
+
+/* ---- providers ----
+ * ln_get_service_provider makes a provider; set its handler, then ln_service_provider_register
+ * it in a group (NULL or "" is the default group): that opens its sockets and registers it with
+ * the manager.  Requests of a group are handled by whichever thread calls
+ * ln_wait_and_handle_service_group_requests for it, or by the threads of a pool after
+ * ln_handle_service_group_in_thread_pool.
+ *
+ * The handler runs once per request.  It reads the request with ln_service_request_get_data,
+ * then answers with ln_service_request_respond (a response struct; it is encoded at once, so
+ * its dynamic data may live on the handler's stack) or ln_service_request_respond_error (a text
+ * the caller gets with LN_ESERVICE), and returns 0.  A handler that returns without answering
+ * answers an error: the text of its negative return code (and of ln_last_error() if that is
+ * about this call), or "handler returned without responding" for 0.  Requests that cannot be
+ * decoded (malformed, too big, another layout) are answered with an error and never reach the
+ * handler; the provider keeps serving every other caller. */
+typedef int (*ln_service_handler)(ln_client* clnt, ln_service_request* req, void* user_data);
+
+LN_EXPORT int ln_get_service_provider(ln_client* clnt, ln_service_provider** out,
+                                      const char* name, const char* md_name,
+                                      uint64_t layout_hash, const char* signature);
+LN_EXPORT int ln_service_provider_set_handler(ln_service_provider* provider,
+                                              ln_service_handler handler, void* user_data);
+/* Largest request (wire bytes and decoded dynamic data) this provider accepts; set it before
+ * registering. */
+LN_EXPORT int ln_service_provider_set_max_size(ln_service_provider* provider, size_t max_bytes);
+LN_EXPORT int ln_service_provider_register(ln_service_provider* provider, const char* group);
+/* Unregisters the service, closes its sockets and connections and frees the handle.  Waits for
+ * a handler of it that is running in another thread; from inside one of its own handlers it
+ * fails with LN_EBUSY. */
+LN_EXPORT int ln_unregister_service_provider(ln_service_provider* provider);
+
+/* Handle the requests of `group` that arrive within `timeout` seconds: waits for the first one,
+ * then handles every request that is ready without waiting again.  Returns how many requests
+ * were handled (0 when the timeout passed without any), or an error: LN_ENOTFOUND for a group
+ * with no registered provider, LN_EBUSY if a thread pool handles the group. */
+LN_EXPORT int ln_wait_and_handle_service_group_requests(ln_client* clnt, const char* group,
+                                                        double timeout);
+/* Hand `group` to the thread pool `pool` (created on first use with one thread): from now on
+ * its threads handle the group's requests, concurrently up to the pool's maximum number of
+ * threads.  The pool stops when the client is destroyed. */
+LN_EXPORT int ln_handle_service_group_in_thread_pool(ln_client* clnt, const char* group,
+                                                     const char* pool);
+/* Maximum number of threads of `pool` (1 .. 256; creates the pool if it does not exist yet). */
+LN_EXPORT int ln_set_max_threads(ln_client* clnt, const char* pool, unsigned max_threads);
+
+/* ---- inside a handler ---- */
+/* Fills *request (the request struct) with the call's request; dynamic fields point into memory
+ * of the call, valid until the handler returns. */
+LN_EXPORT int ln_service_request_get_data(ln_service_request* req, void* request);
+LN_EXPORT int ln_service_request_respond(ln_service_request* req, const void* response);
+LN_EXPORT int ln_service_request_respond_error(ln_service_request* req, const char* text);
+/* Name of the service being called (owned by the provider). */
+LN_EXPORT const char* ln_service_request_service_name(const ln_service_request* req);
+
 /* ==== topic segment administration (used by ln_manager) ===================================
  * The manager creates, sizes, grows and removes the shared-memory segments of topics; clients
  * only map them.  It maps only a segment's header, never its data. */
