@@ -58,6 +58,11 @@ int ln_client_request(ln_client* clnt, uint16_t type, const ln_wbuf* body, uint1
 int ln_client_add_port(ln_client* clnt, void* port, void (*close_fn)(void* port));
 void ln_client_remove_port(ln_client* clnt, void* port);
 pid_t ln_client_pid(const ln_client* clnt);
+/* The instance name from the manager's WELCOME (owned by the client). */
+const char* ln_client_instance(const ln_client* clnt);
+/* The numeric local address of the manager connection (the interface that reaches the
+ * manager), e.g. "192.168.1.5".  LN_OK, or LN_ECONNECTION (recorded) when disconnected. */
+int ln_client_local_host(ln_client* clnt, char* out, size_t size);
 
 /* For lasterror.c: copy an already formatted error into the client. */
 void ln_client_store_error(ln_client* clnt, int code, const char* text);
