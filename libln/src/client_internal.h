@@ -38,8 +38,8 @@ int ln_client_check(const ln_client* clnt);
  * fresh non-zero request id; NULL means no further fields) and wait up to the client's timeout
  * for the answer with that id.  On an ERROR answer: records its text as is and returns its
  * code.  On success: *reply_type is the answer's type (always the one `type` succeeds with,
- * e.g. PORT_OK for PUBLISH) and *reply reads the answer's body after the request id (memory
- * owned by the client, valid until the next ln_client_request on this client); its fields
+ * e.g. PORT_OK for PUBLISH) and *reply reads the answer's body after the request id (a copy
+ * owned by the calling thread, valid until its next ln_client_request); its fields
  * were already checked against docs/protocol.md, so reading them cannot fail.  Serialized by
  * the client's mutex (thread-safe).
  * Connection loss -> LN_ECONNECTION (the client then stays disconnected: later calls fail
