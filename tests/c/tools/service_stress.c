@@ -2,12 +2,14 @@
  * service tests (concurrency, crashes, errors).  The manager comes from $LN_MANAGER.
  *   service_stress provide NAME [pool THREADS | loop] [MAX_SIZE]
  *       serve until stdin closes; prints "ready" once registered.  Handler: text "fail" ->
- *       error response, "silent" -> returns without answering, else sleeps delay_us and echoes.
+ *       error response, "silent" -> returns without answering, else sleeps delay_us (printing
+ *       "busy" first when delay_us > 0) and echoes.
  *   service_stress call NAME THREADS CALLS TIMEOUT [TEXT_BYTES]
  *       THREADS threads, each with its own handle, make CALLS calls; every response must repeat
  *       its own request.  Prints one JSON line {"ok":N,"mismatch":N,"failed":N,"first_error":S}.
  *   service_stress once NAME TEXT DELAY_US TIMEOUT [REPEAT]
- *       REPEAT calls (default 1) on one handle; prints per call a JSON line
+ *       REPEAT calls (default 1) on one handle, each after the first waiting for a line on
+ *       stdin, which may give the next call's "TEXT DELAY_US"; prints per call a JSON line
  *       {"rc":"OK"|"E...","error":S,"text":S}. */
 #define _GNU_SOURCE
 #include <inttypes.h>
@@ -23,7 +25,7 @@
 
 #include "service_messages.h"
 
-#define ECHO LNTEST_ECHO_MD_NAME, LNTEST_ECHO_LAYOUT_HASH, LNTEST_ECHO_SIGNATURE
+#define ECHO LNTEST_ECHO_SERVICE
 
 static ln_client* clnt;
 
@@ -63,8 +65,11 @@ static int handle_echo(ln_client* c, ln_service_request* req, void* user)
         return ln_service_request_respond_error(req, "echo refuses \"fail\"");
     if (in.text_len == 6 && memcmp(in.text, "silent", 6) == 0)
         return 0;
-    if (in.delay_us > 0)
+    if (in.delay_us > 0) {
+        printf("busy\n");
+        fflush(stdout);
         usleep(in.delay_us);
+    }
     lntest_echo_response_t out = {in.caller, in.seq, in.text_len, in.text};
     return ln_service_request_respond(req, &out);
 }
@@ -195,7 +200,18 @@ static int call_once(const char* name, const char* text, uint32_t delay_us, doub
     int rc = ln_get_service(clnt, &svc, name, ECHO);
     if (rc != LN_OK)
         return fail("get_service", rc);
+    char next_text[256];
     for (int i = 0; i < repeat; i++) {
+        char line[300];
+        if (i > 0) {
+            if (fgets(line, sizeof line, stdin) == NULL)
+                break;
+            unsigned d;
+            if (sscanf(line, "%255s %u", next_text, &d) == 2) {
+                text = next_text;
+                delay_us = d;
+            }
+        }
         lntest_echo_request_t req = {0, (uint32_t)i, delay_us, (uint32_t)strlen(text),
                                      (char*)text};
         lntest_echo_response_t resp;
