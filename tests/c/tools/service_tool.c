@@ -151,12 +151,10 @@ static int provide(ln_client* c, const char* name, const char* md, const char* g
     ln_service_handler handler;
     int rc;
     if (!strcmp(md, "robot/plan_path")) {
-        rc = ln_get_service_provider(c, &p, name, ROBOT_PLAN_PATH_MD_NAME,
-                                     ROBOT_PLAN_PATH_LAYOUT_HASH, ROBOT_PLAN_PATH_SIGNATURE);
+        rc = ln_get_service_provider(c, &p, name, ROBOT_PLAN_PATH_SERVICE);
         handler = plan_path_handler;
     } else if (!strcmp(md, "robot/set_gains")) {
-        rc = ln_get_service_provider(c, &p, name, ROBOT_SET_GAINS_MD_NAME,
-                                     ROBOT_SET_GAINS_LAYOUT_HASH, ROBOT_SET_GAINS_SIGNATURE);
+        rc = ln_get_service_provider(c, &p, name, ROBOT_SET_GAINS_SERVICE);
         handler = set_gains_handler;
     } else {
         fprintf(stderr, "service_tool: unknown md %s\n", md);
@@ -269,8 +267,7 @@ static int call(ln_client* c, const char* name, const char* md, int argc, char**
     ln_service* svc;
     int rc;
     if (!strcmp(md, "robot/plan_path")) {
-        if ((rc = ln_get_service(c, &svc, name, ROBOT_PLAN_PATH_MD_NAME,
-                                 ROBOT_PLAN_PATH_LAYOUT_HASH, ROBOT_PLAN_PATH_SIGNATURE)) < 0)
+        if ((rc = ln_get_service(c, &svc, name, ROBOT_PLAN_PATH_SERVICE)) < 0)
             return fail("get_service", rc);
         robot_plan_path_request_t req = {.max_velocity = max_velocity, .constraints_len = n,
                                          .constraints = constraints};
@@ -280,8 +277,7 @@ static int call(ln_client* c, const char* name, const char* md, int argc, char**
             return call_error(rc);
         print_plan_path(&resp);
     } else if (!strcmp(md, "robot/set_gains")) {
-        if ((rc = ln_get_service(c, &svc, name, ROBOT_SET_GAINS_MD_NAME,
-                                 ROBOT_SET_GAINS_LAYOUT_HASH, ROBOT_SET_GAINS_SIGNATURE)) < 0)
+        if ((rc = ln_get_service(c, &svc, name, ROBOT_SET_GAINS_SERVICE)) < 0)
             return fail("get_service", rc);
         robot_set_gains_request_t req = {.profile_name_len = (uint32_t)strlen(profile),
                                          .profile_name = (char*)profile};
