@@ -19,14 +19,15 @@ def set_gains(clnt: ln.client) -> bool:
     svc.req.kp = [30.0] * 7
     svc.req.kd = [1.0] * 7
     svc.req.profile_name = "demo"
-    resp = svc.call(timeout=5.0)
-    print(f"planner: arm.set_gains kp=30 -> ok={resp.ok}", flush=True)
+    accepted = bool(svc.call(timeout=5.0).ok)  # call() returns svc.resp, refilled each call
+    print(f"planner: arm.set_gains kp=30 -> ok={accepted}", flush=True)
     svc.req.kp[3] = 500.0
     refused = svc.call(timeout=5.0)
-    print(f"planner: arm.set_gains kp[3]=500 -> ok={refused.ok} ({refused.message})",
+    print(f"planner: arm.set_gains kp[3]=500 -> ok={bool(refused.ok)} ({refused.message})",
           flush=True)
+    ok = accepted and not refused.ok
     svc.close()
-    return bool(resp.ok) and not refused.ok
+    return ok
 
 
 def main() -> int:

@@ -1,5 +1,6 @@
 """The demo robot system of scripts/demo, short: the C arm controller and the Python planner
-exchange commands and every joint state through a real manager."""
+exchange commands and every joint state through a real manager, and the planner sets the
+controller's gains through its service."""
 
 from __future__ import annotations
 
@@ -22,3 +23,6 @@ def test_arm_controller_and_planner(manager: Manager) -> None:
     out, _ = planner.communicate(timeout=120)
     assert planner.returncode == 0, out
     assert f"planner: {cycles} states, 0 overruns, 0 missing cycles" in out
+    # The controller's service, answered from its control loop: one setting taken, one refused.
+    assert "planner: arm.set_gains kp=30 -> ok=True" in out
+    assert "kp[3]=500 -> ok=False (kp[3] = 500 is outside (0, 100])" in out
