@@ -79,6 +79,8 @@ def emit_md(md: MessageDef) -> list[str]:
         out.append(f"#define {macro}{suffix}_SIZE {s.size}")
     if md.kind == "message":  # the (md name, layout hash, size) arguments of ln_publish/subscribe
         out.append(f"#define {macro}_MD {macro}_MD_NAME, {macro}_LAYOUT_HASH, sizeof({base}_t)")
+    if md.kind == "service":  # the (md name, layout hash, signature) arguments of ln_get_service
+        out.append(f"#define {macro}_SERVICE {macro}_MD_NAME, {macro}_LAYOUT_HASH, {macro}_SIGNATURE")
     out += asserts
     out += [f"#elif {marker} != {hash_lit}",
             f'#error "{md.name}: included from two generated headers with different layouts"',

@@ -2,6 +2,7 @@
 
 `robot/joint_state` becomes `robot::joint_state_t` with `robot::joint_state_signature`,
 `..._layout_hash`, `..._md_name`; services nest `request_t req` / `response_t resp`.
+Messages and services also get an `ln::md_traits` specialisation for ln.hpp.
 """
 
 from __future__ import annotations
@@ -88,12 +89,16 @@ def emit_md(md: MessageDef) -> list[str]:
     out += asserts
     if ns:
         out.append(f"}}  // namespace {'::'.join(ns)}")
-    if md.kind == "message":
+    if md.kind in ("message", "service"):
         prefix = "::".join(ns) + "::" if ns else ""
         out += [f"template <> struct ln::md_traits<::{prefix}{leaf}_t> {{",
                 f"    static constexpr const char* md_name = {'::' + prefix}{leaf}_md_name;",
-                f"    static constexpr std::uint64_t layout_hash = {hash_lit};",
-                "};"]
+                f"    static constexpr std::uint64_t layout_hash = {hash_lit};"]
+        if md.kind == "service":  # what ln_get_service and ln_get_service_provider take
+            out += [f"    static constexpr const char* signature = ::{prefix}{leaf}_signature;",
+                    f"    using request_type = ::{prefix}{leaf}_t::request_t;",
+                    f"    using response_type = ::{prefix}{leaf}_t::response_t;"]
+        out.append("};")
     out += [f"#elif {marker} != {hash_lit}",
             f'#error "{md.name}: included from two generated headers with different layouts"',
             "#endif", ""]
@@ -110,7 +115,8 @@ def emit(requested: list[MessageDef], output: Path, version: str) -> str:
              '#error "links_and_nodes message layouts are little-endian"',
              "#endif", "",
              "namespace ln {",
-             "// md name and layout hash of a generated message type (ln.hpp ports use it)",
+             "// md name and layout hash of a generated message type (ln.hpp ports use it);",
+             "// for a service type also signature, request_type and response_type",
              "template <typename T> struct md_traits;",
              "}  // namespace ln", ""]
     for md in mds:

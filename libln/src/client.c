@@ -7,8 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <netdb.h>
+#include <sys/socket.h>
 
 #include "client_conn.h"
+#include "svc_internal.h"
 
 #define DEFAULT_TIMEOUT 10.0
 #define MAX_ADDRESS LN_CLIENT_MAX_ADDRESS
@@ -48,6 +51,26 @@ pid_t ln_client_pid(const ln_client* clnt)
 {
     assert(clnt != NULL);
     return clnt->pid;
+}
+
+const char* ln_client_instance(const ln_client* clnt)
+{
+    return clnt->instance;
+}
+
+int ln_client_local_host(ln_client* clnt, char* out, size_t size)
+{
+    struct sockaddr_storage addr;
+    socklen_t len = sizeof addr;
+    pthread_mutex_lock(&clnt->request_lock);
+    int fd = clnt->fd;
+    int ok = fd >= 0 && getsockname(fd, (struct sockaddr*)&addr, &len) == 0
+             && getnameinfo((struct sockaddr*)&addr, len, out, (socklen_t)size, NULL, 0,
+                            NI_NUMERICHOST) == 0;
+    pthread_mutex_unlock(&clnt->request_lock);
+    return ok ? LN_OK
+              : ln_set_error(clnt, LN_ECONNECTION, "client \"%s\" is not connected to its manager",
+                             clnt->name);
 }
 
 const char* ln_client_name(const ln_client* clnt)
@@ -185,6 +208,7 @@ static const char* pick_name(const char* name, const ln_client_options* opts)
 
 static void free_client(ln_client* c)
 {
+    ln_svc_client_free(c);
     ln_conn_close(c);
     free(c->ports);
     pthread_mutex_destroy(&c->request_lock);
@@ -249,6 +273,8 @@ int ln_client_destroy(ln_client* clnt)
     int rc = ln_client_check(clnt);
     if (rc != LN_OK)
         return rc;
+    /* Pool threads first: they run handlers of the providers closed below. */
+    ln_svc_client_stop_pools(clnt);
     /* Newest first, and without holding a lock: close_fn talks to the manager and calls
      * ln_client_remove_port. */
     for (;;) {

@@ -236,6 +236,53 @@ static int round_trip(ln_client* c, uint16_t type, const ln_wbuf* body, uint16_t
     return LN_OK;
 }
 
+/* Each thread's copy of its last answer: the client's receive buffer is reused by the next
+ * request of any thread as soon as the lock is released. */
+static pthread_key_t reply_key;
+static pthread_once_t reply_once = PTHREAD_ONCE_INIT;
+
+struct reply_copy {
+    uint8_t* data;
+    size_t cap;
+};
+
+static void reply_free(void* p)
+{
+    struct reply_copy* r = p;
+    free(r->data);
+    free(r);
+}
+
+static void reply_key_init(void)
+{
+    pthread_key_create(&reply_key, reply_free);
+}
+
+/* Copies *reply into the calling thread's buffer and points *reply at it. */
+static int copy_reply(ln_client* c, ln_rbuf* reply)
+{
+    pthread_once(&reply_once, reply_key_init);
+    struct reply_copy* r = pthread_getspecific(reply_key);
+    if (r == NULL) {
+        r = calloc(1, sizeof *r);
+        if (r == NULL || pthread_setspecific(reply_key, r) != 0) {
+            free(r);
+            return ln_set_error(c, LN_ENOMEM, "out of memory for a manager answer");
+        }
+    }
+    if (reply->left > r->cap) {
+        uint8_t* data = realloc(r->data, reply->left);
+        if (data == NULL)
+            return ln_set_error(c, LN_ENOMEM, "out of memory for a manager answer");
+        r->data = data;
+        r->cap = reply->left;
+    }
+    if (reply->left > 0)
+        memcpy(r->data, reply->p, reply->left);
+    reply->p = r->data;
+    return LN_OK;
+}
+
 int ln_client_request(ln_client* clnt, uint16_t type, const ln_wbuf* body, uint16_t* reply_type,
                       ln_rbuf* reply)
 {
@@ -250,6 +297,8 @@ int ln_client_request(ln_client* clnt, uint16_t type, const ln_wbuf* body, uint1
                                 : ln_strerror(body->failed));
     pthread_mutex_lock(&clnt->request_lock);
     rc = round_trip(clnt, type, body, reply_type, reply);
+    if (rc == LN_OK)
+        rc = copy_reply(clnt, reply);
     pthread_mutex_unlock(&clnt->request_lock);
     return rc;
 }

@@ -35,6 +35,8 @@ struct ln_client {
     size_t nports, ports_cap;
     int last_code;
     char last_error[LN_ERROR_TEXT_MAX];
+
+    struct ln_svc_state* svc; /* service groups and pools (svc_group.c), created on first use */
 };
 
 /* Connects to host:port, sends HELLO as `name` and takes the WELCOME (client_id, name,

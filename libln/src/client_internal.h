@@ -38,8 +38,8 @@ int ln_client_check(const ln_client* clnt);
  * fresh non-zero request id; NULL means no further fields) and wait up to the client's timeout
  * for the answer with that id.  On an ERROR answer: records its text as is and returns its
  * code.  On success: *reply_type is the answer's type (always the one `type` succeeds with,
- * e.g. PORT_OK for PUBLISH) and *reply reads the answer's body after the request id (memory
- * owned by the client, valid until the next ln_client_request on this client); its fields
+ * e.g. PORT_OK for PUBLISH) and *reply reads the answer's body after the request id (a copy
+ * owned by the calling thread, valid until its next ln_client_request); its fields
  * were already checked against docs/protocol.md, so reading them cannot fail.  Serialized by
  * the client's mutex (thread-safe).
  * Connection loss -> LN_ECONNECTION (the client then stays disconnected: later calls fail
@@ -58,6 +58,11 @@ int ln_client_request(ln_client* clnt, uint16_t type, const ln_wbuf* body, uint1
 int ln_client_add_port(ln_client* clnt, void* port, void (*close_fn)(void* port));
 void ln_client_remove_port(ln_client* clnt, void* port);
 pid_t ln_client_pid(const ln_client* clnt);
+/* The instance name from the manager's WELCOME (owned by the client). */
+const char* ln_client_instance(const ln_client* clnt);
+/* The numeric local address of the manager connection (the interface that reaches the
+ * manager), e.g. "192.168.1.5".  LN_OK, or LN_ECONNECTION (recorded) when disconnected. */
+int ln_client_local_host(ln_client* clnt, char* out, size_t size);
 
 /* For lasterror.c: copy an already formatted error into the client. */
 void ln_client_store_error(ln_client* clnt, int code, const char* text);

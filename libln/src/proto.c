@@ -261,6 +261,11 @@ static const struct {
     {LN_MSG_OK, 0, 1, "d", "OK"},
     {LN_MSG_TOPIC_INFO, LN_MSG_TOPIC_INFO_OK, 0, "ds", "TOPIC_INFO"},
     {LN_MSG_TOPIC_INFO_OK, 0, 1, "dsqddd", "TOPIC_INFO_OK"},
+    {LN_MSG_REGISTER_SERVICE, LN_MSG_OK, 0, "dssqsssssw", "REGISTER_SERVICE"},
+    {LN_MSG_UNREGISTER_SERVICE, LN_MSG_OK, 0, "ds", "UNREGISTER_SERVICE"},
+    {LN_MSG_FIND_SERVICE, LN_MSG_SERVICE_INFO, 0, "dssq", "FIND_SERVICE"},
+    {LN_MSG_SERVICE_INFO, 0, 1, "dssssws", "SERVICE_INFO"},
+    {LN_MSG_SERVICE_CALLED, LN_MSG_OK, 0, "dsqq", "SERVICE_CALLED"},
 };
 
 static int find_type(uint16_t type)

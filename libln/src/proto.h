@@ -26,6 +26,11 @@ enum ln_msg_type {
     LN_MSG_OK = 14,
     LN_MSG_TOPIC_INFO = 15,
     LN_MSG_TOPIC_INFO_OK = 16,
+    LN_MSG_REGISTER_SERVICE = 20,
+    LN_MSG_UNREGISTER_SERVICE = 21,
+    LN_MSG_FIND_SERVICE = 22,
+    LN_MSG_SERVICE_INFO = 23,
+    LN_MSG_SERVICE_CALLED = 24,
 };
 
 /* Growable writer.  `failed` is 0, or the LN_E* code of the first failure: LN_ENOMEM, or
@@ -90,7 +95,8 @@ int ln_proto_decode_frame(const void* data, size_t len, uint16_t* type, ln_rbuf*
 
 /* 1 for the types of docs/protocol.md, else 0. */
 int ln_proto_type_known(uint16_t type);
-/* 1 for the types the manager sends (WELCOME, ERROR, PORT_OK, OK, TOPIC_INFO_OK), else 0. */
+/* 1 for the types the manager sends (WELCOME, ERROR, PORT_OK, OK, TOPIC_INFO_OK,
+ * SERVICE_INFO), else 0. */
 int ln_proto_to_client(uint16_t type);
 /* LN_OK if `body` (from its start; the reader itself is not moved) holds exactly the fields of
  * message `type` with valid strs, else LN_EPROTOCOL.  A reader that passes can then be read

@@ -1,6 +1,7 @@
 /* test_generated_layout.c — the C header ln_generate makes from the robot/ and ln/ mds has
  * the one packed layout the md files define (offsets and sizes worked out by hand here) and
- * the per-md constants the generator promises. */
+ * the per-md constants the generator promises, including NAME_SERVICE as the argument list of
+ * ln_get_service. */
 #include <stddef.h>
 #include <stdint.h>
 
@@ -70,6 +71,22 @@ static void test_service(void)
     LN_CHECK_STREQ(ROBOT_SET_GAINS_MD_NAME, "robot/set_gains");
 }
 
+/* Stands in for ln_get_service's (md name, layout hash, signature) parameters. */
+static int service_arguments(const char* md_name, uint64_t layout_hash, const char* signature)
+{
+    LN_CHECK(layout_hash != 0);
+    return strcmp(md_name, ROBOT_SET_GAINS_MD_NAME) == 0
+           && layout_hash == ROBOT_SET_GAINS_LAYOUT_HASH
+           && strcmp(signature, ROBOT_SET_GAINS_SIGNATURE) == 0;
+}
+
+static void test_service_arguments(void)
+{
+    LN_CHECK(service_arguments(ROBOT_SET_GAINS_SERVICE));
+    LN_CHECK(!service_arguments(ROBOT_PLAN_PATH_SERVICE));
+    LN_CHECK(strchr(ROBOT_SET_GAINS_SIGNATURE, '|') != NULL);
+}
+
 int main(void)
 {
     LN_TEST_RUN(test_joint_state);
@@ -78,5 +95,6 @@ int main(void)
     LN_TEST_RUN(test_nested_types);
     LN_TEST_RUN(test_dynamic_fields);
     LN_TEST_RUN(test_service);
+    LN_TEST_RUN(test_service_arguments);
     LN_TEST_EXIT();
 }

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 
 #include <ln/ln.h>
 
@@ -74,6 +75,20 @@ static void test_service(void)
     LN_CHECK(robot::set_gains_layout_hash == ROBOT_SET_GAINS_LAYOUT_HASH);
 }
 
+/* Service types have md_traits too, with what ln_get_service takes and the section types. */
+static void test_service_traits(void)
+{
+    using traits = ln::md_traits<robot::set_gains_t>;
+    static_assert(std::is_same_v<traits::request_type, robot::set_gains_t::request_t>);
+    static_assert(std::is_same_v<traits::response_type, robot::set_gains_t::response_t>);
+    static_assert(traits::layout_hash == ROBOT_SET_GAINS_LAYOUT_HASH);
+    CHECK_SAME_STRING(traits::md_name, ROBOT_SET_GAINS_MD_NAME);
+    CHECK_SAME_STRING(traits::signature, ROBOT_SET_GAINS_SIGNATURE);
+    using plan = ln::md_traits<robot::plan_path_t>;
+    static_assert(std::is_same_v<plan::response_type, robot::plan_path_t::response_t>);
+    CHECK_SAME_STRING(plan::signature, ROBOT_PLAN_PATH_SIGNATURE);
+}
+
 /* ln.h is usable from C++ as is: extern "C" linkage, the enum, the version macros. */
 static void test_ln_h_from_cpp(void)
 {
@@ -88,5 +103,6 @@ int main()
     LN_TEST_RUN(test_command);
     LN_TEST_RUN(test_nested_types);
     LN_TEST_RUN(test_service);
+    LN_TEST_RUN(test_service_traits);
     LN_TEST_EXIT();
 }

@@ -348,7 +348,12 @@ static void test_message_types(void)
     int known = 0;
     for (uint32_t t = 0; t <= UINT16_MAX; t++)
         known += ln_proto_type_known((uint16_t)t);
-    LN_CHECK_EQ(known, 10);
+    LN_CHECK_EQ(known, 15);
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_REGISTER_SERVICE), LN_MSG_OK);
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_UNREGISTER_SERVICE), LN_MSG_OK);
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_FIND_SERVICE), LN_MSG_SERVICE_INFO);
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_SERVICE_CALLED), LN_MSG_OK);
+    LN_CHECK(ln_proto_to_client(LN_MSG_SERVICE_INFO) && !ln_proto_to_client(LN_MSG_FIND_SERVICE));
 }
 
 static void test_check_fields(void)

@@ -97,6 +97,7 @@ typedef struct robot_plan_path {
 #define ROBOT_PLAN_PATH_LAYOUT_HASH UINT64_C(0x839d6658b06011c7)
 #define ROBOT_PLAN_PATH_REQUEST_SIZE 76
 #define ROBOT_PLAN_PATH_RESPONSE_SIZE 28
+#define ROBOT_PLAN_PATH_SERVICE ROBOT_PLAN_PATH_MD_NAME, ROBOT_PLAN_PATH_LAYOUT_HASH, ROBOT_PLAN_PATH_SIGNATURE
 LN_MD_STATIC_ASSERT(sizeof(void*) == 8, "robot/plan_path: dynamic fields need 64-bit pointers");
 LN_MD_STATIC_ASSERT(sizeof(robot_plan_path_request_t) == 76, "robot/plan_path request: size");
 LN_MD_STATIC_ASSERT(offsetof(robot_plan_path_request_t, goal) == 0, "robot/plan_path request: offset of goal");

@@ -12,7 +12,8 @@
 #endif
 
 namespace ln {
-// md name and layout hash of a generated message type (ln.hpp ports use it)
+// md name and layout hash of a generated message type (ln.hpp ports use it);
+// for a service type also signature, request_type and response_type
 template <typename T> struct md_traits;
 }  // namespace ln
 
@@ -116,6 +117,13 @@ static_assert(offsetof(plan_path_t::response_t, status) == 12, "robot/plan_path 
 static_assert(offsetof(plan_path_t::response_t, message_len) == 16, "robot/plan_path response: offset of message_len");
 static_assert(offsetof(plan_path_t::response_t, message) == 20, "robot/plan_path response: offset of message");
 }  // namespace robot
+template <> struct ln::md_traits<::robot::plan_path_t> {
+    static constexpr const char* md_name = ::robot::plan_path_md_name;
+    static constexpr std::uint64_t layout_hash = 0x839d6658b06011c7ULL;
+    static constexpr const char* signature = ::robot::plan_path_signature;
+    using request_type = ::robot::plan_path_t::request_t;
+    using response_type = ::robot::plan_path_t::response_t;
+};
 #elif LN_MD_CPP_ROBOT_PLAN_PATH != 0x839d6658b06011c7ULL
 #error "robot/plan_path: included from two generated headers with different layouts"
 #endif

@@ -12,7 +12,8 @@
 #endif
 
 namespace ln {
-// md name and layout hash of a generated message type (ln.hpp ports use it)
+// md name and layout hash of a generated message type (ln.hpp ports use it);
+// for a service type also signature, request_type and response_type
 template <typename T> struct md_traits;
 }  // namespace ln
 

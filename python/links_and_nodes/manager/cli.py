@@ -1,6 +1,7 @@
 """`ln_manager`: runs the manager of one instance.  Takes the instance lock, removes
-segments a killed predecessor left behind, serves clients until SIGTERM/SIGINT, then
-closes every connection and unlinks every segment of the instance."""
+segments and service sockets a killed predecessor's clients left behind, serves clients
+until SIGTERM/SIGINT, then closes every connection and unlinks every segment of the
+instance."""
 
 from __future__ import annotations
 
@@ -9,9 +10,16 @@ import asyncio
 import logging
 import signal
 import sys
+from pathlib import Path
 
 from .registry import Limits, RequestError
-from .runtime import InstanceLock, RuntimeDirError, prepare, runtime_dir
+from .runtime import (
+    InstanceLock,
+    RuntimeDirError,
+    prepare,
+    purge_service_sockets,
+    runtime_dir,
+)
 from .services import DEFAULT_LIMIT as SERVICE_LIMIT
 from .services import Services
 
@@ -63,7 +71,7 @@ def _address(host: str, port: int) -> str:
     return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
-async def _serve(args: argparse.Namespace) -> int:
+async def _serve(args: argparse.Namespace, directory: Path) -> int:
     # libln is loaded only here, so --help and argument errors work without it.
     from .core import Core
     from .registry import Registry
@@ -79,6 +87,15 @@ async def _serve(args: argparse.Namespace) -> int:
     if purged:
         log.info("removed %d stale segment%s of instance %r", purged,
                  "" if purged == 1 else "s", args.instance)
+    try:
+        sockets = purge_service_sockets(directory)
+    except OSError as exc:
+        print(f"ln_manager: error: cannot list runtime directory {directory}: "
+              f"{exc.strerror or exc}", file=sys.stderr)
+        return 1
+    if sockets:
+        log.info("removed %d stale service socket%s in %s: %s", len(sockets),
+                 "" if len(sockets) == 1 else "s", directory, ", ".join(sockets))
     limits = Limits(topics=args.topic_limit, ring_memory=args.ring_memory_limit)
     core = Core(args.instance, Registry(ring_segment_size, limits), segments,
                 Services(args.service_limit))
@@ -125,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"ln_manager: error: {exc}", file=sys.stderr)
         return 1
     try:
-        return asyncio.run(_serve(args))
+        return asyncio.run(_serve(args, directory))
     finally:
         lock.release()
 

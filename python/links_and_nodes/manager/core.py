@@ -1,7 +1,7 @@
 """The manager's answers: turns decoded requests of one connection into registry changes
-and segment operations, and those into reply messages.  Knows nothing of sockets or
-asyncio (server.py does the I/O); keeps registry and segments consistent, also when a
-segment operation fails halfway."""
+and segment operations, and those into reply messages; unlinks the socket files of
+services it removes.  Knows nothing of connections or asyncio (server.py does the I/O);
+keeps registry and segments consistent, also when a segment operation fails halfway."""
 
 from __future__ import annotations
 
@@ -12,8 +12,9 @@ from typing import Any
 from .. import _libln
 from . import protocol as p
 from .registry import Client, Port, PortKind, PortRequest, Registry, RequestError, Topic
+from .runtime import remove_service_socket
 from .segments import Segments
-from .services import ServiceOffer, Services
+from .services import Service, ServiceOffer, Services
 
 log = logging.getLogger("ln_manager")
 
@@ -24,6 +25,13 @@ _MAX_PID = (1 << 31) - 1  # pids travel as i32 into the reader slots
 def error_code(name: str) -> int:
     """The LN_E* number of a table name ("ELIMIT" -> -11)."""
     return _CODES[name]
+
+
+def _service_entry(service: Service) -> p.ServiceEntry:
+    o = service.offer
+    return p.ServiceEntry(o.name, o.md_name, o.layout_hash, service.provider.name, o.group,
+                          o.host_id, o.unix_path, o.tcp_host, o.tcp_port, service.calls,
+                          service.errors)
 
 
 @dataclass(eq=False)
@@ -98,6 +106,9 @@ class Core:
             if isinstance(msg, p.RegisterService | p.UnregisterService | p.FindService
                           | p.ServiceCalled):
                 return self._service_request(session, msg)
+            if isinstance(msg, p.ListServices):
+                return p.service_list(request_id, map(_service_entry,
+                                                      self.service_registry.sorted()))
         except RequestError as exc:
             # an unknown topic or service asked for is an answer, not an event worth a line
             level = (logging.DEBUG if isinstance(msg, p.TopicInfo | p.FindService)
@@ -112,9 +123,11 @@ class Core:
         client = session.client
         if client is None:
             return 0
-        for service in self.service_registry.remove_client(client):
+        gone = self.service_registry.remove_client(client)
+        for service in gone:
             log.info("service %r of %s removed: its client disconnected (%d calls, %d "
                      "errors)", service.name, session.label, service.calls, service.errors)
+        self._remove_sockets(gone)
         ports = list(client.ports.values())
         for port in ports:
             self._close_port(port)
@@ -140,29 +153,45 @@ class Core:
         services = self.service_registry
         if isinstance(msg, p.RegisterService):
             offer = ServiceOffer(msg.name, msg.md_name, msg.layout_hash, msg.signature,
-                                 msg.group, msg.unix_path, msg.tcp_host, msg.tcp_port)
+                                 msg.group, msg.host_id, msg.unix_path, msg.tcp_host,
+                                 msg.tcp_port)
             _, old = services.register(client, offer)
             where = ", ".join(([f"unix {offer.unix_path}"] if offer.unix_path else [])
                               + ([f"tcp {offer.tcp_host}:{offer.tcp_port}"]
                                  if offer.tcp_port else []))
-            log.info("%s: service %r %s: md %r (hash 0x%016x), signature %r, group %r, %s",
-                     session.label, offer.name, "re-registered" if old else "registered",
-                     offer.md_name, offer.layout_hash, offer.signature, offer.group, where)
+            log.info("%s: service %r %s: md %r (hash 0x%016x), signature %r, group %r, "
+                     "host %r, %s", session.label, offer.name,
+                     "re-registered" if old else "registered", offer.md_name,
+                     offer.layout_hash, offer.signature, offer.group, offer.host_id, where)
             return p.Ok(msg.request_id)
         if isinstance(msg, p.UnregisterService):
             service = services.unregister(client, msg.name)
             log.info("%s: service %r unregistered (%d calls, %d errors)", session.label,
                      service.name, service.calls, service.errors)
+            self._remove_sockets([service])
             return p.Ok(msg.request_id)
         if isinstance(msg, p.FindService):
             service = services.find(msg.name, msg.md_name, msg.layout_hash)
             o = service.offer
-            return p.ServiceInfo(msg.request_id, service.provider.name, o.unix_path,
-                                 o.tcp_host, o.tcp_port, o.signature)
+            return p.ServiceInfo(msg.request_id, service.provider.name, o.host_id,
+                                 o.unix_path, o.tcp_host, o.tcp_port, o.signature)
         service = services.called(client, msg.name, msg.calls, msg.errors)
         log.debug("%s: service %r: %d calls, %d errors", session.label, service.name,
                   service.calls, service.errors)
         return p.Ok(msg.request_id)
+
+    def _remove_sockets(self, gone: list[Service]) -> None:
+        """Unlink the unix sockets of removed services that no remaining service offers
+        (runtime.remove_service_socket decides which files may go)."""
+        for path in sorted({s.offer.unix_path for s in gone if s.offer.unix_path}):
+            if self.service_registry.unix_path_in_use(path):
+                log.debug("left service socket %s: another service still offers it", path)
+                continue
+            reason = remove_service_socket(path)
+            if reason is None:
+                log.info("removed service socket %s", path)
+            else:
+                log.debug("left service socket %s: %s", path, reason)
 
     # ---- ports --------------------------------------------------------------------------
     def _open_port(self, session: Session, msg: p.Publish | p.Subscribe) -> p.PortOk:

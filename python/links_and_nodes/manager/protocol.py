@@ -5,9 +5,10 @@ says a frame must satisfy.  A leaf module: no I/O, nothing of ours imported."""
 from __future__ import annotations
 
 import struct
-from dataclasses import astuple, dataclass
+from collections.abc import Iterable
+from dataclasses import dataclass
 from enum import IntEnum
-from typing import ClassVar
+from typing import Any, ClassVar
 
 MAGIC = 0x504D4E4C  # "LNMP" read as a little-endian u32
 VERSION = 1
@@ -38,20 +39,29 @@ class MsgType(IntEnum):
     FIND_SERVICE = 22
     SERVICE_INFO = 23
     SERVICE_CALLED = 24
+    LIST_SERVICES = 25
+    SERVICE_LIST = 26
 
 
-# Field kinds: struct format of the fixed-width ones; "str" is u16 length + UTF-8.
+# Field kinds: struct format of the fixed-width ones; "str" is u16 length + UTF-8; a
+# Record subclass is a list of such records: u32 count, then that many records.
 _FIXED = {"u16": "<H", "u32": "<I", "u64": "<Q", "i32": "<i"}
 _RANGES = {"u16": (0, 0xFFFF), "u32": (0, 0xFFFFFFFF), "u64": (0, (1 << 64) - 1),
            "i32": (-(1 << 31), (1 << 31) - 1)}
 
 
 @dataclass(frozen=True)
-class Message:
-    """Base of all messages; FIELDS lists (name, kind) in wire order."""
+class Record:
+    """Fields in wire order: FIELDS lists (name, kind)."""
+
+    FIELDS: ClassVar[tuple[tuple[str, str | type[Record]], ...]]
+
+
+@dataclass(frozen=True)
+class Message(Record):
+    """Base of all messages."""
 
     TYPE: ClassVar[MsgType]
-    FIELDS: ClassVar[tuple[tuple[str, str], ...]]
     FROM_CLIENT: ClassVar[bool]
 
 
@@ -177,13 +187,15 @@ class RegisterService(Message):
     layout_hash: int
     signature: str
     group: str
+    host_id: str
     unix_path: str
     tcp_host: str
     tcp_port: int
     TYPE = MsgType.REGISTER_SERVICE
     FIELDS = (("request_id", "u32"), ("name", "str"), ("md_name", "str"),
               ("layout_hash", "u64"), ("signature", "str"), ("group", "str"),
-              ("unix_path", "str"), ("tcp_host", "str"), ("tcp_port", "u16"))
+              ("host_id", "str"), ("unix_path", "str"), ("tcp_host", "str"),
+              ("tcp_port", "u16"))
     FROM_CLIENT = True
 
 
@@ -212,13 +224,15 @@ class FindService(Message):
 class ServiceInfo(Message):
     request_id: int
     provider: str
+    host_id: str
     unix_path: str
     tcp_host: str
     tcp_port: int
     signature: str
     TYPE = MsgType.SERVICE_INFO
-    FIELDS = (("request_id", "u32"), ("provider", "str"), ("unix_path", "str"),
-              ("tcp_host", "str"), ("tcp_port", "u16"), ("signature", "str"))
+    FIELDS = (("request_id", "u32"), ("provider", "str"), ("host_id", "str"),
+              ("unix_path", "str"), ("tcp_host", "str"), ("tcp_port", "u16"),
+              ("signature", "str"))
     FROM_CLIENT = False
 
 
@@ -233,10 +247,51 @@ class ServiceCalled(Message):
     FROM_CLIENT = True
 
 
+@dataclass(frozen=True)
+class ListServices(Message):
+    request_id: int
+    TYPE = MsgType.LIST_SERVICES
+    FIELDS = (("request_id", "u32"),)
+    FROM_CLIENT = True
+
+
+@dataclass(frozen=True)
+class ServiceEntry(Record):
+    """One service of a SERVICE_LIST."""
+
+    name: str
+    md_name: str
+    layout_hash: int
+    provider: str
+    group: str
+    host_id: str
+    unix_path: str
+    tcp_host: str
+    tcp_port: int
+    calls: int
+    errors: int
+    FIELDS = (("name", "str"), ("md_name", "str"), ("layout_hash", "u64"),
+              ("provider", "str"), ("group", "str"), ("host_id", "str"), ("unix_path", "str"),
+              ("tcp_host", "str"), ("tcp_port", "u16"), ("calls", "u64"), ("errors", "u64"))
+
+
+@dataclass(frozen=True)
+class ServiceList(Message):
+    """`total` services exist; `entries` are the first of them (by name) that fit a frame."""
+
+    request_id: int
+    total: int
+    entries: tuple[ServiceEntry, ...]
+    TYPE = MsgType.SERVICE_LIST
+    FIELDS = (("request_id", "u32"), ("total", "u32"), ("entries", ServiceEntry))
+    FROM_CLIENT = False
+
+
 MESSAGES: dict[int, type[Message]] = {
     cls.TYPE: cls for cls in (Hello, Welcome, Error, Publish, Subscribe, PortOk, ClosePort,
                               Ok, TopicInfo, TopicInfoOk, RegisterService, UnregisterService,
-                              FindService, ServiceInfo, ServiceCalled)}
+                              FindService, ServiceInfo, ServiceCalled, ListServices,
+                              ServiceList)}
 
 
 def frame_length(header: bytes) -> int:
@@ -250,27 +305,63 @@ def frame_length(header: bytes) -> int:
     return length
 
 
-def encode(msg: Message) -> bytes:
-    """The complete frame (length, type, body) of `msg`; ValueError if a field does not fit."""
-    parts = [struct.pack("<H", msg.TYPE)]
-    for (name, kind), value in zip(msg.FIELDS, astuple(msg), strict=True):
-        if kind == "str":
+def _encode_fields(record: Record, where: str) -> list[bytes]:
+    parts = []
+    for name, kind in record.FIELDS:
+        value = getattr(record, name)
+        field = f"{where}.{name}"
+        if isinstance(kind, type):
+            if not isinstance(value, tuple) or not all(isinstance(v, kind) for v in value):
+                raise ValueError(f"{field}: tuple of {kind.__name__} expected, got {value!r}")
+            if len(value) > 0xFFFFFFFF:
+                raise ValueError(f"{field}: {len(value)} entries do not fit a u32 count")
+            parts.append(struct.pack("<I", len(value)))
+            for index, item in enumerate(value):
+                parts += _encode_fields(item, f"{field}[{index}]")
+        elif kind == "str":
             if not isinstance(value, str):
-                raise ValueError(f"{msg.TYPE.name}.{name}: str expected, got {value!r}")
+                raise ValueError(f"{field}: str expected, got {value!r}")
             raw = value.encode("utf-8")
             if len(raw) > MAX_STR:
-                raise ValueError(f"{msg.TYPE.name}.{name}: {len(raw)} bytes, at most "
-                                 f"{MAX_STR}")
+                raise ValueError(f"{field}: {len(raw)} bytes, at most {MAX_STR}")
             parts += [struct.pack("<H", len(raw)), raw]
         else:
             low, high = _RANGES[kind]
             if not isinstance(value, int) or not low <= value <= high:
-                raise ValueError(f"{msg.TYPE.name}.{name}: {value!r} is not a {kind}")
+                raise ValueError(f"{field}: {value!r} is not a {kind}")
             parts.append(struct.pack(_FIXED[kind], value))
-    payload = b"".join(parts)
+    return parts
+
+
+def encode(msg: Message) -> bytes:
+    """The complete frame (length, type, body) of `msg`; ValueError if a field does not fit."""
+    payload = b"".join([struct.pack("<H", msg.TYPE), *_encode_fields(msg, msg.TYPE.name)])
     if len(payload) > MAX_LENGTH:
         raise ValueError(f"{msg.TYPE.name}: frame of {len(payload)} bytes is too long")
     return struct.pack("<I", len(payload)) + payload
+
+
+def encoded_size(record: Record) -> int:
+    """Bytes of `record`'s fields on the wire (a message's body, without length and type)."""
+    return sum(len(part) for part in _encode_fields(record, type(record).__name__))
+
+
+def service_list(request_id: int, entries: Iterable[ServiceEntry]) -> ServiceList:
+    """The SERVICE_LIST of `entries` (in the order given): `total` counts them all, the
+    list keeps as many as fit the frame limit, cutting at the end."""
+    room = MAX_LENGTH - 2 - encoded_size(ServiceList(request_id, 0, ()))
+    kept: list[ServiceEntry] = []
+    total = 0
+    full = False
+    for entry in entries:
+        total += 1
+        if not full:
+            size = encoded_size(entry)
+            full = size > room
+            if not full:
+                kept.append(entry)
+                room -= size
+    return ServiceList(request_id, total, tuple(kept))
 
 
 def decode_frame(frame: bytes) -> Message:
@@ -293,40 +384,63 @@ def decode_payload(payload: bytes) -> Message:
     return decode_body(cls, payload[2:])
 
 
+class _Reader:
+    """Reads the fields of one body in order; errors name the message type and field."""
+
+    def __init__(self, type_name: str, body: bytes) -> None:
+        self.type_name = type_name
+        self.body = body
+        self.offset = 0
+
+    def too_short(self, detail: str) -> ProtocolError:
+        return ProtocolError(f"{self.type_name} body too short: {len(self.body)} bytes, "
+                             f"{detail}")
+
+    def fields(self, cls: type[Record], prefix: str = "") -> list[Any]:
+        values: list[Any] = []
+        for field_name, kind in cls.FIELDS:
+            name = prefix + field_name
+            if isinstance(kind, type):
+                (count,) = self.fixed("<I", f"the count of {name}")
+                values.append(tuple(kind(*self.fields(kind, f"{name}[{index}]."))
+                                    for index in range(count)))
+            elif kind == "str":
+                values.append(self.str(name))
+            else:
+                (value,) = self.fixed(_FIXED[kind], name)
+                values.append(value)
+        return values
+
+    def fixed(self, fmt: str, what: str) -> tuple[Any, ...]:
+        size = struct.calcsize(fmt)
+        if self.offset + size > len(self.body):
+            raise self.too_short(f"ends inside {what}")
+        values = struct.unpack_from(fmt, self.body, self.offset)
+        self.offset += size
+        return values
+
+    def str(self, name: str) -> str:
+        where = f"{self.type_name}.{name}"
+        (count,) = self.fixed("<H", f"the length of {name}")
+        if count > MAX_STR:
+            raise ProtocolError(f"{where}: str of {count} bytes, at most {MAX_STR}")
+        if self.offset + count > len(self.body):
+            raise self.too_short(f"{name} needs {count} bytes at offset {self.offset}")
+        raw = self.body[self.offset:self.offset + count]
+        self.offset += count
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ProtocolError(f"{where}: not valid UTF-8 (byte {exc.start})") from None
+
+
 def decode_body(cls: type[Message], body: bytes) -> Message:
     """Decode the body of a `cls` frame; it must hold exactly cls's fields."""
-    values: list[int | str] = []
-    offset = 0
-    for name, kind in cls.FIELDS:
-        where = f"{cls.TYPE.name}.{name}"
-        if kind == "str":
-            if offset + 2 > len(body):
-                raise ProtocolError(f"{cls.TYPE.name} body too short: {len(body)} bytes, "
-                                    f"ends inside the length of {name}")
-            (count,) = struct.unpack_from("<H", body, offset)
-            offset += 2
-            if count > MAX_STR:
-                raise ProtocolError(f"{where}: str of {count} bytes, at most {MAX_STR}")
-            if offset + count > len(body):
-                raise ProtocolError(f"{cls.TYPE.name} body too short: {len(body)} bytes, "
-                                    f"{name} needs {count} bytes at offset {offset}")
-            raw = body[offset:offset + count]
-            offset += count
-            try:
-                values.append(raw.decode("utf-8"))
-            except UnicodeDecodeError as exc:
-                raise ProtocolError(f"{where}: not valid UTF-8 (byte {exc.start})") from None
-        else:
-            fmt = _FIXED[kind]
-            size = struct.calcsize(fmt)
-            if offset + size > len(body):
-                raise ProtocolError(f"{cls.TYPE.name} body too short: {len(body)} bytes, "
-                                    f"ends inside {name}")
-            values.append(struct.unpack_from(fmt, body, offset)[0])
-            offset += size
-    if offset != len(body):
+    reader = _Reader(cls.TYPE.name, body)
+    values = reader.fields(cls)
+    if reader.offset != len(body):
         raise ProtocolError(f"{cls.TYPE.name} body too long: {len(body)} bytes, its fields "
-                            f"take {offset}")
+                            f"take {reader.offset}")
     if cls.FROM_CLIENT and cls.FIELDS[0][0] == "request_id" and values[0] == 0:
         raise ProtocolError(f"{cls.TYPE.name} with request id 0 (must be non-zero)")
     return cls(*values)

@@ -1,16 +1,20 @@
 """The per-instance runtime directory and the lock in it that makes one manager per
 instance: a second manager would otherwise purge the segments of the first one's topics.
-The lock is an flock, so the kernel drops it when the manager dies, even by SIGKILL."""
+The lock is an flock, so the kernel drops it when the manager dies, even by SIGKILL.
+Also the clean-up of the Unix sockets that service providers leave in that directory."""
 
 from __future__ import annotations
 
 import fcntl
 import os
+import re
 import stat
 from collections.abc import Mapping
 from pathlib import Path
 
 LOCK_NAME = "manager.lock"
+# What libln names a provider's socket: svc.<pid>.<n>.sock
+SERVICE_SOCKET_NAME = re.compile(r"svc\.[0-9]+\.[0-9]+\.sock\Z")
 
 
 class RuntimeDirError(Exception):
@@ -103,3 +107,41 @@ class InstanceLock:
 
     def __exit__(self, *exc: object) -> None:
         self.release()
+
+
+def remove_service_socket(path: str | Path) -> str | None:
+    """Unlink a provider's socket: only if its file name is svc.<pid>.<n>.sock and it is a
+    socket (not a symlink to one) owned by our uid.  None if it was unlinked, else why it
+    was left."""
+    path = Path(path)
+    if not SERVICE_SOCKET_NAME.match(path.name):
+        return "not named svc.<pid>.<n>.sock"
+    try:
+        info = path.lstat()
+    except FileNotFoundError:
+        return "no such file"
+    except OSError as exc:
+        return f"cannot stat it: {exc.strerror}"
+    if not stat.S_ISSOCK(info.st_mode):
+        return "not a socket"
+    if info.st_uid != os.getuid():
+        return f"owned by uid {info.st_uid}, not by us ({os.getuid()})"
+    try:
+        path.unlink()
+    except FileNotFoundError:
+        return "no such file"
+    except OSError as exc:
+        return f"cannot unlink it: {exc.strerror}"
+    return None
+
+
+def purge_service_sockets(directory: Path) -> list[str]:
+    """Unlink every provider socket (as remove_service_socket decides) in `directory`: what
+    killed providers left; the names unlinked."""
+    removed = []
+    with os.scandir(directory) as entries:
+        names = sorted(e.name for e in entries if SERVICE_SOCKET_NAME.match(e.name))
+    for name in names:
+        if remove_service_socket(directory / name) is None:
+            removed.append(name)
+    return removed

@@ -17,7 +17,7 @@ log = logging.getLogger("ln_manager")
 
 _REQUESTS = (p.MsgType.PUBLISH, p.MsgType.SUBSCRIBE, p.MsgType.CLOSE_PORT,
              p.MsgType.TOPIC_INFO, p.MsgType.REGISTER_SERVICE, p.MsgType.UNREGISTER_SERVICE,
-             p.MsgType.FIND_SERVICE, p.MsgType.SERVICE_CALLED)
+             p.MsgType.FIND_SERVICE, p.MsgType.SERVICE_CALLED, p.MsgType.LIST_SERVICES)
 
 
 class Closing(Exception):

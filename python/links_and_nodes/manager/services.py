@@ -8,10 +8,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from .registry import Client, RequestError, md_name_problem, topic_name_problem
+from .registry import MAX_NAME, Client, RequestError, md_name_problem, topic_name_problem
 
 DEFAULT_LIMIT = 4096  # services per manager
 MAX_SIGNATURE = 1024  # bytes
+MAX_HOST_ID = MAX_NAME  # bytes
 MAX_UNIX_PATH = 107  # bytes: sun_path holds 108 including the terminating NUL
 
 
@@ -24,6 +25,7 @@ class ServiceOffer:
     layout_hash: int
     signature: str
     group: str
+    host_id: str
     unix_path: str
     tcp_host: str
     tcp_port: int
@@ -45,7 +47,7 @@ class Service:
         o = self.offer
         return {"name": o.name, "md_name": o.md_name, "layout_hash": o.layout_hash,
                 "signature": o.signature, "group": o.group, "provider": self.provider.name,
-                "provider_id": self.provider.id, "unix_path": o.unix_path,
+                "provider_id": self.provider.id, "host_id": o.host_id, "unix_path": o.unix_path,
                 "tcp_host": o.tcp_host, "tcp_port": o.tcp_port, "calls": self.calls,
                 "errors": self.errors}
 
@@ -63,6 +65,10 @@ def offer_problem(offer: ServiceOffer) -> RequestError | None:
     if offer.signature.count("|") != 1:
         return RequestError("EMD", f"service {offer.name!r}: signature {offer.signature!r} "
                                    "must contain exactly one '|' (request|response)")
+    size = len(offer.host_id.encode("utf-8"))
+    if size > MAX_HOST_ID:
+        return RequestError("EINVAL", f"service {offer.name!r}: host id of {size} bytes, at "
+                                      f"most {MAX_HOST_ID}")
     if offer.unix_path:
         size = len(offer.unix_path.encode("utf-8"))
         if not offer.unix_path.startswith("/") or "\0" in offer.unix_path:
@@ -124,6 +130,10 @@ class Services:
         del self.by_name[name]
         return service
 
+    def unix_path_in_use(self, path: str) -> bool:
+        """Whether a registered service still offers the unix socket `path`."""
+        return any(s.offer.unix_path == path for s in self.by_name.values())
+
     def find(self, name: str, md_name: str, layout_hash: int) -> Service:
         service = self.by_name.get(name)
         if service is None:
@@ -145,5 +155,9 @@ class Services:
             del self.by_name[service.name]
         return gone
 
+    def sorted(self) -> list[Service]:
+        """Every service, by name."""
+        return [self.by_name[name] for name in sorted(self.by_name)]
+
     def listing(self) -> list[dict[str, Any]]:
-        return [self.by_name[name].as_dict() for name in sorted(self.by_name)]
+        return [service.as_dict() for service in self.sorted()]

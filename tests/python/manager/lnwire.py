@@ -15,8 +15,8 @@ VERSION = 1
 NO_READER = 0xFFFFFFFF
 HELLO, WELCOME, ERROR = 1, 2, 3
 PUBLISH, SUBSCRIBE, PORT_OK, CLOSE_PORT, OK, TOPIC_INFO, TOPIC_INFO_OK = range(10, 17)
-(REGISTER_SERVICE, UNREGISTER_SERVICE, FIND_SERVICE, SERVICE_INFO,
- SERVICE_CALLED) = range(20, 25)
+(REGISTER_SERVICE, UNREGISTER_SERVICE, FIND_SERVICE, SERVICE_INFO, SERVICE_CALLED,
+ LIST_SERVICES, SERVICE_LIST) = range(20, 27)
 TIMEOUT = 60.0  # seconds; only an upper bound for a reply that is expected to come
 
 
@@ -45,9 +45,9 @@ def port_body(request_id: int, topic: str | bytes, md: str, layout_hash: int, si
 def register_service_body(request_id: int, name: str | bytes, md: str | bytes,
                           layout_hash: int, signature: str | bytes, group: str = "",
                           unix_path: str | bytes = "", tcp_host: str = "",
-                          tcp_port: int = 0) -> bytes:
+                          tcp_port: int = 0, host_id: str | bytes = "") -> bytes:
     return (struct.pack("<I", request_id) + s(name) + s(md) + struct.pack("<Q", layout_hash)
-            + s(signature) + s(group) + s(unix_path) + s(tcp_host)
+            + s(signature) + s(group) + s(host_id) + s(unix_path) + s(tcp_host)
             + struct.pack("<H", tcp_port))
 
 
@@ -99,15 +99,26 @@ _LAYOUTS = {
     OK: [("request_id", "<I")],
     TOPIC_INFO_OK: [("request_id", "<I"), ("md_name", "s"), ("layout_hash", "<Q"),
                     ("message_size", "<I"), ("publishers", "<I"), ("subscribers", "<I")],
-    SERVICE_INFO: [("request_id", "<I"), ("provider", "s"), ("unix_path", "s"),
-                   ("tcp_host", "s"), ("tcp_port", "<H"), ("signature", "s")],
+    SERVICE_INFO: [("request_id", "<I"), ("provider", "s"), ("host_id", "s"),
+                   ("unix_path", "s"), ("tcp_host", "s"), ("tcp_port", "<H"),
+                   ("signature", "s")],
+    SERVICE_LIST: [("request_id", "<I"), ("total", "<I"), ("count", "<I")],
 }
+# the layout of each of the `count` entries that follow SERVICE_LIST's fields
+SERVICE_LIST_ENTRY = [("name", "s"), ("md_name", "s"), ("layout_hash", "<Q"),
+                      ("provider", "s"), ("group", "s"), ("host_id", "s"), ("unix_path", "s"),
+                      ("tcp_host", "s"), ("tcp_port", "<H"), ("calls", "<Q"), ("errors", "<Q")]
+
+
+def _read(reader: Reader, layout: list[tuple[str, str]]) -> dict[str, Any]:
+    return {name: reader.str() if fmt == "s" else reader.take(fmt) for name, fmt in layout}
 
 
 def parse(type_: int, body: bytes) -> Reply:
     reader = Reader(body)
-    fields = {name: reader.str() if fmt == "s" else reader.take(fmt)
-              for name, fmt in _LAYOUTS[type_]}
+    fields = _read(reader, _LAYOUTS[type_])
+    if type_ == SERVICE_LIST:
+        fields["entries"] = [_read(reader, SERVICE_LIST_ENTRY) for _ in range(fields["count"])]
     assert reader.pos == len(body), f"reply type {type_} has {len(body) - reader.pos} extra bytes"
     return Reply(type_, fields)
 
@@ -208,6 +219,9 @@ class WireClient:
 
     def service_called(self, name: str, calls: int, errors: int) -> Reply:
         return self._call(SERVICE_CALLED, service_called_body(0, name, calls, errors)[4:])
+
+    def list_services(self) -> Reply:
+        return self._call(LIST_SERVICES, b"")
 
     def __enter__(self) -> WireClient:
         return self

@@ -21,9 +21,13 @@ from lnwire import (
 
 from links_and_nodes.manager import protocol as p
 
+U16 = st.integers(0, 0xFFFF)
 U32 = st.integers(0, 0xFFFFFFFF)
+U64 = st.integers(0, (1 << 64) - 1)
 REQUEST_ID = st.integers(1, 0xFFFFFFFF)
 TEXT = st.text(max_size=200)
+ENTRIES = st.builds(p.ServiceEntry, TEXT, TEXT, U64, TEXT, TEXT, TEXT, TEXT, TEXT, U16, U64,
+                    U64)
 
 MESSAGES = st.one_of(
     st.builds(p.Hello, U32, st.integers(0, 0xFFFF), U32, TEXT, TEXT),
@@ -37,13 +41,14 @@ MESSAGES = st.one_of(
     st.builds(p.Ok, U32),
     st.builds(p.TopicInfo, REQUEST_ID, TEXT),
     st.builds(p.TopicInfoOk, U32, TEXT, st.integers(0, (1 << 64) - 1), U32, U32, U32),
-    st.builds(p.RegisterService, REQUEST_ID, TEXT, TEXT, st.integers(0, (1 << 64) - 1), TEXT,
-              TEXT, TEXT, TEXT, st.integers(0, 0xFFFF)),
+    st.builds(p.RegisterService, REQUEST_ID, TEXT, TEXT, U64, TEXT, TEXT, TEXT, TEXT, TEXT,
+              U16),
     st.builds(p.UnregisterService, REQUEST_ID, TEXT),
     st.builds(p.FindService, REQUEST_ID, TEXT, TEXT, st.integers(0, (1 << 64) - 1)),
-    st.builds(p.ServiceInfo, U32, TEXT, TEXT, TEXT, st.integers(0, 0xFFFF), TEXT),
-    st.builds(p.ServiceCalled, REQUEST_ID, TEXT, st.integers(0, (1 << 64) - 1),
-              st.integers(0, (1 << 64) - 1)),
+    st.builds(p.ServiceInfo, U32, TEXT, TEXT, TEXT, TEXT, U16, TEXT),
+    st.builds(p.ServiceCalled, REQUEST_ID, TEXT, U64, U64),
+    st.builds(p.ListServices, REQUEST_ID),
+    st.builds(p.ServiceList, U32, U32, st.lists(ENTRIES, max_size=4).map(tuple)),
 )
 
 
@@ -73,18 +78,85 @@ def test_replies_bytes() -> None:
 
 def test_service_bytes_match_the_document() -> None:
     msg = p.RegisterService(9, "arm.move", "robot/move", 0xFEDCBA9876543210, "a/req|a/resp",
-                            "arm", "/run/arm.sock", "host", 4711)
+                            "arm", "hostA", "/run/arm.sock", "host", 4711)
     assert p.encode(msg) == frame(20, register_service_body(
         9, "arm.move", "robot/move", 0xFEDCBA9876543210, "a/req|a/resp", "arm",
-        "/run/arm.sock", "host", 4711))
+        "/run/arm.sock", "host", 4711, host_id="hostA"))
+    # host_id sits between group and unix_path
+    assert p.encode(msg)[6:].index(s("hostA") + s("/run/arm.sock")) > 0
     assert p.encode(p.UnregisterService(3, "x")) == frame(21, struct.pack("<I", 3) + s("x"))
     assert p.encode(p.FindService(4, "x", "m/d", 5)) == frame(
         22, find_service_body(4, "x", "m/d", 5))
-    assert p.encode(p.ServiceInfo(4, "prov", "/u", "h", 80, "a|b")) == frame(
-        23, struct.pack("<I", 4) + s("prov") + s("/u") + s("h") + struct.pack("<H", 80)
-        + s("a|b"))
+    assert p.encode(p.ServiceInfo(4, "prov", "hid", "/u", "h", 80, "a|b")) == frame(
+        23, struct.pack("<I", 4) + s("prov") + s("hid") + s("/u") + s("h")
+        + struct.pack("<H", 80) + s("a|b"))
     assert p.encode(p.ServiceCalled(5, "x", 1 << 40, 3)) == frame(
         24, service_called_body(5, "x", 1 << 40, 3))
+    assert p.encode(p.ListServices(6)) == frame(25, struct.pack("<I", 6))
+
+
+def test_service_list_bytes_match_the_document() -> None:
+    entries = (p.ServiceEntry("a.svc", "m/d", 1 << 63, "prov", "grp", "hid", "/u/svc.1.2.sock",
+                              "10.0.0.1", 4711, 12, 3),
+               p.ServiceEntry("b", "x", 2, "q", "", "", "", "h", 1, 0, 0))
+    expected = struct.pack("<III", 7, 5, 2)
+    for e in entries:
+        expected += (s(e.name) + s(e.md_name) + struct.pack("<Q", e.layout_hash) + s(e.provider)
+                     + s(e.group) + s(e.host_id) + s(e.unix_path) + s(e.tcp_host)
+                     + struct.pack("<HQQ", e.tcp_port, e.calls, e.errors))
+    assert p.encode(p.ServiceList(7, 5, entries)) == frame(26, expected)
+    assert p.encode(p.ServiceList(8, 0, ())) == frame(26, struct.pack("<III", 8, 0, 0))
+
+
+def test_service_list_with_more_entries_than_its_body_holds() -> None:
+    entry = p.ServiceEntry("n", "m", 1, "p", "", "", "", "", 1, 0, 0)
+    one = body(p.ServiceList(1, 1, (entry,)))
+    two_claimed = one[:8] + struct.pack("<I", 2) + one[12:]
+    with pytest.raises(p.ProtocolError, match=r"SERVICE_LIST body too short: .* ends inside "
+                                              r"the length of entries\[1\]\.name"):
+        p.decode_body(p.ServiceList, two_claimed)
+    with pytest.raises(p.ProtocolError, match=r"SERVICE_LIST body too long"):
+        p.decode_body(p.ServiceList, one[:8] + struct.pack("<I", 0) + one[12:])
+    bad = one.replace(s("p"), s(b"\xff"))
+    with pytest.raises(p.ProtocolError,
+                       match=r"SERVICE_LIST.entries\[0\].provider: not valid UTF-8"):
+        p.decode_body(p.ServiceList, bad)
+    with pytest.raises(ValueError, match=r"SERVICE_LIST.entries\[0\].tcp_port: 65536 is not "
+                                         r"a u16"):
+        p.encode(p.ServiceList(1, 1, (p.ServiceEntry("n", "m", 1, "p", "", "", "", "",
+                                                     1 << 16, 0, 0),)))
+    with pytest.raises(ValueError, match="tuple of ServiceEntry expected"):
+        p.encode(p.ServiceList(1, 1, [entry]))  # type: ignore[arg-type]
+
+
+def _entry(index: int, filler: int) -> p.ServiceEntry:
+    return p.ServiceEntry(f"s{index:05d}", "m/d", index, "prov", "g" * filler, "", "", "", 1,
+                          index, 0)
+
+
+def test_service_list_is_cut_at_the_frame_limit() -> None:
+    entries = [_entry(i, 1000) for i in range(2000)]  # far more than 1 MiB
+    msg = p.service_list(3, iter(entries))
+    assert msg.total == 2000
+    kept = len(msg.entries)
+    assert 0 < kept < 2000
+    assert msg.entries == tuple(entries[:kept])  # the first ones, in the order given
+    frame_ = p.encode(msg)
+    assert len(frame_) - 4 <= p.MAX_LENGTH
+    # the next entry would not have fitted
+    assert len(frame_) - 4 + p.encoded_size(entries[kept]) > p.MAX_LENGTH
+    assert p.decode_frame(frame_) == msg
+    # a small entry after one that does not fit is cut as well, though it would fit
+    big = [_entry(i, 1024) for i in range(2000)]
+    fitting = len(p.service_list(4, big).entries)
+    small = _entry(9, 0)
+    room = p.MAX_LENGTH - len(p.encode(p.ServiceList(4, 0, tuple(big[:fitting])))) + 4
+    assert p.encoded_size(small) <= room < p.encoded_size(big[0])
+    msg = p.service_list(4, [*big[:fitting + 1], small])
+    assert (msg.total, msg.entries) == (fitting + 2, tuple(big[:fitting]))
+    few = p.service_list(5, entries[:3])
+    assert (few.total, few.entries) == (3, tuple(entries[:3]))
+    assert p.service_list(6, []) == p.ServiceList(6, 0, ())
 
 
 # no deadline: a test must not fail because the machine is slow
@@ -138,9 +210,12 @@ def test_every_truncation_of_every_message_is_refused() -> None:
                p.Subscribe(1, "t", "m/d", 1, 2, 3, 0), p.PortOk(1, 2, "/s", 3),
                p.ClosePort(1, 2), p.Ok(1), p.TopicInfo(1, "t"),
                p.TopicInfoOk(1, "m", 1, 2, 3, 4),
-               p.RegisterService(1, "n", "m", 1, "a|b", "g", "/u", "h", 2),
+               p.RegisterService(1, "n", "m", 1, "a|b", "g", "hid", "/u", "h", 2),
                p.UnregisterService(1, "n"), p.FindService(1, "n", "m", 1),
-               p.ServiceInfo(1, "p", "/u", "h", 2, "a|b"), p.ServiceCalled(1, "n", 1, 2)]
+               p.ServiceInfo(1, "p", "hid", "/u", "h", 2, "a|b"),
+               p.ServiceCalled(1, "n", 1, 2), p.ListServices(1),
+               p.ServiceList(1, 2, (p.ServiceEntry("n", "m", 1, "p", "g", "hid", "/u", "h", 2,
+                                                   3, 4),) * 2)]
     for msg in samples:
         full = body(msg)
         for cut in range(len(full)):
@@ -209,4 +284,4 @@ def test_direction_is_recorded() -> None:
     from_client = {cls.TYPE.name for cls in p.MESSAGES.values() if cls.FROM_CLIENT}
     assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "CLOSE_PORT", "TOPIC_INFO",
                            "REGISTER_SERVICE", "UNREGISTER_SERVICE", "FIND_SERVICE",
-                           "SERVICE_CALLED"}
+                           "SERVICE_CALLED", "LIST_SERVICES"}

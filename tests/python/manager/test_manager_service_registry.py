@@ -1,6 +1,6 @@
 """The service registry's decisions without sockets: the checks of REGISTER_SERVICE in the
-documented order, one provider per name, replacing, the limit, lookups, call counts and
-removal with the provider."""
+documented order, one provider per name, replacing, the limit, lookups, call counts,
+removal with the provider and which unix paths are still offered."""
 
 from __future__ import annotations
 
@@ -16,9 +16,10 @@ SIG = "robot/move_request|robot/move_response"
 
 
 def offer(name: str = "arm.move", md: str = "robot/move", layout_hash: int = HASH,
-          signature: str = SIG, group: str = "arm", unix_path: str = "/run/ln/arm.move",
-          tcp_host: str = "", tcp_port: int = 0) -> ServiceOffer:
-    return ServiceOffer(name, md, layout_hash, signature, group, unix_path, tcp_host,
+          signature: str = SIG, group: str = "arm", host_id: str = "host-a",
+          unix_path: str = "/run/ln/arm.move", tcp_host: str = "",
+          tcp_port: int = 0) -> ServiceOffer:
+    return ServiceOffer(name, md, layout_hash, signature, group, host_id, unix_path, tcp_host,
                         tcp_port)
 
 
@@ -46,6 +47,8 @@ class World:
     ({"signature": "a|" + "b" * 1023}, "EMD", "signature of 1025 bytes, must be 1..1024"),
     ({"signature": "req"}, "EMD", "must contain exactly one '|'"),
     ({"signature": "a|b|c"}, "EMD", "must contain exactly one '|'"),
+    ({"host_id": "h" * 256}, "EINVAL", "service 'arm.move': host id of 256 bytes, at most 255"),
+    ({"host_id": "ä" * 128}, "EINVAL", "host id of 256 bytes"),
     ({"unix_path": "", "tcp_port": 0}, "EINVAL", "neither a unix path nor a tcp port"),
     ({"unix_path": "rel/path"}, "EINVAL", "unix path 'rel/path' is not an absolute path"),
     ({"unix_path": "/" + "p" * 107}, "EINVAL", "unix path of 108 bytes, at most 107"),
@@ -64,6 +67,7 @@ def test_checks_come_in_the_documented_order() -> None:
     assert "service name" in world.refused("EINVAL", name=".x", **bad)
     assert "md name" in world.refused("EINVAL", **bad)
     world.refused("EMD", **{**bad, "md": "m"})
+    assert "host id" in world.refused("EINVAL", host_id="h" * 256, unix_path="", tcp_port=0)
     assert "neither" in world.refused("EINVAL", unix_path="", tcp_port=0)
     world.refused("EEXIST")
 
@@ -74,7 +78,10 @@ def test_addresses_accepted() -> None:
                                            tcp_port=7))
     world.services.register(world.a, offer(name="unix", unix_path="/" + "p" * 106))
     world.services.register(world.a, offer(name="both", tcp_host="h", tcp_port=7))
-    assert sorted(world.services.by_name) == ["both", "tcp", "unix"]
+    world.services.register(world.a, offer(name="no_host_id", host_id=""))
+    world.services.register(world.a, offer(name="long_host_id", host_id="h" * 255))
+    assert sorted(world.services.by_name) == ["both", "long_host_id", "no_host_id", "tcp",
+                                              "unix"]
 
 
 def test_one_provider_per_name_and_replacing() -> None:
@@ -129,7 +136,8 @@ def test_call_counts_only_from_the_provider() -> None:
     [entry] = world.services.listing()
     assert entry == {"name": "arm.move", "md_name": "robot/move", "layout_hash": HASH,
                      "signature": SIG, "group": "arm", "provider": "prov",
-                     "provider_id": world.a.id, "unix_path": "/run/ln/arm.move",
+                     "provider_id": world.a.id, "host_id": "host-a",
+                     "unix_path": "/run/ln/arm.move",
                      "tcp_host": "", "tcp_port": 0, "calls": 10, "errors": 2}
 
 
@@ -155,3 +163,23 @@ def test_remove_client() -> None:
     assert sorted(s.name for s in gone) == ["s1", "s3"]
     assert [e["name"] for e in world.services.listing()] == ["s2"]
     assert world.services.remove_client(world.a) == []
+
+
+def test_sorted_by_name() -> None:
+    world = World()
+    for name in ("b", "a.x", "B", "a", "a_"):
+        world.services.register(world.a, offer(name=name))
+    assert [s.name for s in world.services.sorted()] == ["B", "a", "a.x", "a_", "b"]
+    assert [e["name"] for e in world.services.listing()] == ["B", "a", "a.x", "a_", "b"]
+
+
+def test_unix_path_in_use() -> None:
+    world = World()
+    world.services.register(world.a, offer(name="s1", unix_path="/run/x.sock"))
+    world.services.register(world.b, offer(name="s2", unix_path="/run/x.sock"))
+    assert world.services.unix_path_in_use("/run/x.sock")
+    assert not world.services.unix_path_in_use("/run/y.sock")
+    world.services.unregister(world.a, "s1")
+    assert world.services.unix_path_in_use("/run/x.sock")
+    world.services.remove_client(world.b)
+    assert not world.services.unix_path_in_use("/run/x.sock")

@@ -1,6 +1,7 @@
-"""REGISTER_SERVICE, UNREGISTER_SERVICE, FIND_SERVICE and SERVICE_CALLED against a running
-ln_manager: round trips, every refusal with its code and text, one provider per name,
-removal with the provider's connection, call counts, malformed bodies and the limit."""
+"""REGISTER_SERVICE, UNREGISTER_SERVICE, FIND_SERVICE, SERVICE_CALLED and LIST_SERVICES
+against a running ln_manager: round trips, every refusal with its code and text, one
+provider per name, removal with the provider's connection, call counts, the listing (sorted,
+cut at the frame limit), malformed bodies and the limit."""
 
 from __future__ import annotations
 
@@ -39,20 +40,21 @@ def register(client: lnwire.WireClient, name: str = "arm.move", md: str = MD,
 def test_register_and_find(manager: Manager) -> None:
     with manager.client("prov") as prov, manager.client("user") as user:
         reply = register(prov, group="arm", unix_path="/tmp/arm.sock", tcp_host="10.0.0.5",
-                         tcp_port=4711)
+                         tcp_port=4711, host_id="host-a")
         assert (reply.type, reply.fields) == (lnwire.OK, {"request_id": reply.request_id})
         info = user.find_service("arm.move", MD, HASH)
         assert info.type == lnwire.SERVICE_INFO
-        assert (info.provider, info.unix_path, info.tcp_host, info.tcp_port,
-                info.signature) == ("prov", "/tmp/arm.sock", "10.0.0.5", 4711, SIG)
+        assert (info.provider, info.host_id, info.unix_path, info.tcp_host, info.tcp_port,
+                info.signature) == ("prov", "host-a", "/tmp/arm.sock", "10.0.0.5", 4711, SIG)
         # another md name with the same layout is fine, as for topics
         assert user.find_service("arm.move", "other/name", HASH).type == lnwire.SERVICE_INFO
         tcp_only = register(prov, "arm.stop", unix_path="", tcp_host="h", tcp_port=1)
         assert tcp_only.type == lnwire.OK
-        assert user.find_service("arm.stop", MD, HASH).unix_path == ""
+        stop = user.find_service("arm.stop", MD, HASH)
+        assert (stop.unix_path, stop.host_id) == ("", "")
     manager.wait_log(r"client prov \(.*\): service 'arm.move' registered: md 'robot/move' "
                      r"\(hash 0x0123456789abcdef\), signature '[^']*', group 'arm', "
-                     r"unix /tmp/arm.sock, tcp 10.0.0.5:4711$")
+                     r"host 'host-a', unix /tmp/arm.sock, tcp 10.0.0.5:4711$")
 
 
 @pytest.mark.parametrize("kwargs, code, text", [
@@ -66,6 +68,7 @@ def test_register_and_find(manager: Manager) -> None:
     ({"unix_path": ""}, "EINVAL", "neither a unix path nor a tcp port given"),
     ({"unix_path": "relative.sock"}, "EINVAL", "is not an absolute path"),
     ({"unix_path": "/" + "p" * 107}, "EINVAL", "unix path of 108 bytes, at most 107"),
+    ({"host_id": "h" * 256}, "EINVAL", "host id of 256 bytes, at most 255"),
 ])
 def test_register_refusals(manager: Manager, kwargs: dict[str, object], code: str,
                            text: str) -> None:
@@ -156,6 +159,75 @@ def test_call_counts(start_manager: Start, instance: str) -> None:
                      r"\(18446744073709551615 calls, 2 errors\)$")
 
 
+def test_list_services(manager: Manager) -> None:
+    with (manager.client("prov") as prov, manager.client("tcpprov") as tcpprov,
+          manager.client("user") as user):
+        empty = user.list_services()
+        assert (empty.type, empty.total, empty.count, empty.entries) == (
+            lnwire.SERVICE_LIST, 0, 0, [])
+        assert register(prov, "zeta", group="g1", host_id="host-a",
+                        unix_path="/run/z.sock").type == lnwire.OK
+        assert register(tcpprov, "alpha", md="other/md", layout_hash=7, unix_path="",
+                        tcp_host="10.1.2.3", tcp_port=4711).type == lnwire.OK
+        assert register(prov, "Mid.x", unix_path="/run/m.sock", tcp_host="h",
+                        tcp_port=1).type == lnwire.OK
+        assert prov.service_called("zeta", 41, 2).type == lnwire.OK
+        assert prov.service_called("zeta", 42, 3).type == lnwire.OK
+        assert tcpprov.service_called("alpha", (1 << 64) - 1, 1 << 40).type == lnwire.OK
+        reply = user.list_services()
+        assert (reply.type, reply.total, reply.count) == (lnwire.SERVICE_LIST, 3, 3)
+        assert reply.entries == [  # by name: byte order, upper case first
+            {"name": "Mid.x", "md_name": MD, "layout_hash": HASH, "provider": "prov",
+             "group": "", "host_id": "", "unix_path": "/run/m.sock", "tcp_host": "h",
+             "tcp_port": 1, "calls": 0, "errors": 0},
+            {"name": "alpha", "md_name": "other/md", "layout_hash": 7, "provider": "tcpprov",
+             "group": "", "host_id": "", "unix_path": "", "tcp_host": "10.1.2.3",
+             "tcp_port": 4711, "calls": (1 << 64) - 1, "errors": 1 << 40},
+            {"name": "zeta", "md_name": MD, "layout_hash": HASH, "provider": "prov",
+             "group": "g1", "host_id": "host-a", "unix_path": "/run/z.sock", "tcp_host": "",
+             "tcp_port": 0, "calls": 42, "errors": 3},
+        ]
+        # the provider may list too; what it unregisters or loses with its connection goes
+        assert prov.unregister_service("Mid.x").type == lnwire.OK
+        assert [e["name"] for e in prov.list_services().entries] == ["alpha", "zeta"]
+        tcpprov.close()
+        manager.wait_log(r"client tcpprov \(.*\): disconnected")
+        reply = user.list_services()
+        assert (reply.total, [e["name"] for e in reply.entries]) == (1, ["zeta"])
+
+
+def _entry_size(entry: dict[str, object]) -> int:
+    """Bytes of one SERVICE_LIST entry, from docs/protocol.md."""
+    strs = ("name", "md_name", "provider", "group", "host_id", "unix_path", "tcp_host")
+    return sum(2 + len(str(entry[k]).encode()) for k in strs) + 8 + 2 + 8 + 8
+
+
+def test_list_services_is_cut_at_the_frame_limit(manager: Manager) -> None:
+    count = 400  # about 3.2 kB each: more than 1 MiB together
+    with manager.client("p" * 255) as prov, manager.client("user") as user:
+        for i in reversed(range(count)):  # registration order is not the listing order
+            reply = register(prov, f"{i:04d}" + "n" * 251, md="m" * 255, group="g" * 1024,
+                             host_id="h" * 255, unix_path="/" + "u" * 106,
+                             tcp_host="t" * 1024, tcp_port=1)
+            assert reply.type == lnwire.OK, reply
+        user.send(lnwire.LIST_SERVICES, struct.pack("<I", 77))
+        length, type_ = struct.unpack("<IH", user._exactly(6))
+        body = user._exactly(length - 2)
+        reply = lnwire.parse(type_, body)
+        assert (reply.type, reply.request_id, reply.total) == (lnwire.SERVICE_LIST, 77, count)
+        assert 0 < reply.count < count
+        assert length <= 1 << 20
+        entry_size = _entry_size(reply.entries[0])
+        assert entry_size > 3000
+        assert length + entry_size > 1 << 20  # one more would not have fitted
+        assert [e["name"][:4] for e in reply.entries] == [f"{i:04d}" for i in range(
+            reply.count)]
+        assert all(e["provider"] == prov.name and len(e["tcp_host"]) == 1024
+                   for e in reply.entries)
+        # the connection goes on as usual after the big frame
+        assert user.find_service("0000" + "n" * 251, MD, HASH).type == lnwire.SERVICE_INFO
+
+
 class _NoSegments:
     """Service requests never touch segments; this stands in for them."""
 
@@ -165,22 +237,28 @@ def test_core_listing() -> None:
     core = Core("inst", registry, _NoSegments(), Services())  # type: ignore[arg-type]
     session = Session("127.0.0.1:9")
     core.hello(session, p.Hello(p.MAGIC, p.VERSION, 42, "prov", "0.1.0"))
-    reply = core.request(session, p.RegisterService(1, "b.svc", MD, HASH, SIG, "grp",
+    reply = core.request(session, p.RegisterService(1, "b.svc", MD, HASH, SIG, "grp", "hb",
                                                     "/tmp/b.sock", "", 0))
     assert reply == p.Ok(1)
-    core.request(session, p.RegisterService(2, "a.svc", MD, 7, "x|y", "", "", "h", 9))
+    core.request(session, p.RegisterService(2, "a.svc", MD, 7, "x|y", "", "", "", "h", 9))
     assert core.request(session, p.ServiceCalled(3, "b.svc", 12, 2)) == p.Ok(3)
     listing = core.services()
     assert [e["name"] for e in listing] == ["a.svc", "b.svc"]
     assert listing[1] == {"name": "b.svc", "md_name": MD, "layout_hash": HASH,
                           "signature": SIG, "group": "grp", "provider": "prov",
                           "provider_id": session.client.id,  # type: ignore[union-attr]
-                          "unix_path": "/tmp/b.sock", "tcp_host": "", "tcp_port": 0,
-                          "calls": 12, "errors": 2}
+                          "host_id": "hb", "unix_path": "/tmp/b.sock", "tcp_host": "",
+                          "tcp_port": 0, "calls": 12, "errors": 2}
     found = core.request(session, p.FindService(4, "a.svc", "m/d", 7))
-    assert found == p.ServiceInfo(4, "prov", "", "h", 9, "x|y")
+    assert found == p.ServiceInfo(4, "prov", "", "", "h", 9, "x|y")
+    assert core.request(session, p.ListServices(5)) == p.ServiceList(5, 2, (
+        p.ServiceEntry("a.svc", MD, 7, "prov", "", "", "", "h", 9, 0, 0),
+        p.ServiceEntry("b.svc", MD, HASH, "prov", "grp", "hb", "/tmp/b.sock", "", 0, 12, 2)))
     assert core.disconnect(session) == 0
     assert core.services() == []
+    other = Session("127.0.0.1:10")
+    core.hello(other, p.Hello(p.MAGIC, p.VERSION, 43, "user", "0.1.0"))
+    assert core.request(other, p.ListServices(1)) == p.ServiceList(1, 0, ())
 
 
 def test_service_limit(start_manager: Start, instance: str) -> None:
@@ -220,6 +298,12 @@ BAD = [
      r"SERVICE_CALLED with request id 0 \(must be non-zero\)"),
     ("service-info", frame(lnwire.SERVICE_INFO, b""),
      "unexpected SERVICE_INFO frame from a client"),
+    ("list-long", frame(lnwire.LIST_SERVICES, struct.pack("<II", 1, 0)),
+     "LIST_SERVICES body too long: 8 bytes, its fields take 4"),
+    ("list-id-0", frame(lnwire.LIST_SERVICES, struct.pack("<I", 0)),
+     r"LIST_SERVICES with request id 0 \(must be non-zero\)"),
+    ("service-list", frame(lnwire.SERVICE_LIST, struct.pack("<III", 1, 0, 0)),
+     "unexpected SERVICE_LIST frame from a client"),
 ]
 
 

@@ -1,0 +1,384 @@
+/* service.c — the caller side of services: looking a service up in the manager, connecting to
+ * its provider (Unix socket on the same host, TCP otherwise), and calls over that connection. */
+#include <errno.h>
+#include <math.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "net.h"
+#include "svc_internal.h"
+
+#define LN_SERVICE_MAGIC 0x4c4e5343u
+#define RX_INITIAL 4096
+
+struct ln_service {
+    uint32_t magic;
+    ln_client* clnt;
+    char name[LN_SVC_MAX_NAME + 1];
+    char md_name[LN_SVC_MAX_NAME + 1];
+    uint64_t layout_hash;
+    ln_sig* req_sig;
+    ln_sig* resp_sig;
+    size_t max_size;
+
+    pthread_mutex_t lock; /* one call at a time; guards everything below */
+    int fd;               /* -1: not connected */
+    char provider[LN_PROTO_MAX_STR + 1];
+    char via[LN_PROTO_MAX_STR + 16]; /* "unix:PATH" or "tcp:HOST:PORT", for texts */
+    uint32_t last_call;
+    ln_wbuf tx;
+    uint8_t* rx;
+    size_t rx_cap;
+    ln_arena arena; /* dynamic fields of the last response */
+};
+
+static int service_check(const ln_service* s)
+{
+    if (s == NULL || s->magic != LN_SERVICE_MAGIC)
+        return ln_set_error(NULL, LN_EBADHANDLE, "invalid service handle");
+    return LN_OK;
+}
+
+static void disconnect(ln_service* s)
+{
+    if (s->fd >= 0)
+        close(s->fd);
+    s->fd = -1;
+}
+
+static void service_free(ln_service* s)
+{
+    disconnect(s);
+    ln_sig_free(s->req_sig);
+    ln_sig_free(s->resp_sig);
+    ln_wbuf_free(&s->tx);
+    free(s->rx);
+    ln_arena_free(&s->arena);
+    pthread_mutex_destroy(&s->lock);
+    s->magic = 0;
+    free(s);
+}
+
+static void service_close_fn(void* s)
+{
+    ln_service_release(s);
+}
+
+int ln_get_service(ln_client* clnt, ln_service** out, const char* name, const char* md_name,
+                   uint64_t layout_hash, const char* signature)
+{
+    int rc = ln_client_check(clnt);
+    if (rc != LN_OK)
+        return rc;
+    if (out == NULL)
+        return ln_set_error(clnt, LN_EINVAL, "ln_get_service: out must not be NULL");
+    *out = NULL;
+    rc = ln_svc_check_names(clnt, "ln_get_service", name, md_name, signature);
+    if (rc != LN_OK)
+        return rc;
+    ln_service* s = calloc(1, sizeof *s);
+    if (s == NULL)
+        return ln_set_error(clnt, LN_ENOMEM, "out of memory for service \"%s\"", name);
+    s->clnt = clnt;
+    s->fd = -1;
+    snprintf(s->name, sizeof s->name, "%s", name);
+    snprintf(s->md_name, sizeof s->md_name, "%s", md_name);
+    s->layout_hash = layout_hash;
+    s->max_size = LN_SERVICE_DEFAULT_MAX_SIZE;
+    pthread_mutex_init(&s->lock, NULL);
+    ln_wbuf_init(&s->tx);
+    ln_arena_init(&s->arena, 0);
+    rc = ln_svc_parse_signature(clnt, md_name, signature, &s->req_sig, &s->resp_sig);
+    if (rc == LN_OK) {
+        s->magic = LN_SERVICE_MAGIC;
+        rc = ln_client_add_port(clnt, s, service_close_fn);
+    }
+    if (rc != LN_OK) {
+        service_free(s);
+        return rc;
+    }
+    *out = s;
+    return LN_OK;
+}
+
+int ln_service_set_max_size(ln_service* s, size_t max_bytes)
+{
+    int rc = service_check(s);
+    if (rc != LN_OK)
+        return rc;
+    if (max_bytes == 0 || max_bytes > ((size_t)1 << 31))
+        return ln_set_error(s->clnt, LN_EINVAL, "service \"%s\": max size %zu is not in 1..2^31",
+                            s->name, max_bytes);
+    pthread_mutex_lock(&s->lock);
+    s->max_size = max_bytes;
+    pthread_mutex_unlock(&s->lock);
+    return LN_OK;
+}
+
+int ln_service_release(ln_service* s)
+{
+    int rc = service_check(s);
+    if (rc != LN_OK)
+        return rc;
+    ln_client_remove_port(s->clnt, s);
+    service_free(s);
+    return LN_OK;
+}
+
+/* ---- frames on the caller's connection ---- */
+
+/* Reads one whole frame into s->rx.  LN_OK with type and body, or an error (recorded; the
+ * caller disconnects). */
+static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* type,
+                      ln_rbuf* body)
+{
+    uint8_t header[LN_SVC_HEADER_SIZE];
+    int err = ln_net_read_all(s->fd, header, sizeof header, deadline);
+    uint32_t len = 0;
+    int rc = LN_OK;
+    if (err == 0) {
+        rc = ln_svc_parse_header(header, s->max_size, &len, type);
+        if (rc == LN_ETOOBIG)
+            return ln_set_error(s->clnt, LN_ETOOBIG,
+                                "service \"%s\": response of %u bytes exceeds this caller's "
+                                "maximum of %zu (ln_service_set_max_size)",
+                                s->name, (unsigned)len, s->max_size);
+        if (rc != LN_OK)
+            return ln_set_error(s->clnt, LN_EPROTOCOL,
+                                "service \"%s\": malformed frame from provider \"%s\" (%s)",
+                                s->name, s->provider, s->via);
+        if (len > s->rx_cap) {
+            size_t cap = len > RX_INITIAL ? len : RX_INITIAL;
+            uint8_t* rx = realloc(s->rx, cap);
+            if (rx == NULL)
+                return ln_set_error(s->clnt, LN_ENOMEM, "service \"%s\": out of memory for a "
+                                                        "response of %u bytes", s->name,
+                                    (unsigned)len);
+            s->rx = rx;
+            s->rx_cap = cap;
+        }
+        err = ln_net_read_all(s->fd, s->rx, len, deadline);
+    }
+    if (err == ETIMEDOUT)
+        return ln_set_error(s->clnt, LN_ETIMEOUT,
+                            "service \"%s\": no response from provider \"%s\" (%s) in time",
+                            s->name, s->provider, s->via);
+    if (err == LN_NET_EOF)
+        return ln_set_error(s->clnt, LN_ECONNECTION,
+                            "service \"%s\": provider \"%s\" (%s) closed the connection",
+                            s->name, s->provider, s->via);
+    if (err != 0)
+        return ln_set_errno_error(s->clnt, err,
+                                  "service \"%s\": connection to provider \"%s\" (%s) failed",
+                                  s->name, s->provider, s->via);
+    ln_rbuf_init(body, s->rx, len);
+    return LN_OK;
+}
+
+/* An ERROR frame into its code and text (recorded). */
+static int take_error(ln_service* s, ln_rbuf* body)
+{
+    char text[LN_PROTO_MAX_STR + 1];
+    ln_rbuf_u32(body); /* call id: 0 or this call's */
+    int code = ln_rbuf_i32(body);
+    ln_rbuf_str(body, text, sizeof text);
+    if (ln_rbuf_end(body) != LN_OK || code >= 0 || code < -LN_ERROR_COUNT)
+        return ln_set_error(s->clnt, LN_EPROTOCOL,
+                            "service \"%s\": malformed ERROR frame from provider \"%s\"",
+                            s->name, s->provider);
+    return ln_set_error(s->clnt, code, "service \"%s\" (provider \"%s\"): %s", s->name,
+                        s->provider, text);
+}
+
+static int send_tx(ln_service* s, const struct timespec* deadline)
+{
+    int err = ln_net_write_all(s->fd, s->tx.data, s->tx.len, deadline);
+    if (err == ETIMEDOUT)
+        return ln_set_error(s->clnt, LN_ETIMEOUT,
+                            "service \"%s\": provider \"%s\" (%s) does not take the request",
+                            s->name, s->provider, s->via);
+    if (err != 0)
+        return ln_set_errno_error(s->clnt, err,
+                                  "service \"%s\": cannot send to provider \"%s\" (%s)",
+                                  s->name, s->provider, s->via);
+    return LN_OK;
+}
+
+/* ---- connecting ---- */
+
+static int open_connection(ln_service* s, const char* host_id, const char* unix_path,
+                           const char* tcp_host, uint16_t tcp_port,
+                           const struct timespec* deadline)
+{
+    char mine[256];
+    ln_svc_host_id(mine, sizeof mine);
+    int err = ENOENT;
+    if (unix_path[0] != '\0' && strcmp(host_id, mine) == 0) {
+        err = ln_svc_connect_unix(unix_path, deadline, &s->fd);
+        if (err == 0) {
+            snprintf(s->via, sizeof s->via, "unix:%s", unix_path);
+            return LN_OK;
+        }
+    }
+    if (tcp_port != 0 && tcp_host[0] != '\0') {
+        char port[8];
+        snprintf(port, sizeof port, "%u", tcp_port);
+        snprintf(s->via, sizeof s->via, "tcp:%s:%u", tcp_host, tcp_port);
+        struct addrinfo* ai;
+        int gai = ln_net_resolve(tcp_host, port, &ai);
+        if (gai != 0)
+            return ln_set_error(s->clnt, LN_ECONNECTION,
+                                "service \"%s\": cannot resolve provider host \"%s\": %s",
+                                s->name, tcp_host, gai_strerror(gai));
+        err = ln_net_connect(ai, deadline, &s->fd);
+        freeaddrinfo(ai);
+        if (err == 0)
+            return LN_OK;
+    } else {
+        snprintf(s->via, sizeof s->via, "unix:%s", unix_path);
+    }
+    if (err == ETIMEDOUT)
+        return ln_set_error(s->clnt, LN_ETIMEOUT,
+                            "service \"%s\": connecting to provider \"%s\" (%s) timed out",
+                            s->name, s->provider, s->via);
+    return ln_set_errno_error(s->clnt, err == 0 ? ECONNREFUSED : err,
+                              "service \"%s\": cannot connect to provider \"%s\" (%s)", s->name,
+                              s->provider, s->via);
+}
+
+/* Looks the service up, connects and greets the provider. */
+static int connect_service(ln_service* s, const struct timespec* deadline)
+{
+    ln_wbuf body;
+    ln_wbuf_init(&body);
+    ln_wbuf_str(&body, s->name);
+    ln_wbuf_str(&body, s->md_name);
+    ln_wbuf_u64(&body, s->layout_hash);
+    uint16_t reply_type;
+    ln_rbuf reply;
+    int rc = ln_client_request(s->clnt, LN_MSG_FIND_SERVICE, &body, &reply_type, &reply);
+    ln_wbuf_free(&body);
+    if (rc != LN_OK)
+        return ln_set_error(s->clnt, rc, "cannot call service \"%s\": %s", s->name,
+                            ln_last_error());
+    char host_id[LN_PROTO_MAX_STR + 1], unix_path[LN_PROTO_MAX_STR + 1];
+    char tcp_host[LN_PROTO_MAX_STR + 1], signature[LN_PROTO_MAX_STR + 1];
+    ln_rbuf_str(&reply, s->provider, sizeof s->provider);
+    ln_rbuf_str(&reply, host_id, sizeof host_id);
+    ln_rbuf_str(&reply, unix_path, sizeof unix_path);
+    ln_rbuf_str(&reply, tcp_host, sizeof tcp_host);
+    uint16_t tcp_port = ln_rbuf_u16(&reply);
+    ln_rbuf_str(&reply, signature, sizeof signature);
+    rc = open_connection(s, host_id, unix_path, tcp_host, tcp_port, deadline);
+    if (rc != LN_OK)
+        return rc;
+
+    ln_wbuf_reset(&s->tx);
+    size_t start = ln_proto_frame_begin(&s->tx, LN_SVC_HELLO);
+    ln_wbuf_u32(&s->tx, LN_SVC_MAGIC);
+    ln_wbuf_u16(&s->tx, LN_SVC_VERSION);
+    ln_wbuf_str(&s->tx, s->name);
+    ln_wbuf_u64(&s->tx, s->layout_hash);
+    rc = ln_svc_frame_end(&s->tx, start);
+    if (rc == LN_OK)
+        rc = send_tx(s, deadline);
+    uint16_t type;
+    ln_rbuf answer;
+    if (rc == LN_OK)
+        rc = read_frame(s, deadline, &type, &answer);
+    if (rc == LN_OK && type == LN_SVC_ERROR)
+        rc = take_error(s, &answer);
+    else if (rc == LN_OK && (type != LN_SVC_WELCOME || ln_rbuf_end(&answer) != LN_OK))
+        rc = ln_set_error(s->clnt, LN_EPROTOCOL,
+                          "service \"%s\": provider \"%s\" (%s) did not answer HELLO", s->name,
+                          s->provider, s->via);
+    if (rc != LN_OK)
+        disconnect(s);
+    return rc;
+}
+
+/* 1 if the idle connection was closed by the provider (or has unexpected data): it must not
+ * carry a request, which would then be lost without knowing whether it ran. */
+static int connection_stale(const ln_service* s)
+{
+    struct pollfd pfd = {.fd = s->fd, .events = POLLIN};
+    return poll(&pfd, 1, 0) != 0;
+}
+
+/* ---- calls ---- */
+
+static int call_locked(ln_service* s, const void* request, void* response,
+                       const struct timespec* deadline)
+{
+    int rc;
+    if (s->fd >= 0 && connection_stale(s))
+        disconnect(s);
+    if (s->fd < 0 && (rc = connect_service(s, deadline)) != LN_OK)
+        return rc;
+    uint32_t call_id = ++s->last_call;
+    if (call_id == 0)
+        call_id = ++s->last_call;
+    ln_wbuf_reset(&s->tx);
+    size_t start = ln_proto_frame_begin(&s->tx, LN_SVC_REQUEST);
+    ln_wbuf_u32(&s->tx, call_id);
+    rc = ln_sig_encode(s->req_sig, request, &s->tx, s->max_size);
+    if (rc != LN_OK)
+        return ln_set_error(s->clnt, rc, "service \"%s\": cannot encode the request: %s",
+                            s->name, ln_last_error());
+    rc = ln_svc_frame_end(&s->tx, start);
+    if (rc != LN_OK)
+        return ln_set_error(s->clnt, rc, "service \"%s\": cannot encode the request", s->name);
+    if ((rc = send_tx(s, deadline)) != LN_OK) {
+        disconnect(s);
+        return rc;
+    }
+    uint16_t type;
+    ln_rbuf body;
+    rc = read_frame(s, deadline, &type, &body);
+    if (rc != LN_OK) {
+        disconnect(s);
+        return rc;
+    }
+    if (type == LN_SVC_ERROR) {
+        /* An error about the connection (call id 0) ends it; one about this call does not. */
+        ln_rbuf peek = body;
+        if (ln_rbuf_u32(&peek) == 0)
+            disconnect(s);
+        return take_error(s, &body);
+    }
+    if (type != LN_SVC_RESPONSE || ln_rbuf_u32(&body) != call_id) {
+        disconnect(s);
+        return ln_set_error(s->clnt, LN_EPROTOCOL,
+                            "service \"%s\": provider \"%s\" sent an unexpected frame", s->name,
+                            s->provider);
+    }
+    ln_arena_reset(&s->arena);
+    rc = ln_sig_decode(s->resp_sig, body.p, body.left, response, &s->arena, s->max_size);
+    if (rc != LN_OK)
+        return ln_set_error(s->clnt, rc, "service \"%s\": bad response from provider \"%s\": %s",
+                            s->name, s->provider, ln_last_error());
+    return LN_OK;
+}
+
+int ln_service_call(ln_service* s, const void* request, void* response, double timeout)
+{
+    int rc = service_check(s);
+    if (rc != LN_OK)
+        return rc;
+    if (isnan(timeout))
+        return ln_set_error(s->clnt, LN_EINVAL, "service \"%s\": timeout is NaN", s->name);
+    if ((request == NULL && ln_sig_size(s->req_sig) > 0)
+        || (response == NULL && ln_sig_size(s->resp_sig) > 0))
+        return ln_set_error(s->clnt, LN_EINVAL, "service \"%s\": request or response is NULL",
+                            s->name);
+    struct timespec ts;
+    const struct timespec* deadline = isinf(timeout) ? NULL : ln_net_deadline(&ts, timeout);
+    pthread_mutex_lock(&s->lock);
+    rc = call_locked(s, request, response, deadline);
+    pthread_mutex_unlock(&s->lock);
+    return rc;
+}
