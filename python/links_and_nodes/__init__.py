@@ -3,12 +3,14 @@
     import links_and_nodes as ln
     clnt = ln.client("planner")
     pub = clnt.publish("robot.state", "robot/joint_state")
+    svc = clnt.get_service("robot.set_gains", "robot/set_gains")
 
 Importing the package does not load libln: generated message modules work without it.
 The library is loaded (and its version checked) the first time something that needs it
-is used: `ln.client`, or one of the exception classes generated from libln's error table
-(``ln.LnTimeoutError`` is the class for ``LN_ETIMEOUT``: "Ln" + table name without its
-leading E, capitalised, + "Error"; all derive from ``ln.LnError``).
+is used: `ln.client`, `ln.service_provider` (or another class of the client API), or one
+of the exception classes generated from libln's error table (``ln.LnTimeoutError`` is
+the class for ``LN_ETIMEOUT``: "Ln" + table name without its leading E, capitalised,
++ "Error"; all derive from ``ln.LnError``).
 """
 
 from typing import Any
@@ -19,9 +21,11 @@ from .md_loader import add_message_definition_dir, message_class
 __version__ = "0.1.0"
 
 __all__ = ["LibraryNotFoundError", "LnError", "__version__", "add_message_definition_dir",
-           "client", "message_class", "publisher", "subscriber"]
+           "client", "message_class", "provided_service", "publisher", "service",
+           "service_provider", "service_request", "subscriber"]
 
 _CLIENT_NAMES = ("client", "publisher", "subscriber")
+_SERVICE_NAMES = ("provided_service", "service", "service_provider", "service_request")
 
 
 def __getattr__(name: str) -> Any:
@@ -30,6 +34,10 @@ def __getattr__(name: str) -> Any:
         from . import _client as _client_module
 
         return getattr(_client_module, name)
+    if name in _SERVICE_NAMES:
+        from . import _services
+
+        return getattr(_services, name)
     if name.startswith("Ln") and name.endswith("Error"):
         from . import _libln
 

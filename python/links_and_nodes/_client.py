@@ -1,4 +1,5 @@
-"""The Python client API: `ln.client`, publishers and subscribers (LN names and habits).
+"""The Python client API: `ln.client`, publishers and subscribers (LN names and habits);
+services are in _services.py.
 
     clnt = ln.client("planner")
     pub = clnt.publish("robot.state", "robot/joint_state")
@@ -12,13 +13,17 @@ Everything runs through libln; these classes only hold handles and message objec
 
 from __future__ import annotations
 
+import atexit
 import ctypes
+import weakref
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
 from . import _clientlib as C
+from . import _services
 from ._libln import error_from_code
+from ._services import Handler, provided_service, service
 from .md_loader import message_class
 from .md_types import LnStruct
 
@@ -48,6 +53,8 @@ class client:  # noqa: N801 - the LN name
         C.ln_client_create(ctypes.byref(handle), name.encode(), ctypes.byref(opts))
         self._handle: int | None = handle.value
         self._ports: list[_Port] = []
+        self._services: list[service] = []
+        self._providers: list[provided_service] = []
         self.name: str = C.ln_client_name(self._handle).decode()
 
     @property
@@ -84,14 +91,64 @@ class client:  # noqa: N801 - the LN name
     def unsubscribe(self, port: subscriber) -> None:
         port.close()
 
+    # ---- services (see _services.py and docs/services.md) ----
+    def get_service(self, name: str, message_definition_name: str) -> service:
+        """A caller's handle of service `name` with md `message_definition_name`: fill
+        `svc.req`, `svc.call(timeout)`, read `svc.resp`.  Nothing is contacted before the
+        first call."""
+        svc = service(self, name, message_definition_name)
+        self._services.append(svc)
+        return svc
+
+    def release_service(self, svc: service) -> None:
+        svc.close()
+
+    def get_service_provider(self, name: str, message_definition_name: str,
+                             handler: Handler, group: str | None = None,
+                             max_size: int | None = None) -> provided_service:
+        """Provide service `name`: registers it in `group` (None: the default group) at once.
+        `handler(request)` answers each call with request.respond() or
+        request.respond_error(text); max_size: largest request accepted (bytes)."""
+        provider = provided_service(self, name, message_definition_name, handler, group,
+                                    max_size)
+        self._providers.append(provider)
+        return provider
+
+    def unregister_service_provider(self, provider: provided_service) -> None:
+        provider.close()
+
+    def wait_and_handle_service_group_requests(self, group: str | None = None,
+                                               timeout: float | None = None) -> int:
+        """Wait up to `timeout` seconds (None: forever) for a request of `group`, then
+        handle every request that is ready, in this thread; returns how many were handled."""
+        return _services.wait_and_handle(self, group, timeout)
+
+    def handle_service_group_in_thread_pool(self, group: str | None, pool: str) -> None:
+        """From now on the threads of `pool` handle the requests of `group` (concurrently up
+        to the pool's set_max_threads, default 1); handlers then run in those threads."""
+        C.ln_handle_service_group_in_thread_pool(self.handle, _services._name_arg(group),
+                                                 pool.encode())
+        _pool_clients.add(self)
+
+    def set_max_threads(self, pool: str, max_threads: int) -> None:
+        """Maximum number of threads of thread pool `pool` (1 .. 256)."""
+        C.ln_set_max_threads(self.handle, pool.encode(), max_threads)
+
     def close(self) -> None:
-        """Close every port and the connection (idempotent)."""
+        """Close every port, service and provider and the connection (idempotent)."""
         for port in reversed(self._ports):
             port._forget()  # libln closes them with the client
         self._ports.clear()
+        for svc in self._services:
+            svc._forget()
+        self._services.clear()
+        providers, self._providers = self._providers, []
+        for provider in providers:
+            provider._forget()
         if self._handle is not None:
             handle, self._handle = self._handle, None
-            C.ln_client_destroy(handle)
+            C.ln_client_destroy(handle)  # stops thread pools, frees providers
+        del providers  # their ctypes callbacks may go only now
 
     def __enter__(self) -> client:
         return self
@@ -104,6 +161,16 @@ class client:  # noqa: N801 - the LN name
             self.close()
         except Exception:  # noqa: BLE001 - interpreter shutdown
             pass
+
+
+# Clients whose thread pools may call into Python: closed before the interpreter shuts down.
+_pool_clients: weakref.WeakSet[client] = weakref.WeakSet()
+
+
+@atexit.register
+def _close_pool_clients() -> None:
+    for clnt in list(_pool_clients):
+        clnt.close()
 
 
 _ln_read = C.ln_read

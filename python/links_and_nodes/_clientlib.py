@@ -1,4 +1,5 @@
-"""ctypes declarations of libln's client and topic functions (style: each C function once).
+"""ctypes declarations of libln's client, topic and service functions (each C function
+declared once).
 
 Functions that return an LN_E* code get an errcheck that raises the exception class of
 that code with libln's thread-local last-error text as detail.
@@ -75,3 +76,41 @@ ln_read_release = _declare("ln_read_release", c_int, [c_void_p])
 ln_outport_subscriber_count = _declare("ln_outport_subscriber_count", c_int, [c_void_p], _check)
 ln_inport_publisher_count = _declare("ln_inport_publisher_count", c_int, [c_void_p], _check)
 ln_inport_overruns = _declare("ln_inport_overruns", c_uint64, [c_void_p])
+
+# ---- services ----------------------------------------------------------------------------
+LN_EINTR = -21
+# int handler(ln_client*, ln_service_request*, void* user_data); ctypes takes the GIL for it,
+# so libln's pool threads may run Python handlers.
+SERVICE_HANDLER = ctypes.CFUNCTYPE(c_int, c_void_p, c_void_p, c_void_p)
+
+ln_get_service = _declare("ln_get_service", c_int, [
+    c_void_p, ctypes.POINTER(c_void_p), c_char_p, c_char_p, c_uint64, c_char_p], _check)
+ln_service_call = _declare("ln_service_call", c_int, [c_void_p, c_void_p, c_void_p, c_double],
+                           _check)
+ln_service_set_max_size = _declare("ln_service_set_max_size", c_int, [c_void_p, c_size_t], _check)
+ln_service_release = _declare("ln_service_release", c_int, [c_void_p], _check)
+ln_get_service_provider = _declare("ln_get_service_provider", c_int, [
+    c_void_p, ctypes.POINTER(c_void_p), c_char_p, c_char_p, c_uint64, c_char_p], _check)
+ln_service_provider_set_handler = _declare("ln_service_provider_set_handler", c_int,
+                                           [c_void_p, SERVICE_HANDLER, c_void_p], _check)
+ln_service_provider_set_max_size = _declare("ln_service_provider_set_max_size", c_int,
+                                            [c_void_p, c_size_t], _check)
+ln_service_provider_register = _declare("ln_service_provider_register", c_int,
+                                        [c_void_p, c_char_p], _check)
+ln_unregister_service_provider = _declare("ln_unregister_service_provider", c_int, [c_void_p],
+                                          _check)
+# Returns the number of requests handled; LN_EINTR is checked by the caller.
+ln_wait_and_handle_service_group_requests = _declare(
+    "ln_wait_and_handle_service_group_requests", c_int, [c_void_p, c_char_p, c_double])
+ln_handle_service_group_in_thread_pool = _declare(
+    "ln_handle_service_group_in_thread_pool", c_int, [c_void_p, c_char_p, c_char_p], _check)
+ln_set_max_threads = _declare("ln_set_max_threads", c_int, [c_void_p, c_char_p, ctypes.c_uint],
+                              _check)
+ln_service_request_get_data = _declare("ln_service_request_get_data", c_int,
+                                       [c_void_p, c_void_p], _check)
+ln_service_request_respond = _declare("ln_service_request_respond", c_int, [c_void_p, c_void_p],
+                                      _check)
+ln_service_request_respond_error = _declare("ln_service_request_respond_error", c_int,
+                                            [c_void_p, c_char_p], _check)
+ln_service_request_service_name = _declare("ln_service_request_service_name", c_char_p,
+                                           [c_void_p])

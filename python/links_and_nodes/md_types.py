@@ -4,6 +4,8 @@
 raw ctypes accessors of array, char and dynamic fields with friendlier ones:
 numeric arrays read and write as numpy views on the struct's own memory, char
 fields as `str`, dynamic fields accept lists, numpy arrays, `bytes` and `str`.
+A dynamic field's buffer belongs to the struct (and to every value read from it);
+`own_dynamic_data` copies data that C code pointed a struct at into such buffers.
 """
 
 from __future__ import annotations
@@ -47,10 +49,23 @@ def _keep_alive(obj: ctypes.Structure, name: str, value: Any) -> None:
     keep[(ctypes.addressof(obj), name)] = value
 
 
+def _owned_buffer(obj: ctypes.Structure, name: str, address: int | None,
+                  nbytes: int) -> Any:
+    """The buffer kept alive for dynamic field `name` of `obj` if the field still points at
+    its start and it holds `nbytes`, else None (memory the struct does not own)."""
+    keep = _root(obj).__dict__.get("_ln_keep")
+    buf = keep.get((ctypes.addressof(obj), name)) if keep else None
+    if buf is None or ctypes.addressof(buf) != address or ctypes.sizeof(buf) < nbytes:
+        return None
+    return buf
+
+
 class LnStruct(ctypes.LittleEndianStructure):
     """Base of every generated message type."""
 
     _ln_specs_: tuple[tuple[str, str, Any, int], ...] = ()
+    _ln_raw_fields_: dict[str, Any] = {}  # dynamic field -> its ctypes pointer descriptor
+    _ln_has_dynamic_ = False  # a dynamic field here or in a nested struct
     MD_NAME = ""
 
     def to_dict(self) -> dict[str, Any]:
@@ -163,8 +178,14 @@ def _dynamic_property(name: str, elem: Any, cfield: Any) -> property:
             raise ValueError(f"{self.MD_NAME}.{name}: NULL pointer with {name}_len = {n}")
         if elem is ctypes.c_char:
             return _decode(ctypes.string_at(ptr, n))
+        address = ctypes.cast(ptr, ctypes.c_void_p).value
+        owned = _owned_buffer(self, name, address, n * ctypes.sizeof(elem))
         if is_struct:
-            return (elem * n).from_address(ctypes.addressof(ptr.contents))
+            if owned is not None and type(owned) is elem * n:
+                return owned  # its elements keep it (and their own buffers) alive
+            return (elem * n).from_address(address)
+        if owned is not None:  # a view that keeps the buffer alive
+            return np.frombuffer(owned, dtype=_DTYPES[elem], count=n)
         return np.ctypeslib.as_array(ptr, shape=(n,))
 
     def set_(self: LnStruct, value: Any) -> None:
@@ -193,11 +214,62 @@ def _dynamic_property(name: str, elem: Any, cfield: Any) -> property:
     return property(get, set_, doc=f"dynamic field {name} (length in {len_name})")
 
 
+def own_dynamic_data(obj: LnStruct) -> None:
+    """Copy what the dynamic fields of `obj` (at any depth) point to into buffers owned by
+    `obj`, and point the fields there.
+
+    For structs filled by C code whose dynamic fields point into memory that lives only for
+    a while (a service response until the next call, a request until its handler returns):
+    afterwards `obj`, and every value read from it, stays valid on its own.  A field with
+    length 0 becomes a NULL pointer."""
+    cls = type(obj)
+    if not cls._ln_has_dynamic_:
+        return
+    for name, kind, elem, _count in cls._ln_specs_:
+        is_struct = isinstance(elem, type) and issubclass(elem, LnStruct)
+        if kind == "dynamic":
+            _own_field(obj, name, elem, is_struct)
+        elif is_struct and elem._ln_has_dynamic_:
+            items = [getattr(obj, name)] if kind == "scalar" else getattr(obj, name)
+            for item in items:
+                own_dynamic_data(item)
+
+
+def _own_field(obj: LnStruct, name: str, elem: Any, is_struct: bool) -> None:
+    raw = type(obj)._ln_raw_fields_[name]
+    n = getattr(obj, f"{name}_len")
+    ptr = raw.__get__(obj)
+    if n == 0:
+        raw.__set__(obj, None)
+        keep = _root(obj).__dict__.get("_ln_keep")
+        if keep:
+            keep.pop((ctypes.addressof(obj), name), None)
+        return
+    if not ptr:
+        raise ValueError(f"{obj.MD_NAME}.{name}: NULL pointer with {name}_len = {n}")
+    size = n * ctypes.sizeof(elem)
+    # char data gets a NUL after it, as the setter gives it, for C readers
+    buf: Any = ctypes.create_string_buffer(size + 1) if elem is ctypes.c_char else (elem * n)()
+    ctypes.memmove(buf, ptr, size)
+    _keep_alive(obj, name, buf)
+    raw.__set__(obj, ctypes.cast(buf, ctypes.POINTER(elem)))
+    if is_struct and elem._ln_has_dynamic_:
+        for item in buf:
+            own_dynamic_data(item)
+
+
 def finalize(cls: type[LnStruct]) -> type[LnStruct]:
-    """Install the field accessors of a generated class (called once per class)."""
+    """Install the field accessors of a generated class (called once per class, after the
+    classes of its nested types)."""
+    cls._ln_raw_fields_ = {}
+    cls._ln_has_dynamic_ = False
     for name, kind, elem, count in cls._ln_specs_:
         cfield = cls.__dict__[name]
+        if isinstance(elem, type) and issubclass(elem, LnStruct) and elem._ln_has_dynamic_:
+            cls._ln_has_dynamic_ = True
         if kind == "dynamic":
+            cls._ln_raw_fields_[name] = cfield
+            cls._ln_has_dynamic_ = True
             setattr(cls, name, _dynamic_property(name, elem, cfield))
         elif kind == "scalar" and elem is ctypes.c_char:
             setattr(cls, name, _char_scalar_property(name, cfield.offset))

@@ -124,3 +124,45 @@ def test_constants_and_registry(m: ModuleType) -> None:
     assert m.MESSAGES["robot/set_gains"] is m.robot_set_gains_t
     assert m.robot_set_gains_t.KIND == "service"
     assert m.robot_fault_event_t.from_dict({"call": {"text": "hot"}}).call.text == "hot"
+
+
+def test_own_dynamic_data_detaches_from_foreign_memory(m: ModuleType) -> None:
+    """A struct that C code pointed at its own memory (as libln does with responses) owns
+    copies after own_dynamic_data, at every depth: changing the original changes nothing."""
+    from links_and_nodes.md_types import own_dynamic_data
+
+    source = m.robot_plan_path_t()
+    source.req.constraints = [{"data": "joint_limits"}, {"data": "collision"}]
+    source.resp.waypoints = [{"cycle": 1}, {"cycle": 2}]
+    source.resp.message = "done"
+    copy = m.robot_plan_path_t.from_buffer_copy(bytes(source))  # same pointers
+    own_dynamic_data(copy)
+    first = source.req.constraints[0]
+    ctypes.memset(type(first)._ln_raw_fields_["data"].__get__(first), ord("X"), 12)
+    source.req.constraints[1].data_len = 0
+    source.resp.waypoints[1].cycle = 99
+    del source
+    gc.collect()
+    assert copy.to_dict()["req"]["constraints"] == [{"data": "joint_limits"},
+                                                    {"data": "collision"}]
+    assert [w.cycle for w in copy.resp.waypoints] == [1, 2] and copy.resp.message == "done"
+    empty = m.robot_plan_path_t()
+    own_dynamic_data(empty)  # length 0 stays a NULL pointer
+    assert empty.to_dict()["resp"] == {"waypoints": [], "status": 0, "message": ""}
+
+
+def test_dynamic_values_keep_their_buffer(tmp_path: Path) -> None:
+    """What a dynamic field gave out stays valid when the field gets a new value."""
+    (tmp_path / "t").mkdir()
+    (tmp_path / "t" / "dyn").write_text("double* values\n")
+    out = tmp_path / "gen_dyn2.py"
+    assert main(["-o", str(out), "--md-dir", str(tmp_path), "t/dyn"]) == 0
+    ns: dict[str, object] = {}
+    exec(compile(out.read_text(), str(out), "exec"), ns)
+    obj = ns["t_dyn_t"]()  # type: ignore[operator]
+    obj.values = [1.0, 2.0, 3.0]
+    old = obj.values
+    obj.values = [4.0]
+    gc.collect()
+    assert isinstance(old.base, ctypes.Array)  # the buffer itself, not the struct
+    assert old.tolist() == [1.0, 2.0, 3.0] and obj.values.tolist() == [4.0]

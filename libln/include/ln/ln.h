@@ -234,7 +234,8 @@ LN_EXPORT int ln_get_service(ln_client* clnt, ln_service** out, const char* name
                              const char* md_name, uint64_t layout_hash, const char* signature);
 LN_EXPORT int ln_service_call(ln_service* svc, const void* request, void* response,
                               double timeout);
-/* Largest response (wire bytes and decoded dynamic data) this caller accepts. */
+/* Largest message (wire bytes and decoded dynamic data) this caller encodes as a request or
+ * accepts as a response. */
 LN_EXPORT int ln_service_set_max_size(ln_service* svc, size_t max_bytes);
 /* Closes the connection and frees the handle (ln_client_destroy releases the remaining ones). */
 LN_EXPORT int ln_service_release(ln_service* svc);
@@ -261,8 +262,8 @@ LN_EXPORT int ln_get_service_provider(ln_client* clnt, ln_service_provider** out
                                       uint64_t layout_hash, const char* signature);
 LN_EXPORT int ln_service_provider_set_handler(ln_service_provider* provider,
                                               ln_service_handler handler, void* user_data);
-/* Largest request (wire bytes and decoded dynamic data) this provider accepts; set it before
- * registering. */
+/* Largest message (wire bytes and decoded dynamic data) this provider accepts as a request or
+ * encodes as a response; set it before registering. */
 LN_EXPORT int ln_service_provider_set_max_size(ln_service_provider* provider, size_t max_bytes);
 LN_EXPORT int ln_service_provider_register(ln_service_provider* provider, const char* group);
 /* Unregisters the service, closes its sockets and connections and frees the handle.  Waits for

@@ -1,12 +1,15 @@
 // ln.hpp — header-only C++17 RAII wrapper of libln for C++ controllers.
 // Failures throw ln::error carrying the LN_E* code; a timed-out read returns false instead,
-// since timeouts are ordinary control flow in a control loop.  Ports keep their client alive.
+// since timeouts are ordinary control flow in a control loop.  Ports, services and providers
+// keep their client alive.
 #ifndef LN_LN_HPP
 #define LN_LN_HPP
 
 #include <ln/ln.h>
 
 #include <cstdint>
+#include <exception>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -15,7 +18,8 @@
 
 namespace ln {
 
-// md name and layout hash of a generated message type; ln_generate's C++ headers specialise it.
+// md name and layout hash of a generated message type, plus signature, request_type and
+// response_type for a service type; ln_generate's C++ headers specialise it.
 template <typename T> struct md_traits;
 
 class error : public std::runtime_error {
@@ -42,6 +46,8 @@ using client_ptr = std::shared_ptr<ln_client>;
 
 template <typename T> class outport;
 template <typename T> class inport;
+template <typename T> class service;
+template <typename T> class service_provider;
 
 class client {
 public:
@@ -70,6 +76,35 @@ public:
     template <typename T> inport<T> subscribe(const std::string& topic, unsigned buffers = 1)
     {
         return inport<T>(c_, topic, md_traits<T>::md_name, md_traits<T>::layout_hash, buffers);
+    }
+
+    // Services: T is a generated service type (e.g. robot::set_gains_t).
+    template <typename T> service<T> get_service(const std::string& name)
+    {
+        return service<T>(c_, name);
+    }
+    // The handler gets a service_provider<T>::call; see there.  The provider is registered in
+    // `group` ("" = default) and serves until it is destroyed.
+    template <typename T>
+    std::unique_ptr<service_provider<T>> provide_service(
+        const std::string& name, std::function<void(typename service_provider<T>::call&)> handler,
+        const std::string& group = "")
+    {
+        return std::unique_ptr<service_provider<T>>(
+            new service_provider<T>(c_, name, std::move(handler), group));
+    }
+    // Number of requests handled (0 if none came within the timeout).
+    int wait_and_handle_service_group_requests(const std::string& group, double timeout)
+    {
+        return check(ln_wait_and_handle_service_group_requests(c_.get(), group.c_str(), timeout));
+    }
+    void handle_service_group_in_thread_pool(const std::string& group, const std::string& pool)
+    {
+        check(ln_handle_service_group_in_thread_pool(c_.get(), group.c_str(), pool.c_str()));
+    }
+    void set_max_threads(const std::string& pool, unsigned max_threads)
+    {
+        check(ln_set_max_threads(c_.get(), pool.c_str(), max_threads));
     }
 
 private:
@@ -233,6 +268,137 @@ public:
 private:
     detail::client_ptr c_;
     ln_inport* p_ = nullptr;
+};
+
+// A caller: fill req, call(), read resp.  Dynamic fields of resp point into memory of this
+// object until the next call.  Failures (including a provider's error text, LN_ESERVICE, and
+// a timeout) throw ln::error.  Movable, not copyable.
+template <typename T> class service {
+    using traits = md_traits<T>;
+
+public:
+    using request_type = typename traits::request_type;
+    using response_type = typename traits::response_type;
+
+    request_type req{};
+    response_type resp{};
+
+    service(detail::client_ptr c, const std::string& name) : c_(std::move(c))
+    {
+        check(ln_get_service(c_.get(), &s_, name.c_str(), traits::md_name, traits::layout_hash,
+                             traits::signature));
+    }
+    service(service&& o) noexcept
+        : req(o.req), resp(o.resp), c_(std::move(o.c_)), s_(std::exchange(o.s_, nullptr)) {}
+    service& operator=(service&& o) noexcept
+    {
+        if (this != &o) {
+            release();
+            req = o.req;
+            resp = o.resp;
+            c_ = std::move(o.c_);
+            s_ = std::exchange(o.s_, nullptr);
+        }
+        return *this;
+    }
+    service(const service&) = delete;
+    service& operator=(const service&) = delete;
+    ~service() { release(); }
+
+    // timeout in seconds, < 0 waits forever.
+    void call(double timeout = -1) { check(ln_service_call(s_, &req, &resp, timeout)); }
+    void set_max_size(std::size_t bytes) { check(ln_service_set_max_size(s_, bytes)); }
+    ln_service* get() const noexcept { return s_; }
+
+private:
+    void release() noexcept
+    {
+        if (s_ != nullptr)
+            ln_service_release(s_);
+        s_ = nullptr;
+    }
+    detail::client_ptr c_;
+    ln_service* s_ = nullptr;
+};
+
+// A provider.  The handler gets a `call` with the decoded request (`req`) and a response to
+// fill (`resp`).  Returning normally sends resp unless the handler already answered with
+// respond() or respond_error(); an exception answers an error with its what() text.  Handlers
+// run on the thread that handles the group (wait_and_handle_service_group_requests or a pool).
+// Not movable: libln holds a pointer to it.
+template <typename T> class service_provider {
+    using traits = md_traits<T>;
+
+public:
+    using request_type = typename traits::request_type;
+    using response_type = typename traits::response_type;
+
+    class call {
+    public:
+        request_type req{};
+        response_type resp{};
+
+        void respond()
+        {
+            check(ln_service_request_respond(r_, &resp));
+            answered_ = true;
+        }
+        void respond_error(const std::string& text)
+        {
+            check(ln_service_request_respond_error(r_, text.c_str()));
+            answered_ = true;
+        }
+        bool answered() const noexcept { return answered_; }
+
+    private:
+        friend class service_provider;
+        explicit call(ln_service_request* r) : r_(r) {}
+        ln_service_request* r_;
+        bool answered_ = false;
+    };
+
+    service_provider(detail::client_ptr c, const std::string& name,
+                     std::function<void(call&)> handler, const std::string& group)
+        : c_(std::move(c)), handler_(std::move(handler))
+    {
+        check(ln_get_service_provider(c_.get(), &p_, name.c_str(), traits::md_name,
+                                      traits::layout_hash, traits::signature));
+        try {
+            check(ln_service_provider_set_handler(p_, &trampoline, this));
+            check(ln_service_provider_register(p_, group.c_str()));
+        } catch (...) {
+            ln_unregister_service_provider(p_);
+            throw;
+        }
+    }
+    service_provider(const service_provider&) = delete;
+    service_provider& operator=(const service_provider&) = delete;
+    ~service_provider() { ln_unregister_service_provider(p_); }
+
+    ln_service_provider* get() const noexcept { return p_; }
+
+private:
+    static int trampoline(ln_client*, ln_service_request* r, void* self)
+    {
+        auto* p = static_cast<service_provider*>(self);
+        call c(r);
+        try {
+            check(ln_service_request_get_data(r, &c.req));
+            p->handler_(c);
+            if (!c.answered())
+                c.respond();
+        } catch (const std::exception& e) {
+            if (!c.answered())
+                ln_service_request_respond_error(r, e.what());
+        } catch (...) {
+            if (!c.answered())
+                ln_service_request_respond_error(r, "handler threw a non-standard exception");
+        }
+        return 0;
+    }
+    detail::client_ptr c_;
+    std::function<void(call&)> handler_;
+    ln_service_provider* p_ = nullptr;
 };
 
 }  // namespace ln

@@ -25,7 +25,7 @@
 
 #include "service_messages.h"
 
-#define ECHO LNTEST_ECHO_MD_NAME, LNTEST_ECHO_LAYOUT_HASH, LNTEST_ECHO_SIGNATURE
+#define ECHO LNTEST_ECHO_SERVICE
 
 static ln_client* clnt;
 

@@ -6,6 +6,10 @@ from __future__ import annotations
 
 import json
 import subprocess
+import sys
+import time
+
+import pytest
 
 from .conftest import LIMIT, Setup, stop
 
@@ -103,3 +107,32 @@ def test_socket_removed_when_provider_exits(setup: Setup) -> None:
     assert len(sockets) == 1
     assert stop(prov) == 0
     assert setup.sockets() == []
+
+
+def listed(setup: Setup) -> list[dict[str, object]]:
+    out = subprocess.run([sys.executable, "-m", "links_and_nodes.manager.listing", "--json"],
+                         capture_output=True, text=True, env=setup.manager.env,
+                         timeout=LIMIT, check=True)
+    return json.loads(out.stdout)
+
+
+@pytest.mark.parametrize("mode", [("loop",), ("pool", "2")])
+def test_manager_lists_call_counts(setup: Setup, mode: tuple[str, ...]) -> None:
+    prov = setup.provider("arm.echo", *mode)
+    assert setup.call("arm.echo", "2", "300", str(LIMIT))["ok"] == 600
+    for text in ("fail", "silent"):
+        assert once(setup, "arm.echo", text)["rc"] == "ESERVICE"
+    # Providers report while busy at most once a second and the rest when idle: the final
+    # counts arrive without further calls.
+    deadline = time.monotonic() + LIMIT
+    while True:
+        (entry,) = listed(setup)
+        if entry["calls"] == 602 or time.monotonic() > deadline:
+            break
+        time.sleep(0.1)
+    assert (entry["calls"], entry["errors"]) == (602, 2)
+    assert entry["name"] == "arm.echo" and entry["md_name"] == "lntest/echo"
+    assert entry["provider"] == "service_stress"
+    assert entry["group"] == "echo"
+    stop(prov)
+    assert listed(setup) == []

@@ -1,0 +1,1 @@
+"""End-to-end tests of services between Python and C providers and callers."""
