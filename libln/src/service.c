@@ -27,12 +27,14 @@ struct ln_service {
 
     pthread_mutex_t lock; /* one call at a time; guards everything below */
     int fd;               /* -1: not connected */
+    int is_unix;          /* fd is a Unix socket: a send to a closed one fails at once */
+    int send_errno;       /* of the last send_tx, 0 if it went out */
     char provider[LN_PROTO_MAX_STR + 1];
     char via[LN_PROTO_MAX_STR + 16]; /* "unix:PATH" or "tcp:HOST:PORT", for texts */
     uint32_t last_call;
     ln_wbuf tx;
     uint8_t* rx;
-    size_t rx_cap;
+    size_t rx_len, rx_cap;
     ln_arena arena; /* dynamic fields of the last response */
 };
 
@@ -131,17 +133,43 @@ int ln_service_release(ln_service* s)
 
 /* ---- frames on the caller's connection ---- */
 
+/* Receives until s->rx holds `need` bytes: waits for data, then takes whatever is there, so a
+ * small frame costs one poll and one recv.  0, LN_NET_EOF or an errno value. */
+static int fill(ln_service* s, size_t need, const struct timespec* deadline)
+{
+    while (s->rx_len < need) {
+        int err = ln_net_wait_readable(s->fd, deadline);
+        if (err != 0)
+            return err;
+        ssize_t n = recv(s->fd, s->rx + s->rx_len, s->rx_cap - s->rx_len, 0);
+        if (n > 0)
+            s->rx_len += (size_t)n;
+        else if (n == 0)
+            return LN_NET_EOF;
+        else if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
+            return errno;
+    }
+    return 0;
+}
+
 /* Reads one whole frame into s->rx.  LN_OK with type and body, or an error (recorded; the
- * caller disconnects). */
+ * caller disconnects).  The provider answers one frame per request, so any byte beyond the
+ * frame is a protocol error. */
 static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* type,
                       ln_rbuf* body)
 {
-    uint8_t header[LN_SVC_HEADER_SIZE];
-    int err = ln_net_read_all(s->fd, header, sizeof header, deadline);
+    if (s->rx_cap < RX_INITIAL) {
+        uint8_t* rx = realloc(s->rx, RX_INITIAL);
+        if (rx == NULL)
+            return ln_set_error(s->clnt, LN_ENOMEM, "service \"%s\": out of memory", s->name);
+        s->rx = rx;
+        s->rx_cap = RX_INITIAL;
+    }
+    s->rx_len = 0;
+    int err = fill(s, LN_SVC_HEADER_SIZE, deadline);
     uint32_t len = 0;
-    int rc = LN_OK;
     if (err == 0) {
-        rc = ln_svc_parse_header(header, s->max_size, &len, type);
+        int rc = ln_svc_parse_header(s->rx, s->max_size, &len, type);
         if (rc == LN_ETOOBIG)
             return ln_set_error(s->clnt, LN_ETOOBIG,
                                 "service \"%s\": response of %u bytes exceeds this caller's "
@@ -151,17 +179,21 @@ static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* 
             return ln_set_error(s->clnt, LN_EPROTOCOL,
                                 "service \"%s\": malformed frame from provider \"%s\" (%s)",
                                 s->name, s->provider, s->via);
-        if (len > s->rx_cap) {
-            size_t cap = len > RX_INITIAL ? len : RX_INITIAL;
-            uint8_t* rx = realloc(s->rx, cap);
+        size_t total = LN_SVC_HEADER_SIZE + (size_t)len;
+        if (total > s->rx_cap) {
+            uint8_t* rx = realloc(s->rx, total);
             if (rx == NULL)
                 return ln_set_error(s->clnt, LN_ENOMEM, "service \"%s\": out of memory for a "
                                                         "response of %u bytes", s->name,
                                     (unsigned)len);
             s->rx = rx;
-            s->rx_cap = cap;
+            s->rx_cap = total;
         }
-        err = ln_net_read_all(s->fd, s->rx, len, deadline);
+        err = fill(s, total, deadline);
+        if (err == 0 && s->rx_len != total)
+            return ln_set_error(s->clnt, LN_EPROTOCOL,
+                                "service \"%s\": provider \"%s\" (%s) sent more than one frame",
+                                s->name, s->provider, s->via);
     }
     if (err == ETIMEDOUT)
         return ln_set_error(s->clnt, LN_ETIMEOUT,
@@ -175,7 +207,7 @@ static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* 
         return ln_set_errno_error(s->clnt, err,
                                   "service \"%s\": connection to provider \"%s\" (%s) failed",
                                   s->name, s->provider, s->via);
-    ln_rbuf_init(body, s->rx, len);
+    ln_rbuf_init(body, s->rx + LN_SVC_HEADER_SIZE, len);
     return LN_OK;
 }
 
@@ -194,9 +226,10 @@ static int take_error(ln_service* s, ln_rbuf* body)
                         s->provider, text);
 }
 
-static int send_tx(ln_service* s, const struct timespec* deadline)
+static int send_buf(ln_service* s, const ln_wbuf* b, const struct timespec* deadline)
 {
-    int err = ln_net_write_all(s->fd, s->tx.data, s->tx.len, deadline);
+    int err = ln_net_write_all(s->fd, b->data, b->len, deadline);
+    s->send_errno = err;
     if (err == ETIMEDOUT)
         return ln_set_error(s->clnt, LN_ETIMEOUT,
                             "service \"%s\": provider \"%s\" (%s) does not take the request",
@@ -220,10 +253,12 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
     if (unix_path[0] != '\0' && strcmp(host_id, mine) == 0) {
         err = ln_svc_connect_unix(unix_path, deadline, &s->fd);
         if (err == 0) {
+            s->is_unix = 1;
             snprintf(s->via, sizeof s->via, "unix:%s", unix_path);
             return LN_OK;
         }
     }
+    s->is_unix = 0;
     if (tcp_port != 0 && tcp_host[0] != '\0') {
         char port[8];
         snprintf(port, sizeof port, "%u", tcp_port);
@@ -277,15 +312,17 @@ static int connect_service(ln_service* s, const struct timespec* deadline)
     if (rc != LN_OK)
         return rc;
 
-    ln_wbuf_reset(&s->tx);
-    size_t start = ln_proto_frame_begin(&s->tx, LN_SVC_HELLO);
-    ln_wbuf_u32(&s->tx, LN_SVC_MAGIC);
-    ln_wbuf_u16(&s->tx, LN_SVC_VERSION);
-    ln_wbuf_str(&s->tx, s->name);
-    ln_wbuf_u64(&s->tx, s->layout_hash);
-    rc = ln_svc_frame_end(&s->tx, start);
+    ln_wbuf hello;
+    ln_wbuf_init(&hello);
+    size_t start = ln_proto_frame_begin(&hello, LN_SVC_HELLO);
+    ln_wbuf_u32(&hello, LN_SVC_MAGIC);
+    ln_wbuf_u16(&hello, LN_SVC_VERSION);
+    ln_wbuf_str(&hello, s->name);
+    ln_wbuf_u64(&hello, s->layout_hash);
+    rc = ln_svc_frame_end(&hello, start);
     if (rc == LN_OK)
-        rc = send_tx(s, deadline);
+        rc = send_buf(s, &hello, deadline);
+    ln_wbuf_free(&hello);
     uint16_t type;
     ln_rbuf answer;
     if (rc == LN_OK)
@@ -302,7 +339,9 @@ static int connect_service(ln_service* s, const struct timespec* deadline)
 }
 
 /* 1 if the idle connection was closed by the provider (or has unexpected data): it must not
- * carry a request, which would then be lost without knowing whether it ran. */
+ * carry a request, which would then be lost without knowing whether it ran.  Unix sockets
+ * skip this check (a system call per call): a send to a closed one fails with EPIPE before
+ * anything was delivered, and the call is retried on a new connection. */
 static int connection_stale(const ln_service* s)
 {
     struct pollfd pfd = {.fd = s->fd, .events = POLLIN};
@@ -315,8 +354,9 @@ static int call_locked(ln_service* s, const void* request, void* response,
                        const struct timespec* deadline)
 {
     int rc;
-    if (s->fd >= 0 && connection_stale(s))
+    if (s->fd >= 0 && !s->is_unix && connection_stale(s))
         disconnect(s);
+    int reused = s->fd >= 0;
     if (s->fd < 0 && (rc = connect_service(s, deadline)) != LN_OK)
         return rc;
     uint32_t call_id = ++s->last_call;
@@ -332,7 +372,17 @@ static int call_locked(ln_service* s, const void* request, void* response,
     rc = ln_svc_frame_end(&s->tx, start);
     if (rc != LN_OK)
         return ln_set_error(s->clnt, rc, "service \"%s\": cannot encode the request", s->name);
-    if ((rc = send_tx(s, deadline)) != LN_OK) {
+    rc = send_buf(s, &s->tx, deadline);
+    if (rc != LN_OK && reused && s->is_unix
+        && (s->send_errno == EPIPE || s->send_errno == ECONNRESET || s->send_errno == ENOTCONN)) {
+        /* The provider had closed this connection before the request went out (it was
+         * restarted): nothing was delivered, so sending again on a new connection is safe. */
+        disconnect(s);
+        if ((rc = connect_service(s, deadline)) != LN_OK)
+            return rc;
+        rc = send_buf(s, &s->tx, deadline);
+    }
+    if (rc != LN_OK) {
         disconnect(s);
         return rc;
     }

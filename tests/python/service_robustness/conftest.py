@@ -28,11 +28,14 @@ class Setup:
     runtime: Path
     tools: list[subprocess.Popen[str]] = field(default_factory=list)
 
-    def run(self, *args: str, stdin: int | None = subprocess.DEVNULL) -> subprocess.Popen[str]:
+    def run(self, *args: str, stdin: int | None = subprocess.DEVNULL,
+            env: dict[str, str] | None = None) -> subprocess.Popen[str]:
+        """service_stress with `args`; `env` adds to the manager's environment."""
         if not STRESS.exists():
             pytest.fail(f"{STRESS} is missing: run scons first")
         proc = subprocess.Popen([str(STRESS), *args], stdin=stdin, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True, env=self.manager.env)
+                                stderr=subprocess.PIPE, text=True,
+                                env={**self.manager.env, **(env or {})})
         self.tools.append(proc)
         return proc
 

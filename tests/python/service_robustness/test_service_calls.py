@@ -136,3 +136,50 @@ def test_manager_lists_call_counts(setup: Setup, mode: tuple[str, ...]) -> None:
     assert entry["group"] == "echo"
     stop(prov)
     assert listed(setup) == []
+
+
+# A caller with another host id than the provider's must use TCP.
+ELSEWHERE = {"LN_HOST_ID": "another-host"}
+
+
+@pytest.mark.parametrize("env", [{}, ELSEWHERE], ids=["unix", "tcp"])
+def test_provider_restarted_between_calls(setup: Setup, env: dict[str, str]) -> None:
+    prov = setup.provider("arm.echo", "loop")
+    caller = setup.run("once", "arm.echo", "first", "0", str(LIMIT), "2",
+                       stdin=subprocess.PIPE, env=env)
+    assert caller.stdout is not None and caller.stdin is not None
+    assert json.loads(caller.stdout.readline()) == {"rc": "OK", "error": "", "text": "first"}
+    assert stop(prov) == 0
+    again = setup.provider("arm.echo", "loop")
+    # The idle connection points at the old provider; the call must notice before sending and
+    # go to the new one.
+    caller.stdin.write("second 0\n")
+    caller.stdin.flush()
+    assert json.loads(caller.stdout.readline()) == {"rc": "OK", "error": "", "text": "second"}
+    caller.stdin.close()
+    assert caller.wait(timeout=LIMIT) == 0
+    assert stop(again) == 0
+
+
+def test_tcp_callers_against_thread_pool(setup: Setup) -> None:
+    prov = setup.provider("arm.echo", "pool", "3")
+    proc = setup.run("call", "arm.echo", "4", "2000", str(LIMIT), "100", env=ELSEWHERE)
+    out, err = proc.communicate(timeout=LIMIT * 3)
+    assert json.loads(out) == {"ok": 8000, "mismatch": 0, "failed": 0, "first_error": ""}, err
+    # And over TCP an error names the TCP address it used.
+    proc = setup.run("once", "arm.echo", "fail", "0", str(LIMIT), env=ELSEWHERE)
+    failed = json.loads(proc.communicate(timeout=LIMIT)[0])
+    assert failed["rc"] == "ESERVICE"
+    assert stop(prov) == 0
+
+
+def test_tcp_provider_killed_mid_call(setup: Setup) -> None:
+    prov = setup.provider("arm.echo", "loop")
+    caller = setup.run("once", "arm.echo", "slow", "30000000", str(LIMIT), env=ELSEWHERE)
+    assert prov.stdout is not None and caller.stdout is not None
+    assert prov.stdout.readline().strip() == "busy"
+    prov.kill()
+    prov.wait()
+    result = json.loads(caller.stdout.readline())
+    assert result["rc"] == "ECONNECTION", result
+    assert "tcp:" in result["error"]
