@@ -1,0 +1,1 @@
+"""Reading `.lnc` configuration files into the typed model of `model.py`."""

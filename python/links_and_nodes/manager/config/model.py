@@ -1,0 +1,155 @@
+"""The typed model of a loaded `.lnc` configuration: what the parser produces and the
+scheduler consumes.  Plain dataclasses, fully resolved: every `%()` expanded, every
+template replayed, every name prefixed, every reference checked.  A leaf module."""
+
+from __future__ import annotations
+
+import enum
+import signal
+from dataclasses import dataclass, field
+
+DEFAULT_ARBITER_PORT = 54376  # ln_daemon's TCP port, unless LN_ARBITER_PORT says otherwise
+
+
+@dataclass(frozen=True)
+class Location:
+    """Where something was written: 1-based line and column."""
+
+    file: str
+    line: int
+    col: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.col}"
+
+
+class Restart(enum.Enum):
+    NEVER = "never"
+    ON_FAILURE = "on-failure"
+    ALWAYS = "always"
+
+
+class Policy(enum.Enum):
+    OTHER = "SCHED_OTHER"
+    FIFO = "SCHED_FIFO"
+    RR = "SCHED_RR"
+
+
+@dataclass
+class ResourceLimit:
+    """One `set_resource_limits` entry; None means unlimited (RLIM_INFINITY)."""
+
+    name: str  # lower-case RLIMIT_ suffix: core, nofile, memlock, stack, rtprio, nice, as, ...
+    soft: int | None
+    hard: int | None
+
+
+@dataclass
+class OutputLog:
+    path: str
+    size_limit: int = 10 << 20  # bytes per file before it is rotated
+    keep_count: int = 3  # rotated files kept besides the current one
+
+
+@dataclass
+class Watchdog:
+    """Restart the process when `topic` is published at less than `min_hz` (measured over
+    a window of max(1 s, 3 / min_hz)) once it has been ready."""
+
+    topic: str
+    min_hz: float
+
+
+@dataclass
+class Instance:
+    name: str
+    manager: str  # "HOST:PORT" or ":PORT"
+    location: Location
+    documentation: str = ""
+
+
+@dataclass
+class Host:
+    """One `hosts` line: settings of a physical host."""
+
+    name: str
+    location: Location
+    interfaces: dict[str, str] = field(default_factory=dict)  # label -> IPv4 address
+    process_start_rate_limit: float | None = None  # starts per second, None: unlimited
+    daemon_port: int | None = None  # None: LN_ARBITER_PORT or DEFAULT_ARBITER_PORT
+    daemon_start_script: str | None = None
+
+
+@dataclass
+class Process:
+    name: str  # full name, with the push_name_prefix prefixes joined by "/"
+    location: Location  # of the section header
+    command: str
+    node: str = "localhost"  # "localhost": the manager's host
+    environment: dict[str, str] = field(default_factory=dict)
+    pass_environment: list[str] = field(default_factory=list)  # names copied from the manager
+    change_directory: str | None = None
+    # Processes or states that must be ready (states: UP) before this one starts, and stay so.
+    depends_on: list[str] = field(default_factory=list)
+    # Processes that must have finished successfully before this one starts.
+    start_before: list[str] = field(default_factory=list)
+    # Processes started as soon as this one is ready.
+    start_on_ready: list[str] = field(default_factory=list)
+    ready_regex: str | None = None  # Python re syntax, searched in each output line
+    ready_time: float | None = None  # seconds after start
+    ready_on_topic: str | None = None  # ready once that topic has a publisher
+    ready_on_service: str | None = None  # ready once that service is registered
+    term_signal: int = int(signal.SIGTERM)
+    term_timeout: float = 5.0  # seconds before SIGKILL
+    policy: Policy = Policy.OTHER
+    priority: int = 0  # nice value for SCHED_OTHER, 1..99 for FIFO/RR
+    affinity: list[int] | None = None  # CPU numbers
+    resource_limits: list[ResourceLimit] = field(default_factory=list)
+    output_log: OutputLog | None = None
+    max_output_lines: int = 1000  # lines of output kept in memory
+    output_encoding: str = "utf-8"
+    flags: set[str] = field(default_factory=set)
+    restart: Restart = Restart.NEVER
+    restart_limit: int = 5  # restarts in a row before giving up (state failed)
+    restart_delay: float = 1.0  # seconds before the first restart; doubles, at most 30 s
+    watchdog: Watchdog | None = None
+    message_definition_dirs: list[str] = field(default_factory=list)
+
+    @property
+    def has_readiness(self) -> bool:
+        return any(x is not None for x in (self.ready_regex, self.ready_time,
+                                           self.ready_on_topic, self.ready_on_service))
+
+
+@dataclass
+class State:
+    """A `state` section: CHECK exit 0 means UP; `up`/`down` bring it there."""
+
+    name: str
+    location: Location
+    check: str
+    up: str | None = None
+    down: str | None = None
+    node: str | None = None  # None: the node of a process that depends on it, else localhost
+    min_check_interval: float = 30.0
+
+
+@dataclass
+class Group:
+    name: str
+    location: Location
+    members: list[str] = field(default_factory=list)  # resolved process/state/group names
+    flags: set[str] = field(default_factory=set)
+
+
+@dataclass
+class Config:
+    files: list[str]  # every file read, the main one first
+    instance: Instance
+    defines: dict[str, str] = field(default_factory=dict)  # final values
+    hosts: dict[str, Host] = field(default_factory=dict)
+    node_map: dict[str, str] = field(default_factory=dict)  # logical node -> host
+    processes: dict[str, Process] = field(default_factory=dict)  # in file order
+    states: dict[str, State] = field(default_factory=dict)
+    groups: dict[str, Group] = field(default_factory=dict)
+    message_definition_dirs: list[str] = field(default_factory=list)
