@@ -241,6 +241,38 @@ class Scheduler:
                     continue
                 await self._adopt(rt, link, info)
 
+    def apply_config(self, config: model.Config) -> dict[str, list[str]]:
+        """Take a reloaded configuration: new processes are added (stopped), processes
+        no longer configured are dropped once they are not running (running ones stay until
+        stopped), changed ones get their new settings for their next start."""
+        added, removed, changed, kept = [], [], [], []
+        for name, cfg in config.processes.items():
+            rt = self.procs.get(name)
+            if rt is None:
+                rt = Runtime(cfg, output=deque(maxlen=max(1, cfg.max_output_lines)))
+                self.procs[name] = rt
+                added.append(name)
+            elif rt.cfg != cfg:
+                changed.append(name)
+            else:
+                continue
+            rt.cfg = cfg
+            rt.regex = re.compile(cfg.ready_regex) if cfg.ready_regex is not None else None
+        for name in list(self.procs):
+            if name not in config.processes:
+                if self.procs[name].state in STARTABLE:
+                    del self.procs[name]
+                    removed.append(name)
+                else:
+                    kept.append(name)
+        for name, st in config.states.items():
+            if name not in self.states or self.states[name].cfg != st:
+                self.states[name] = StateRuntime(st)
+        self.config = config
+        self._limiters.clear()
+        return {"added": added, "removed": removed, "changed": changed,
+                "removed_when_stopped": kept}
+
     async def shutdown(self) -> None:
         """Stop every process the configuration runs (dependents first), except those with
         the flag disable_stop, which are left running for the next manager."""
@@ -366,7 +398,10 @@ class Scheduler:
     async def _spawn(self, rt: Runtime) -> None:
         cfg = rt.cfg
         await self._limiter(cfg.node).acquire()
-        link = await self._link(cfg.node)
+        try:
+            link = await self._link(cfg.node)
+        except (OSError, self.backend.error_type) as exc:
+            raise StartError(f"cannot start: {exc}") from None
         spec = self.backend.spawn_spec(
             name=cfg.name, command=cfg.command, shell="start_in_shell" in cfg.flags,
             env=self._environment(cfg), cwd=cfg.change_directory,
@@ -487,7 +522,10 @@ class Scheduler:
         died by a signal)."""
         self._transient += 1
         name = f"state:{label}:{self._transient}"
-        link = await self._link(node)
+        try:
+            link = await self._link(node)
+        except (OSError, self.backend.error_type) as exc:
+            raise StartError(f"{label}: {exc}") from None
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         self._waiters[name] = future
         env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
@@ -612,8 +650,11 @@ class Scheduler:
         if rt.restarts >= rt.cfg.restart_limit:
             reason = f"gave up after {rt.restarts} restarts; last: {rt.reason}"
             rt.reason = reason
-            rt.transitions.append(Transition(time.time(), rt.state, reason))
+            t = Transition(time.time(), rt.state, reason)
+            rt.transitions.append(t)
             log.warning("process %s: %s", rt.cfg.name, reason)
+            for listener in list(self.transition_listeners):
+                listener(rt.cfg.name, t)
             self._notify()
             return
         delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * (2 ** rt.restarts))
