@@ -43,6 +43,24 @@ class LineError(Exception):
         return cls([Problem(loc, message)])
 
 
+class Gather:
+    """Collects the LineErrors of several parts of one line; check() raises them together.
+    A LineError without problems (a part that used a name whose own line failed) still
+    fails the line."""
+
+    def __init__(self) -> None:
+        self.problems: list[Problem] = []
+        self.failed = False
+
+    def add(self, exc: LineError) -> None:
+        self.problems.extend(exc.problems)
+        self.failed = True
+
+    def check(self) -> None:
+        if self.failed:
+            raise LineError(self.problems)
+
+
 def closest(word: str, candidates: Iterable[str]) -> str | None:
     close = difflib.get_close_matches(word, sorted(set(candidates)), n=1, cutoff=0.6)
     return close[0] if close else None

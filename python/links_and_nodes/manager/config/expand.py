@@ -48,6 +48,9 @@ class Evaluator:
         self.instance_name: str | None = None
         self.manager: str | None = None  # as written in the instance section
         self.process: tuple[str, str] | None = None  # (name, full name) of the last process
+        # Names whose defining line had a problem: a line using them is skipped quietly.
+        self.broken: set[str] = set()
+        self._poisoned = False
 
     # ------------------------------------------------------------------ names
 
@@ -95,8 +98,11 @@ class Evaluator:
         if "%(" not in text:
             return text
         problems: list[Problem] = []
+        self._poisoned = False
         out, _ = self._scan(text, 0, 0, loc, file, args, problems)
-        if problems:
+        if problems or self._poisoned:
+            # A name whose own line failed: that problem is reported already, so this
+            # line is skipped without another.
             raise LineError(problems)
         return out
 
@@ -117,7 +123,9 @@ class Evaluator:
                     if depth == 0:
                         problems.append(Problem(shift(loc, i), "unterminated '%(' (missing ')')"))
                     return "".join(out), -1
-                out.append(self._call(inner, shift(loc, i), file, args, problems))
+                # A call around a name whose line failed is not evaluated: no second problem.
+                if not self._poisoned:
+                    out.append(self._call(inner, shift(loc, i), file, args, problems))
                 i = end
                 continue
             c = text[i]
@@ -147,6 +155,9 @@ class Evaluator:
         name, rest = m.group(1), m.group(2)
         if rest is None and name not in FUNCTIONS:
             value = self.lookup(name, file, args)
+            if value is None and name in self.broken:
+                self._poisoned = True
+                return ""
             if value is None:
                 problems.append(Problem(loc, self._undefined(name, args)))
                 return ""

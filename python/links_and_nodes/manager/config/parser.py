@@ -15,7 +15,7 @@ import os
 import re
 
 from .drafts import Ctx, Drafts, GroupDraft, InstanceDraft, KeyLine, ProcessDraft, StateDraft
-from .errors import LineError, Problem, describe, did_you_mean, relative, shift
+from .errors import Gather, LineError, Problem, describe, did_you_mean, relative, shift
 from .expand import Evaluator
 from .lexer import SECTION_WORDS, RawLine, decode, lex
 from .model import Group, Location, Process, State
@@ -219,14 +219,13 @@ class Parser:
         return Value(out, loc, out == raw)
 
     def values(self, kl: KeyLine) -> list[Value]:
-        out, problems = [], []
+        out, gather = [], Gather()
         for piece in kl.pieces:
             try:
                 out.append(self.value(piece, kl.ctx))
             except LineError as exc:
-                problems.extend(exc.problems)
-        if problems:
-            raise LineError(problems)
+                gather.add(exc)
+        gather.check()
         return out
 
     def scalar(self, kl: KeyLine) -> Value:
@@ -332,9 +331,9 @@ class Parser:
         if word == "instance":
             if self.drafts.instance is None:
                 self.drafts.instance = InstanceDraft(loc)
-            return InstanceSection(self.drafts.instance)
+            return InstanceSection(self.drafts.instance, self.evaluator)
         if word == "defines":
-            return DefinesSection()
+            return DefinesSection(self.evaluator)
         return HostsSection() if word == "hosts" else NodeMapSection()
 
     # ------------------------------------------------------------------ directives
@@ -415,19 +414,18 @@ class Parser:
 
     def include_glob(self, word: str, piece: Piece, ctx: Ctx) -> None:
         patterns, excluded = [], set()
-        problems = []
+        gather = Gather()
         for text, offset in split_top(piece.text, " \t"):
             try:
                 v = self.value(Piece(text, shift(piece.loc, offset)), ctx)
             except LineError as exc:
-                problems.extend(exc.problems)
+                gather.add(exc)
                 continue
             if v.text.startswith("!"):
                 excluded.update(self._glob(v.text[1:], ctx.file))
             else:
                 patterns.append(v)
-        if problems:
-            raise LineError(problems)
+        gather.check()
         if not patterns:
             raise LineError.at(piece.loc, f"'{word}' needs a file pattern")
         reading = {r for r, _ in self.stack}
@@ -492,21 +490,20 @@ class Parser:
         given = args or []
         check_arity(template, len(given), piece.loc)
         bound: dict[str, str] = {}
-        problems = []
+        gather = Gather()
         for param, (text, offset) in zip(template.params, given, strict=False):
             try:
                 bound[param.name] = self.value(Piece(text, shift(piece.loc, offset)), ctx).text
             except LineError as exc:
-                problems.extend(exc.problems)
+                gather.add(exc)
         for param in template.params[len(given):]:
             assert param.default is not None
             try:
                 inner = Ctx(param.loc.file, dict(bound))
                 bound[param.name] = self.value(Piece(param.default, param.loc), inner).text
             except LineError as exc:
-                problems.extend(exc.problems)
-        if problems:
-            raise LineError(problems)
+                gather.add(exc)
+        gather.check()
         where = f"{relative(piece.loc.file, self.drafts.root)}:{piece.loc.line}:{piece.loc.col}"
         use = f"template '{template.name}' used at {where}"
         self.run(template.body, Ctx(ctx.file, bound, (use, *ctx.uses),

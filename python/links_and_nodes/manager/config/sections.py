@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from .drafts import GroupDraft, InstanceDraft, KeyLine, ProcessDraft, StateDraft
 from .errors import LineError, Problem, closest, did_you_mean
-from .expand import BUILTINS
+from .expand import BUILTINS, Evaluator
 from .model import Host
 from .process_keys import process_key, ref_items
 from .templates import Template
@@ -52,8 +52,9 @@ class InstanceSection(Section):
     IGNORED = frozenset({"enable_auto_groups", "groups_opened_default",
                          "groups_sorted_default"})
 
-    def __init__(self, draft: InstanceDraft) -> None:
+    def __init__(self, draft: InstanceDraft, evaluator: Evaluator) -> None:
         self.draft = draft
+        self.evaluator = evaluator
 
     def key(self, p: Parser, kl: KeyLine) -> None:
         if kl.key in self.IGNORED:
@@ -76,11 +77,19 @@ class InstanceSection(Section):
 
     def failed(self, key: str) -> None:
         self.draft.failed.add(key)
+        if key in ("name", "manager"):
+            self.evaluator.broken.add("instance_name" if key == "name" else key)
 
 
 class DefinesSection(Section):
     kind = "defines"
     general_keys = True
+
+    def __init__(self, evaluator: Evaluator) -> None:
+        self.evaluator = evaluator
+
+    def failed(self, key: str) -> None:
+        self.evaluator.broken.add(key.strip())
 
     def key(self, p: Parser, kl: KeyLine) -> None:
         _no_add(kl)
@@ -93,6 +102,7 @@ class DefinesSection(Section):
         value = p.scalar(kl)
         if name not in p.evaluator.fixed:  # given by the caller: it wins
             p.evaluator.defines[name] = value.text
+            p.evaluator.broken.discard(name)
 
 
 class HostsSection(Section):
