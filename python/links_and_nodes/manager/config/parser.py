@@ -3,8 +3,8 @@ name prefixes, templates, conditionals) and `%()` expansion, filling the drafts.
 
 An included file starts in the section of its include line (so it can hold keys of the
 process that includes it); sections it opens end with it, and after the include line the
-including file's section goes on.  A problem skips its line and is
-recorded; reading goes on so that one run reports every problem of every file.
+including file's section goes on.  A problem skips its line and is recorded; reading goes
+on so that one run reports every problem of every file.
 """
 
 from __future__ import annotations
@@ -48,8 +48,7 @@ _VERSION_RE = re.compile(r"[0-9]+(\.[0-9]+)*\Z")
 # Directives that end a template's body instead of being recorded in it.
 _FILE_DIRECTIVE_RE = re.compile(r"(optional_)?include(_glob)?(\s|:|$)|(push|pop)_name_prefix"
                                 r"(\s|:|$)|requires_version(\s|:|$)")
-_SIMPLE_SECTIONS = {"instance": "instance", "defines": "defines", "hosts": "hosts",
-                    "node_map": "node_map"}
+_SIMPLE_SECTIONS = frozenset({"instance", "defines", "hosts", "node_map"})  # no name
 
 
 class Parser:
