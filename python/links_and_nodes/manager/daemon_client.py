@@ -244,11 +244,11 @@ async def _probe(host: str, port: int, timeout: float) -> bool:
     something else does."""
     try:
         reader, writer = await asyncio.wait_for(asyncio.open_connection(host, port), timeout)
-    except (OSError, asyncio.TimeoutError):
+    except (TimeoutError, OSError):
         return False
     try:
         head = await asyncio.wait_for(reader.readexactly(4 + 5 + len(MAGIC)), timeout)
-    except (OSError, asyncio.IncompleteReadError, asyncio.TimeoutError):
+    except (TimeoutError, OSError, asyncio.IncompleteReadError):
         head = b""
     finally:
         writer.close()
@@ -281,7 +281,7 @@ async def ensure_local_daemon(port: int, key_file: Path, log_file: Path | None =
         raise DaemonError(f"cannot run {args[0]}: {e.strerror}") from e
     try:
         _, err = await asyncio.wait_for(proc.communicate(), max(0.1, deadline - loop.time()))
-    except asyncio.TimeoutError:
+    except TimeoutError:
         proc.kill()
         await proc.wait()
         raise DaemonError(f"ln_daemon did not start within {timeout} s") from None

@@ -176,7 +176,7 @@ def test_manager_killed_processes_survive_and_new_manager_reattaches(lab: Lab) -
 
 
 def test_console_on_stdin(lab: Lab) -> None:
-    body = process("a", "ready", "hello from a", marker=lab.instance,
+    body = process("a", "ready", "hello-from-a", marker=lab.instance,
                    extra="ready_regex: hello")
     config = lab.write(body)
     proc = lab.manager(config, stdin=subprocess.PIPE)
@@ -193,7 +193,7 @@ def test_console_on_stdin(lab: Lab) -> None:
     lines = out.splitlines()
     assert lines[0].split() == ["process", "state", "pid", "node", "restarts", "reason"]
     assert lines[1].split()[:2] == ["a", "ready"]
-    assert "a: hello from a" in lines
+    assert "a: hello-from-a" in lines
     assert "error: unknown command 'bogus' (try help)" in lines
     assert proc.returncode == 0
 
