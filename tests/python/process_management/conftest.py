@@ -5,6 +5,7 @@ the test's daemon killed and every process the test started checked gone."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import socket
@@ -44,6 +45,14 @@ def pids_with(marker: str) -> list[int]:
         if marker.encode() in raw and stat.rsplit(")", 1)[1].split()[0] != "Z":
             found.append(int(entry))
     return found
+
+
+def parent(pid: int) -> int:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return 0
+    return int(stat.rsplit(")", 1)[1].split()[1])
 
 
 @dataclass
@@ -87,8 +96,13 @@ class Lab:
         logs = sorted(self.tmp.glob("manager-*.log"))
         return logs[index].read_text() if logs else ""
 
-    def daemon_pids(self) -> list[int]:
-        return pids_with(f"--port\0{self.daemon_port}\0")
+    def daemon_pids(self, *, all_forks: bool = False) -> list[int]:
+        """The test's ln_daemon; with all_forks also its forks that have not exec'd yet
+        or keep a process (they share its command line)."""
+        pids = pids_with(f"--port\0{self.daemon_port}\0")
+        if all_forks:
+            return pids
+        return [pid for pid in pids if parent(pid) not in pids]
 
 
 @pytest.fixture
@@ -112,11 +126,13 @@ def lab(tmp_path: Path) -> Iterator[Lab]:
                     proc.wait()
             if proc.stdout is not None:
                 proc.stdout.close()
-        for pid in lab.daemon_pids():  # its processes die with it? no: kill them too
-            os.kill(pid, signal.SIGKILL)
+        for pid in lab.daemon_pids(all_forks=True):
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
         leftovers = pids_with(instance)
         for pid in leftovers:
-            os.kill(pid, signal.SIGKILL)
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
         assert not leftovers, f"processes of the test left running: {leftovers}"
 
 

@@ -236,3 +236,22 @@ def test_exit_on_failure(lab: Lab) -> None:
     assert proc.wait(timeout=LIMIT) == 1
     assert proc.stdout is not None
     assert "exit status 7" in proc.stdout.read()
+
+
+def test_daemon_killed_marks_its_processes_failed(lab: Lab) -> None:
+    body = process("a", "ready", "up", marker=lab.instance, extra="ready_regex: up")
+    with start(lab, body) as mgr:
+        mgr.start("a")
+        mgr.wait_ready("a", LIMIT)
+        (daemon,) = lab.daemon_pids()
+        os.kill(daemon, signal.SIGKILL)
+        wait_for(lambda: mgr.state("a") == "failed", "the manager to notice")
+        assert "lost the connection to the ln_daemon of node 'localhost'" in \
+            mgr.history("a")[-1]["reason"]
+        # a new start goes through a new daemon, which the manager starts itself
+        mgr.start("a")
+        mgr.wait_ready("a", LIMIT)
+        assert lab.daemon_pids() not in ([], [daemon])
+        mgr.quit()
+    for pid in pids_with(lab.instance):  # what the killed daemon left behind
+        os.kill(pid, signal.SIGKILL)
