@@ -148,8 +148,6 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
     loop = asyncio.get_running_loop()
     for signum in (signal.SIGTERM, signal.SIGINT):
         loop.add_signal_handler(signum, shutdown, True)
-    print(f"ln_manager: instance {args.instance} listening on {_address(args.host, port)}",
-          flush=True)
     runner = None
     status = 0
     if config is not None:
@@ -158,6 +156,10 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
         connect_host = "127.0.0.1" if args.host in ("0.0.0.0", "::", "") else args.host
         runner = Runner(args, config, core, directory, _address(connect_host, port), shutdown)
         server.control = runner.control.handle_json
+        await runner.attach()
+    print(f"ln_manager: instance {args.instance} listening on {_address(args.host, port)}",
+          flush=True)
+    if runner is not None:
         status = await runner.begin()
     else:
         from .control import Control

@@ -39,10 +39,13 @@ class Runner:
         if args.exit_on_failure:
             self.scheduler.transition_listeners.append(self._fail_fast)
 
-    async def begin(self) -> int:
-        """Attach to running processes, start what was asked, open the console; non-zero if
-        the manager must exit right away (--exit-on-failure)."""
+    async def attach(self) -> None:
+        """Take over what the daemons still run for this instance (before clients come)."""
         await self.scheduler.attach()
+
+    async def begin(self) -> int:
+        """Start what was asked, open the console; non-zero if the manager must exit right
+        away (--exit-on-failure)."""
         if self.args.start_all:
             self.scheduler.start("all")
         if not self.args.no_console:

@@ -692,20 +692,41 @@ class Scheduler:
         link = await self.backend.link(node)
         if id(link) not in self._event_tasks:
             self._event_tasks[id(link)] = asyncio.get_running_loop().create_task(
-                self._pump(link))
+                self._pump(link, node))
         return link
 
-    async def _pump(self, link: DaemonLink) -> None:
+    async def _pump(self, link: DaemonLink, node: str) -> None:
         queue = link.events()
         while True:
             event = await queue.get()
             if event is None:  # the connection ended
                 self._event_tasks.pop(id(link), None)
+                self._daemon_lost(link, node)
                 return
             try:
                 self._on_event(event)
             except Exception:  # one bad event must not stop supervision
                 log.exception("handling daemon event %r", event)
+
+    def _daemon_lost(self, link: DaemonLink, node: str) -> None:
+        """The daemon connection of `node` ended: what ran there is unknown now.  Those
+        processes fail (and restart by their policy, through a new connection)."""
+        for rt in self.procs.values():
+            if rt.state in ALIVE and self.config.node_map.get(rt.cfg.node, rt.cfg.node) == \
+                    self.config.node_map.get(node, node):
+                rt.pid = None
+                self._cancel_side(rt)
+                if rt.stop_requested:
+                    self._set(rt, S.STOPPED, "stopped (daemon connection lost)")
+                    continue
+                self._set(rt, S.FAILED, f"lost the connection to the ln_daemon of node "
+                                        f"{node!r}")
+                self._lost_dependency(rt)
+                if rt.cfg.restart != model.Restart.NEVER:
+                    self._schedule_restart(rt)
+        for future in self._waiters.values():
+            if not future.done():
+                future.set_exception(StartError(f"lost the ln_daemon of node {node!r}"))
 
     def _limiter(self, node: str) -> RateLimiter:
         host = self.config.node_map.get(node, node)

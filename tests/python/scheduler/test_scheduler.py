@@ -225,3 +225,48 @@ async def test_groups_and_all(world_factory: list[World]) -> None:
     await w.sched.stop("all")
     with pytest.raises(KeyError):
         w.sched.targets("nothing")
+
+
+async def test_start_rate_limit_spaces_starts(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Five starts at 20/s on a frozen clock: each waits 50 ms longer than the one before."""
+    from links_and_nodes.manager import scheduler as sched_mod
+
+    slept: list[float] = []
+
+    async def fake_sleep(delay: float) -> None:
+        slept.append(round(delay, 6))
+
+    monkeypatch.setattr(sched_mod.time, "monotonic", lambda: 100.0)
+    monkeypatch.setattr(sched_mod.asyncio, "sleep", fake_sleep)
+    limiter = sched_mod.RateLimiter(20.0)
+    for _ in range(5):
+        await limiter.acquire()
+    assert slept == [0.05, 0.1, 0.15, 0.2]
+    unlimited = sched_mod.RateLimiter(None)
+    await unlimited.acquire()
+    assert len(slept) == 4
+
+
+async def test_disable_stop_refused_unless_forced(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("keep", flags={"disable_stop"}))
+    w.sched.start("keep")
+    await w.sched.wait_ready("keep", LIMIT)
+    with pytest.raises(StartError, match="disable_stop"):
+        await w.sched.stop("keep")
+    assert w.sched.procs["keep"].state == S.READY
+    await w.sched.stop("keep", force=True)
+    assert w.sched.procs["keep"].state == S.STOPPED
+
+
+async def test_reload_adds_changes_and_removes(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b"))
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    result = w.sched.apply_config(config(proc("a", "sleep 61"), proc("c")))
+    assert result == {"added": ["c"], "removed": ["b"], "changed": ["a"],
+                      "removed_when_stopped": []}
+    assert w.sched.procs["a"].state == S.READY  # running on with its old command
+    await w.sched.restart("a")
+    assert w.sched.procs["a"].cfg.command == "sleep 61"
+    w.sched.start("c")
+    await w.sched.wait_ready("all", LIMIT)

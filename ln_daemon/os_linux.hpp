@@ -1,0 +1,20 @@
+// The real Os: a keeper process per supervised process (a child subreaper that starts it,
+// reports its start and exit, and lives until its whole tree is gone), /proc scans to
+// signal that tree, waitpid and the clocks.
+#pragma once
+
+#include "os.hpp"
+
+namespace lnd {
+
+class LinuxOs final : public Os {
+public:
+    double monotonic() noexcept override;
+    double wall() noexcept override;
+    bool launch(const LaunchSpec &spec, Launched &out, std::string &error) override;
+    int kill(pid_t pid, int sig) noexcept override;
+    int kill_tree(pid_t keeper, int sig, pid_t skip_group) noexcept override;
+    bool reap(pid_t &pid, int &status) noexcept override;
+};
+
+} // namespace lnd

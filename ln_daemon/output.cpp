@@ -1,0 +1,125 @@
+// Line splitting, the bounded line list and log rotation (output.hpp).  A failing log file
+// is reported once in the daemon log and then closed, never stopping the process.
+#include "output.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/uio.h>
+#include <unistd.h>
+
+#include "log.hpp"
+
+namespace lnd {
+
+void LineSplitter::feed(const char *data, size_t n, double now, const Emit &emit)
+{
+    while (n > 0) {
+        if (partial_.empty())
+            since_ = now;
+        const char *nl = static_cast<const char *>(std::memchr(data, '\n', n));
+        size_t take = nl ? static_cast<size_t>(nl - data) : n;
+        size_t room = kMaxLineBytes - partial_.size();
+        if (take > room || (!nl && take == room)) { // too long: cut it here
+            partial_.append(data, room);
+            data += room;
+            n -= room;
+            emit(std::move(partial_));
+            partial_.clear();
+            continue;
+        }
+        partial_.append(data, take);
+        data += take;
+        n -= take;
+        if (!nl)
+            break;
+        ++data; // the newline
+        --n;
+        if (!partial_.empty() && partial_.back() == '\r')
+            partial_.pop_back();
+        emit(std::move(partial_));
+        partial_.clear();
+    }
+}
+
+void LineSplitter::flush(const Emit &emit)
+{
+    if (partial_.empty())
+        return;
+    if (partial_.back() == '\r')
+        partial_.pop_back();
+    emit(std::move(partial_));
+    partial_.clear();
+}
+
+void LineBuffer::add(const Line &line)
+{
+    ++total_;
+    if (capacity_ == 0)
+        return;
+    if (lines_.size() >= capacity_)
+        lines_.pop_front();
+    lines_.push_back(line);
+}
+
+bool RotatingLog::open(const std::string &path, uint64_t limit, uint32_t keep,
+                       std::string &error)
+{
+    path_ = path;
+    limit_ = limit;
+    keep_ = keep;
+    fd_.reset(::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NOCTTY, 0644));
+    if (!fd_) {
+        error = "cannot open output log '" + path + "': " + std::strerror(errno);
+        return false;
+    }
+    struct stat st;
+    size_ = ::fstat(fd_.get(), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0;
+    return true;
+}
+
+bool RotatingLog::rotate() noexcept
+{
+    fd_.reset();
+    // PATH.(keep-1) -> PATH.keep, ..., PATH -> PATH.1; the rename over PATH.keep drops the
+    // oldest file.
+    for (uint32_t i = keep_; i >= 1; --i) {
+        std::string from = i == 1 ? path_ : path_ + "." + std::to_string(i - 1);
+        std::string to = path_ + "." + std::to_string(i);
+        if (::rename(from.c_str(), to.c_str()) != 0 && errno != ENOENT)
+            logf("output log %s: cannot rename to %s: %s", from.c_str(), to.c_str(),
+                 std::strerror(errno));
+    }
+    fd_.reset(::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC | O_NOCTTY,
+                     0644));
+    if (!fd_) {
+        logf("output log %s: cannot reopen after rotation, logging stops: %s", path_.c_str(),
+             std::strerror(errno));
+        return false;
+    }
+    size_ = 0;
+    return true;
+}
+
+void RotatingLog::write_line(std::string_view text) noexcept
+{
+    if (!fd_)
+        return;
+    size_t len = text.size() + 1;
+    if (limit_ && size_ > 0 && size_ + len > limit_ && !rotate())
+        return;
+    struct iovec iov[2] = {{const_cast<char *>(text.data()), text.size()},
+                           {const_cast<char *>("\n"), 1}};
+    ssize_t n = ::writev(fd_.get(), iov, 2);
+    if (n < 0) {
+        logf("output log %s: write failed, logging stops: %s", path_.c_str(),
+             std::strerror(errno));
+        fd_.reset();
+        return;
+    }
+    size_ += static_cast<uint64_t>(n);
+}
+
+} // namespace lnd

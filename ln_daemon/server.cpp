@@ -1,0 +1,615 @@
+// The poll loop and the TCP protocol of the daemon (server.hpp).  Order of one round:
+// poll -> signals (reap children) -> new connections -> connection input -> process
+// descriptors -> timers -> output to connections.  Frames are parsed only from complete
+// buffers; the length is checked before a body is awaited, so an oversized frame costs
+// nothing but its connection.
+#include "server.hpp"
+
+#include <arpa/inet.h>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/signalfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+#include <vector>
+
+#include "log.hpp"
+#include "messages.hpp"
+
+namespace lnd {
+
+using proto::Err;
+using proto::Msg;
+
+struct Connection {
+    enum class Phase { handshake, ready, closing };
+    uint64_t id = 0;
+    UniqueFd fd;
+    std::string peer;
+    Phase phase = Phase::handshake;
+    std::string in;
+    std::string out;
+    uint8_t nonce[proto::kNonceBytes];
+    std::string instance;
+    Key to_daemon;
+    Key to_client;
+    uint64_t seq_in = 0;
+    uint64_t seq_out = 0;
+    double deadline = 0; // monotonic: handshake or linger ends
+    bool shut = false;   // closing: our side is shut down
+    bool dead = false;   // to be erased at the end of the round
+};
+
+namespace {
+
+uint32_t le32(const char *p) noexcept
+{
+    const auto *u = reinterpret_cast<const uint8_t *>(p);
+    return u[0] | u[1] << 8 | u[2] << 16 | static_cast<uint32_t>(u[3]) << 24;
+}
+
+std::string peer_name(const sockaddr_storage &sa)
+{
+    char host[INET6_ADDRSTRLEN] = "?";
+    unsigned port = 0;
+    if (sa.ss_family == AF_INET) {
+        const auto &in = reinterpret_cast<const sockaddr_in &>(sa);
+        ::inet_ntop(AF_INET, &in.sin_addr, host, sizeof host);
+        port = ntohs(in.sin_port);
+    } else if (sa.ss_family == AF_INET6) {
+        const auto &in6 = reinterpret_cast<const sockaddr_in6 &>(sa);
+        ::inet_ntop(AF_INET6, &in6.sin6_addr, host, sizeof host);
+        port = ntohs(in6.sin6_port);
+    }
+    return std::string(host) + ":" + std::to_string(port);
+}
+
+const char *msg_name(uint8_t type) noexcept
+{
+    switch (static_cast<Msg>(type)) {
+    case Msg::spawn:
+        return "SPAWN";
+    case Msg::stop:
+        return "STOP";
+    case Msg::signal:
+        return "SIGNAL";
+    case Msg::list:
+        return "LIST";
+    case Msg::output:
+        return "OUTPUT";
+    case Msg::forget:
+        return "FORGET";
+    case Msg::ping:
+        return "PING";
+    case Msg::client_hello:
+        return "CLIENT_HELLO";
+    default:
+        return "unknown";
+    }
+}
+
+} // namespace
+
+Server::Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path)
+    : os_(os), key_(key), listener_(std::move(listener)), signals_(std::move(signals)),
+      log_path_(std::move(log_path)), supervisor_(os, *this)
+{
+}
+
+Server::~Server() = default;
+
+// ---- connections -------------------------------------------------------------------------
+
+void Server::accept_all()
+{
+    for (;;) {
+        sockaddr_storage sa;
+        socklen_t len = sizeof sa;
+        UniqueFd fd(::accept4(listener_.get(), reinterpret_cast<sockaddr *>(&sa), &len,
+                              SOCK_NONBLOCK | SOCK_CLOEXEC));
+        if (!fd) {
+            if (errno != EAGAIN && errno != EINTR && errno != ECONNABORTED)
+                logf("accept: %s", std::strerror(errno));
+            return;
+        }
+        std::string peer = peer_name(sa);
+        if (conns_.size() >= kMaxConnections) {
+            logf("connection from %s refused: %zu connections open", peer.c_str(), conns_.size());
+            continue;
+        }
+        int one = 1, idle = 30, interval = 10, count = 3;
+        ::setsockopt(fd.get(), IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        ::setsockopt(fd.get(), SOL_SOCKET, SO_KEEPALIVE, &one, sizeof one);
+        ::setsockopt(fd.get(), IPPROTO_TCP, TCP_KEEPIDLE, &idle, sizeof idle);
+        ::setsockopt(fd.get(), IPPROTO_TCP, TCP_KEEPINTVL, &interval, sizeof interval);
+        ::setsockopt(fd.get(), IPPROTO_TCP, TCP_KEEPCNT, &count, sizeof count);
+        auto c = std::make_unique<Connection>();
+        c->id = next_conn_++;
+        c->fd = std::move(fd);
+        c->peer = std::move(peer);
+        c->deadline = os_.monotonic() + kHandshakeTimeout;
+        random_bytes(c->nonce, sizeof c->nonce);
+        proto::Writer w;
+        w.raw(proto::kMagic, sizeof proto::kMagic);
+        w.u16(proto::kVersion);
+        w.raw(c->nonce, sizeof c->nonce);
+        send(*c, Msg::daemon_hello, 0, w.buffer());
+        conns_.emplace(c->id, std::move(c));
+    }
+}
+
+void Server::send(Connection &c, Msg type, uint32_t req, const std::string &payload)
+{
+    if (c.dead || (c.phase == Connection::Phase::closing && c.shut))
+        return;
+    bool tagged = c.phase == Connection::Phase::ready ||
+                  (c.phase == Connection::Phase::closing && !c.instance.empty());
+    size_t body = proto::kHeaderBytes + payload.size();
+    size_t len = body + (tagged ? proto::kTagBytes : 0);
+    size_t start = c.out.size();
+    proto::Writer head;
+    head.u32(static_cast<uint32_t>(len));
+    head.u8(static_cast<uint8_t>(type));
+    head.u32(req);
+    c.out += head.buffer();
+    c.out += payload;
+    if (tagged) {
+        Tag tag;
+        frame_tag(c.to_client, c.seq_out++, c.out.data() + start + proto::kLengthBytes, body, tag);
+        c.out.append(reinterpret_cast<const char *>(tag), sizeof tag);
+    }
+    if (c.out.size() > kMaxQueuedBytes)
+        drop(c, "it does not read its events fast enough");
+}
+
+void Server::send_error(Connection &c, uint32_t req, Err code, const std::string &text)
+{
+    proto::Writer w;
+    w.u16(static_cast<uint16_t>(code));
+    w.str(text);
+    send(c, Msg::error, req, w.buffer());
+}
+
+void Server::refuse(Connection &c, uint32_t req, Err code, const std::string &text)
+{
+    logf("connection %s%s%s closed: %s", c.peer.c_str(), c.instance.empty() ? "" : " instance ",
+         c.instance.c_str(), text.c_str());
+    send_error(c, req, code, text);
+    c.phase = Connection::Phase::closing;
+    c.in.clear();
+    c.deadline = os_.monotonic() + kLingerTimeout;
+}
+
+void Server::drop(Connection &c, const char *why)
+{
+    if (c.dead)
+        return;
+    if (why)
+        logf("connection %s%s%s closed: %s", c.peer.c_str(),
+             c.instance.empty() ? "" : " instance ", c.instance.c_str(), why);
+    c.dead = true;
+    c.out.clear();
+}
+
+void Server::flush(Connection &c)
+{
+    while (!c.out.empty() && !c.dead) {
+        ssize_t n = ::send(c.fd.get(), c.out.data(), c.out.size(), MSG_NOSIGNAL);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            if (errno != EAGAIN)
+                drop(c, nullptr);
+            return;
+        }
+        c.out.erase(0, static_cast<size_t>(n));
+    }
+    if (c.phase == Connection::Phase::closing && c.out.empty() && !c.shut) {
+        // Half-close and wait for the peer to close: closing with unread input would
+        // reset the connection and could destroy the error before the peer reads it.
+        ::shutdown(c.fd.get(), SHUT_WR);
+        c.shut = true;
+    }
+}
+
+void Server::on_readable(Connection &c)
+{
+    char buf[65536];
+    for (int rounds = 0; rounds < 4 && !c.dead; ++rounds) {
+        ssize_t n = ::recv(c.fd.get(), buf, sizeof buf, 0);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            if (errno != EAGAIN)
+                drop(c, c.phase == Connection::Phase::closing ? nullptr : "connection error");
+            break;
+        }
+        if (n == 0) {
+            drop(c, c.phase == Connection::Phase::ready || c.phase == Connection::Phase::closing
+                        ? nullptr
+                        : "closed during the handshake");
+            if (c.phase == Connection::Phase::ready)
+                logf("connection %s instance %s closed by the peer", c.peer.c_str(),
+                     c.instance.c_str());
+            break;
+        }
+        if (c.phase == Connection::Phase::closing)
+            continue; // discarded until the peer closes
+        c.in.append(buf, static_cast<size_t>(n));
+        parse_frames(c);
+        if (static_cast<size_t>(n) < sizeof buf)
+            break;
+    }
+}
+
+void Server::parse_frames(Connection &c)
+{
+    size_t pos = 0;
+    while (!c.dead && c.phase != Connection::Phase::closing) {
+        if (c.in.size() - pos < proto::kLengthBytes)
+            break;
+        uint32_t len = le32(c.in.data() + pos);
+        bool tagged = c.phase == Connection::Phase::ready;
+        size_t min = proto::kHeaderBytes + (tagged ? proto::kTagBytes : 0);
+        if (len > proto::kMaxFrame) {
+            refuse(c, 0, Err::bad_request,
+                   "frame of " + std::to_string(len) + " bytes exceeds the limit of " +
+                       std::to_string(proto::kMaxFrame));
+            return;
+        }
+        if (len < min) {
+            refuse(c, 0, Err::bad_request, "malformed frame of " + std::to_string(len) + " bytes");
+            return;
+        }
+        if (c.in.size() - pos < proto::kLengthBytes + len)
+            break;
+        const char *body = c.in.data() + pos + proto::kLengthBytes;
+        size_t body_len = len - (tagged ? proto::kTagBytes : 0);
+        if (tagged) {
+            Tag expect;
+            frame_tag(c.to_daemon, c.seq_in++, body, body_len, expect);
+            if (!tag_equal(expect, reinterpret_cast<const uint8_t *>(body + body_len))) {
+                refuse(c, 0, Err::bad_request,
+                       "frame with a wrong tag (not from the authenticated peer, altered, "
+                       "replayed or out of order)");
+                return;
+            }
+        }
+        uint8_t type = static_cast<uint8_t>(body[0]);
+        uint32_t req = le32(body + 1);
+        proto::Reader r(body + proto::kHeaderBytes, body_len - proto::kHeaderBytes);
+        pos += proto::kLengthBytes + len;
+        if (c.phase == Connection::Phase::handshake)
+            handle_hello(c, type, r);
+        else
+            handle_request(c, type, req, r);
+    }
+    if (c.phase == Connection::Phase::closing)
+        c.in.clear();
+    else
+        c.in.erase(0, pos);
+}
+
+void Server::handle_hello(Connection &c, uint8_t type, proto::Reader &r)
+{
+    if (type != static_cast<uint8_t>(Msg::client_hello)) {
+        refuse(c, 0, Err::not_authenticated,
+               std::string("not authenticated: ") + msg_name(type) +
+                   " refused before the handshake");
+        return;
+    }
+    char magic[sizeof proto::kMagic];
+    r.raw(magic, sizeof magic);
+    uint16_t version = r.u16();
+    uint8_t nonce[proto::kNonceBytes];
+    r.raw(nonce, sizeof nonce);
+    std::string instance = r.str(proto::kMaxName);
+    Tag proof;
+    r.raw(proof, sizeof proof);
+    if (!r.done() || std::memcmp(magic, proto::kMagic, sizeof magic) != 0) {
+        refuse(c, 0, Err::bad_request, "malformed CLIENT_HELLO");
+        return;
+    }
+    if (version != proto::kVersion) {
+        refuse(c, 0, Err::version,
+               "unsupported protocol version " + std::to_string(version) +
+                   "; this daemon speaks version " + std::to_string(proto::kVersion));
+        return;
+    }
+    if (!valid_name(instance)) {
+        refuse(c, 0, Err::bad_request, "invalid instance name");
+        return;
+    }
+    Session s;
+    derive_session(key_, c.nonce, nonce, instance, s);
+    if (!tag_equal(s.client_proof, proof)) {
+        refuse(c, 0, Err::auth_failed, "authentication failed (wrong key) for instance " + instance);
+        return;
+    }
+    c.instance = std::move(instance);
+    c.to_daemon = s.to_daemon;
+    c.to_client = s.to_client;
+    proto::Writer w;
+    w.raw(s.daemon_proof, sizeof s.daemon_proof);
+    send(c, Msg::auth_ok, 0, w.buffer()); // the last untagged frame
+    c.phase = Connection::Phase::ready;
+    logf("connection %s authenticated for instance %s", c.peer.c_str(), c.instance.c_str());
+}
+
+void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Reader &r)
+{
+    Err code = Err::bad_request;
+    std::string error;
+    proto::Writer w;
+    auto malformed = [&] {
+        refuse(c, req, Err::bad_request, std::string("malformed ") + msg_name(type) + " request");
+    };
+    switch (static_cast<Msg>(type)) {
+    case Msg::spawn: {
+        SpawnRequest sr;
+        if (!decode_spawn(r, sr))
+            return malformed();
+        uint64_t token = next_token_++;
+        if (shutdown_signals_) {
+            send_error(c, req, Err::spawn_failed, "the daemon is shutting down");
+            return;
+        }
+        if (!supervisor_.spawn(c.instance, sr, token, code, error)) {
+            send_error(c, req, code, error);
+            return;
+        }
+        pending_[token] = {c.id, req};
+        logf("instance %s: starting %s", c.instance.c_str(), sr.name.c_str());
+        return;
+    }
+    case Msg::stop:
+    case Msg::forget:
+    case Msg::output:
+    case Msg::signal: {
+        std::string name = r.str(proto::kMaxName);
+        uint32_t n = 0;
+        int32_t sig = 0;
+        bool group = false;
+        if (type == static_cast<uint8_t>(Msg::output))
+            n = r.u32();
+        if (type == static_cast<uint8_t>(Msg::signal)) {
+            sig = r.i32();
+            uint8_t g = r.u8();
+            if (g > 1)
+                return malformed();
+            group = g;
+        }
+        if (!r.done())
+            return malformed();
+        if (type == static_cast<uint8_t>(Msg::forget)) {
+            if (!supervisor_.forget(c.instance, name, code, error))
+                return send_error(c, req, code, error);
+            return send(c, Msg::ok, req, {});
+        }
+        Process *p = supervisor_.find(c.instance, name, code, error);
+        if (!p)
+            return send_error(c, req, code, error);
+        if (type == static_cast<uint8_t>(Msg::output)) {
+            encode_lines(w, *p, n, proto::kMaxFrame - 64);
+            return send(c, Msg::output_lines, req, w.buffer());
+        }
+        bool ok = type == static_cast<uint8_t>(Msg::stop) ? p->stop(code, error)
+                                                          : p->send_signal(sig, group, code, error);
+        if (!ok)
+            return send_error(c, req, code, error);
+        if (type == static_cast<uint8_t>(Msg::stop))
+            logf("instance %s: stopping %s (pid %d)", c.instance.c_str(), name.c_str(),
+                 static_cast<int>(p->pid()));
+        return send(c, Msg::ok, req, {});
+    }
+    case Msg::list: {
+        if (!r.done())
+            return malformed();
+        auto procs = supervisor_.list(c.instance);
+        w.u32(static_cast<uint32_t>(procs.size()));
+        for (const Process *p : procs)
+            encode_info(w, *p);
+        return send(c, Msg::process_list, req, w.buffer());
+    }
+    case Msg::ping:
+        if (!r.done())
+            return malformed();
+        return send(c, Msg::ok, req, {});
+    default:
+        refuse(c, req, Err::bad_request, "unknown message type " + std::to_string(type));
+        return;
+    }
+}
+
+void Server::broadcast(const std::string &instance, Msg type, const std::string &payload)
+{
+    for (auto &entry : conns_) {
+        Connection &c = *entry.second;
+        if (c.phase == Connection::Phase::ready && !c.dead && c.instance == instance)
+            send(c, type, 0, payload);
+    }
+}
+
+// ---- Sink ------------------------------------------------------------------------------
+
+void Server::spawn_result(const Process &p, bool ok, Err code, const std::string &error)
+{
+    if (ok)
+        logf("instance %s: %s started, pid %d", p.instance().c_str(), p.name().c_str(),
+             static_cast<int>(p.pid()));
+    else
+        logf("instance %s: %s not started: %s", p.instance().c_str(), p.name().c_str(),
+             error.c_str());
+    auto it = pending_.find(p.token());
+    if (it == pending_.end())
+        return;
+    auto [conn_id, req] = it->second;
+    pending_.erase(it);
+    auto c = conns_.find(conn_id);
+    if (c == conns_.end() || c->second->phase != Connection::Phase::ready)
+        return; // the requester is gone; LIST shows the outcome
+    if (!ok)
+        return send_error(*c->second, req, code, error);
+    proto::Writer w;
+    encode_info(w, p);
+    send(*c->second, Msg::spawned, req, w.buffer());
+}
+
+void Server::line(const Process &p, const Line &line)
+{
+    proto::Writer w;
+    encode_output_event(w, p, line);
+    broadcast(p.instance(), Msg::ev_output, w.buffer());
+}
+
+void Server::state_changed(const Process &p)
+{
+    proto::Writer w;
+    encode_state_event(w, p);
+    broadcast(p.instance(), Msg::ev_state, w.buffer());
+}
+
+void Server::exited(const Process &p)
+{
+    if (p.exit_kind() == proto::ExitKind::signal)
+        logf("instance %s: %s (pid %d) killed by signal %d", p.instance().c_str(),
+             p.name().c_str(), static_cast<int>(p.pid()), p.exit_value());
+    else
+        logf("instance %s: %s (pid %d) exited with code %d", p.instance().c_str(),
+             p.name().c_str(), static_cast<int>(p.pid()), p.exit_value());
+    proto::Writer w;
+    encode_exited_event(w, p);
+    broadcast(p.instance(), Msg::ev_exited, w.buffer());
+}
+
+// ---- the loop ----------------------------------------------------------------------------
+
+void Server::begin_shutdown()
+{
+    if (++shutdown_signals_ == 1) {
+        logf("shutting down: stopping %zu process(es)", supervisor_.alive());
+        listener_.reset();
+        supervisor_.stop_all();
+    } else {
+        logf("second shutdown signal: SIGKILL to every process tree");
+        supervisor_.kill_all();
+    }
+}
+
+void Server::read_signals()
+{
+    signalfd_siginfo si;
+    bool child = false;
+    while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
+        switch (si.ssi_signo) {
+        case SIGCHLD:
+            child = true;
+            break;
+        case SIGTERM:
+        case SIGINT:
+            begin_shutdown();
+            break;
+        case SIGHUP:
+            if (!log_path_.empty()) {
+                std::string error;
+                if (!log_open(log_path_, error))
+                    logf("%s", error.c_str());
+                else
+                    logf("log file reopened");
+            }
+            break;
+        default:
+            break;
+        }
+    }
+    if (child)
+        supervisor_.reap();
+}
+
+int Server::run()
+{
+    std::vector<pollfd> fds;
+    std::vector<Supervisor::FdRef> proc_refs;
+    std::vector<uint64_t> conn_ids;
+    for (;;) {
+        if (shutdown_signals_) {
+            supervisor_.stop_all(); // also those that were still starting
+            if (supervisor_.alive() == 0)
+                break;
+        }
+        fds.clear();
+        proc_refs.clear();
+        conn_ids.clear();
+        fds.push_back({signals_.get(), POLLIN, 0});
+        fds.push_back({listener_.get(), POLLIN, 0}); // -1 after shutdown began: ignored
+        for (auto &entry : conns_) {
+            Connection &c = *entry.second;
+            short events = POLLIN;
+            if (!c.out.empty())
+                events |= POLLOUT;
+            fds.push_back({c.fd.get(), events, 0});
+            conn_ids.push_back(c.id);
+        }
+        size_t proc_base = fds.size();
+        supervisor_.collect_fds(fds, proc_refs);
+
+        double due = supervisor_.next_deadline();
+        for (auto &entry : conns_)
+            if (entry.second->phase != Connection::Phase::ready)
+                due = std::min(due, entry.second->deadline);
+        int timeout = -1;
+        if (due != HUGE_VAL) {
+            double ms = std::ceil((due - os_.monotonic()) * 1000.0);
+            timeout = ms <= 0 ? 0 : ms > 60000 ? 60000 : static_cast<int>(ms);
+        }
+        int n = ::poll(fds.data(), fds.size(), timeout);
+        if (n < 0 && errno != EINTR) {
+            logf("poll: %s", std::strerror(errno));
+            return 1;
+        }
+        if (n > 0) {
+            if (fds[0].revents)
+                read_signals();
+            if (fds[1].revents && listener_)
+                accept_all();
+            for (size_t i = 0; i < conn_ids.size(); ++i) {
+                short rev = fds[2 + i].revents;
+                auto it = conns_.find(conn_ids[i]);
+                if (!rev || it == conns_.end())
+                    continue;
+                if (rev & (POLLIN | POLLHUP | POLLERR))
+                    on_readable(*it->second);
+            }
+            for (size_t i = 0; i < proc_refs.size(); ++i)
+                if (fds[proc_base + i].revents)
+                    supervisor_.on_fd(proc_refs[i]);
+        }
+        supervisor_.tick();
+        double now = os_.monotonic();
+        for (auto it = conns_.begin(); it != conns_.end();) {
+            Connection &c = *it->second;
+            if (!c.dead && c.phase == Connection::Phase::handshake && now >= c.deadline)
+                refuse(c, 0, Err::not_authenticated, "no handshake within the time limit");
+            else if (!c.dead && c.phase == Connection::Phase::closing && now >= c.deadline)
+                drop(c, nullptr);
+            if (!c.dead)
+                flush(c);
+            if (c.dead)
+                it = conns_.erase(it);
+            else
+                ++it;
+        }
+    }
+    for (auto &entry : conns_) // best effort: the last events
+        flush(*entry.second);
+    logf("every process has exited; daemon ends");
+    return 0;
+}
+
+} // namespace lnd

@@ -1,0 +1,73 @@
+// The daemon's poll loop and its TCP side: accepting connections, the authentication
+// handshake, framing with per-frame tags, dispatching commands to the Supervisor, and
+// turning the Supervisor's news into replies and events.  A connection that misbehaves is
+// closed with one log line; nothing it sends can affect another connection or a process.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+#include "auth.hpp"
+#include "fd.hpp"
+#include "process.hpp"
+#include "protocol.hpp"
+#include "supervisor.hpp"
+
+namespace lnd {
+
+constexpr size_t kMaxConnections = 256;
+constexpr size_t kMaxQueuedBytes = 64u << 20; // a connection that falls further behind is closed
+constexpr double kHandshakeTimeout = 10.0;
+constexpr double kLingerTimeout = 2.0; // after a final error, for the peer to read it
+
+struct Connection;
+
+class Server final : public Sink {
+public:
+    // `listener` is a bound, listening, non-blocking socket; `signals` a signalfd for
+    // SIGCHLD, SIGTERM, SIGINT and SIGHUP.  `log_path` is reopened on SIGHUP.
+    Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path);
+    ~Server() override;
+    // Runs until SIGTERM/SIGINT has stopped every process; returns the exit status.
+    int run();
+
+    void spawn_result(const Process &p, bool ok, proto::Err code,
+                      const std::string &error) override;
+    void line(const Process &p, const Line &line) override;
+    void state_changed(const Process &p) override;
+    void exited(const Process &p) override;
+
+private:
+    void accept_all();
+    void read_signals();
+    void on_readable(Connection &c);
+    void parse_frames(Connection &c);
+    void handle_hello(Connection &c, uint8_t type, proto::Reader &r);
+    void handle_request(Connection &c, uint8_t type, uint32_t req, proto::Reader &r);
+    void flush(Connection &c);
+    void send(Connection &c, proto::Msg type, uint32_t req, const std::string &payload);
+    void send_error(Connection &c, uint32_t req, proto::Err code, const std::string &text);
+    // Sends a last error, then closes the connection once the peer had a chance to read it.
+    void refuse(Connection &c, uint32_t req, proto::Err code, const std::string &text);
+    void drop(Connection &c, const char *why);
+    void broadcast(const std::string &instance, proto::Msg type, const std::string &payload);
+    void begin_shutdown();
+
+    Os &os_;
+    Key key_;
+    UniqueFd listener_;
+    UniqueFd signals_;
+    std::string log_path_;
+    Supervisor supervisor_;
+    std::map<uint64_t, std::unique_ptr<Connection>> conns_;
+    uint64_t next_conn_ = 1;
+    uint64_t next_token_ = 1;
+    std::unordered_map<uint64_t, std::pair<uint64_t, uint32_t>> pending_; // token -> conn, req
+    int shutdown_signals_ = 0;
+};
+
+} // namespace lnd

@@ -1,0 +1,66 @@
+// A SPAWN request as it arrives (SpawnRequest) and its checking into what the OS layer and
+// the process record need; every refusal is a sentence naming the offending field.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "os.hpp"
+
+namespace lnd {
+
+struct RlimitRequest {
+    std::string name;
+    int64_t soft; // -1: unlimited
+    int64_t hard;
+};
+
+struct SpawnRequest {
+    std::string name;
+    bool shell = false;
+    bool use_pty = true;
+    std::vector<std::string> argv; // shell: exactly one element, the command line
+    std::vector<std::string> env;
+    std::string cwd; // empty: "/"
+    std::vector<RlimitRequest> rlimits;
+    std::string policy = "SCHED_OTHER";
+    int32_t priority = 0;
+    std::vector<uint32_t> affinity;
+    uint32_t max_output_lines = 1000;
+    std::string log_path; // empty: no log file
+    uint64_t log_limit = 0;
+    uint32_t log_keep = 0;
+    int32_t term_signal = 15;
+    double term_timeout = 5.0;
+};
+
+// What the process record keeps besides the launch itself.
+struct ProcessConfig {
+    std::string instance;
+    std::string name;
+    uint32_t max_output_lines = 1000;
+    std::string log_path;
+    uint64_t log_limit = 0;
+    uint32_t log_keep = 0;
+    int term_signal = 15;
+    double term_timeout = 5.0;
+};
+
+constexpr uint32_t kMaxOutputLines = 1000000;
+constexpr uint32_t kMaxLogKeep = 1000;
+
+// True if `s` is a valid instance or process name: 1..255 bytes, no control characters.
+bool valid_name(const std::string &s) noexcept;
+
+// Checks `req`; false and a sentence in `error` if anything is refused.
+bool check_spawn(const SpawnRequest &req, LaunchSpec &launch, ProcessConfig &config,
+                 std::string &error);
+
+// The sentence for a failed child setup, e.g. "command not found: foo".
+std::string describe_failure(const LaunchSpec &spec, int32_t stage, int32_t index, int32_t err);
+
+// "SCHED_FIFO" for SCHED_FIFO and so on.
+const char *policy_name(int policy) noexcept;
+
+} // namespace lnd

@@ -1,0 +1,69 @@
+// All supervised processes of the daemon, namespaced by instance: the commands of the
+// protocol (spawn, stop, signal, list, output, forget), reaping, timers and the descriptors
+// the poll loop watches.  Owns the Process records; knows nothing about connections.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <poll.h>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "os.hpp"
+#include "process.hpp"
+#include "spec.hpp"
+
+namespace lnd {
+
+constexpr size_t kMaxProcesses = 4096; // records, exited ones included
+
+class Supervisor {
+public:
+    Supervisor(Os &os, Sink &sink) : os_(os), sink_(sink) {}
+
+    // Starts a process.  false: refused at once (code, error).  true: Sink::spawn_result
+    // with `token` follows once the keeper has reported.
+    bool spawn(const std::string &instance, const SpawnRequest &req, uint64_t token,
+               proto::Err &code, std::string &error);
+    // nullptr (code, error) if the instance has no process of that name.
+    Process *find(const std::string &instance, const std::string &name, proto::Err &code,
+                  std::string &error);
+    std::vector<const Process *> list(const std::string &instance) const;
+    // The record whose keeper is `keeper`, in any state (nullptr if none).
+    Process *find_keeper(pid_t keeper) noexcept;
+    bool forget(const std::string &instance, const std::string &name, proto::Err &code,
+                std::string &error);
+
+    void reap();  // after SIGCHLD: every exited child
+    void tick();  // every poll round
+    double next_deadline() const noexcept;
+
+    struct FdRef {
+        uint64_t id;
+        Process::Fd which;
+    };
+    void collect_fds(std::vector<pollfd> &fds, std::vector<FdRef> &refs) const;
+    void on_fd(const FdRef &ref);
+
+    void stop_all(); // daemon shutdown: STOP for every running process
+    void kill_all(); // second shutdown signal: SIGKILL now
+    size_t alive() const noexcept; // records that have not exited
+    size_t size() const noexcept { return procs_.size(); }
+
+private:
+    using Key = std::pair<std::string, std::string>; // instance, name
+    void erase(Process *p);
+    void erase_if_failed(Process *p);
+
+    Os &os_;
+    Sink &sink_;
+    uint64_t next_id_ = 1;
+    std::map<Key, std::unique_ptr<Process>> procs_;
+    std::unordered_map<uint64_t, Process *> by_id_;
+    std::unordered_map<pid_t, Process *> by_keeper_;
+};
+
+} // namespace lnd
