@@ -414,6 +414,9 @@ class Scheduler:
         # A record of an earlier run of this name would answer SPAWN with "exists".
         with contextlib.suppress(self.backend.error_type):
             await link.forget(cfg.name)
+        # Reset before the spawn, not after: the new run's first output can be handled
+        # before this task resumes with the daemon's answer.
+        rt.regex_seen = False
         spawning = asyncio.ensure_future(link.spawn(spec))
         try:
             info = await asyncio.shield(spawning)
@@ -429,7 +432,6 @@ class Scheduler:
         rt.pid = info.pid
         rt.started_at = time.time()
         rt.exit_code = rt.exit_signal = None
-        rt.regex_seen = False
         if rt.state != S.STARTING:  # stopped (or exited) while the spawn was on its way
             return
         if not cfg.has_readiness:

@@ -16,7 +16,7 @@ from links_and_nodes.manager.config import model
 from links_and_nodes.manager.process_states import ProcState as S
 from links_and_nodes.manager.scheduler import Scheduler, StartError
 
-from .fake_daemon import FakeDaemon, FakeRegistry, backend
+from .fake_daemon import FakeDaemon, FakeRegistry, Info, Spec, backend
 
 LIMIT = 60.0
 HERE = model.Location("test.lnc", 1, 1)
@@ -36,8 +36,8 @@ def config(*procs: model.Process, states: tuple[model.State, ...] = (),
 
 
 class World:
-    def __init__(self, cfg: model.Config) -> None:
-        self.daemon = FakeDaemon()
+    def __init__(self, cfg: model.Config, daemon: FakeDaemon | None = None) -> None:
+        self.daemon = daemon or FakeDaemon()
         self.registry = FakeRegistry()
         self.sched = Scheduler(cfg, self.registry, backend(self.daemon),
                                manager_address="127.0.0.1:1")
@@ -109,6 +109,31 @@ async def test_ready_regex_gates_dependents(world_factory: list[World],
     await w.sched.wait_ready("all", LIMIT)
     assert w.daemon.spawned == ["sensor", "ctrl"]
     assert "READY" in w.sched.procs["sensor"].reason
+
+
+class OutputFirstDaemon(FakeDaemon):
+    """Answers SPAWN only after the scheduler took the new process's first output line off
+    the event queue: the order a busy manager can see with the real daemon."""
+
+    async def spawn(self, spec: Spec) -> Info:
+        info = await super().spawn(spec)
+        p = self.procs[spec.name]
+        async with asyncio.timeout(LIMIT):
+            while not p.lines or not self.queue.empty():
+                await asyncio.sleep(0.005)
+        await asyncio.sleep(0)  # the pump handles the line it took
+        return info
+
+
+async def test_ready_line_before_spawn_answer_counts(world_factory: list[World]) -> None:
+    say_ready = "sh -c 'echo ready; exec sleep 60'"
+    w = World(config(proc("a", say_ready, ready_regex="^ready"),
+                     proc("b", say_ready, ready_regex="^ready", depends_on=["a"])),
+              OutputFirstDaemon())
+    world_factory.append(w)
+    w.sched.start("all")
+    await w.sched.wait_ready("all", 10)
+    assert w.daemon.spawned == ["a", "b"]
 
 
 async def test_ready_on_topic_and_service(world_factory: list[World]) -> None:
