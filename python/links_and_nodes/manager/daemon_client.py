@@ -244,11 +244,11 @@ async def _probe(host: str, port: int, timeout: float) -> bool:
     something else does."""
     try:
         reader, writer = await asyncio.wait_for(asyncio.open_connection(host, port), timeout)
-    except (OSError, asyncio.TimeoutError):
+    except (TimeoutError, OSError):
         return False
     try:
         head = await asyncio.wait_for(reader.readexactly(4 + 5 + len(MAGIC)), timeout)
-    except (OSError, asyncio.IncompleteReadError, asyncio.TimeoutError):
+    except (TimeoutError, OSError, asyncio.IncompleteReadError):
         head = b""
     finally:
         writer.close()
@@ -281,7 +281,7 @@ async def ensure_local_daemon(port: int, key_file: Path, log_file: Path | None =
         raise DaemonError(f"cannot run {args[0]}: {e.strerror}") from e
     try:
         _, err = await asyncio.wait_for(proc.communicate(), max(0.1, deadline - loop.time()))
-    except asyncio.TimeoutError:
+    except TimeoutError:
         proc.kill()
         await proc.wait()
         raise DaemonError(f"ln_daemon did not start within {timeout} s") from None
@@ -557,9 +557,9 @@ class DaemonClient:
             raise DaemonConnectionError(self._closed)
         req = self._next_req
         self._next_req = self._next_req % 0xFFFFFFFF + 1
+        self._send(mtype, req, payload)  # raises before anything is sent if too large
         future: asyncio.Future[tuple[int, bytes]] = asyncio.get_running_loop().create_future()
         self._pending[req] = future
-        self._send(mtype, req, payload)
         with contextlib.suppress(ConnectionError):
             await self._writer.drain()  # a lost connection shows in the reader
         rtype, rpayload = await future
