@@ -8,13 +8,14 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import os
+import selectors
 import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-from daemonproc import REPO, Daemon, alive, descendants, exited, line, spec, wait_for
+from daemonproc import REPO, WAIT, Daemon, alive, descendants, exited, line, spec, wait_for
 
 from links_and_nodes.manager import daemon_client as dc
 
@@ -31,11 +32,11 @@ async def main():
     await client.spawn(dc.SpawnSpec(
         "short", f"echo short-start; while [ ! -e {gate} ]; do sleep 0.02; done; "
                  "echo short-end; exit 3", True, env))
-    for name in ("long", "short"):
-        while True:
-            ev = await client.events().get()
-            if getattr(ev, "name", None) == name and getattr(ev, "text", "").endswith("start"):
-                break
+    started = set()
+    while started != {"long", "short"}:
+        ev = await client.events().get()
+        if getattr(ev, "text", "").endswith("-start"):
+            started.add(ev.name)
     print("ready", flush=True)
     await asyncio.sleep(600)
 asyncio.run(main())
@@ -91,6 +92,9 @@ def test_manager_killed_then_reattach(daemon: Daemon, tmp_path: Path) -> None:
                                     "PATH": "/usr/bin:/bin"})
     daemon.extra.append(manager)  # type: ignore[arg-type]
     assert manager.stdout is not None
+    with selectors.DefaultSelector() as sel:
+        sel.register(manager.stdout, selectors.EVENT_READ)
+        assert sel.select(WAIT), "the manager script did not get ready"
     assert manager.stdout.readline().strip() == "ready"
     manager.kill()
     manager.wait()

@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import os
 import pwd
+import resource
 import shutil
 import sys
 import tempfile
@@ -51,6 +52,11 @@ def test_resource_limits(daemon: Daemon) -> None:
              rlimits=[("nofile", 64, 128), ("RLIMIT_CORE", None, None)])
     lines, _ = output_of(daemon, s)
     assert lines == ["64", "128", "unlimited", "unlimited"]
+    # Without a limit given, a process gets the descriptor limit the daemon started with
+    # (the daemon raises its own).
+    soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
+    lines, _ = output_of(daemon, spec("default", "ulimit -Sn"))
+    assert lines == ["unlimited" if soft == resource.RLIM_INFINITY else str(soft)]
 
 
 def test_cpu_affinity(daemon: Daemon) -> None:

@@ -100,6 +100,13 @@ def test_key_file_helpers(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
     assert dc.default_key_file() == path
     monkeypatch.delenv("LN_DAEMON_KEY_FILE")
     assert dc.default_key_file() == Path.home() / ".config/links_and_nodes/daemon.key"
+    monkeypatch.setenv("LN_ARBITER_PORT", "60001")
+    assert dc.default_port() == 60001
+    monkeypatch.setenv("LN_ARBITER_PORT", "nope")
+    with pytest.raises(dc.DaemonError):
+        dc.default_port()
+    monkeypatch.delenv("LN_ARBITER_PORT")
+    assert dc.default_port() == 54376
     monkeypatch.setenv("LN_DAEMON", "/opt/ln/bin/ln_daemon")
     assert dc.daemon_executable() == "/opt/ln/bin/ln_daemon"
     monkeypatch.delenv("LN_DAEMON")
