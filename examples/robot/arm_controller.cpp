@@ -24,6 +24,7 @@ constexpr double pi = 3.14159265358979323846;
 constexpr double kp_max = 1000.0;  // Nm/rad
 constexpr double kd_max = 50.0;    // Nm s/rad
 constexpr std::uint8_t mode_torque = 3;
+constexpr double write_timeout = 0.0002;  // s, a fifth of the sensor's period
 
 volatile std::sig_atomic_t stop_signal = 0;
 
@@ -46,6 +47,20 @@ void target(double t, double q[joints], double qd[joints])
         double omega = 2.0 * pi * 0.2 * (1.0 + j / 7.0);  // rad/s
         q[j] = amplitude * std::sin(omega * t);
         qd[j] = amplitude * omega * std::cos(omega * t);
+    }
+}
+
+// Publishes msg unless the ring stays locked for longer than `timeout` (it is, for a moment,
+// while the manager grows it for a new subscriber): then the sample is dropped, false.
+template <typename T> bool publish(ln::outport<T>& port, const T& msg, double timeout)
+{
+    try {
+        port.write(msg, timeout);
+        return true;
+    } catch (const ln::error& e) {
+        if (e.code() == LN_ETIMEOUT || e.code() == LN_EAGAIN)
+            return false;
+        throw;
     }
 }
 
@@ -116,7 +131,7 @@ int main(int argc, char** argv)
         robot::command_t command{};
         robot::joint_state_t reference{};
         command.mode = mode_torque;
-        unsigned long cycles = 0, cycles_in_second = 0, skipped = 0;
+        unsigned long cycles = 0, cycles_in_second = 0, skipped = 0, dropped = 0;
         std::uint32_t last_cycle = 0;
         double next_status = 1.0;
         while (!stop_signal) {
@@ -135,18 +150,21 @@ int main(int argc, char** argv)
                 command.timestamp = t;
                 reference.timestamp = t;
                 reference.cycle = state.cycle;
-                command_out.write(command, 0.0);
-                reference_out.write(reference, 0.0);
+                dropped += !publish(command_out, command, write_timeout);
+                dropped += !publish(reference_out, reference, write_timeout);
                 if (last_cycle != 0 && state.cycle > last_cycle + 1)
                     skipped += state.cycle - last_cycle - 1;  // latest mode: we fell behind
                 last_cycle = state.cycle;
                 cycles++;
                 cycles_in_second++;
                 if (t >= next_status) {
+                    std::string extra;
+                    if (dropped > 0)
+                        extra = ", " + std::to_string(dropped) + " samples dropped";
                     std::printf("t=%.0f s: %lu cycles in the last second, %lu "
-                                "skipped in all, gains '%s' (kp[0] %g, kd[0] %g)\n",
-                                t, cycles_in_second, skipped, active.profile.c_str(),
-                                active.kp[0], active.kd[0]);
+                                "skipped in all%s, gains '%s' (kp[0] %g, kd[0] %g)\n",
+                                t, cycles_in_second, skipped, extra.c_str(),
+                                active.profile.c_str(), active.kp[0], active.kd[0]);
                     std::fflush(stdout);
                     cycles_in_second = 0;
                     next_status = std::floor(t) + 1.0;
@@ -160,10 +178,10 @@ int main(int argc, char** argv)
                     throw;
             }
         }
-        std::printf("stopped by %s after %lu cycles (%lu skipped); %lu gain settings "
-                    "accepted, %lu refused\n",
-                    stop_signal == SIGINT ? "SIGINT" : "SIGTERM", cycles, skipped, accepted,
-                    refused);
+        std::printf("stopped by %s after %lu cycles (%lu skipped, %lu samples dropped); %lu "
+                    "gain settings accepted, %lu refused\n",
+                    stop_signal == SIGINT ? "SIGINT" : "SIGTERM", cycles, skipped, dropped,
+                    accepted, refused);
     } catch (const ln::error& e) {
         std::fprintf(stderr, "arm_controller: %s\n", e.what());
         return 1;

@@ -90,7 +90,18 @@ def main() -> int:
     reference = clnt.subscribe("arm.reference", "robot/joint_state", buffers=BUFFERS)
     gains = clnt.get_service("arm.set_gains", "robot/set_gains")
     profile = "soft"
-    set_gains(gains, profile)
+    # Under robot.lnc the controller is ready before we start; by hand it may not be yet.
+    deadline = time.monotonic() + 10.0
+    while True:
+        try:
+            set_gains(gains, profile)
+            break
+        except ln.LnError as exc:
+            if time.monotonic() > deadline or stop_signal is not None:
+                print(f"supervisor: cannot call arm.set_gains: {exc}", file=sys.stderr)
+                clnt.close()
+                return 1
+            time.sleep(0.2)
     switched = False
 
     positions: dict[int, np.ndarray] = {}  # cycle -> measured position, not yet matched

@@ -84,9 +84,30 @@ def test_sensor_controller_supervisor(manager: Manager) -> None:
                      rest, re.M), rest
     code, rest = stop(controller)
     assert code == 0, rest
-    assert re.search(r"^stopped by SIGTERM after \d+ cycles \(\d+ skipped\); "
+    assert re.search(r"^stopped by SIGTERM after \d+ cycles \(\d+ skipped, \d+ samples "
+                     r"dropped\); "
                      r"2 gain settings accepted, 1 refused$", rest, re.M), rest
     code, rest = stop(sensor)
     assert code == 0, rest
-    assert re.search(r"^stopped by SIGTERM after \d+ commands, \d+ late cycles$", rest, re.M), \
-        rest
+    assert re.search(r"^stopped by SIGTERM after \d+ commands, \d+ late cycles, \d+ samples "
+                     r"dropped$", rest, re.M), rest
+
+
+def test_sensor_drops_samples_while_its_ring_is_locked(manager: Manager) -> None:
+    """A ring locked for longer than the sensor's write timeout (here another publisher inside
+    a zero-copy loan; in the demo the manager growing the ring for a new subscriber) costs
+    samples, never the sensor: it keeps its rate, counts them and exits 0 on SIGTERM."""
+    sensor = spawn(manager, str(BIN / "arm_sensor"))
+    lines_until(sensor, re.compile("^publishing arm.state at 1000 Hz"))
+    with manager.client("hog") as clnt:
+        port = clnt.publish("arm.state", "robot/joint_state")
+        for _ in range(2):
+            with port.loan():
+                time.sleep(0.05)  # 50 cycles of the sensor
+        port.close()
+    report = lines_until(sensor, re.compile(r"^t=\d+ s, cycle \d+: .* samples dropped"))
+    assert sensor.poll() is None, report
+    code, rest = stop(sensor)
+    assert code == 0, rest
+    dropped = re.search(r"(\d+) samples dropped$", rest, re.M)
+    assert dropped is not None and int(dropped[1]) >= 10, rest
