@@ -82,7 +82,8 @@ bool load_key_file(const std::string &path, Key &key, std::string &error)
     for (size_t i = 0; valid && i < Key::kBytes; ++i) {
         int hi = hex_value(text[2 * i]), lo = hex_value(text[2 * i + 1]);
         valid = hi >= 0 && lo >= 0;
-        key.bytes[i] = static_cast<uint8_t>(hi << 4 | lo);
+        if (valid)
+            key.bytes[i] = static_cast<uint8_t>(hi << 4 | lo);
     }
     sodium_memzero(text, sizeof text);
     if (!valid) {
