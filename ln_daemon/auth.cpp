@@ -87,6 +87,7 @@ bool load_key_file(const std::string &path, Key &key, std::string &error)
     }
     sodium_memzero(text, sizeof text);
     if (!valid) {
+        sodium_memzero(key.bytes, Key::kBytes);
         error = "key file '" + path + "' holds no valid key: it must contain exactly 64 "
                 "hex digits (32 bytes), optionally followed by a newline";
         return false;

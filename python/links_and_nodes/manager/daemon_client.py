@@ -557,9 +557,9 @@ class DaemonClient:
             raise DaemonConnectionError(self._closed)
         req = self._next_req
         self._next_req = self._next_req % 0xFFFFFFFF + 1
+        self._send(mtype, req, payload)  # raises before anything is sent if too large
         future: asyncio.Future[tuple[int, bytes]] = asyncio.get_running_loop().create_future()
         self._pending[req] = future
-        self._send(mtype, req, payload)
         with contextlib.suppress(ConnectionError):
             await self._writer.drain()  # a lost connection shows in the reader
         rtype, rpayload = await future
