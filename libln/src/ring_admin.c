@@ -120,6 +120,17 @@ int ln_ring_admin_set_counts(ln_ring_admin* a, uint32_t publishers, uint32_t sub
     return LN_OK;
 }
 
+int ln_ring_admin_write_seq(ln_ring_admin* a, uint64_t* seq)
+{
+    int rc = check(a);
+    if (rc != LN_OK)
+        return rc;
+    if (seq == NULL)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_admin_write_seq: seq is NULL");
+    *seq = atomic_load_explicit(&a->hdr->write_seq, memory_order_acquire);
+    return LN_OK;
+}
+
 int ln_ring_admin_reserve_reader(ln_ring_admin* a, uint32_t index, int32_t pid, uint32_t buffers)
 {
     int rc = check(a);

@@ -85,6 +85,8 @@ ln_ring_admin_unlink = _declare("ln_ring_admin_unlink", ctypes.c_int, [ctypes.c_
                                 _check)
 ln_ring_admin_set_counts = _declare("ln_ring_admin_set_counts", ctypes.c_int, [
     RingAdminHandle, ctypes.c_uint32, ctypes.c_uint32], _check)
+ln_ring_admin_write_seq = _declare("ln_ring_admin_write_seq", ctypes.c_int, [
+    RingAdminHandle, ctypes.POINTER(ctypes.c_uint64)], _check)
 ln_ring_admin_reserve_reader = _declare("ln_ring_admin_reserve_reader", ctypes.c_int, [
     RingAdminHandle, ctypes.c_uint32, ctypes.c_int32, ctypes.c_uint32], _check)
 ln_ring_admin_release_reader = _declare("ln_ring_admin_release_reader", ctypes.c_int, [

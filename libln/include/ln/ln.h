@@ -307,6 +307,9 @@ LN_EXPORT void ln_ring_admin_close(ln_ring_admin* admin);
 LN_EXPORT int ln_ring_admin_unlink(const char* shm_name);
 LN_EXPORT int ln_ring_admin_set_counts(ln_ring_admin* admin, uint32_t publishers,
                                        uint32_t subscribers);
+/* Sequence number of the newest sample published into the ring (0: none yet); it carries
+ * over to successors, so it counts the topic's samples.  The manager's rate watchdog. */
+LN_EXPORT int ln_ring_admin_write_seq(ln_ring_admin* admin, uint64_t* seq);
 /* Reserve reader slot `index` (0..63) for a subscriber process with `buffers`; release frees
  * it again (a dead subscriber stops holding back publishers that wait for subscribers). */
 LN_EXPORT int ln_ring_admin_reserve_reader(ln_ring_admin* admin, uint32_t index, int32_t pid,

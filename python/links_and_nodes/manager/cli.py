@@ -1,7 +1,9 @@
 """`ln_manager`: runs the manager of one instance.  Takes the instance lock, removes
 segments and service sockets a killed predecessor's clients left behind, serves clients
-until SIGTERM/SIGINT, then closes every connection and unlinks every segment of the
-instance."""
+until SIGTERM/SIGINT (or `quit`), then closes every connection and unlinks every segment
+of the instance.  With `-c FILE` it also runs the configuration's processes through the
+ln_daemons (scheduler.py) with a console on stdin; `ln_manager status|start|stop|...`
+talk to a running manager instead (remote_cli.py)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,9 @@ import logging
 import signal
 import sys
 from pathlib import Path
+from typing import Any
+
+from . import remote_cli
 
 from .registry import Limits, RequestError
 from .runtime import (
@@ -33,10 +38,33 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="ln_manager",
         description="Run the links_and_nodes manager of one instance: the registry of its "
-                    "clients, topics and their shared-memory segments.")
-    parser.add_argument("--port", type=int, required=True,
+                    "clients, topics and their shared-memory segments, and with -c the "
+                    "processes of a configuration file.  `ln_manager COMMAND --help` for "
+                    "the commands that talk to a running manager: "
+                    "status, start, stop, restart, output, wait-ready, quit, detach.")
+    parser.add_argument("-c", "--config", metavar="FILE",
+                        help="configuration (.lnc) whose processes this manager runs; its "
+                             "instance section gives --instance and --port")
+    parser.add_argument("-D", "--define", action="append", default=[], metavar="NAME=VALUE",
+                        help="a define for the configuration (repeatable)")
+    parser.add_argument("--start-all", action="store_true",
+                        help="start every process of the configuration")
+    parser.add_argument("--wait-ready", action="store_true",
+                        help="with --start-all: print 'all ready' once every process is "
+                             "ready")
+    parser.add_argument("--ready-timeout", type=float, default=None, metavar="SECONDS",
+                        help="with --wait-ready: give up after this long")
+    parser.add_argument("--exit-on-failure", action="store_true",
+                        help="stop everything and exit 1 if a process fails to start "
+                             "(or does not get ready within --ready-timeout)")
+    parser.add_argument("--no-console", action="store_true",
+                        help="do not read commands from stdin")
+    parser.add_argument("--daemon-key-file", type=Path, default=None, metavar="FILE",
+                        help="the ln_daemon key (default $LN_DAEMON_KEY_FILE or "
+                             "~/.config/links_and_nodes/daemon.key, created if missing)")
+    parser.add_argument("--port", type=int, default=None,
                         help="TCP port for clients; 0 picks a free one (printed when ready)")
-    parser.add_argument("--instance", required=True,
+    parser.add_argument("--instance", default=None,
                         help="instance name; one manager per instance and host")
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default 127.0.0.1; 0.0.0.0 or :: for "
@@ -54,6 +82,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    if args.instance is None or args.port is None:
+        parser.error("--port and --instance are required without -c FILE")
     size = len(args.instance.encode("utf-8"))
     if not 1 <= size <= MAX_INSTANCE or not args.instance.isprintable():
         parser.error(f"--instance must be 1..{MAX_INSTANCE} bytes of printable characters")
@@ -71,7 +101,7 @@ def _address(host: str, port: int) -> str:
     return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
-async def _serve(args: argparse.Namespace, directory: Path) -> int:
+async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) -> int:
     # libln is loaded only here, so --help and argument errors work without it.
     from .core import Core
     from .registry import Registry
@@ -109,23 +139,85 @@ async def _serve(args: argparse.Namespace, directory: Path) -> int:
     server = Server(core)
     await server.start(sock)
     stop = asyncio.Event()
+    stop_processes = [True]  # False: leave them running (detach)
+
+    def shutdown(processes: bool) -> None:
+        stop_processes[0] = processes
+        stop.set()
+
     loop = asyncio.get_running_loop()
     for signum in (signal.SIGTERM, signal.SIGINT):
-        loop.add_signal_handler(signum, stop.set)
+        loop.add_signal_handler(signum, shutdown, True)
+    runner = None
+    status = 0
+    if config is not None:
+        from .runner import Runner
+
+        connect_host = "127.0.0.1" if args.host in ("0.0.0.0", "::", "") else args.host
+        runner = Runner(args, config, core, directory, _address(connect_host, port), shutdown)
+        server.control = runner.control.handle_json
+        await runner.attach()
     print(f"ln_manager: instance {args.instance} listening on {_address(args.host, port)}",
           flush=True)
-    await stop.wait()
+    if runner is not None:
+        status = await runner.begin()
+    else:
+        from .control import Control
+
+        server.control = Control(core, None, shutdown=shutdown).handle_json
+    if status == 0:
+        await stop.wait()
+    if runner is not None:
+        await runner.end(stop_processes[0])
+        status = max(status, runner.exit_status)
     log.info("shutting down: closing %d client%s", len(core.registry.clients),
              "" if len(core.registry.clients) == 1 else "s")
     await server.close()
     removed = core.shutdown()
     log.info("removed %d segment%s, exiting", removed, "" if removed == 1 else "s")
-    return 0
+    return status
+
+
+def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
+    """Read -c FILE (exit 2 with every error on failure) and fill --instance/--port/--host
+    from its instance section where the command line did not give them."""
+    from .config import ConfigError, load
+
+    defines = {}
+    for item in args.define:
+        name, eq, value = item.partition("=")
+        if not eq or not name:
+            parser.error(f"-D {item!r}: expected NAME=VALUE")
+        defines[name] = value
+    try:
+        config = load(args.config, defines=defines)
+    except ConfigError as exc:
+        print(str(exc), file=sys.stderr)
+        print(f"ln_manager: {args.config}: configuration has errors, nothing started",
+              file=sys.stderr)
+        sys.exit(2)
+    except OSError as exc:
+        parser.error(f"cannot read {args.config}: {exc.strerror or exc}")
+    if args.instance is None:
+        args.instance = config.instance.name
+    host, _, port = config.instance.manager.rpartition(":")
+    if args.port is None:
+        if not port.isdigit():
+            parser.error(f"{config.instance.location}: manager {config.instance.manager!r} "
+                         "has no port")
+        args.port = int(port)
+    if host.strip("[]") and args.host == "127.0.0.1":
+        args.host = host.strip("[]")
+    return config
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] in remote_cli.COMMANDS:
+        return remote_cli.main(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
+    config = _load_config(parser, args) if args.config else None
     _check_args(parser, args)
     logging.basicConfig(stream=sys.stderr, level=args.log_level.upper(),
                         format="%(asctime)s ln_manager %(levelname)s: %(message)s")
@@ -142,7 +234,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"ln_manager: error: {exc}", file=sys.stderr)
         return 1
     try:
-        return asyncio.run(_serve(args, directory))
+        return asyncio.run(_serve(args, directory, config))
     finally:
         lock.release()
 

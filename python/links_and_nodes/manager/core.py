@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from collections.abc import Callable
 from typing import Any
 
 from .. import _libln
@@ -63,6 +64,26 @@ class Core:
         self.registry = registry
         self.segments = segments
         self.service_registry = services if services is not None else Services()
+        # Called after every change of clients, ports or services (the scheduler's readiness
+        # and watchdog checks wait on them instead of polling).
+        self.listeners: list[Callable[[], None]] = []
+
+    def _changed(self) -> None:
+        for listener in list(self.listeners):
+            listener()
+
+    def topic_publishers(self, name: str) -> int:
+        """Publishers of topic `name` now (0 if there is no such topic)."""
+        topic = self.registry.topics.get(name)
+        return topic.publishers if topic is not None else 0
+
+    def topic_published(self, name: str) -> int:
+        """Samples topic `name` has had (0 if there is no such topic)."""
+        topic = self.registry.topics.get(name)
+        return self.segments.published(topic.id) if topic is not None else 0
+
+    def service_provided(self, name: str) -> bool:
+        return name in self.service_registry.by_name
 
     # ---- handshake ----------------------------------------------------------------------
     def check_version(self, version: int) -> None:
@@ -88,6 +109,12 @@ class Core:
     # ---- requests -----------------------------------------------------------------------
     def request(self, session: Session, msg: p.Message) -> p.Message:
         """The reply to one request of a registered client; refusals become ERROR."""
+        try:
+            return self._request(session, msg)
+        finally:
+            self._changed()
+
+    def _request(self, session: Session, msg: p.Message) -> p.Message:
         assert session.client is not None
         request_id = msg.request_id  # type: ignore[attr-defined]
         try:
@@ -132,6 +159,7 @@ class Core:
         for port in ports:
             self._close_port(port)
         self.registry.remove_client(client)
+        self._changed()
         return len(ports)
 
     def shutdown(self) -> int:

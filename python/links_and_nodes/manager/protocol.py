@@ -41,10 +41,13 @@ class MsgType(IntEnum):
     SERVICE_CALLED = 24
     LIST_SERVICES = 25
     SERVICE_LIST = 26
+    CONTROL = 30
+    CONTROL_RESULT = 31
 
 
-# Field kinds: struct format of the fixed-width ones; "str" is u16 length + UTF-8; a
-# Record subclass is a list of such records: u32 count, then that many records.
+# Field kinds: struct format of the fixed-width ones; "str" is u16 length + UTF-8 (at most
+# MAX_STR bytes); "text" is u32 length + UTF-8 (as long as the frame allows); a Record
+# subclass is a list of such records: u32 count, then that many records.
 _FIXED = {"u16": "<H", "u32": "<I", "u64": "<Q", "i32": "<i"}
 _RANGES = {"u16": (0, 0xFFFF), "u32": (0, 0xFFFFFFFF), "u64": (0, (1 << 64) - 1),
            "i32": (-(1 << 31), (1 << 31) - 1)}
@@ -287,11 +290,34 @@ class ServiceList(Message):
     FROM_CLIENT = False
 
 
+@dataclass(frozen=True)
+class Control(Message):
+    """A command for the process scheduler, as a JSON object (docs/process_management.md,
+    "Control requests")."""
+
+    request_id: int
+    command: str
+    TYPE = MsgType.CONTROL
+    FIELDS = (("request_id", "u32"), ("command", "text"))
+    FROM_CLIENT = True
+
+
+@dataclass(frozen=True)
+class ControlResult(Message):
+    """The JSON answer to a CONTROL: {"ok": true, ...} or {"ok": false, "error": TEXT}."""
+
+    request_id: int
+    result: str
+    TYPE = MsgType.CONTROL_RESULT
+    FIELDS = (("request_id", "u32"), ("result", "text"))
+    FROM_CLIENT = False
+
+
 MESSAGES: dict[int, type[Message]] = {
     cls.TYPE: cls for cls in (Hello, Welcome, Error, Publish, Subscribe, PortOk, ClosePort,
                               Ok, TopicInfo, TopicInfoOk, RegisterService, UnregisterService,
                               FindService, ServiceInfo, ServiceCalled, ListServices,
-                              ServiceList)}
+                              ServiceList, Control, ControlResult)}
 
 
 def frame_length(header: bytes) -> int:
@@ -325,6 +351,11 @@ def _encode_fields(record: Record, where: str) -> list[bytes]:
             if len(raw) > MAX_STR:
                 raise ValueError(f"{field}: {len(raw)} bytes, at most {MAX_STR}")
             parts += [struct.pack("<H", len(raw)), raw]
+        elif kind == "text":
+            if not isinstance(value, str):
+                raise ValueError(f"{field}: str expected, got {value!r}")
+            raw = value.encode("utf-8")
+            parts += [struct.pack("<I", len(raw)), raw]
         else:
             low, high = _RANGES[kind]
             if not isinstance(value, int) or not low <= value <= high:
@@ -406,6 +437,8 @@ class _Reader:
                                     for index in range(count)))
             elif kind == "str":
                 values.append(self.str(name))
+            elif kind == "text":
+                values.append(self.text(name))
             else:
                 (value,) = self.fixed(_FIXED[kind], name)
                 values.append(value)
@@ -424,6 +457,19 @@ class _Reader:
         (count,) = self.fixed("<H", f"the length of {name}")
         if count > MAX_STR:
             raise ProtocolError(f"{where}: str of {count} bytes, at most {MAX_STR}")
+        if self.offset + count > len(self.body):
+            raise self.too_short(f"{name} needs {count} bytes at offset {self.offset}")
+        raw = self.body[self.offset:self.offset + count]
+        self.offset += count
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ProtocolError(f"{where}: not valid UTF-8 (byte {exc.start})") from None
+
+
+    def text(self, name: str) -> str:
+        where = f"{self.type_name}.{name}"
+        (count,) = self.fixed("<I", f"the length of {name}")
         if self.offset + count > len(self.body):
             raise self.too_short(f"{name} needs {count} bytes at offset {self.offset}")
         raw = self.body[self.offset:self.offset + count]

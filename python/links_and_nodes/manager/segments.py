@@ -130,6 +130,16 @@ class Segments:
             raise _failure(f"topic {rings.topic!r}: setting port counts in {rings.current}",
                            exc) from None
 
+    def published(self, topic_id: int) -> int:
+        """How many samples the topic has had (its newest sequence number)."""
+        rings = self._rings[topic_id]
+        seq = ctypes.c_uint64(0)
+        try:
+            _libln.ln_ring_admin_write_seq(rings.admin, ctypes.byref(seq))
+        except LnError as exc:
+            raise _failure(f"topic {rings.topic!r}: reading its sequence number", exc) from None
+        return int(seq.value)
+
     def remove(self, topic_id: int) -> list[str]:
         """Unmap and unlink every generation of a topic's ring; the names unlinked."""
         rings = self._rings.pop(topic_id, None)

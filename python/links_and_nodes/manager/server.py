@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import socket
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from . import protocol as p
@@ -53,6 +54,8 @@ def _peer(writer: asyncio.StreamWriter) -> str:
 class Server:
     def __init__(self, core: Core) -> None:
         self.core = core
+        # Answers CONTROL requests (control.Control.handle_json); None: refused.
+        self.control: Callable[[str], Awaitable[str]] | None = None
         self._writers: set[asyncio.StreamWriter] = set()
         self._tasks: set[asyncio.Task[Any]] = set()
         self._server: asyncio.base_events.Server | None = None
@@ -130,9 +133,18 @@ class Server:
             msg = self._decode(type_, body)
             if msg.TYPE == p.MsgType.HELLO:
                 raise Closing("second HELLO on one connection")
+            if isinstance(msg, p.Control):
+                await self._send(writer, await self._control(msg))
+                continue
             if msg.TYPE not in _REQUESTS:
                 raise Closing(f"unexpected {msg.TYPE.name} frame from a client")
             await self._send(writer, self.core.request(session, msg))
+
+    async def _control(self, msg: p.Control) -> p.Message:
+        if self.control is None:
+            return p.ControlResult(msg.request_id, '{"ok": false, "error": "this manager '
+                                                   'takes no control commands"}')
+        return p.ControlResult(msg.request_id, await self.control(msg.command))
 
     @staticmethod
     async def _read(reader: asyncio.StreamReader) -> tuple[int, bytes] | None:

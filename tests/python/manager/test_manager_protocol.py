@@ -284,4 +284,19 @@ def test_direction_is_recorded() -> None:
     from_client = {cls.TYPE.name for cls in p.MESSAGES.values() if cls.FROM_CLIENT}
     assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "CLOSE_PORT", "TOPIC_INFO",
                            "REGISTER_SERVICE", "UNREGISTER_SERVICE", "FIND_SERVICE",
-                           "SERVICE_CALLED", "LIST_SERVICES"}
+                           "SERVICE_CALLED", "LIST_SERVICES", "CONTROL"}
+
+
+def test_control_text_field_round_trip() -> None:
+    """CONTROL carries its JSON as a u32-length text, longer than a str may be."""
+    command = '{"op": "status", "pad": "' + "x" * 5000 + '"}'
+    frame = p.encode(p.Control(7, command))
+    assert frame[4:6] == (30).to_bytes(2, "little")
+    assert frame[6:10] == (7).to_bytes(4, "little")
+    assert int.from_bytes(frame[10:14], "little") == len(command)
+    assert p.decode_frame(frame) == p.Control(7, command)
+    result = p.ControlResult(7, "{}")
+    assert p.decode_frame(p.encode(result)) == result
+    with pytest.raises(p.ProtocolError, match="too short"):
+        p.decode_frame(frame[:-1][:4] and (len(frame) - 5).to_bytes(4, "little")
+                       + frame[4:-1])

@@ -1,1 +1,71 @@
-"""Reading `.lnc` configuration files into the typed model of `model.py`."""
+"""Reading `.lnc` configuration files into the typed model of `model.py`.
+
+    config = load("robot.lnc", defines={"robot": "sim"})
+
+load() reads the file and everything it includes and returns a fully resolved Config,
+or raises ConfigError listing every problem of every file (`file:line:col: message`).
+The language is described in docs/configuration.md.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+from collections.abc import Mapping
+from pathlib import Path
+
+from ... import __version__
+from .errors import ConfigError, LineError, Problem, sort_problems
+from .expand import BUILTINS, Evaluator
+from .model import Config, Location
+from .parser import Parser
+from .resolve import build
+from .sections import DEFINE_NAME_RE
+from .text import Value
+from .values import parse_address
+
+__all__ = ["Config", "ConfigError", "Location", "Problem", "load", "parse_text"]
+
+
+def load(path: str | Path, *, defines: dict[str, str] | None = None,
+         env: Mapping[str, str] | None = None, manager: str | None = None) -> Config:
+    """Read the configuration in `path`.
+
+    `defines` are set before the first line and win over the files' own `defines`
+    lines; `env` is what `%(env NAME)` reads (default: os.environ); `manager` replaces
+    the instance's `manager` address.  Raises ConfigError with every problem found, or
+    ValueError for a bad `defines` name or `manager` address."""
+    file = str(path)
+    try:
+        with open(file, "rb") as f:
+            data = f.read()
+    except OSError as exc:
+        raise ConfigError([Problem(Location(file, 1, 1),
+                                   f"cannot read configuration: {exc.strerror}")]) from None
+    return parse_text(data, file, defines=defines, env=env, manager=manager)
+
+
+def parse_text(text: str | bytes, filename: str, *, defines: dict[str, str] | None = None,
+               env: Mapping[str, str] | None = None, manager: str | None = None) -> Config:
+    """Like load(), for text that claims to come from `filename` (includes and relative
+    paths are resolved against its directory)."""
+    fixed = dict(defines or {})
+    for name in fixed:
+        if not DEFINE_NAME_RE.match(name) or name in BUILTINS:
+            raise ValueError(f"bad define name {name!r}")
+    if manager is not None:
+        try:
+            parse_address(Value(manager, Location("<manager>", 0, 0)), "manager")
+        except LineError as exc:
+            raise ValueError(exc.problems[0].message) from None
+    evaluator = Evaluator(os.environ if env is None else env, fixed, socket.gethostname(),
+                          manager)
+    parser = Parser(evaluator, __version__)
+    data = text.encode("utf-8", "surrogatepass") if isinstance(text, str) else text
+    parser.read_main(filename, data)
+    config, problems = build(parser.drafts, evaluator.defines, manager, filename)
+    problems = parser.problems + problems
+    if problems or config is None:
+        raise ConfigError(sort_problems(problems, parser.drafts.files))
+    return config
+

@@ -66,6 +66,7 @@ class Instance:
     manager: str  # "HOST:PORT" or ":PORT"
     location: Location
     documentation: str = ""
+    webui_auth_file: str | None = None  # absolute path; LNM_WEBUI_AUTH_FILE overrides it
 
 
 @dataclass

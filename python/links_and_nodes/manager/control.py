@@ -1,0 +1,160 @@
+"""Control commands of a running manager: what the console, `ln_manager status|start|...`
+and the scripting API (links_and_nodes.manager.connect) ask for, as JSON objects in CONTROL
+frames.  One function per command; each returns a JSON-able dict (docs/process_management.md,
+"Control requests")."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from .core import Core
+from .scheduler import Scheduler, StartError
+
+log = logging.getLogger("ln_manager")
+
+MAX_OUTPUT_LINES = 10000
+
+
+class ControlError(Exception):
+    """A command that cannot be carried out; the text goes back as {"error": TEXT}."""
+
+
+class Control:
+    def __init__(self, core: Core, scheduler: Scheduler | None,
+                 reload: Callable[[], Awaitable[dict[str, Any]]] | None = None,
+                 shutdown: Callable[[bool], None] | None = None) -> None:
+        self.core = core
+        self.scheduler = scheduler
+        self._reload = reload
+        self._shutdown = shutdown
+        self.commands: dict[str, Callable[[dict[str, Any]], Awaitable[dict[str, Any]]]] = {
+            "status": self.status, "start": self.start, "stop": self.stop,
+            "restart": self.restart, "wait_ready": self.wait_ready, "output": self.output,
+            "history": self.history, "topics": self.topics, "services": self.services,
+            "reload": self.reload, "quit": self.quit, "detach": self.detach,
+        }
+
+    async def handle_json(self, text: str) -> str:
+        """One CONTROL request to its CONTROL_RESULT text."""
+        try:
+            command = json.loads(text)
+            if not isinstance(command, dict) or not isinstance(command.get("op"), str):
+                raise ControlError('a command is a JSON object with a string "op"')
+            result = await self.handle(command)
+        except json.JSONDecodeError as exc:
+            result = {"ok": False, "error": f"command is not JSON: {exc}"}
+        except ControlError as exc:
+            result = {"ok": False, "error": str(exc)}
+        return json.dumps(result)
+
+    async def handle(self, command: dict[str, Any]) -> dict[str, Any]:
+        op = command["op"]
+        func = self.commands.get(op)
+        if func is None:
+            raise ControlError(f"unknown command {op!r}; known: {', '.join(self.commands)}")
+        try:
+            result = await func(command)
+        except (KeyError, StartError) as exc:
+            raise ControlError(exc.args[0] if exc.args else str(exc)) from None
+        return {"ok": True, **result}
+
+    # ---- helpers -------------------------------------------------------------------------
+    def _sched(self) -> Scheduler:
+        if self.scheduler is None:
+            raise ControlError("this manager runs no configuration (start it with -c FILE)")
+        return self.scheduler
+
+    @staticmethod
+    def _target(command: dict[str, Any]) -> str:
+        target = command.get("target", "all")
+        if not isinstance(target, str) or not target:
+            raise ControlError('"target" must be a process, a group or "all"')
+        return target
+
+    @staticmethod
+    def _timeout(command: dict[str, Any]) -> float | None:
+        timeout = command.get("timeout")
+        if timeout is not None and (not isinstance(timeout, int | float) or timeout < 0):
+            raise ControlError('"timeout" must be a number of seconds >= 0 or null')
+        return timeout
+
+    # ---- commands ------------------------------------------------------------------------
+    async def status(self, command: dict[str, Any]) -> dict[str, Any]:
+        if self.scheduler is None:
+            return {"processes": [], "states": []}
+        states = [{"name": name, "up": st.up} for name, st in self.scheduler.states.items()]
+        return {"processes": self.scheduler.status(), "states": states}
+
+    async def start(self, command: dict[str, Any]) -> dict[str, Any]:
+        return {"processes": self._sched().start(self._target(command))}
+
+    async def stop(self, command: dict[str, Any]) -> dict[str, Any]:
+        return {"processes": await self._sched().stop(self._target(command),
+                                                      force=bool(command.get("force")))}
+
+    async def restart(self, command: dict[str, Any]) -> dict[str, Any]:
+        return {"processes": await self._sched().restart(self._target(command))}
+
+    async def wait_ready(self, command: dict[str, Any]) -> dict[str, Any]:
+        sched = self._sched()
+        target = self._target(command)
+        try:
+            await sched.wait_ready(target, self._timeout(command))
+        except TimeoutError:
+            waiting = [p["name"] + " (" + p["state"] + ")" for p in sched.status()
+                       if p["name"] in sched.targets(target)
+                       and p["state"] not in ("ready", "finished")]
+            raise ControlError(f"not ready in time: {', '.join(waiting)}") from None
+        return {}
+
+    async def output(self, command: dict[str, Any]) -> dict[str, Any]:
+        sched = self._sched()
+        name = command.get("name")
+        if name not in sched.procs:
+            raise ControlError(f"no process named {name!r}")
+        n = command.get("n", 100)
+        if not isinstance(n, int) or not 0 <= n <= MAX_OUTPUT_LINES:
+            raise ControlError(f'"n" must be 0..{MAX_OUTPUT_LINES}')
+        return {"lines": [{"time": line.time, "stream": line.stream, "text": line.text}
+                          for line in sched.output(name, n)]}
+
+    async def history(self, command: dict[str, Any]) -> dict[str, Any]:
+        sched = self._sched()
+        name = command.get("name")
+        if name not in sched.procs:
+            raise ControlError(f"no process named {name!r}")
+        return {"transitions": [{"time": t.time, "state": t.state.value, "reason": t.reason}
+                                for t in sched.history(name)]}
+
+    async def topics(self, command: dict[str, Any]) -> dict[str, Any]:
+        topics = []
+        for name, topic in sorted(self.core.registry.topics.items()):
+            topics.append({"name": name, "md_name": topic.md_name,
+                           "publishers": topic.publishers, "subscribers": topic.subscribers,
+                           "published": self.core.topic_published(name)})
+        return {"topics": topics}
+
+    async def services(self, command: dict[str, Any]) -> dict[str, Any]:
+        return {"services": self.core.services()}
+
+    async def reload(self, command: dict[str, Any]) -> dict[str, Any]:
+        if self._reload is None:
+            raise ControlError("this manager runs no configuration file to reload")
+        return await self._reload()
+
+    async def quit(self, command: dict[str, Any]) -> dict[str, Any]:
+        if self._shutdown is None:
+            raise ControlError("this manager cannot be shut down remotely")
+        asyncio.get_running_loop().call_soon(self._shutdown, True)
+        return {}
+
+    async def detach(self, command: dict[str, Any]) -> dict[str, Any]:
+        """Exit the manager, leaving every process running under its daemon."""
+        if self._shutdown is None:
+            raise ControlError("this manager cannot be shut down remotely")
+        asyncio.get_running_loop().call_soon(self._shutdown, False)
+        return {}

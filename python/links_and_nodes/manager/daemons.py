@@ -1,0 +1,91 @@
+"""The manager's connections to the ln_daemons of its hosts: which daemon a process's
+`node:` means, starting the local daemon when none runs, authenticating with the shared key
+and reconnecting after a daemon restart.  Gives the scheduler its Backend."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import os
+import socket
+from pathlib import Path
+
+from . import daemon_client as dc
+from .config import model
+from .scheduler import Backend
+
+log = logging.getLogger("ln_manager")
+
+LOCAL_NAMES = {"localhost", "127.0.0.1", "::1"}
+
+
+def arbiter_port() -> int:
+    text = os.environ.get("LN_ARBITER_PORT", "")
+    return int(text) if text.isdigit() else model.DEFAULT_ARBITER_PORT
+
+
+class DaemonPool:
+    def __init__(self, config: model.Config, instance: str, *, key_file: Path | None = None,
+                 log_dir: Path | None = None, start_local: bool = True) -> None:
+        self.config = config
+        self.instance = instance
+        self.key_file = key_file or dc.default_key_file()
+        self.log_dir = log_dir
+        self.start_local = start_local
+        self._clients: dict[tuple[str, int], dc.DaemonClient] = {}
+        self._lock = asyncio.Lock()
+        self._key: bytes | None = None
+
+    def is_local(self, node: str) -> bool:
+        host = self.config.node_map.get(node, node)
+        return host in LOCAL_NAMES or host == socket.gethostname()
+
+    def address(self, node: str) -> tuple[str, int]:
+        """Where the daemon of `node` listens: node_map, then the host's first interface
+        address (or its name), and its daemon_port (or LN_ARBITER_PORT / 54376)."""
+        host_name = self.config.node_map.get(node, node)
+        host = self.config.hosts.get(host_name)
+        port = (host.daemon_port if host and host.daemon_port else None) or arbiter_port()
+        if self.is_local(node):
+            return "127.0.0.1", port
+        if host and host.interfaces:
+            return next(iter(host.interfaces.values())), port
+        return host_name, port
+
+    def _read_key(self, create: bool) -> bytes:
+        if self._key is None:
+            if create and not self.key_file.exists():
+                log.info("creating daemon key file %s", self.key_file)
+                self._key = dc.create_key_file(self.key_file)
+            else:
+                self._key = dc.read_key_file(self.key_file)
+        return self._key
+
+    async def link(self, node: str) -> dc.DaemonClient:
+        host, port = self.address(node)
+        async with self._lock:
+            client = self._clients.get((host, port))
+            if client is not None and not client.closed:
+                return client
+            local = self.is_local(node)
+            key = self._read_key(create=local and self.start_local)
+            if local and self.start_local:
+                log_file = (self.log_dir / f"ln_daemon-{port}.log") if self.log_dir else None
+                await dc.ensure_local_daemon(port, self.key_file, log_file)
+            try:
+                client = await dc.DaemonClient.connect(host, port, key, self.instance)
+            except OSError as exc:
+                raise dc.DaemonError(f"cannot reach ln_daemon of node {node!r} at "
+                                     f"{host}:{port}: {exc.strerror or exc}") from None
+            log.info("connected to ln_daemon of node %r at %s:%d", node, host, port)
+            self._clients[(host, port)] = client
+            return client
+
+    async def close(self) -> None:
+        for client in self._clients.values():
+            await client.close()
+        self._clients.clear()
+
+    def backend(self) -> Backend:
+        return Backend(link=self.link, spawn_spec=dc.SpawnSpec, exited_type=dc.Exited,
+                       output_type=dc.OutputLine, error_type=dc.DaemonError)

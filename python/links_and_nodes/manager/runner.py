@@ -1,0 +1,103 @@
+"""What `ln_manager -c FILE` adds to a plain manager: the daemons, the scheduler, the
+control commands and the console, set up in order and taken down in reverse
+(--start-all, --wait-ready, --exit-on-failure, reload)."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import logging
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .config import ConfigError, load, model
+from .console import Console, stdin_reader
+from .control import Control, ControlError
+from .core import Core
+from .daemons import DaemonPool
+from .process_states import ProcState
+from .scheduler import Scheduler, StartError, Transition
+
+log = logging.getLogger("ln_manager")
+
+
+class Runner:
+    def __init__(self, args: argparse.Namespace, config: model.Config, core: Core,
+                 runtime_dir: Path, address: str, shutdown: Callable[[bool], None]) -> None:
+        self.args = args
+        self.shutdown = shutdown
+        self.exit_status = 0
+        self.pool = DaemonPool(config, args.instance, key_file=args.daemon_key_file,
+                               log_dir=runtime_dir)
+        self.scheduler = Scheduler(config, core, self.pool.backend(), manager_address=address,
+                                   extra_env={"LN_RUNTIME_DIR": str(runtime_dir)})
+        self.control = Control(core, self.scheduler, reload=self.reload, shutdown=shutdown)
+        self._console: asyncio.Task[None] | None = None
+        if args.exit_on_failure:
+            self.scheduler.transition_listeners.append(self._fail_fast)
+
+    async def attach(self) -> None:
+        """Take over what the daemons still run for this instance (before clients come)."""
+        await self.scheduler.attach()
+
+    async def begin(self) -> int:
+        """Start what was asked, open the console; non-zero if the manager must exit right
+        away (--exit-on-failure)."""
+        if self.args.start_all:
+            self.scheduler.start("all")
+        if not self.args.no_console:
+            self._console = asyncio.get_running_loop().create_task(self._run_console())
+        if self.args.wait_ready:
+            try:
+                await self.scheduler.wait_ready("all", self.args.ready_timeout)
+            except (StartError, TimeoutError) as exc:
+                text = str(exc) or "not ready within --ready-timeout"
+                print(f"ln_manager: not all processes ready: {text}", flush=True)
+                if self.args.exit_on_failure:
+                    self.exit_status = 1
+                    return 1
+            else:
+                print(f"ln_manager: all {len(self.scheduler.procs)} processes ready",
+                      flush=True)
+        return self.exit_status
+
+    def _fail_fast(self, name: str, t: Transition) -> None:
+        rt = self.scheduler.procs.get(name)
+        if t.state != ProcState.FAILED or rt is None:
+            return
+        if rt.cfg.restart == model.Restart.NEVER or "gave up" in t.reason:
+            print(f"ln_manager: process {name} failed: {t.reason}", flush=True)
+            self.exit_status = 1
+            self.shutdown(True)
+
+    async def _run_console(self) -> None:
+        try:
+            await Console(self.control).run(await stdin_reader())
+        except (OSError, ValueError) as exc:  # no usable stdin: run without a console
+            log.info("no console: %s", exc)
+
+    async def reload(self) -> dict[str, Any]:
+        defines = dict(item.partition("=")[::2] for item in self.args.define)
+        try:
+            config = load(self.args.config, defines=defines)
+        except ConfigError as exc:
+            raise ControlError(f"reload refused, the configuration is unchanged:\n{exc}") \
+                from None
+        return self.scheduler.apply_config(config)
+
+    async def end(self, stop_processes: bool) -> None:
+        if self._console is not None:
+            self._console.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._console
+        if stop_processes:
+            log.info("stopping every process")
+            await self.scheduler.shutdown()
+        else:
+            log.info("detaching: processes keep running under their daemons")
+            await self.scheduler.close()
+        await self.pool.close()
+        sys.stdout.flush()

@@ -1,0 +1,774 @@
+"""The scheduler: brings the processes of a loaded configuration up in dependency order,
+gated on real readiness, keeps them supervised (restart policies, rate watchdogs) and takes
+them down dependents first.  It drives one ln_daemon per host through `DaemonLink`s and
+asks the manager's registry (core.Core) whether topics have publishers and services are
+registered.  States and transitions: process_states.py; the rules: docs/process_management.md.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import os
+import re
+import signal
+import time
+from collections import deque
+from collections.abc import Awaitable, Callable, Iterable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from .config import model
+from .process_states import ALIVE, STARTABLE, ProcState, check_transition
+
+log = logging.getLogger("ln_manager")
+
+S = ProcState
+MAX_RESTART_DELAY = 30.0  # seconds
+STABLE_AFTER = 10.0  # seconds ready after which a process's restart count starts again
+BASE_ENV = ("PATH", "HOME", "USER", "LOGNAME", "LANG", "LC_ALL", "TZ", "TERM")
+
+
+# ---- what the scheduler needs of a daemon connection (daemon_client.DaemonClient) ---------
+class DaemonLink(Protocol):
+    async def spawn(self, spec: Any) -> Any: ...
+    async def stop(self, name: str) -> None: ...
+    async def list(self) -> list[Any]: ...
+    async def output(self, name: str, n: int = 100) -> list[Any]: ...
+    async def forget(self, name: str) -> None: ...
+    def events(self) -> asyncio.Queue[Any]: ...
+
+
+class Registry(Protocol):
+    """What readiness and watchdogs ask the manager (core.Core implements it)."""
+
+    listeners: list[Callable[[], None]]
+
+    def topic_publishers(self, name: str) -> int: ...
+    def topic_published(self, name: str) -> int: ...
+    def service_provided(self, name: str) -> bool: ...
+
+
+@dataclass
+class Backend:
+    """How the scheduler reaches daemons and builds their requests: `link(node)` returns
+    the (connected) daemon of a node; `spawn_spec(**fields)` builds the daemon client's
+    SpawnSpec; `exited_type`/`output_type` are its event classes."""
+
+    link: Callable[[str], Awaitable[DaemonLink]]
+    spawn_spec: Callable[..., Any]
+    exited_type: type
+    output_type: type
+    error_type: type[Exception]
+
+
+@dataclass
+class Transition:
+    time: float  # time.time()
+    state: ProcState
+    reason: str
+
+
+@dataclass
+class Runtime:
+    """What the scheduler knows of one configured process."""
+
+    cfg: model.Process
+    state: ProcState = S.STOPPED
+    pid: int | None = None
+    reason: str = ""  # why it is in its state (failure text, "stopped by request", ...)
+    exit_code: int | None = None
+    exit_signal: int | None = None
+    started_at: float | None = None
+    ready_at: float | None = None
+    restarts: int = 0  # restarts in a row
+    output: deque[Any] = field(default_factory=deque)
+    transitions: list[Transition] = field(default_factory=list)
+    stop_requested: bool = False
+    stopped_for: str | None = None  # dependency whose loss stopped it (restarted with it)
+    watchdog_fired: str | None = None  # why the watchdog is stopping it (then restarts it)
+    regex: re.Pattern[str] | None = None
+    regex_seen: bool = False
+    task: asyncio.Task[None] | None = None  # starting (dependencies, spawn, readiness)
+    side_tasks: set[asyncio.Task[Any]] = field(default_factory=set)  # watchdog, restart timer
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"name": self.cfg.name, "state": self.state.value, "pid": self.pid,
+                "node": self.cfg.node, "reason": self.reason, "exit_code": self.exit_code,
+                "exit_signal": self.exit_signal, "restarts": self.restarts,
+                "started_at": self.started_at, "ready_at": self.ready_at}
+
+
+@dataclass
+class StateRuntime:
+    cfg: model.State
+    up: bool | None = None
+    checked_at: float = 0.0
+    lock: asyncio.Lock = field(default_factory=asyncio.Lock)
+
+
+class StartError(Exception):
+    """A process (or state) could not be brought up; the text says why."""
+
+
+class RateLimiter:
+    """At most `rate` starts per second on one host (None: no limit)."""
+
+    def __init__(self, rate: float | None) -> None:
+        self.interval = 1.0 / rate if rate else 0.0
+        self._next = 0.0
+        self._lock = asyncio.Lock()
+
+    async def acquire(self) -> None:
+        if not self.interval:
+            return
+        async with self._lock:
+            now = time.monotonic()
+            if self._next > now:
+                await asyncio.sleep(self._next - now)
+            self._next = max(now, self._next) + self.interval
+
+
+class Scheduler:
+    def __init__(self, config: model.Config, registry: Registry, backend: Backend, *,
+                 manager_address: str, extra_env: dict[str, str] | None = None) -> None:
+        self.config = config
+        self.registry = registry
+        self.backend = backend
+        self.manager_address = manager_address
+        self.extra_env = dict(extra_env or {})
+        self.procs: dict[str, Runtime] = {}
+        for name, cfg in config.processes.items():
+            rt = Runtime(cfg, output=deque(maxlen=max(1, cfg.max_output_lines)))
+            if cfg.ready_regex is not None:
+                rt.regex = re.compile(cfg.ready_regex)
+            self.procs[name] = rt
+        self.states = {name: StateRuntime(cfg) for name, cfg in config.states.items()}
+        self._changed = asyncio.Condition()
+        self._limiters: dict[str, RateLimiter] = {}
+        self._event_tasks: dict[int, asyncio.Task[None]] = {}
+        self._links: dict[str, DaemonLink] = {}
+        self._transient = 0
+        self._waiters: dict[str, asyncio.Future[Any]] = {}  # transient runs (state commands)
+        self.output_listeners: list[Callable[[str, Any], None]] = []
+        self.transition_listeners: list[Callable[[str, Transition], None]] = []
+        registry.listeners.append(self._registry_changed)
+
+    # ---- public API ----------------------------------------------------------------------
+    def targets(self, target: str) -> list[str]:
+        """Process names of a process, a group (recursively) or "all"; KeyError if none."""
+        if target == "all":
+            return list(self.procs)
+        if target in self.procs:
+            return [target]
+        if target in self.config.groups:
+            out: list[str] = []
+            self._group_members(target, out, set())
+            return out
+        raise KeyError(f"no process or group named {target!r}")
+
+    def start(self, target: str) -> list[str]:
+        """Start what `target` names (and its dependencies); returns at once."""
+        names = self.targets(target)
+        for name in names:
+            rt = self.procs[name]
+            rt.stopped_for = None
+            self._launch(rt)
+        return names
+
+    async def stop(self, target: str, *, force: bool = False) -> list[str]:
+        """Stop what `target` names, dependents first; returns when all are down."""
+        names = self.targets(target)
+        await asyncio.gather(*(self._stop(self.procs[n], "stopped by request", force=force)
+                               for n in names))
+        return names
+
+    async def restart(self, target: str) -> list[str]:
+        names = await self.stop(target)
+        for name in names:
+            self.procs[name].restarts = 0
+            self._launch(self.procs[name])
+        return names
+
+    async def wait(self, names: Iterable[str], states: set[ProcState],
+                   timeout: float | None = None, *, fail_on: set[ProcState] | None = None
+                   ) -> None:
+        """Until every process of `names` is in one of `states`; StartError if one reaches
+        `fail_on` first (its reason), TimeoutError after `timeout` seconds."""
+        rts = [self.procs[n] for n in names]
+        fail_on = fail_on or set()
+
+        def done() -> bool:
+            for rt in rts:
+                if rt.state in fail_on and rt.state not in states:
+                    raise StartError(f"{rt.cfg.name}: {rt.state.value}: {rt.reason}")
+            return all(rt.state in states for rt in rts)
+
+        async with self._changed:
+            await asyncio.wait_for(self._changed.wait_for(done), timeout)
+
+    async def wait_ready(self, target: str = "all", timeout: float | None = None) -> None:
+        """Until every process of `target` is ready (or finished, for ones that ran to
+        completion); StartError as soon as one fails."""
+        await self.wait(self.targets(target), {S.READY, S.FINISHED}, timeout,
+                        fail_on={S.FAILED})
+
+    def status(self) -> list[dict[str, Any]]:
+        return [rt.as_dict() for rt in self.procs.values()]
+
+    def history(self, name: str) -> list[Transition]:
+        return list(self.procs[name].transitions)
+
+    def output(self, name: str, n: int = 100) -> list[Any]:
+        lines = list(self.procs[name].output)
+        return lines[-n:] if n > 0 else []
+
+    async def attach(self) -> None:
+        """Take over processes a daemon still runs for this instance (a new manager after
+        the old one died): their true states and recent output."""
+        nodes = {rt.cfg.node for rt in self.procs.values()}
+        for node in sorted(nodes):
+            try:
+                link = await self._link(node)
+                infos = await link.list()
+            except (OSError, self.backend.error_type) as exc:
+                log.warning("cannot ask the daemon of node %r for its processes: %s", node, exc)
+                continue
+            for info in infos:
+                rt = self.procs.get(info.name)
+                if rt is None or rt.cfg.node != node:
+                    continue
+                await self._adopt(rt, link, info)
+
+    def apply_config(self, config: model.Config) -> dict[str, list[str]]:
+        """Take a reloaded configuration: new processes are added (stopped), processes
+        no longer configured are dropped once they are not running (running ones stay until
+        stopped), changed ones get their new settings for their next start."""
+        added, removed, changed, kept = [], [], [], []
+        for name, cfg in config.processes.items():
+            rt = self.procs.get(name)
+            if rt is None:
+                rt = Runtime(cfg, output=deque(maxlen=max(1, cfg.max_output_lines)))
+                self.procs[name] = rt
+                added.append(name)
+            elif rt.cfg != cfg:
+                changed.append(name)
+            else:
+                continue
+            rt.cfg = cfg
+            rt.regex = re.compile(cfg.ready_regex) if cfg.ready_regex is not None else None
+        for name in list(self.procs):
+            if name not in config.processes:
+                if self.procs[name].state in STARTABLE:
+                    del self.procs[name]
+                    removed.append(name)
+                else:
+                    kept.append(name)
+        for name, st in config.states.items():
+            if name not in self.states or self.states[name].cfg != st:
+                self.states[name] = StateRuntime(st)
+        self.config = config
+        self._limiters.clear()
+        return {"added": added, "removed": removed, "changed": changed,
+                "removed_when_stopped": kept}
+
+    async def shutdown(self) -> None:
+        """Stop every process the configuration runs (dependents first), except those with
+        the flag disable_stop, which are left running for the next manager."""
+        await asyncio.gather(*(self._stop(rt, "manager shutting down")
+                               for rt in self.procs.values()
+                               if "disable_stop" not in rt.cfg.flags))
+        await self.close()
+
+    async def close(self) -> None:
+        """Forget the daemons without stopping anything (processes keep running)."""
+        tasks = [t for rt in self.procs.values() for t in ([rt.task] if rt.task else [])]
+        tasks += [t for rt in self.procs.values() for t in rt.side_tasks]
+        tasks += list(self._event_tasks.values())
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+        with contextlib.suppress(ValueError):
+            self.registry.listeners.remove(self._registry_changed)
+
+    # ---- transitions ---------------------------------------------------------------------
+    def _set(self, rt: Runtime, state: ProcState, reason: str = "") -> None:
+        check_transition(rt.state, state)
+        rt.state = state
+        rt.reason = reason
+        t = Transition(time.time(), state, reason)
+        rt.transitions.append(t)
+        if state == S.READY:
+            rt.ready_at = time.monotonic()
+        log.info("process %s: %s%s", rt.cfg.name, state.value, f" ({reason})" if reason else "")
+        for listener in list(self.transition_listeners):
+            listener(rt.cfg.name, t)
+        self._notify()
+
+    def _notify(self) -> None:
+        async def notify() -> None:
+            async with self._changed:
+                self._changed.notify_all()
+        task = asyncio.get_running_loop().create_task(notify())
+        self._background(task)
+
+    def _background(self, task: asyncio.Task[Any]) -> None:
+        self._bg = getattr(self, "_bg", set())
+        self._bg.add(task)
+        task.add_done_callback(self._bg.discard)
+
+    def _registry_changed(self) -> None:
+        for rt in self.procs.values():
+            if rt.state == S.STARTED:
+                self._check_ready(rt)
+        self._notify()
+
+    # ---- starting ------------------------------------------------------------------------
+    def _launch(self, rt: Runtime) -> asyncio.Task[None] | None:
+        """Start rt's start task unless it runs or is up already."""
+        if rt.task is not None and not rt.task.done():
+            return rt.task
+        if rt.state not in STARTABLE:
+            return None
+        rt.stop_requested = False
+        rt.watchdog_fired = None
+        self._set(rt, S.STARTING)
+        rt.task = asyncio.get_running_loop().create_task(self._start(rt))
+        return rt.task
+
+    async def _start(self, rt: Runtime) -> None:
+        try:
+            await self._dependencies(rt)
+            await self._spawn(rt)
+        except asyncio.CancelledError:
+            if rt.state == S.STARTING:
+                self._set(rt, S.STOPPED, "start cancelled")
+            raise
+        except StartError as exc:
+            if rt.state == S.STARTING:
+                self._set(rt, S.FAILED, str(exc))
+                self._after_failure(rt)
+
+    async def _dependencies(self, rt: Runtime) -> None:
+        jobs = []
+        for dep in rt.cfg.depends_on:
+            if dep in self.states:
+                jobs.append(self._state_up(dep, rt.cfg.node))
+            else:
+                jobs.append(self._dependency_ready(rt, dep))
+        jobs += [self._dependency_finished(rt, dep) for dep in rt.cfg.start_before]
+        results = await asyncio.gather(*jobs, return_exceptions=True)
+        for result in results:
+            if isinstance(result, BaseException):
+                raise result
+
+    async def _dependency_ready(self, rt: Runtime, dep: str) -> None:
+        d = self.procs[dep]
+        if d.state not in (S.READY, S.STARTED):
+            self._launch(d)
+        try:
+            await self.wait([dep], {S.READY}, fail_on={S.FAILED, S.FINISHED, S.STOPPED})
+        except StartError as exc:
+            raise StartError(f"dependency {dep} did not become ready: {exc}") from None
+
+    async def _dependency_finished(self, rt: Runtime, dep: str) -> None:
+        d = self.procs[dep]
+        if d.state == S.FINISHED:
+            return
+        if d.state in STARTABLE:
+            self._launch(d)
+        try:
+            await self.wait([dep], {S.FINISHED}, fail_on={S.FAILED, S.STOPPED})
+        except StartError as exc:
+            raise StartError(f"{dep} (start_before) did not finish: {exc}") from None
+
+    def _environment(self, cfg: model.Process) -> dict[str, str]:
+        env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
+        env.update({k: os.environ[k] for k in cfg.pass_environment if k in os.environ})
+        env["LN_MANAGER"] = self.manager_address
+        env["LN_PROGRAM_NAME"] = cfg.name.replace("/", ".")
+        dirs = cfg.message_definition_dirs + self.config.message_definition_dirs
+        if dirs:
+            env["LN_MESSAGE_DEFINITION_DIRS"] = ":".join(dirs)
+        env.update(self.extra_env)
+        env.update(cfg.environment)
+        return env
+
+    async def _spawn(self, rt: Runtime) -> None:
+        cfg = rt.cfg
+        await self._limiter(cfg.node).acquire()
+        try:
+            link = await self._link(cfg.node)
+        except (OSError, self.backend.error_type) as exc:
+            raise StartError(f"cannot start: {exc}") from None
+        spec = self.backend.spawn_spec(
+            name=cfg.name, command=cfg.command, shell="start_in_shell" in cfg.flags,
+            env=self._environment(cfg), cwd=cfg.change_directory,
+            rlimits=[(r.name, r.soft, r.hard) for r in cfg.resource_limits],
+            policy=cfg.policy.value, priority=cfg.priority, affinity=cfg.affinity,
+            use_pty="no_pty" not in cfg.flags, max_output_lines=cfg.max_output_lines,
+            output_log=((cfg.output_log.path, cfg.output_log.size_limit,
+                         cfg.output_log.keep_count) if cfg.output_log else None),
+            term_signal=cfg.term_signal, term_timeout=cfg.term_timeout)
+        # A record of an earlier run of this name would answer SPAWN with "exists".
+        with contextlib.suppress(self.backend.error_type):
+            await link.forget(cfg.name)
+        spawning = asyncio.ensure_future(link.spawn(spec))
+        try:
+            info = await asyncio.shield(spawning)
+        except self.backend.error_type as exc:
+            raise StartError(f"cannot start: {exc}") from None
+        except asyncio.CancelledError:
+            # Stopped while the daemon was starting it: let that finish, then stop it, so
+            # nothing runs that the scheduler believes stopped.
+            with contextlib.suppress(Exception):
+                await spawning
+                await link.stop(cfg.name)
+            raise
+        rt.pid = info.pid
+        rt.started_at = time.time()
+        rt.exit_code = rt.exit_signal = None
+        rt.regex_seen = False
+        if rt.state != S.STARTING:  # stopped (or exited) while the spawn was on its way
+            return
+        if not cfg.has_readiness:
+            self._set(rt, S.READY, "started (no readiness condition)")
+            self._on_ready(rt)
+            return
+        self._set(rt, S.STARTED, f"pid {info.pid}")
+        if cfg.ready_time is not None:
+            self._side(rt, self._ready_timer(rt, cfg.ready_time))
+        self._check_ready(rt)
+
+    async def _ready_timer(self, rt: Runtime, delay: float) -> None:
+        await asyncio.sleep(delay)
+        self._check_ready(rt)
+
+    def _check_ready(self, rt: Runtime) -> None:
+        """READY once every readiness condition of rt holds."""
+        if rt.state != S.STARTED:
+            return
+        cfg = rt.cfg
+        held = []
+        if cfg.ready_regex is not None:
+            if not rt.regex_seen:
+                return
+            held.append(f"output matched {cfg.ready_regex!r}")
+        if cfg.ready_time is not None:
+            assert rt.started_at is not None
+            if time.time() - rt.started_at < cfg.ready_time - 1e-3:
+                return
+            held.append(f"{cfg.ready_time:g} s passed")
+        if cfg.ready_on_topic is not None:
+            if self.registry.topic_publishers(cfg.ready_on_topic) == 0:
+                return
+            held.append(f"topic {cfg.ready_on_topic} has a publisher")
+        if cfg.ready_on_service is not None:
+            if not self.registry.service_provided(cfg.ready_on_service):
+                return
+            held.append(f"service {cfg.ready_on_service} is registered")
+        self._set(rt, S.READY, ", ".join(held))
+        self._on_ready(rt)
+
+    def _on_ready(self, rt: Runtime) -> None:
+        for name in rt.cfg.start_on_ready:
+            self._launch(self.procs[name])
+        if rt.cfg.watchdog is not None:
+            self._side(rt, self._watchdog(rt, rt.cfg.watchdog))
+        # dependents this process's earlier loss stopped come back with it
+        for other in self.procs.values():
+            if other.stopped_for == rt.cfg.name and other.state in STARTABLE:
+                other.stopped_for = None
+                self._launch(other)
+
+    def _side(self, rt: Runtime, coro: Awaitable[None]) -> None:
+        task = asyncio.get_running_loop().create_task(coro)  # type: ignore[arg-type]
+        rt.side_tasks.add(task)
+        task.add_done_callback(rt.side_tasks.discard)
+
+    def _cancel_side(self, rt: Runtime) -> None:
+        current = asyncio.current_task()
+        for task in list(rt.side_tasks):
+            if task is not current:
+                task.cancel()
+
+    # ---- states (check/up/down commands) -------------------------------------------------
+    async def _state_up(self, name: str, node: str) -> None:
+        st = self.states[name]
+        node = st.cfg.node or node
+        async with st.lock:
+            fresh = time.monotonic() - st.checked_at < st.cfg.min_check_interval
+            if st.up and fresh:
+                return
+            if await self._run_check(st, node):
+                return
+            if st.cfg.up is None:
+                raise StartError(f"state {name} is DOWN (check failed) and has no up command")
+            code = await self._run_transient(node, f"{name}.up", st.cfg.up)
+            if code != 0 or not await self._run_check(st, node):
+                raise StartError(f"state {name} stays DOWN after its up command "
+                                 f"(exit status {code})")
+
+    async def _run_check(self, st: StateRuntime, node: str) -> bool:
+        code = await self._run_transient(node, f"{st.cfg.name}.check", st.cfg.check)
+        st.up = code == 0
+        st.checked_at = time.monotonic()
+        log.info("state %s: %s", st.cfg.name, "UP" if st.up else "DOWN")
+        return st.up
+
+    async def _run_transient(self, node: str, label: str, command: str) -> int | None:
+        """Run a shell command on `node` through its daemon; its exit status (None if it
+        died by a signal)."""
+        self._transient += 1
+        name = f"state:{label}:{self._transient}"
+        try:
+            link = await self._link(node)
+        except (OSError, self.backend.error_type) as exc:
+            raise StartError(f"{label}: {exc}") from None
+        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
+        self._waiters[name] = future
+        env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
+        env["LN_MANAGER"] = self.manager_address
+        spec = self.backend.spawn_spec(name=name, command=command, shell=True, env=env,
+                                       use_pty=False, max_output_lines=100)
+        try:
+            await link.spawn(spec)
+            exited = await future
+        except self.backend.error_type as exc:
+            raise StartError(f"{label}: cannot run {command!r}: {exc}") from None
+        finally:
+            self._waiters.pop(name, None)
+        with contextlib.suppress(self.backend.error_type):
+            await link.forget(name)
+        return exited.exit_code
+
+    # ---- stopping ------------------------------------------------------------------------
+    def _dependents(self, name: str) -> list[Runtime]:
+        return [rt for rt in self.procs.values() if name in rt.cfg.depends_on]
+
+    async def _stop(self, rt: Runtime, reason: str, *, force: bool = False) -> None:
+        if "disable_stop" in rt.cfg.flags and not force and reason == "stopped by request":
+            raise StartError(f"{rt.cfg.name} has the flag disable_stop")
+        # dependents first
+        await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped", force=force)
+                               for d in self._dependents(rt.cfg.name)
+                               if d.state not in STARTABLE))
+        rt.stop_requested = True
+        self._cancel_side(rt)
+        if rt.task is not None and not rt.task.done() and rt.task is not asyncio.current_task():
+            rt.task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await rt.task
+        if rt.state == S.STARTING:
+            self._set(rt, S.STOPPED, reason)
+            self._restore(rt)
+        if rt.state in (S.STARTED, S.READY):
+            self._set(rt, S.STOPPING, reason)
+            try:
+                await (await self._link(rt.cfg.node)).stop(rt.cfg.name)
+            except (OSError, self.backend.error_type) as exc:
+                log.warning("process %s: stop failed: %s", rt.cfg.name, exc)
+        if rt.state == S.STOPPING:
+            await self.wait([rt.cfg.name], {S.STOPPED, S.FINISHED, S.FAILED})
+
+    # ---- daemon events -------------------------------------------------------------------
+    def _on_event(self, event: Any) -> None:
+        if isinstance(event, self.backend.output_type):
+            rt = self.procs.get(event.name)
+            if rt is None:
+                return
+            rt.output.append(event)
+            for listener in list(self.output_listeners):
+                listener(event.name, event)
+            if rt.regex is not None and not rt.regex_seen and rt.regex.search(event.text):
+                rt.regex_seen = True
+                self._check_ready(rt)
+        elif isinstance(event, self.backend.exited_type):
+            waiter = self._waiters.get(event.name)
+            if waiter is not None and not waiter.done():
+                waiter.set_result(event)
+                return
+            rt = self.procs.get(event.name)
+            if rt is not None and rt.pid == event.pid:
+                self._on_exit(rt, event.exit_code, event.signal)
+
+    def _on_exit(self, rt: Runtime, code: int | None, sig: int | None) -> None:
+        rt.exit_code, rt.exit_signal = code, sig
+        rt.pid = None
+        self._cancel_side(rt)
+        if rt.state not in ALIVE and rt.state != S.STARTING:
+            return
+        how = (f"exit status {code}" if sig is None
+               else f"killed by {signal.Signals(sig).name if sig in _SIGNALS else sig}")
+        if rt.stop_requested:
+            self._set(rt, S.STOPPED, f"{rt.reason or 'stopped'}; {how}")
+            self._restore(rt)
+            return
+        if rt.watchdog_fired is not None:
+            why, rt.watchdog_fired = rt.watchdog_fired, None
+            self._set(rt, S.FAILED, f"{why}; {how}")
+            self._lost_dependency(rt)
+            self._schedule_restart(rt)
+            return
+        if rt.state == S.STARTING:  # exited before the spawn answer was processed
+            self._set(rt, S.STARTED, "")
+        if code == 0 and sig is None:
+            self._set(rt, S.FINISHED, how)
+            failed = False
+        else:
+            self._set(rt, S.FAILED, how)
+            failed = True
+        self._lost_dependency(rt)
+        restart = rt.cfg.restart
+        if restart == model.Restart.ALWAYS or (restart == model.Restart.ON_FAILURE and failed):
+            self._schedule_restart(rt)
+
+    def _after_failure(self, rt: Runtime) -> None:
+        if rt.cfg.restart != model.Restart.NEVER and not rt.stop_requested:
+            self._schedule_restart(rt)
+
+    def _restore(self, rt: Runtime) -> None:
+        """A dependent stopped because its dependency went down comes back as soon as the
+        dependency is ready again (which may already be the case when its stop completes)."""
+        dep = self.procs.get(rt.stopped_for) if rt.stopped_for else None
+        if dep is not None and dep.state == S.READY and rt.state in STARTABLE:
+            rt.stopped_for = None
+            self._launch(rt)
+
+    def _lost_dependency(self, rt: Runtime) -> None:
+        """Dependents of a process that went down are stopped (and come back with it)."""
+        for d in self._dependents(rt.cfg.name):
+            if d.state not in STARTABLE:
+                d.stopped_for = rt.cfg.name
+                self._background(asyncio.get_running_loop().create_task(
+                    self._stop(d, f"dependency {rt.cfg.name} went down")))
+
+    def _schedule_restart(self, rt: Runtime) -> None:
+        if rt.ready_at is not None and time.monotonic() - rt.ready_at >= STABLE_AFTER:
+            rt.restarts = 0
+        if rt.restarts >= rt.cfg.restart_limit:
+            reason = f"gave up after {rt.restarts} restarts; last: {rt.reason}"
+            rt.reason = reason
+            t = Transition(time.time(), rt.state, reason)
+            rt.transitions.append(t)
+            log.warning("process %s: %s", rt.cfg.name, reason)
+            for listener in list(self.transition_listeners):
+                listener(rt.cfg.name, t)
+            self._notify()
+            return
+        delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * (2 ** rt.restarts))
+        rt.restarts += 1
+        log.info("process %s: restart %d of %d in %.3g s", rt.cfg.name, rt.restarts,
+                 rt.cfg.restart_limit, delay)
+        self._side(rt, self._restart_later(rt, delay))
+
+    async def _restart_later(self, rt: Runtime, delay: float) -> None:
+        await asyncio.sleep(delay)
+        if rt.state in STARTABLE and not rt.stop_requested:
+            self._launch(rt)
+
+    async def _watchdog(self, rt: Runtime, wd: model.Watchdog) -> None:
+        window = max(1.0, 3.0 / wd.min_hz)
+        before = self.registry.topic_published(wd.topic)
+        while rt.state == S.READY:
+            await asyncio.sleep(window)
+            now = self.registry.topic_published(wd.topic)
+            rate = (now - before) / window
+            before = now
+            if rate < wd.min_hz and rt.state == S.READY:
+                why = f"watchdog: {wd.topic} at {rate:.3g} Hz < {wd.min_hz:g} Hz"
+                log.warning("process %s: %s: restarting", rt.cfg.name, why)
+                rt.watchdog_fired = why
+                self._set(rt, S.STOPPING, why)
+                try:
+                    await (await self._link(rt.cfg.node)).stop(rt.cfg.name)
+                except (OSError, self.backend.error_type) as exc:
+                    log.warning("process %s: stop failed: %s", rt.cfg.name, exc)
+                return  # its exit is a failure that restarts it (_on_exit)
+
+    # ---- daemons -------------------------------------------------------------------------
+    async def _link(self, node: str) -> DaemonLink:
+        link = await self.backend.link(node)
+        if id(link) not in self._event_tasks:
+            self._event_tasks[id(link)] = asyncio.get_running_loop().create_task(
+                self._pump(link, node))
+        return link
+
+    async def _pump(self, link: DaemonLink, node: str) -> None:
+        queue = link.events()
+        while True:
+            event = await queue.get()
+            if event is None:  # the connection ended
+                self._event_tasks.pop(id(link), None)
+                self._daemon_lost(link, node)
+                return
+            try:
+                self._on_event(event)
+            except Exception:  # one bad event must not stop supervision
+                log.exception("handling daemon event %r", event)
+
+    def _daemon_lost(self, link: DaemonLink, node: str) -> None:
+        """The daemon connection of `node` ended: what ran there is unknown now.  Those
+        processes fail (and restart by their policy, through a new connection)."""
+        for rt in self.procs.values():
+            if rt.state in ALIVE and self.config.node_map.get(rt.cfg.node, rt.cfg.node) == \
+                    self.config.node_map.get(node, node):
+                rt.pid = None
+                self._cancel_side(rt)
+                if rt.stop_requested:
+                    self._set(rt, S.STOPPED, "stopped (daemon connection lost)")
+                    continue
+                self._set(rt, S.FAILED, f"lost the connection to the ln_daemon of node "
+                                        f"{node!r}")
+                self._lost_dependency(rt)
+                if rt.cfg.restart != model.Restart.NEVER:
+                    self._schedule_restart(rt)
+        for future in self._waiters.values():
+            if not future.done():
+                future.set_exception(StartError(f"lost the ln_daemon of node {node!r}"))
+
+    def _limiter(self, node: str) -> RateLimiter:
+        host = self.config.node_map.get(node, node)
+        if host not in self._limiters:
+            h = self.config.hosts.get(host)
+            self._limiters[host] = RateLimiter(h.process_start_rate_limit if h else None)
+        return self._limiters[host]
+
+    async def _adopt(self, rt: Runtime, link: DaemonLink, info: Any) -> None:
+        recent = await link.output(info.name, rt.cfg.max_output_lines)
+        rt.output.extend(recent)
+        rt.started_at = info.started
+        if info.state in ("running", "stopping"):
+            rt.pid = info.pid
+            if rt.regex is not None:
+                rt.regex_seen = any(rt.regex.search(line.text) for line in recent)
+            self._set(rt, S.STARTED, f"re-attached to pid {info.pid}")
+            if not rt.cfg.has_readiness:
+                self._set(rt, S.READY, "re-attached (no readiness condition)")
+                self._on_ready(rt)
+            else:
+                if rt.cfg.ready_time is not None:
+                    left = rt.cfg.ready_time - (time.time() - info.started)
+                    self._side(rt, self._ready_timer(rt, max(0.0, left)))
+                self._check_ready(rt)
+        else:
+            rt.exit_code, rt.exit_signal = info.exit_code, info.signal
+            ok = info.exit_code == 0 and info.signal is None
+            self._set(rt, S.FINISHED if ok else S.FAILED,
+                      f"exited while no manager was attached (exit status {info.exit_code}, "
+                      f"signal {info.signal})")
+
+    # ---- groups ----------------------------------------------------------------------------
+    def _group_members(self, group: str, out: list[str], seen: set[str]) -> None:
+        if group in seen:
+            return
+        seen.add(group)
+        for member in self.config.groups[group].members:
+            if member in self.procs and member not in out:
+                out.append(member)
+            elif member in self.config.groups:
+                self._group_members(member, out, seen)
+
+
+_SIGNALS = {int(s) for s in signal.Signals}

@@ -1,0 +1,167 @@
+"""The manager scripting API: `links_and_nodes.manager.connect("HOST:PORT")` returns a
+connection to a running ln_manager whose methods start, stop and watch the processes of
+its configuration (CONTROL requests, docs/process_management.md).  Blocking and
+single-threaded; speaks the manager protocol with protocol.py's codec, needs no libln.
+
+    mgr = connect("localhost:54414")
+    mgr.start("arm")
+    mgr.wait_ready("arm", timeout=30)
+    print(mgr.state("arm/sensor"), mgr.output("arm/sensor", 20))
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+from typing import Any
+
+from .. import __version__
+from . import protocol as p
+from .listing import parse_address
+
+DEFAULT_TIMEOUT = 10.0  # seconds for connecting and for answers that do not wait
+
+
+class ManagerError(Exception):
+    """The manager refused a command or could not be reached; the text says why."""
+
+
+class Manager:
+    """One connection to a manager (use as a context manager or call close())."""
+
+    def __init__(self, address: str, *, timeout: float = DEFAULT_TIMEOUT,
+                 name: str = "ln_script") -> None:
+        host, port = parse_address(address)
+        self.address = address
+        self.timeout = timeout
+        try:
+            self._sock = socket.create_connection((host, port), timeout=timeout)
+        except OSError as exc:
+            raise ManagerError(f"cannot reach the manager at {address}: "
+                               f"{exc.strerror or exc}") from None
+        self._next_id = 0
+        self._send(p.Hello(p.MAGIC, p.VERSION, os.getpid(), name, __version__))
+        welcome = self._receive(timeout)
+        if isinstance(welcome, p.Error):
+            self.close()
+            raise ManagerError(f"the manager refused the connection: {welcome.text}")
+        if not isinstance(welcome, p.Welcome):
+            self.close()
+            raise ManagerError(f"the manager answered HELLO with {welcome.TYPE.name}")
+        self.instance = welcome.instance_name
+
+    # ---- plumbing --------------------------------------------------------------------------
+    def close(self) -> None:
+        self._sock.close()
+
+    def __enter__(self) -> Manager:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _send(self, msg: p.Message) -> None:
+        try:
+            self._sock.sendall(p.encode(msg))
+        except OSError as exc:
+            raise ManagerError(f"connection to the manager lost: {exc}") from None
+
+    def _exactly(self, count: int) -> bytes:
+        data = bytearray()
+        while len(data) < count:
+            try:
+                chunk = self._sock.recv(min(count - len(data), 1 << 16))
+            except TimeoutError:
+                raise ManagerError("no answer from the manager in time") from None
+            except OSError as exc:
+                raise ManagerError(f"connection to the manager lost: {exc}") from None
+            if not chunk:
+                raise ManagerError("the manager closed the connection")
+            data += chunk
+        return bytes(data)
+
+    def _receive(self, timeout: float | None) -> p.Message:
+        self._sock.settimeout(timeout)
+        try:
+            length = p.frame_length(self._exactly(p.HEADER_SIZE))
+            return p.decode_payload(self._exactly(length))
+        except p.ProtocolError as exc:
+            raise ManagerError(f"malformed answer from the manager: {exc}") from None
+
+    def command(self, op: str, *, wait: float | None = None, **args: Any) -> dict[str, Any]:
+        """Send one control command; its result dict.  `wait` is how long the command itself
+        may take (None: forever) on top of the connection's timeout."""
+        self._next_id += 1
+        self._send(p.Control(self._next_id, json.dumps({"op": op, **args})))
+        limit = None if wait is None and op in ("wait_ready", "stop", "restart") \
+            else (wait or 0) + self.timeout
+        reply = self._receive(limit)
+        if isinstance(reply, p.Error):
+            raise ManagerError(reply.text)
+        if not isinstance(reply, p.ControlResult) or reply.request_id != self._next_id:
+            raise ManagerError(f"unexpected answer {reply.TYPE.name} to {op}")
+        result = json.loads(reply.result)
+        if not result.get("ok"):
+            raise ManagerError(result.get("error", "unknown error"))
+        return result
+
+    # ---- commands --------------------------------------------------------------------------
+    def start(self, target: str = "all") -> list[str]:
+        """Start a process, a group or "all" (with dependencies); returns at once."""
+        return self.command("start", target=target)["processes"]
+
+    def stop(self, target: str = "all", *, force: bool = False) -> list[str]:
+        """Stop (dependents first); returns once they are down."""
+        return self.command("stop", target=target, force=force)["processes"]
+
+    def restart(self, target: str = "all") -> list[str]:
+        return self.command("restart", target=target)["processes"]
+
+    def wait_ready(self, target: str = "all", timeout: float | None = None) -> None:
+        """Until everything of `target` is ready (or finished); ManagerError as soon as
+        one of them fails, or after `timeout` seconds."""
+        self.command("wait_ready", target=target, timeout=timeout, wait=timeout)
+
+    def status(self) -> list[dict[str, Any]]:
+        """One dict per process: name, state, pid, node, reason, exit_code, restarts, ..."""
+        return self.command("status")["processes"]
+
+    def state(self, name: str) -> str:
+        for entry in self.status():
+            if entry["name"] == name:
+                return str(entry["state"])
+        raise ManagerError(f"no process named {name!r}")
+
+    def output(self, name: str, n: int = 100) -> list[str]:
+        """The last `n` lines of a process's output."""
+        return [line["text"] for line in self.command("output", name=name, n=n)["lines"]]
+
+    def history(self, name: str) -> list[dict[str, Any]]:
+        """Every state transition of a process: time, state, reason."""
+        return self.command("history", name=name)["transitions"]
+
+    def topics(self) -> list[dict[str, Any]]:
+        return self.command("topics")["topics"]
+
+    def services(self) -> list[dict[str, Any]]:
+        return self.command("services")["services"]
+
+    def reload(self) -> dict[str, Any]:
+        return self.command("reload")
+
+    def quit(self) -> None:
+        """Stop every process and end the manager."""
+        self.command("quit")
+
+    def detach(self) -> None:
+        """End the manager; its processes keep running under their daemons."""
+        self.command("detach")
+
+
+def connect(address: str | None = None, *, timeout: float = DEFAULT_TIMEOUT) -> Manager:
+    """A connection to the manager at `address` ("HOST:PORT", default $LN_MANAGER)."""
+    address = address or os.environ.get("LN_MANAGER")
+    if not address:
+        raise ManagerError("no manager address: pass HOST:PORT or set LN_MANAGER")
+    return Manager(address, timeout=timeout)

@@ -1,0 +1,1 @@
+"""Tests of the `.lnc` configuration reader (links_and_nodes.manager.config)."""

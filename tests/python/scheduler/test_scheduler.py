@@ -1,0 +1,272 @@
+"""The scheduler's rules on a fake daemon: dependency order for chains and diamonds
+(asserted from the recorded transitions, never from timing), readiness gates, start_before,
+states, failures, restart back-off and its limit, the rate watchdog, and stopping dependents
+first."""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+from collections.abc import AsyncIterator, Callable
+from pathlib import Path
+
+import pytest
+
+from links_and_nodes.manager.config import model
+from links_and_nodes.manager.process_states import ProcState as S
+from links_and_nodes.manager.scheduler import Scheduler, StartError
+
+from .fake_daemon import FakeDaemon, FakeRegistry, backend
+
+LIMIT = 60.0
+HERE = model.Location("test.lnc", 1, 1)
+PY = sys.executable
+
+
+def proc(name: str, command: str = "sleep 60", **kw: object) -> model.Process:
+    return model.Process(name=name, location=HERE, command=command, **kw)  # type: ignore[arg-type]
+
+
+def config(*procs: model.Process, states: tuple[model.State, ...] = (),
+           groups: tuple[model.Group, ...] = ()) -> model.Config:
+    return model.Config(files=["test.lnc"], instance=model.Instance("t", ":1", HERE),
+                        processes={p.name: p for p in procs},
+                        states={s.name: s for s in states},
+                        groups={g.name: g for g in groups})
+
+
+class World:
+    def __init__(self, cfg: model.Config) -> None:
+        self.daemon = FakeDaemon()
+        self.registry = FakeRegistry()
+        self.sched = Scheduler(cfg, self.registry, backend(self.daemon),
+                               manager_address="127.0.0.1:1")
+        self.log: list[tuple[str, S]] = []
+        self.sched.transition_listeners.append(lambda n, t: self.log.append((n, t.state)))
+
+    def index(self, name: str, state: S) -> int:
+        return self.log.index((name, state))
+
+
+@pytest.fixture
+async def world_factory() -> AsyncIterator[list[World]]:
+    worlds: list[World] = []
+    yield worlds
+    for w in worlds:
+        await w.sched.close()
+        await w.daemon.kill_all()
+
+
+async def until(predicate: Callable[[], bool]) -> None:
+    """Poll `predicate` (an upper bound of LIMIT seconds, not a measurement)."""
+    async with asyncio.timeout(LIMIT):
+        while not predicate():
+            await asyncio.sleep(0.01)
+
+
+def make(worlds: list[World], *procs: model.Process, **kw: object) -> World:
+    w = World(config(*procs, **kw))  # type: ignore[arg-type]
+    worlds.append(w)
+    return w
+
+
+async def test_chain_starts_in_dependency_order(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("c", depends_on=["b"]), proc("b", depends_on=["a"]), proc("a"))
+    w.sched.start("c")
+    await w.sched.wait_ready("all", LIMIT)
+    assert w.daemon.spawned == ["a", "b", "c"]
+    assert w.index("a", S.READY) < w.index("b", S.READY) < w.index("c", S.READY)
+
+
+async def test_diamond_starts_shared_dependency_once(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b", depends_on=["a"]), proc("c", depends_on=["a"]),
+             proc("d", depends_on=["b", "c"]))
+    w.sched.start("d")
+    await w.sched.wait_ready("all", LIMIT)
+    assert w.daemon.spawned.count("a") == 1 and w.daemon.spawned[0] == "a"
+    assert w.daemon.spawned[-1] == "d"
+    ready_d = w.index("d", S.READY)
+    assert w.index("b", S.READY) < ready_d and w.index("c", S.READY) < ready_d
+    assert w.index("a", S.READY) < min(w.index("b", S.STARTING) + 10**6,
+                                       w.index("b", S.READY))
+
+
+async def test_ready_regex_gates_dependents(world_factory: list[World],
+                                            tmp_path: Path) -> None:
+    gate = tmp_path / "go"
+    script = tmp_path / "sensor.py"
+    script.write_text(f"import os, time\nprint('init', flush=True)\n"
+                      f"while not os.path.exists({str(gate)!r}): time.sleep(0.01)\n"
+                      f"print('sensor READY now', flush=True)\ntime.sleep(60)\n")
+    w = make(world_factory, proc("sensor", f"{PY} {script}", ready_regex=r"READY"),
+             proc("ctrl", depends_on=["sensor"]))
+    w.sched.start("ctrl")
+    await w.sched.wait(["sensor"], {S.STARTED}, LIMIT)
+    await until(lambda: any(line.text == "init" for line in w.sched.output("sensor")))
+    assert w.daemon.spawned == ["sensor"]  # its output came, the regex did not match yet
+    assert w.sched.procs["ctrl"].state == S.STARTING
+    gate.touch()
+    await w.sched.wait_ready("all", LIMIT)
+    assert w.daemon.spawned == ["sensor", "ctrl"]
+    assert "READY" in w.sched.procs["sensor"].reason
+
+
+async def test_ready_on_topic_and_service(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("pub", ready_on_topic="arm.state"),
+             proc("prov", ready_on_service="arm.set_gains"),
+             proc("user", depends_on=["pub", "prov"]))
+    w.sched.start("user")
+    await w.sched.wait(["pub", "prov"], {S.STARTED}, LIMIT)
+    w.registry.publishers["arm.state"] = 1
+    w.registry.changed()
+    await w.sched.wait(["pub"], {S.READY}, LIMIT)
+    assert w.sched.procs["prov"].state == S.STARTED and "user" not in w.daemon.spawned
+    w.registry.services.add("arm.set_gains")
+    w.registry.changed()
+    await w.sched.wait_ready("all", LIMIT)
+    assert w.index("prov", S.READY) < w.index("user", S.READY)
+
+
+async def test_start_before_runs_to_completion_first(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("setup", "sh -c 'echo prepared'"),
+             proc("main", start_before=["setup"]))
+    w.sched.start("main")
+    await w.sched.wait_ready("main", LIMIT)
+    assert w.index("setup", S.FINISHED) < w.index("main", S.READY)
+
+
+async def test_failed_dependency_fails_dependent(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b", depends_on=["a"]))
+    w.daemon.fail_spawn.add("a")
+    w.sched.start("b")
+    with pytest.raises(StartError, match="command not found"):
+        await w.sched.wait_ready("b", LIMIT)
+    await w.sched.wait(["b"], {S.FAILED}, LIMIT)
+    assert "dependency a did not become ready" in w.sched.procs["b"].reason
+    assert "b" not in w.daemon.spawned
+
+
+async def test_state_brought_up_before_dependent(world_factory: list[World],
+                                                 tmp_path: Path) -> None:
+    flag = tmp_path / "flag"
+    st = model.State("net", HERE, check=f"test -e {flag}", up=f"touch {flag}")
+    w = make(world_factory, proc("user", depends_on=["net"]), states=(st,))
+    w.sched.start("user")
+    await w.sched.wait_ready("user", LIMIT)
+    assert flag.exists()
+    assert w.sched.states["net"].up is True
+
+
+async def test_crash_restarts_with_backoff_then_gives_up(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("crasher", "sh -c 'exit 3'", restart=model.Restart.ON_FAILURE,
+                                 restart_limit=2, restart_delay=0.01))
+    w.sched.start("crasher")
+    rt = w.sched.procs["crasher"]
+    await until(lambda: "gave up" in rt.reason)
+    assert w.daemon.spawned == ["crasher"] * 3
+    assert rt.state == S.FAILED and "gave up after 2 restarts" in rt.reason
+    assert "exit status 3" in rt.reason
+
+
+async def test_successful_exit_is_finished_not_restarted(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("once", "true", restart=model.Restart.ON_FAILURE))
+    w.sched.start("once")
+    await w.sched.wait(["once"], {S.FINISHED}, LIMIT)
+    await asyncio.sleep(0.05)
+    assert w.daemon.spawned == ["once"]
+
+
+async def test_watchdog_restarts_stalled_publisher(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("pub", watchdog=model.Watchdog("arm.state", 100.0),
+                                 restart_delay=0.01))
+    w.sched.start("pub")
+    await w.sched.wait_ready("pub", LIMIT)
+    # nothing is published: the watchdog window (1 s) passes with rate 0
+    await until(lambda: w.daemon.spawned.count("pub") >= 2)
+    await w.sched.wait_ready("pub", LIMIT)
+    assert "watchdog: arm.state at 0 Hz < 100 Hz" in [t.reason for t in
+                                                      w.sched.history("pub")
+                                                      if t.state == S.STOPPING][0]
+
+
+async def test_stop_stops_dependents_first(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b", depends_on=["a"]), proc("c", depends_on=["b"]))
+    w.sched.start("c")
+    await w.sched.wait_ready("all", LIMIT)
+    await w.sched.stop("a")
+    assert all(w.sched.procs[n].state == S.STOPPED for n in "abc")
+    assert w.index("c", S.STOPPED) < w.index("b", S.STOPPING)
+    assert w.index("b", S.STOPPED) < w.index("a", S.STOPPING)
+
+
+async def test_lost_dependency_stops_and_restores_dependent(world_factory: list[World],
+                                                            tmp_path: Path) -> None:
+    marker = tmp_path / "crashed-once"
+    a_cmd = f"sh -c 'if [ -e {marker} ]; then sleep 60; else touch {marker}; sleep 0.2; exit 1; fi'"
+    w = make(world_factory, proc("a", a_cmd, restart=model.Restart.ON_FAILURE,
+                                 restart_delay=0.01),
+             proc("b", depends_on=["a"]))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    await w.sched.wait(["a"], {S.FAILED}, LIMIT)
+    await until(lambda: w.daemon.spawned == ["a", "b", "a", "b"])
+    await w.sched.wait(["a", "b"], {S.READY}, LIMIT)
+    assert w.index("a", S.FAILED) < w.index("b", S.STOPPING)
+    assert [state for name, state in w.log if name == "b"][-3:] == [S.STOPPED, S.STARTING,
+                                                                     S.READY]
+
+
+async def test_groups_and_all(world_factory: list[World]) -> None:
+    g = model.Group("arm", HERE, members=["a", "b"])
+    w = make(world_factory, proc("a"), proc("b"), proc("c"), groups=(g,))
+    assert w.sched.start("arm") == ["a", "b"]
+    await w.sched.wait_ready("arm", LIMIT)
+    assert w.sched.procs["c"].state == S.STOPPED
+    await w.sched.stop("all")
+    with pytest.raises(KeyError):
+        w.sched.targets("nothing")
+
+
+async def test_start_rate_limit_spaces_starts(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Five starts at 20/s on a frozen clock: each waits 50 ms longer than the one before."""
+    from links_and_nodes.manager import scheduler as sched_mod
+
+    slept: list[float] = []
+
+    async def fake_sleep(delay: float) -> None:
+        slept.append(round(delay, 6))
+
+    monkeypatch.setattr(sched_mod.time, "monotonic", lambda: 100.0)
+    monkeypatch.setattr(sched_mod.asyncio, "sleep", fake_sleep)
+    limiter = sched_mod.RateLimiter(20.0)
+    for _ in range(5):
+        await limiter.acquire()
+    assert slept == [0.05, 0.1, 0.15, 0.2]
+    unlimited = sched_mod.RateLimiter(None)
+    await unlimited.acquire()
+    assert len(slept) == 4
+
+
+async def test_disable_stop_refused_unless_forced(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("keep", flags={"disable_stop"}))
+    w.sched.start("keep")
+    await w.sched.wait_ready("keep", LIMIT)
+    with pytest.raises(StartError, match="disable_stop"):
+        await w.sched.stop("keep")
+    assert w.sched.procs["keep"].state == S.READY
+    await w.sched.stop("keep", force=True)
+    assert w.sched.procs["keep"].state == S.STOPPED
+
+
+async def test_reload_adds_changes_and_removes(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b"))
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    result = w.sched.apply_config(config(proc("a", "sleep 61"), proc("c")))
+    assert result == {"added": ["c"], "removed": ["b"], "changed": ["a"],
+                      "removed_when_stopped": []}
+    assert w.sched.procs["a"].state == S.READY  # running on with its old command
+    await w.sched.restart("a")
+    assert w.sched.procs["a"].cfg.command == "sleep 61"
+    w.sched.start("c")
+    await w.sched.wait_ready("all", LIMIT)
