@@ -166,8 +166,15 @@ def test_connection_loss_ends_events_and_calls(daemon: Daemon) -> None:
         client = await daemon.connect()
         await client.spawn(spec("x", "sleep 600"))
         tree = descendants(daemon.proc.pid)
+        # A stopped daemon cannot answer: this call is surely pending when it dies.
+        daemon.proc.send_signal(signal.SIGSTOP)
+        pending = asyncio.create_task(client.list())
+        await asyncio.sleep(0.05)
+        assert not pending.done()
         daemon.proc.send_signal(signal.SIGKILL)  # the daemon itself goes away
         daemon.proc.wait()
+        with pytest.raises(dc.DaemonConnectionError):
+            await pending
         for pid in tree:  # nobody supervises them any more
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
