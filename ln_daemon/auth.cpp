@@ -82,10 +82,12 @@ bool load_key_file(const std::string &path, Key &key, std::string &error)
     for (size_t i = 0; valid && i < Key::kBytes; ++i) {
         int hi = hex_value(text[2 * i]), lo = hex_value(text[2 * i + 1]);
         valid = hi >= 0 && lo >= 0;
-        key.bytes[i] = static_cast<uint8_t>(hi << 4 | lo);
+        if (valid)
+            key.bytes[i] = static_cast<uint8_t>(hi << 4 | lo);
     }
     sodium_memzero(text, sizeof text);
     if (!valid) {
+        sodium_memzero(key.bytes, Key::kBytes);
         error = "key file '" + path + "' holds no valid key: it must contain exactly 64 "
                 "hex digits (32 bytes), optionally followed by a newline";
         return false;

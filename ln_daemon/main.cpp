@@ -88,14 +88,11 @@ lnd::UniqueFd listen_on(const std::string &bind, unsigned port, unsigned &bound,
 
 void redirect_stdio_to_null()
 {
-    int null_fd = ::open("/dev/null", O_RDWR);
-    if (null_fd < 0)
-        return;
-    ::dup2(null_fd, 0);
-    ::dup2(null_fd, 1);
-    ::dup2(null_fd, 2);
-    if (null_fd > 2)
-        ::close(null_fd);
+    lnd::UniqueFd null_fd(::open("/dev/null", O_RDWR | O_CLOEXEC));
+    for (int target = 0; null_fd && target <= 2; ++target)
+        ::dup2(null_fd.get(), target); // dup2 clears close-on-exec on the copies
+    if (null_fd.get() <= 2)
+        null_fd.release(); // it is one of the standard streams now
 }
 
 } // namespace

@@ -115,7 +115,8 @@ struct Prepared {
     const LaunchSpec &spec;
     std::vector<char *> argv;
     std::vector<char *> envp;
-    int stdin_fd = -1; // pipes: /dev/null
+    struct rlimit nofile; // RLIMIT_NOFILE as the daemon found it
+    int stdin_fd = -1;    // pipes: /dev/null
     int out_fd = -1;   // pipe write end, or the pty slave
     int err_fd = -1;   // pipe write end, or the pty slave
     bool pty = false;
@@ -133,6 +134,8 @@ struct Prepared {
         child_fail(status_fd, Stage::setup, 0);
     if (::chdir(p.spec.cwd.c_str()) != 0)
         child_fail(status_fd, Stage::chdir, 0);
+    // The daemon raised its own descriptor limit; the process gets the one it started with.
+    ::setrlimit(RLIMIT_NOFILE, &p.nofile);
     for (size_t i = 0; i < p.spec.rlimits.size(); ++i) {
         const Rlimit &r = p.spec.rlimits[i];
         struct rlimit rl = {r.soft, r.hard};
@@ -189,28 +192,27 @@ void write_report(int fd, KeeperReport r) noexcept
         ::signal(sig, SIG_IGN);
     ::prctl(PR_SET_CHILD_SUBREAPER, 1);
     ::prctl(PR_SET_NAME, "ln_daemon-keep");
-    int null_fd = ::open("/dev/null", O_RDWR);
-    if (null_fd >= 0) {
-        ::dup2(null_fd, 0);
-        ::dup2(null_fd, 1);
-        ::dup2(null_fd, 2);
-        if (null_fd > 2)
-            ::close(null_fd);
+    {
+        UniqueFd null_fd(::open("/dev/null", O_RDWR));
+        for (int target = 0; null_fd && target <= 2; ++target)
+            ::dup2(null_fd.get(), target);
+        if (null_fd.get() <= 2)
+            null_fd.release(); // it is one of the standard streams now
     }
     close_all_except({report_fd, p.stdin_fd, p.out_fd, p.err_fd});
 
-    int status_pipe[2];
-    if (::pipe2(status_pipe, O_CLOEXEC) != 0) {
+    UniqueFd status_r, status_w;
+    if (!make_pipe(status_r, status_w)) {
         write_report(report_fd, {KeeperReport::failed, static_cast<int32_t>(Stage::setup), 0, errno});
         ::_exit(1);
     }
     pid_t child = ::fork();
     if (child == 0) {
-        ::close(status_pipe[0]);
-        child_main(p, status_pipe[1]);
+        status_r.reset();
+        child_main(p, status_w.get());
     }
     int fork_errno = errno;
-    ::close(status_pipe[1]);
+    status_w.reset();
     for (int fd : {p.stdin_fd, p.out_fd, p.err_fd})
         if (fd >= 0)
             ::close(fd); // the tree's ends only: the keeper must not keep a stream open
@@ -222,9 +224,9 @@ void write_report(int fd, KeeperReport r) noexcept
     ChildStatus st;
     ssize_t n;
     do
-        n = ::read(status_pipe[0], &st, sizeof st);
+        n = ::read(status_r.get(), &st, sizeof st);
     while (n < 0 && errno == EINTR);
-    ::close(status_pipe[0]);
+    status_r.reset();
     if (n == static_cast<ssize_t>(sizeof st))
         write_report(report_fd, {KeeperReport::failed, st.stage, st.index, st.err});
     else
@@ -285,13 +287,26 @@ std::unordered_map<pid_t, ProcEntry> scan_proc()
 
 } // namespace
 
+LinuxOs::LinuxOs() noexcept
+{
+    // Each running process holds two or three descriptors in the daemon: raise the soft
+    // limit as far as allowed (children get the original one back).
+    if (::getrlimit(RLIMIT_NOFILE, &nofile_) != 0)
+        return;
+    struct rlimit raised = nofile_;
+    raised.rlim_cur = raised.rlim_max == RLIM_INFINITY || raised.rlim_max > 65536 ? 65536
+                                                                                  : raised.rlim_max;
+    if (raised.rlim_cur > nofile_.rlim_cur)
+        ::setrlimit(RLIMIT_NOFILE, &raised);
+}
+
 double LinuxOs::monotonic() noexcept { return clock_seconds(CLOCK_MONOTONIC); }
 
 double LinuxOs::wall() noexcept { return clock_seconds(CLOCK_REALTIME); }
 
 bool LinuxOs::launch(const LaunchSpec &spec, Launched &out, std::string &error)
 {
-    Prepared p{spec, {}, {}};
+    Prepared p{spec, {}, {}, nofile_};
     for (const auto &a : spec.argv)
         p.argv.push_back(const_cast<char *>(a.c_str()));
     p.argv.push_back(nullptr);

@@ -3,18 +3,24 @@
 // signal that tree, waitpid and the clocks.
 #pragma once
 
+#include <sys/resource.h>
+
 #include "os.hpp"
 
 namespace lnd {
 
 class LinuxOs final : public Os {
 public:
+    LinuxOs() noexcept; // raises the daemon's descriptor limit
     double monotonic() noexcept override;
     double wall() noexcept override;
     bool launch(const LaunchSpec &spec, Launched &out, std::string &error) override;
     int kill(pid_t pid, int sig) noexcept override;
     int kill_tree(pid_t keeper, int sig, pid_t skip_group) noexcept override;
     bool reap(pid_t &pid, int &status) noexcept override;
+
+private:
+    struct rlimit nofile_ = {}; // as the daemon found it; what children get
 };
 
 } // namespace lnd

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstring>
+#include <exception>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
@@ -114,8 +115,14 @@ void Server::accept_all()
         UniqueFd fd(::accept4(listener_.get(), reinterpret_cast<sockaddr *>(&sa), &len,
                               SOCK_NONBLOCK | SOCK_CLOEXEC));
         if (!fd) {
-            if (errno != EAGAIN && errno != EINTR && errno != ECONNABORTED)
+            if (errno == EMFILE || errno == ENFILE) {
+                // The pending connection stays readable: without a pause this would spin.
+                logf("accept: %s; not accepting for %.1f s", std::strerror(errno),
+                     kAcceptPause);
+                accept_paused_until_ = os_.monotonic() + kAcceptPause;
+            } else if (errno != EAGAIN && errno != EINTR && errno != ECONNABORTED) {
                 logf("accept: %s", std::strerror(errno));
+            }
             return;
         }
         std::string peer = peer_name(sa);
@@ -242,7 +249,11 @@ void Server::on_readable(Connection &c)
         if (c.phase == Connection::Phase::closing)
             continue; // discarded until the peer closes
         c.in.append(buf, static_cast<size_t>(n));
-        parse_frames(c);
+        try {
+            parse_frames(c);
+        } catch (const std::exception &e) { // nothing may escape the protocol boundary
+            drop(c, e.what());
+        }
         if (static_cast<size_t>(n) < sizeof buf)
             break;
     }
@@ -540,14 +551,15 @@ int Server::run()
     for (;;) {
         if (shutdown_signals_) {
             supervisor_.stop_all(); // also those that were still starting
-            if (supervisor_.alive() == 0)
+            if (supervisor_.alive() == 0 && supervisor_.stray_keepers() == 0)
                 break;
         }
         fds.clear();
         proc_refs.clear();
         conn_ids.clear();
         fds.push_back({signals_.get(), POLLIN, 0});
-        fds.push_back({listener_.get(), POLLIN, 0}); // -1 after shutdown began: ignored
+        bool accepting = listener_ && os_.monotonic() >= accept_paused_until_;
+        fds.push_back({accepting ? listener_.get() : -1, POLLIN, 0}); // -1: ignored
         for (auto &entry : conns_) {
             Connection &c = *entry.second;
             short events = POLLIN;
@@ -560,6 +572,8 @@ int Server::run()
         supervisor_.collect_fds(fds, proc_refs);
 
         double due = supervisor_.next_deadline();
+        if (listener_ && !accepting)
+            due = std::min(due, accept_paused_until_);
         for (auto &entry : conns_)
             if (entry.second->phase != Connection::Phase::ready)
                 due = std::min(due, entry.second->deadline);
@@ -576,7 +590,7 @@ int Server::run()
         if (n > 0) {
             if (fds[0].revents)
                 read_signals();
-            if (fds[1].revents && listener_)
+            if (fds[1].revents && accepting && listener_)
                 accept_all();
             for (size_t i = 0; i < conn_ids.size(); ++i) {
                 short rev = fds[2 + i].revents;

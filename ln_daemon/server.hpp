@@ -23,6 +23,7 @@ constexpr size_t kMaxConnections = 256;
 constexpr size_t kMaxQueuedBytes = 64u << 20; // a connection that falls further behind is closed
 constexpr double kHandshakeTimeout = 10.0;
 constexpr double kLingerTimeout = 2.0; // after a final error, for the peer to read it
+constexpr double kAcceptPause = 0.1;   // after accept() ran out of descriptors
 
 struct Connection;
 
@@ -68,6 +69,7 @@ private:
     uint64_t next_token_ = 1;
     std::unordered_map<uint64_t, std::pair<uint64_t, uint32_t>> pending_; // token -> conn, req
     int shutdown_signals_ = 0;
+    double accept_paused_until_ = 0; // monotonic
 };
 
 } // namespace lnd

@@ -109,8 +109,10 @@ void Supervisor::erase(Process *p)
 {
     by_id_.erase(p->id());
     auto k = by_keeper_.find(p->keeper());
-    if (k != by_keeper_.end() && k->second == p)
+    if (k != by_keeper_.end() && k->second == p) {
         by_keeper_.erase(k);
+        stray_.insert(p->keeper()); // still to be reaped
+    }
     procs_.erase({p->instance(), p->name()});
 }
 
@@ -126,8 +128,10 @@ void Supervisor::reap()
     int status;
     while (os_.reap(pid, status)) {
         auto it = by_keeper_.find(pid);
-        if (it == by_keeper_.end())
-            continue; // a refused spawn's keeper, or an orphan left to the daemon
+        if (it == by_keeper_.end()) {
+            stray_.erase(pid); // a refused spawn's keeper, or an orphan left to the daemon
+            continue;
+        }
         Process *p = it->second;
         by_keeper_.erase(it);
         p->on_keeper_exit(status);

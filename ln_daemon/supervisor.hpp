@@ -9,6 +9,7 @@
 #include <poll.h>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -51,6 +52,8 @@ public:
     void stop_all(); // daemon shutdown: STOP for every running process
     void kill_all(); // second shutdown signal: SIGKILL now
     size_t alive() const noexcept; // records that have not exited
+    // Keepers of refused spawns that have not been reaped yet (they end on their own).
+    size_t stray_keepers() const noexcept { return stray_.size(); }
     size_t size() const noexcept { return procs_.size(); }
 
 private:
@@ -64,6 +67,7 @@ private:
     std::map<Key, std::unique_ptr<Process>> procs_;
     std::unordered_map<uint64_t, Process *> by_id_;
     std::unordered_map<pid_t, Process *> by_keeper_;
+    std::unordered_set<pid_t> stray_;
 };
 
 } // namespace lnd

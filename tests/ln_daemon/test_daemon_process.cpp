@@ -261,11 +261,15 @@ void test_exec_failure_is_a_spawn_error()
     p->on_report(failed);
     CHECK_STR(f.sink.take(), "refused d 9: command not found: no-such-cmd");
     LN_CHECK(p->failed());
-    // The supervisor drops the record when the next keeper event comes (here: reaping).
+    // The supervisor drops the record after the report was read; the keeper is still to
+    // be reaped, and a shutting-down daemon waits for it.
+    f.sup.on_fd({p->id(), Process::Fd::report});
+    LN_CHECK_EQ(f.sup.size(), 0);
+    LN_CHECK_EQ(f.sup.stray_keepers(), 1);
     f.os.exits.push_back({keeper, exit_status(0)});
     f.sup.reap();
+    LN_CHECK_EQ(f.sup.stray_keepers(), 0);
     LN_CHECK(f.sup.list("inst").empty());
-    LN_CHECK_EQ(f.sup.size(), 0);
     // The name is free again.
     LN_CHECK(start(f, "inst", request("d"), 70) != nullptr);
 }

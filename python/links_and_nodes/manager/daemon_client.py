@@ -69,7 +69,7 @@ STREAMS = {0: "pty", 1: "stdout", 2: "stderr"}
 STATES = {0: "starting", 1: "running", 2: "stopping", 3: "exited"}
 _EXIT_CODE, _EXIT_SIGNAL = 1, 2
 _SPAWN_SHELL, _SPAWN_PTY = 1, 2
-DEFAULT_PORT = 54376
+DEFAULT_PORT = 54376  # the LN "arbiter" port
 
 
 # ---- public data ------------------------------------------------------------------------
@@ -161,6 +161,20 @@ class KeyFileError(DaemonError):
 
 
 # ---- key files ----------------------------------------------------------------------------
+
+
+def default_port() -> int:
+    """$LN_ARBITER_PORT, else 54376: where ln_daemon listens unless told otherwise."""
+    env = os.environ.get("LN_ARBITER_PORT")
+    if not env:
+        return DEFAULT_PORT
+    try:
+        port = int(env)
+    except ValueError:
+        port = -1
+    if not 0 < port < 65536:
+        raise DaemonError(f"LN_ARBITER_PORT is not a port number: {env}")
+    return port
 
 
 def default_key_file() -> Path:
@@ -557,9 +571,9 @@ class DaemonClient:
             raise DaemonConnectionError(self._closed)
         req = self._next_req
         self._next_req = self._next_req % 0xFFFFFFFF + 1
+        self._send(mtype, req, payload)  # raises before anything is sent if too large
         future: asyncio.Future[tuple[int, bytes]] = asyncio.get_running_loop().create_future()
         self._pending[req] = future
-        self._send(mtype, req, payload)
         with contextlib.suppress(ConnectionError):
             await self._writer.drain()  # a lost connection shows in the reader
         rtype, rpayload = await future

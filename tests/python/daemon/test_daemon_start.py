@@ -1,0 +1,171 @@
+"""Starting the daemon: it refuses key files that are not private, not ours or not a key
+(clear message, exit status 1); key file helpers; ensure_local_daemon starts a detached
+daemon in its own session once, and reuses it afterwards."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import re
+import signal
+import socket
+import stat
+import subprocess
+from pathlib import Path
+
+import pytest
+from daemonproc import WAIT, alive, daemon_exe, free_port, wait_for
+
+from links_and_nodes.manager import daemon_client as dc
+
+HEX = "ab" * 32
+
+
+def run_daemon(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([daemon_exe(), "--port", "0", "--bind", "127.0.0.1", *args],
+                          capture_output=True, text=True, timeout=WAIT)
+
+
+def key_file(tmp_path: Path, text: str, mode: int) -> Path:
+    path = tmp_path / f"key-{mode:o}-{len(text)}"
+    path.write_text(text)
+    path.chmod(mode)
+    return path
+
+
+@pytest.mark.parametrize("mode", [0o644, 0o640, 0o604, 0o660, 0o606, 0o610])
+def test_key_file_open_to_others_is_refused(tmp_path: Path, mode: int) -> None:
+    path = key_file(tmp_path, HEX, mode)
+    result = run_daemon("--key-file", str(path), "--foreground")
+    assert result.returncode == 1
+    assert result.stderr == (f"ln_daemon: error: key file '{path}' is accessible by group or "
+                             f"others (mode {mode:04o}); it must be private: "
+                             f"chmod 600 '{path}'\n")
+    with pytest.raises(dc.KeyFileError) as e:
+        dc.read_key_file(path)
+    assert f"(mode {mode:04o})" in str(e.value)
+
+
+@pytest.mark.parametrize("text", ["", "abc", HEX[:-1], HEX + "0", "zz" + HEX[2:], HEX + "\n\n",
+                                  " " + HEX])
+def test_key_file_without_a_key_is_refused(tmp_path: Path, text: str) -> None:
+    path = key_file(tmp_path, text, 0o600)
+    result = run_daemon("--key-file", str(path), "--foreground")
+    assert result.returncode == 1
+    assert "holds no valid key: it must contain exactly 64 hex digits" in result.stderr
+    with pytest.raises(dc.KeyFileError):
+        dc.read_key_file(path)
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="only root can give a file to another user")
+def test_key_file_of_another_user_is_refused(tmp_path: Path) -> None:
+    path = key_file(tmp_path, HEX, 0o600)
+    os.chown(path, 65534, 65534)
+    result = run_daemon("--key-file", str(path), "--foreground")
+    assert result.returncode == 1
+    assert "is owned by uid 65534, not by this daemon's uid 0" in result.stderr
+    with pytest.raises(dc.KeyFileError):
+        dc.read_key_file(path)
+
+
+def test_usage_errors(tmp_path: Path) -> None:
+    result = run_daemon("--foreground")
+    assert result.returncode == 2 and "--key-file is required" in result.stderr
+    result = run_daemon("--key-file", str(tmp_path / "missing"), "--foreground")
+    assert result.returncode == 1
+    assert "cannot open key file" in result.stderr
+    path = key_file(tmp_path, HEX, 0o600)
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        result = subprocess.run([daemon_exe(), "--port", str(port), "--bind", "127.0.0.1",
+                                 "--key-file", str(path), "--foreground"], capture_output=True,
+                                text=True, timeout=WAIT)
+    assert result.returncode == 1
+    assert f"cannot listen on 127.0.0.1:{port}: Address already in use" in result.stderr
+
+
+def test_key_file_helpers(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = tmp_path / "a" / "b" / "daemon.key"
+    key = dc.create_key_file(path)
+    assert len(key) == 32 and dc.read_key_file(path) == key
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    assert stat.S_IMODE(path.parent.stat().st_mode) == 0o700
+    assert stat.S_IMODE(path.parent.parent.stat().st_mode) == 0o700
+    assert path.read_text() == key.hex() + "\n"
+    with pytest.raises(FileExistsError):
+        dc.create_key_file(path)  # never overwritten
+    monkeypatch.setenv("LN_DAEMON_KEY_FILE", str(path))
+    assert dc.default_key_file() == path
+    monkeypatch.delenv("LN_DAEMON_KEY_FILE")
+    assert dc.default_key_file() == Path.home() / ".config/links_and_nodes/daemon.key"
+    monkeypatch.setenv("LN_ARBITER_PORT", "60001")
+    assert dc.default_port() == 60001
+    monkeypatch.setenv("LN_ARBITER_PORT", "nope")
+    with pytest.raises(dc.DaemonError):
+        dc.default_port()
+    monkeypatch.delenv("LN_ARBITER_PORT")
+    assert dc.default_port() == 54376
+    monkeypatch.setenv("LN_DAEMON", "/opt/ln/bin/ln_daemon")
+    assert dc.daemon_executable() == "/opt/ln/bin/ln_daemon"
+    monkeypatch.delenv("LN_DAEMON")
+    assert dc.daemon_executable() == daemon_exe()  # the in-tree build
+
+
+def test_ensure_local_daemon(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("LN_DAEMON", daemon_exe())
+    key_path = tmp_path / "daemon.key"
+    key = dc.create_key_file(key_path)
+    log = tmp_path / "daemon.log"
+    port = free_port()
+    pid = None
+    try:
+        asyncio.run(dc.ensure_local_daemon(port, key_path, log))
+        text = wait_for(lambda: log.exists() and re.search(r"ln_daemon\[(\d+)\]: listening",
+                                                           log.read_text()),
+                        "the daemon's log line")
+        pid = int(text.group(1))  # type: ignore[union-attr]
+        assert alive(pid)
+        assert os.getsid(pid) == pid  # its own session, detached from ours
+        assert os.getpgid(pid) != os.getpgid(0)
+
+        async def use() -> None:
+            client = await dc.DaemonClient.connect("127.0.0.1", port, key, "ensure")
+            await client.ping()
+            await client.close()
+            # A second call finds it answering and starts nothing.
+            await dc.ensure_local_daemon(port, key_path, log)
+
+        asyncio.run(use())
+        assert log.read_text().count("listening on") == 1
+    finally:
+        if pid is not None and alive(pid):
+            os.kill(pid, signal.SIGTERM)
+            wait_for(lambda: not alive(pid), "the detached daemon to exit")
+
+
+def test_ensure_local_daemon_reports_start_errors(tmp_path: Path,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("LN_DAEMON", daemon_exe())
+    bad = key_file(tmp_path, HEX, 0o644)
+    with pytest.raises(dc.DaemonError) as e:
+        asyncio.run(dc.ensure_local_daemon(free_port(), bad, timeout=WAIT))
+    assert "ln_daemon did not start: ln_daemon: error: key file" in str(e.value)
+
+
+def test_ensure_local_daemon_refuses_a_foreign_port(tmp_path: Path) -> None:
+    async def main() -> None:
+        async def other(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+            writer.write(b"SSH-2.0-something else\r\n" * 4)
+            await writer.drain()
+            writer.close()
+
+        server = await asyncio.start_server(other, "127.0.0.1", 0)
+        port = server.sockets[0].getsockname()[1]
+        async with server:
+            with pytest.raises(dc.DaemonError) as e:
+                await dc.ensure_local_daemon(port, tmp_path / "unused.key", timeout=WAIT)
+            assert "is in use by something that is not ln_daemon" in str(e.value)
+
+    asyncio.run(main())
