@@ -30,19 +30,25 @@ import startup_run as run  # noqa: E402
 from links_and_nodes.manager import daemon_client as dc  # noqa: E402
 from links_and_nodes.manager.scripting import ManagerError, connect  # noqa: E402
 
-PROCESSES, ROUNDS, QUICK_ROUNDS = 50, 7, 2
+PROCESSES, ROUNDS, QUICK_ROUNDS = 50, 11, 2
 GOAL_SECONDS, GOAL_RATIO = 1.5, 3.0  # all-ready (warm daemon); and over the shell floor
 READY_LINE = r"all (\d+) processes ready"
 NOT_READY_LINE = r"not all processes ready|failed"
 Record = dict[str, Any]
+IMPORTS = ("import links_and_nodes.manager.cli, links_and_nodes.manager.core, "
+           "links_and_nodes.manager.server, links_and_nodes.manager.runner")
 
 # measurement -> (label, what it is); the order of the table
 MEASURES = {
     "mgr_ready": ("ln_manager -c: launch -> all ready", "warm daemon"),
-    "mgr_to_first_spawn": ("  launch -> first process started", "interpreter, config, daemon"),
-    "mgr_tree": ("  first started -> last ready", "the dependency tree"),
+    "mgr_to_first_start": ("  launch -> first process starting", "interpreter, imports, "
+                           "config, daemon link"),
+    "mgr_tree": ("  first starting -> last ready", "the dependency tree"),
     "mgr_report": ("  last ready -> 'all ready' line", ""),
-    "shell_ready": ("shell floor: launch -> all ready", "floor.sh"),
+    "mgr_hop": ("  a parent ready -> its child started", "median over the tree's edges"),
+    "py_start": ("python -c pass", "for scale: interpreter start"),
+    "py_imports": ("python -c 'import ...'", "for scale: the modules ln_manager -c loads"),
+    "shell_ready": ("shell floor: launch -> all ready", "floor.sh, output through a FIFO"),
     "api_ready": ("scripting start + wait_ready", "manager already up"),
     "mgr_stop": ("scripting stop('all')", "dependents first"),
     "mgr_quit": ("scripting quit -> manager exited", "stops all, then exits"),
@@ -122,11 +128,7 @@ class Bench:
                     raise run.CaseError(f"status after 'all ready': "
                                         f"{[s['state'] for s in status]}")
                 self.check_running("after all ready")
-                started = min(s["started_at"] for s in status)
-                ready = max(s["ready_at"] for s in status)
-                rec["mgr_to_first_spawn"] = started - wall0
-                rec["mgr_tree"] = ready - started
-                rec["mgr_report"] = (wall0 + rec["mgr_ready"]) - ready
+                rec.update(breakdown(mgr, self.n, wall0, wall0 + rec["mgr_ready"]))
                 t = time.monotonic()
                 mgr.stop("all")
                 rec["mgr_stop"] = time.monotonic() - t
@@ -149,6 +151,19 @@ class Bench:
             run.terminate_pids(left)
             raise run.CaseError(f"{exc}") from None
         self.managers.remove(child)
+        return rec
+
+    def python(self) -> Record:
+        """For scale: the interpreter's start alone, and with the imports of ln_manager -c
+        (what cli.main and its _serve load before the first process starts)."""
+        rec: Record = {}
+        for key, code in (("py_start", "pass"), ("py_imports", IMPORTS)):
+            t = time.monotonic()
+            done = subprocess.run([sys.executable, "-c", code], env=self.env,
+                                  capture_output=True, text=True)
+            if done.returncode != 0:
+                raise run.CaseError(f"python -c {code!r}: {done.stderr.strip()[-500:]}")
+            rec[key] = time.monotonic() - t
         return rec
 
     def shell(self) -> Record:
@@ -175,6 +190,27 @@ class Bench:
             run.terminate_pids(run.with_token(self.token))
             raise run.CaseError(f"floor.sh: {exc}") from None
         return rec
+
+
+def breakdown(mgr: Any, n: int, launched: float, line: float) -> Record:
+    """Where the manager's time went, from every process's recorded transitions (wall-clock
+    times): launch -> first `starting`, first `starting` -> last `ready`, last `ready` -> the
+    "all ready" line; and the medians of the hop from a parent's `ready` to its child's
+    `started` and of `started` -> `ready` of one process."""
+    first: list[dict[str, float]] = []
+    for i in range(n):
+        seen: dict[str, float] = {}
+        for t in mgr.history(f"p{i}"):
+            seen.setdefault(t["state"], t["time"])
+        if not {"starting", "started", "ready"} <= seen.keys():
+            raise run.CaseError(f"p{i}: history without starting/started/ready: {seen}")
+        first.append(seen)
+    start = min(s["starting"] for s in first)
+    ready = max(s["ready"] for s in first)
+    return {"mgr_to_first_start": start - launched, "mgr_tree": ready - start,
+            "mgr_report": line - ready,
+            "mgr_hop": statistics.median(first[i]["started"] - first[run.parent(i)]["ready"]
+                                         for i in range(1, n)) if n > 1 else 0.0}
 
 
 class Daemon:
@@ -256,7 +292,7 @@ def table(summary: dict[str, Record], cold: Record, n: int, rounds: int) -> list
     else:
         out.append(f"{'ln_manager -c: launch -> all ready':<38}{ms(cold['mgr_ready']):>9}"
                    f"{'':>18}  cold daemon (started by the manager), once; of which "
-                   f"{ms(cold['mgr_to_first_spawn'])} ms to the first start")
+                   f"{ms(cold['mgr_to_first_start'])} ms to the first start")
     return out
 
 
@@ -339,11 +375,16 @@ def main() -> int:
     bench = Bench(args, tmp, prog)
     daemon: Daemon | None = None
     try:
-        daemon = Daemon(tmp)
+        try:
+            daemon = Daemon(tmp)
+        except (run.CaseError, dc.DaemonError, OSError) as exc:
+            print(f"bench_startup: cannot start the warm ln_daemon: {exc}", file=sys.stderr)
+            return 1
         daemon_pids.append(daemon.proc.pid)
         log(f"warm ln_daemon pid {daemon.proc.pid} on port {daemon.port}; warm-up round")
         attempt(warmup, "ln_manager", "warm-up", bench.manager, daemon.port, daemon.key_file)
         attempt(warmup, "shell", "warm-up", bench.shell)
+        attempt(warmup, "python", "warm-up", bench.python)
         log("cold round: the manager starts its own ln_daemon")
         cold, pids = cold_round(bench, tmp)
         daemon_pids += pids
@@ -351,8 +392,8 @@ def main() -> int:
         for rnd in range(rounds):
             log(f"round {rnd + 1}/{rounds}")
             cases = [("ln_manager", bench.manager, daemon.port, daemon.key_file),
-                     ("shell", bench.shell)]
-            for kind, fn, *fn_args in (cases if rnd % 2 == 0 else cases[::-1]):
+                     ("shell", bench.shell), ("python", bench.python)]
+            for kind, fn, *fn_args in cases[rnd % 3:] + cases[:rnd % 3]:
                 attempt(runs, kind, rnd, fn, *fn_args)
     finally:
         for child in bench.managers:
