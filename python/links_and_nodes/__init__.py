@@ -5,7 +5,8 @@
     pub = clnt.publish("robot.state", "robot/joint_state")
     svc = clnt.get_service("robot.set_gains", "robot/set_gains")
 
-Importing the package does not load libln: generated message modules work without it.
+Importing the package loads neither libln nor numpy: generated message modules work
+without libln.
 The library is loaded (and its version checked) the first time something that needs it
 is used: `ln.client`, `ln.service_provider` (or another class of the client API), or one
 of the exception classes generated from libln's error table (``ln.LnTimeoutError`` is
@@ -16,7 +17,6 @@ the class for ``LN_ETIMEOUT``: "Ln" + table name without its leading E, capitali
 from typing import Any
 
 from .errors import LibraryNotFoundError, LnError
-from .md_loader import add_message_definition_dir, message_class
 
 __version__ = "0.1.0"
 
@@ -25,11 +25,17 @@ __all__ = ["LibraryNotFoundError", "LnError", "__version__", "add_message_defini
            "service_provider", "service_request", "subscriber"]
 
 _CLIENT_NAMES = ("client", "publisher", "subscriber")
+_MD_NAMES = ("add_message_definition_dir", "message_class")
 _SERVICE_NAMES = ("provided_service", "service", "service_provider", "service_request")
 
 
 def __getattr__(name: str) -> Any:
-    # Names that need libln are resolved on first use, which is what loads it.
+    # Names that need libln are resolved on first use, which is what loads it; the message
+    # types (and numpy with them) too, so the manager, which needs neither, starts faster.
+    if name in _MD_NAMES:
+        from . import md_loader
+
+        return getattr(md_loader, name)
     if name in _CLIENT_NAMES:
         from . import _client as _client_module
 

@@ -154,7 +154,8 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
         from .runner import Runner
 
         connect_host = "127.0.0.1" if args.host in ("0.0.0.0", "::", "") else args.host
-        runner = Runner(args, config, core, directory, _address(connect_host, port), shutdown)
+        runner = Runner(args, config, core, directory, _address(connect_host, port), shutdown,
+                        stop)
         server.control = runner.control.handle_json
         await runner.attach()
     print(f"ln_manager: instance {args.instance} listening on {_address(args.host, port)}",

@@ -26,9 +26,11 @@ log = logging.getLogger("ln_manager")
 
 class Runner:
     def __init__(self, args: argparse.Namespace, config: model.Config, core: Core,
-                 runtime_dir: Path, address: str, shutdown: Callable[[bool], None]) -> None:
+                 runtime_dir: Path, address: str, shutdown: Callable[[bool], None],
+                 stopping: asyncio.Event) -> None:
         self.args = args
         self.shutdown = shutdown
+        self.stopping = stopping  # set by SIGTERM/SIGINT/quit: no waiting beyond it
         self.exit_status = 0
         self.pool = DaemonPool(config, args.instance, key_file=args.daemon_key_file,
                                log_dir=runtime_dir)
@@ -52,7 +54,9 @@ class Runner:
             self._console = asyncio.get_running_loop().create_task(self._run_console())
         if self.args.wait_ready:
             try:
-                await self.scheduler.wait_ready("all", self.args.ready_timeout)
+                if not await self._unless_stopping(
+                        self.scheduler.wait_ready("all", self.args.ready_timeout)):
+                    return 0  # asked to stop while waiting
             except (StartError, TimeoutError) as exc:
                 text = str(exc) or "not ready within --ready-timeout"
                 print(f"ln_manager: not all processes ready: {text}", flush=True)
@@ -63,6 +67,20 @@ class Runner:
                 print(f"ln_manager: all {len(self.scheduler.procs)} processes ready",
                       flush=True)
         return self.exit_status
+
+    async def _unless_stopping(self, awaitable: Any) -> bool:
+        """Await `awaitable` unless the manager is asked to stop first; False then."""
+        task = asyncio.ensure_future(awaitable)
+        stop = asyncio.ensure_future(self.stopping.wait())
+        done, _ = await asyncio.wait({task, stop}, return_when=asyncio.FIRST_COMPLETED)
+        if task in done:
+            stop.cancel()
+            task.result()  # its exception, if any
+            return True
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError, StartError, TimeoutError):
+            await task
+        return False
 
     def _fail_fast(self, name: str, t: Transition) -> None:
         rt = self.scheduler.procs.get(name)

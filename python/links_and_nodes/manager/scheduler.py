@@ -80,8 +80,9 @@ class Runtime:
     reason: str = ""  # why it is in its state (failure text, "stopped by request", ...)
     exit_code: int | None = None
     exit_signal: int | None = None
-    started_at: float | None = None
-    ready_at: float | None = None
+    started_at: float | None = None  # time.time()
+    ready_at: float | None = None  # time.monotonic(), for the restart count
+    ready_wall: float | None = None  # time.time()
     restarts: int = 0  # restarts in a row
     output: deque[Any] = field(default_factory=deque)
     transitions: list[Transition] = field(default_factory=list)
@@ -97,7 +98,7 @@ class Runtime:
         return {"name": self.cfg.name, "state": self.state.value, "pid": self.pid,
                 "node": self.cfg.node, "reason": self.reason, "exit_code": self.exit_code,
                 "exit_signal": self.exit_signal, "restarts": self.restarts,
-                "started_at": self.started_at, "ready_at": self.ready_at}
+                "started_at": self.started_at, "ready_at": self.ready_wall}
 
 
 @dataclass
@@ -301,6 +302,7 @@ class Scheduler:
         rt.transitions.append(t)
         if state == S.READY:
             rt.ready_at = time.monotonic()
+            rt.ready_wall = t.time
         log.info("process %s: %s%s", rt.cfg.name, state.value, f" ({reason})" if reason else "")
         for listener in list(self.transition_listeners):
             listener(rt.cfg.name, t)

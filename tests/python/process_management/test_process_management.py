@@ -255,3 +255,15 @@ def test_daemon_killed_marks_its_processes_failed(lab: Lab) -> None:
         mgr.quit()
     for pid in pids_with(lab.instance):  # what the killed daemon left behind
         os.kill(pid, signal.SIGKILL)
+
+
+def test_sigterm_ends_wait_ready(lab: Lab) -> None:
+    body = process("never", "ready", "up", marker=lab.instance, extra="ready_regex: nope")
+    config = lab.write(body)
+    proc = lab.manager(config, "--no-console", "--start-all", "--wait-ready")
+    lab.wait_listening(proc)
+    with lab.connect() as mgr:
+        wait_for(lambda: mgr.state("never") == "started", "the process to run")
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=LIMIT) == 0
+    wait_for(lambda: pids_with(lab.instance) == [], "the process stopped with the manager")
