@@ -89,6 +89,8 @@ class Runtime:
     stop_requested: bool = False
     stopped_for: str | None = None  # dependency whose loss stopped it (restarted with it)
     watchdog_fired: str | None = None  # why the watchdog is stopping it (then restarts it)
+    daemon_record: bool = False  # the daemon may still hold a record of an earlier run
+    early_exit: Any = None  # an exit event that came before the daemon's spawn answer
     regex: re.Pattern[str] | None = None
     regex_seen: bool = False
     task: asyncio.Task[None] | None = None  # starting (dependencies, spawn, readiness)
@@ -414,11 +416,14 @@ class Scheduler:
                          cfg.output_log.keep_count) if cfg.output_log else None),
             term_signal=cfg.term_signal, term_timeout=cfg.term_timeout)
         # A record of an earlier run of this name would answer SPAWN with "exists".
-        with contextlib.suppress(self.backend.error_type):
-            await link.forget(cfg.name)
+        if rt.daemon_record:
+            with contextlib.suppress(self.backend.error_type):
+                await link.forget(cfg.name)
+            rt.daemon_record = False
         # Reset before the spawn, not after: the new run's first output can be handled
         # before this task resumes with the daemon's answer.
         rt.regex_seen = False
+        rt.early_exit = None
         spawning = asyncio.ensure_future(link.spawn(spec))
         try:
             info = await asyncio.shield(spawning)
@@ -432,9 +437,14 @@ class Scheduler:
                 await link.stop(cfg.name)
             raise
         rt.pid = info.pid
+        rt.daemon_record = True
         rt.started_at = time.time()
         rt.exit_code = rt.exit_signal = None
+        early, rt.early_exit = rt.early_exit, None
         if rt.state != S.STARTING:  # stopped (or exited) while the spawn was on its way
+            return
+        if early is not None and early.pid == info.pid:  # it has already exited
+            self._on_exit(rt, early.exit_code, early.signal)
             return
         if not cfg.has_readiness:
             self._set(rt, S.READY, "started (no readiness condition)")
@@ -594,8 +604,12 @@ class Scheduler:
                 waiter.set_result(event)
                 return
             rt = self.procs.get(event.name)
-            if rt is not None and rt.pid == event.pid:
+            if rt is None:
+                return
+            if rt.pid == event.pid:
                 self._on_exit(rt, event.exit_code, event.signal)
+            elif rt.state == S.STARTING:
+                rt.early_exit = event  # the spawn answer is still on its way
 
     def _on_exit(self, rt: Runtime, code: int | None, sig: int | None) -> None:
         rt.exit_code, rt.exit_signal = code, sig
@@ -740,6 +754,7 @@ class Scheduler:
         return self._limiters[host]
 
     async def _adopt(self, rt: Runtime, link: DaemonLink, info: Any) -> None:
+        rt.daemon_record = True
         recent = await link.output(info.name, rt.cfg.max_output_lines)
         rt.output.extend(recent)
         rt.started_at = info.started

@@ -82,6 +82,8 @@ class FakeDaemon:
         self.queue: asyncio.Queue[object] = asyncio.Queue()
         self.spawned: list[str] = []  # names in spawn order
         self.fail_spawn: set[str] = set()
+        # names whose spawn answer comes only after the process's output and exit events
+        self.late_answer: set[str] = set()
 
     def events(self) -> asyncio.Queue[object]:
         return self.queue
@@ -98,7 +100,13 @@ class FakeDaemon:
         p = _Proc(spec, proc, time.time(), deque(maxlen=spec.max_output_lines))
         self.procs[spec.name] = p
         self.spawned.append(spec.name)
-        asyncio.get_running_loop().create_task(self._watch(p))
+        watch = asyncio.get_running_loop().create_task(self._watch(p))
+        if spec.name in self.late_answer:
+            # answer only after the first output (or the exit) went to the scheduler
+            while not (p.lines or watch.done()) or not self.queue.empty():
+                await asyncio.sleep(0.001)
+            if not watch.done():
+                await asyncio.sleep(0.01)  # and maybe the exit too
         return Info(spec.name, proc.pid, "running", None, None, p.started)
 
     async def _watch(self, p: _Proc) -> None:

@@ -295,3 +295,15 @@ async def test_reload_adds_changes_and_removes(world_factory: list[World]) -> No
     assert w.sched.procs["a"].cfg.command == "sleep 61"
     w.sched.start("c")
     await w.sched.wait_ready("all", LIMIT)
+
+
+async def test_output_and_exit_before_the_spawn_answer(world_factory: list[World]) -> None:
+    """The daemon's events may overtake its answer to SPAWN; none of them may be lost."""
+    w = make(world_factory, proc("quick", "sh -c 'echo go; exit 4'"),
+             proc("gated", "sh -c 'echo go; sleep 60'", ready_regex="go"))
+    w.daemon.late_answer |= {"quick", "gated"}
+    w.sched.start("quick")
+    await w.sched.wait(["quick"], {S.FAILED}, LIMIT)
+    assert w.sched.procs["quick"].reason == "exit status 4"
+    w.sched.start("gated")
+    await w.sched.wait_ready("gated", LIMIT)
