@@ -114,7 +114,9 @@ def test_crash_restarts_with_backoff_then_gives_up(lab: Lab) -> None:
 def test_watchdog_restarts_stalled_publisher(lab: Lab) -> None:
     body = process("pub", "publish", "lab.state", "40", marker=lab.instance,
                    extra="ready_regex: ^ready\nwatchdog_topic: lab.state, 50\n"
-                         "restart_delay: 0.05\nrestart_limit: 1")
+                         "restart_delay: 0.05\nrestart_limit: 1\n"
+                         # it imports links_and_nodes: also without an installed copy
+                         "pass_environment: PYTHONPATH")
     with start(lab, body) as mgr:
         mgr.start("pub")
         mgr.wait_ready("pub", LIMIT)
