@@ -337,6 +337,7 @@ class Scheduler:
             return None
         rt.stop_requested = False
         rt.watchdog_fired = None
+        rt.ready_at = None  # the restart count looks at how long this run stays ready
         self._set(rt, S.STARTING)
         rt.task = asyncio.get_running_loop().create_task(self._start(rt))
         return rt.task

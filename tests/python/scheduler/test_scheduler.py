@@ -7,14 +7,16 @@ from __future__ import annotations
 
 import asyncio
 import sys
+import time
 from collections.abc import AsyncIterator, Callable
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
 from links_and_nodes.manager.config import model
 from links_and_nodes.manager.process_states import ProcState as S
-from links_and_nodes.manager.scheduler import Scheduler, StartError
+from links_and_nodes.manager.scheduler import Scheduler, StartError, Transition
 
 from .fake_daemon import FakeDaemon, FakeRegistry, Info, Spec, backend
 
@@ -307,3 +309,32 @@ async def test_output_and_exit_before_the_spawn_answer(world_factory: list[World
     assert w.sched.procs["quick"].reason == "exit status 4"
     w.sched.start("gated")
     await w.sched.wait_ready("gated", LIMIT)
+
+
+async def test_old_ready_period_does_not_reset_the_restart_count(
+        world_factory: list[World], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """"Stayed ready for 10 s" is about the run that just ended: a process that was ready
+    once and then keeps failing before it gets ready again still gives up.  The scheduler's
+    monotonic clock is the test's: every failure advances it by 6 s."""
+    from links_and_nodes.manager import scheduler as sched_mod
+
+    now = [0.0]
+    monkeypatch.setattr(sched_mod, "time",
+                        SimpleNamespace(time=time.time, monotonic=lambda: now[0]))
+    marker, gate = tmp_path / "ran", tmp_path / "gate"
+    cmd = (f"sh -c 'if [ -e {marker} ]; then exit 1; fi; touch {marker}; echo up; "
+           f"while [ ! -e {gate} ]; do sleep 0.01; done; exit 1'")
+    w = make(world_factory, proc("p", cmd, ready_regex="^up", restart=model.Restart.ON_FAILURE,
+                                 restart_limit=2, restart_delay=0.01))
+
+    def advance(name: str, t: Transition) -> None:
+        if t.state == S.FAILED:
+            now[0] += 6.0
+    w.sched.transition_listeners.append(advance)
+    w.sched.start("p")
+    await w.sched.wait_ready("p", LIMIT)  # ready at 0 s
+    gate.touch()  # fails at 6 s, then before being ready at 12 s, 18 s, ...
+    rt = w.sched.procs["p"]
+    await until(lambda: "gave up" in rt.reason or w.daemon.spawned.count("p") > 3)
+    assert w.daemon.spawned == ["p"] * 3
+    assert "gave up after 2 restarts" in rt.reason
