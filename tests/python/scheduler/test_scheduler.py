@@ -338,3 +338,81 @@ async def test_old_ready_period_does_not_reset_the_restart_count(
     await until(lambda: "gave up" in rt.reason or w.daemon.spawned.count("p") > 3)
     assert w.daemon.spawned == ["p"] * 3
     assert "gave up after 2 restarts" in rt.reason
+
+
+def crash_once(tmp_path: Path, gate: Path) -> str:
+    """A command that runs until `gate` exists and then fails, the first time; after that
+    it just runs."""
+    marker = tmp_path / f"{gate.name}-ran"
+    return (f"sh -c 'if [ -e {marker} ]; then exec sleep 60; fi; touch {marker}; "
+            f"while [ ! -e {gate} ]; do sleep 0.01; done; exit 1'")
+
+
+def slow_to_stop(tmp_path: Path, gate: Path) -> str:
+    """A command that, sent SIGTERM, exits only once `gate` exists."""
+    script = tmp_path / f"{gate.name}.py"
+    script.write_text(f"import os, signal, time\n"
+                      f"def term(*_):\n"
+                      f"    while not os.path.exists({str(gate)!r}): time.sleep(0.01)\n"
+                      f"    raise SystemExit(0)\n"
+                      f"signal.signal(signal.SIGTERM, term)\n"
+                      f"print('up', flush=True)\n"
+                      f"while True: time.sleep(1)\n")
+    return f"{PY} {script}"
+
+
+async def test_stopped_dependent_stays_stopped_when_its_dependency_returns(
+        world_factory: list[World], tmp_path: Path) -> None:
+    """A dependent stopped because its dependency went down comes back with it, unless it
+    was stopped on request meanwhile."""
+    gate = tmp_path / "crash"
+    w = make(world_factory, proc("a", crash_once(tmp_path, gate)),
+             proc("b", depends_on=["a"]))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    gate.touch()
+    await w.sched.wait(["a", "b"], {S.FAILED, S.STOPPED}, LIMIT)
+    await w.sched.stop("b")
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    assert w.sched.procs["b"].state == S.STOPPED
+    assert w.daemon.spawned == ["a", "b", "a"]
+
+
+async def test_stop_request_during_a_dependency_loss_stop_returns(
+        world_factory: list[World], tmp_path: Path) -> None:
+    """`stop b` while b is being stopped because its dependency crashed: b stays stopped
+    even though the dependency is ready again by then, and the stop returns."""
+    crash, release = tmp_path / "crash", tmp_path / "release"
+    w = make(world_factory, proc("a", crash_once(tmp_path, crash),
+                                 restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             proc("b", slow_to_stop(tmp_path, release), depends_on=["a"],
+                  ready_regex="^up", term_timeout=LIMIT))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    crash.touch()
+    await w.sched.wait(["b"], {S.STOPPING}, LIMIT)
+    stopping = asyncio.create_task(w.sched.stop("b"))
+    await until(lambda: w.daemon.spawned.count("a") == 2)
+    await w.sched.wait(["a"], {S.READY}, LIMIT)
+    release.touch()
+    await until(lambda: stopping.done() or w.daemon.spawned.count("b") > 1)
+    assert w.daemon.spawned.count("b") == 1 and w.sched.procs["b"].state == S.STOPPED
+    assert await stopping == ["b"]
+
+
+async def test_lost_dependency_restores_the_whole_chain(world_factory: list[World],
+                                                        tmp_path: Path) -> None:
+    """a <- b <- c: when a crashes both b and c are stopped, and both come back with a."""
+    gate = tmp_path / "crash"
+    w = make(world_factory, proc("a", crash_once(tmp_path, gate),
+                                 restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             proc("b", depends_on=["a"]), proc("c", depends_on=["b"]))
+    w.sched.start("c")
+    await w.sched.wait_ready("all", LIMIT)
+    gate.touch()
+    await until(lambda: w.daemon.spawned.count("b") == 2)
+    await w.sched.wait(["b"], {S.READY}, LIMIT)
+    assert w.sched.procs["c"].state != S.STOPPED  # started as soon as b was ready
+    await w.sched.wait_ready("all", LIMIT)
+    assert w.daemon.spawned == ["a", "b", "c", "a", "b", "c"]
