@@ -337,6 +337,7 @@ class Scheduler:
             return None
         rt.stop_requested = False
         rt.watchdog_fired = None
+        rt.ready_at = None  # the restart count looks at how long this run stays ready
         self._set(rt, S.STARTING)
         rt.task = asyncio.get_running_loop().create_task(self._start(rt))
         return rt.task
@@ -561,14 +562,23 @@ class Scheduler:
     def _dependents(self, name: str) -> list[Runtime]:
         return [rt for rt in self.procs.values() if name in rt.cfg.depends_on]
 
-    async def _stop(self, rt: Runtime, reason: str, *, force: bool = False) -> None:
+    async def _stop(self, rt: Runtime, reason: str, *, force: bool = False,
+                    restore: bool = False) -> None:
+        """Stop rt, dependents first.  `restore`: it is stopped because a dependency went
+        down (rt.stopped_for) and comes back with it, and so do its dependents; any other
+        stop keeps it down whatever its dependencies do."""
         if "disable_stop" in rt.cfg.flags and not force and reason == "stopped by request":
             raise StartError(f"{rt.cfg.name} has the flag disable_stop")
+        if not restore:
+            rt.stopped_for = None
+        rt.stop_requested = True  # before its dependents stop: they must not come back yet
         # dependents first
-        await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped", force=force)
-                               for d in self._dependents(rt.cfg.name)
-                               if d.state not in STARTABLE))
-        rt.stop_requested = True
+        dependents = [d for d in self._dependents(rt.cfg.name) if d.state not in STARTABLE]
+        if restore:
+            for d in dependents:
+                d.stopped_for = rt.cfg.name
+        await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped", force=force,
+                                          restore=restore) for d in dependents))
         self._cancel_side(rt)
         if rt.task is not None and not rt.task.done() and rt.task is not asyncio.current_task():
             rt.task.cancel()
@@ -576,6 +586,7 @@ class Scheduler:
                 await rt.task
         if rt.state == S.STARTING:
             self._set(rt, S.STOPPED, reason)
+        if rt.state in STARTABLE:
             self._restore(rt)
         if rt.state in (S.STARTED, S.READY):
             self._set(rt, S.STOPPING, reason)
@@ -584,7 +595,9 @@ class Scheduler:
             except (OSError, self.backend.error_type) as exc:
                 log.warning("process %s: stop failed: %s", rt.cfg.name, exc)
         if rt.state == S.STOPPING:
-            await self.wait([rt.cfg.name], {S.STOPPED, S.FINISHED, S.FAILED})
+            # not "until stopped": a restored dependent may be starting again at once
+            async with self._changed:
+                await self._changed.wait_for(lambda: rt.state != S.STOPPING)
 
     # ---- daemon events -------------------------------------------------------------------
     def _on_event(self, event: Any) -> None:
@@ -650,7 +663,8 @@ class Scheduler:
         """A dependent stopped because its dependency went down comes back as soon as the
         dependency is ready again (which may already be the case when its stop completes)."""
         dep = self.procs.get(rt.stopped_for) if rt.stopped_for else None
-        if dep is not None and dep.state == S.READY and rt.state in STARTABLE:
+        if dep is not None and dep.state == S.READY and not dep.stop_requested \
+                and rt.state in STARTABLE:
             rt.stopped_for = None
             self._launch(rt)
 
@@ -660,7 +674,7 @@ class Scheduler:
             if d.state not in STARTABLE:
                 d.stopped_for = rt.cfg.name
                 self._background(asyncio.get_running_loop().create_task(
-                    self._stop(d, f"dependency {rt.cfg.name} went down")))
+                    self._stop(d, f"dependency {rt.cfg.name} went down", restore=True)))
 
     def _schedule_restart(self, rt: Runtime) -> None:
         if rt.ready_at is not None and time.monotonic() - rt.ready_at >= STABLE_AFTER:

@@ -7,14 +7,16 @@ from __future__ import annotations
 
 import asyncio
 import sys
+import time
 from collections.abc import AsyncIterator, Callable
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
 from links_and_nodes.manager.config import model
 from links_and_nodes.manager.process_states import ProcState as S
-from links_and_nodes.manager.scheduler import Scheduler, StartError
+from links_and_nodes.manager.scheduler import Scheduler, StartError, Transition
 
 from .fake_daemon import FakeDaemon, FakeRegistry, Info, Spec, backend
 
@@ -307,3 +309,110 @@ async def test_output_and_exit_before_the_spawn_answer(world_factory: list[World
     assert w.sched.procs["quick"].reason == "exit status 4"
     w.sched.start("gated")
     await w.sched.wait_ready("gated", LIMIT)
+
+
+async def test_old_ready_period_does_not_reset_the_restart_count(
+        world_factory: list[World], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """"Stayed ready for 10 s" is about the run that just ended: a process that was ready
+    once and then keeps failing before it gets ready again still gives up.  The scheduler's
+    monotonic clock is the test's: every failure advances it by 6 s."""
+    from links_and_nodes.manager import scheduler as sched_mod
+
+    now = [0.0]
+    monkeypatch.setattr(sched_mod, "time",
+                        SimpleNamespace(time=time.time, monotonic=lambda: now[0]))
+    marker, gate = tmp_path / "ran", tmp_path / "gate"
+    cmd = (f"sh -c 'if [ -e {marker} ]; then exit 1; fi; touch {marker}; echo up; "
+           f"while [ ! -e {gate} ]; do sleep 0.01; done; exit 1'")
+    w = make(world_factory, proc("p", cmd, ready_regex="^up", restart=model.Restart.ON_FAILURE,
+                                 restart_limit=2, restart_delay=0.01))
+
+    def advance(name: str, t: Transition) -> None:
+        if t.state == S.FAILED:
+            now[0] += 6.0
+    w.sched.transition_listeners.append(advance)
+    w.sched.start("p")
+    await w.sched.wait_ready("p", LIMIT)  # ready at 0 s
+    gate.touch()  # fails at 6 s, then before being ready at 12 s, 18 s, ...
+    rt = w.sched.procs["p"]
+    await until(lambda: "gave up" in rt.reason or w.daemon.spawned.count("p") > 3)
+    assert w.daemon.spawned == ["p"] * 3
+    assert "gave up after 2 restarts" in rt.reason
+
+
+def crash_once(tmp_path: Path, gate: Path) -> str:
+    """A command that runs until `gate` exists and then fails, the first time; after that
+    it just runs."""
+    marker = tmp_path / f"{gate.name}-ran"
+    return (f"sh -c 'if [ -e {marker} ]; then exec sleep 60; fi; touch {marker}; "
+            f"while [ ! -e {gate} ]; do sleep 0.01; done; exit 1'")
+
+
+def slow_to_stop(tmp_path: Path, gate: Path) -> str:
+    """A command that, sent SIGTERM, exits only once `gate` exists."""
+    script = tmp_path / f"{gate.name}.py"
+    script.write_text(f"import os, signal, time\n"
+                      f"def term(*_):\n"
+                      f"    while not os.path.exists({str(gate)!r}): time.sleep(0.01)\n"
+                      f"    raise SystemExit(0)\n"
+                      f"signal.signal(signal.SIGTERM, term)\n"
+                      f"print('up', flush=True)\n"
+                      f"while True: time.sleep(1)\n")
+    return f"{PY} {script}"
+
+
+async def test_stopped_dependent_stays_stopped_when_its_dependency_returns(
+        world_factory: list[World], tmp_path: Path) -> None:
+    """A dependent stopped because its dependency went down comes back with it, unless it
+    was stopped on request meanwhile."""
+    gate = tmp_path / "crash"
+    w = make(world_factory, proc("a", crash_once(tmp_path, gate)),
+             proc("b", depends_on=["a"]))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    gate.touch()
+    await w.sched.wait(["a", "b"], {S.FAILED, S.STOPPED}, LIMIT)
+    await w.sched.stop("b")
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    assert w.sched.procs["b"].state == S.STOPPED
+    assert w.daemon.spawned == ["a", "b", "a"]
+
+
+async def test_stop_request_during_a_dependency_loss_stop_returns(
+        world_factory: list[World], tmp_path: Path) -> None:
+    """`stop b` while b is being stopped because its dependency crashed: b stays stopped
+    even though the dependency is ready again by then, and the stop returns."""
+    crash, release = tmp_path / "crash", tmp_path / "release"
+    w = make(world_factory, proc("a", crash_once(tmp_path, crash),
+                                 restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             proc("b", slow_to_stop(tmp_path, release), depends_on=["a"],
+                  ready_regex="^up", term_timeout=LIMIT))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    crash.touch()
+    await w.sched.wait(["b"], {S.STOPPING}, LIMIT)
+    stopping = asyncio.create_task(w.sched.stop("b"))
+    await until(lambda: w.daemon.spawned.count("a") == 2)
+    await w.sched.wait(["a"], {S.READY}, LIMIT)
+    release.touch()
+    await until(lambda: stopping.done() or w.daemon.spawned.count("b") > 1)
+    assert w.daemon.spawned.count("b") == 1 and w.sched.procs["b"].state == S.STOPPED
+    assert await stopping == ["b"]
+
+
+async def test_lost_dependency_restores_the_whole_chain(world_factory: list[World],
+                                                        tmp_path: Path) -> None:
+    """a <- b <- c: when a crashes both b and c are stopped, and both come back with a."""
+    gate = tmp_path / "crash"
+    w = make(world_factory, proc("a", crash_once(tmp_path, gate),
+                                 restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             proc("b", depends_on=["a"]), proc("c", depends_on=["b"]))
+    w.sched.start("c")
+    await w.sched.wait_ready("all", LIMIT)
+    gate.touch()
+    await until(lambda: w.daemon.spawned.count("b") == 2)
+    await w.sched.wait(["b"], {S.READY}, LIMIT)
+    assert w.sched.procs["c"].state != S.STOPPED  # started as soon as b was ready
+    await w.sched.wait_ready("all", LIMIT)
+    assert w.daemon.spawned == ["a", "b", "c", "a", "b", "c"]
