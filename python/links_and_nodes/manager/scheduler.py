@@ -306,8 +306,7 @@ class Scheduler:
             rt.ready_at = time.monotonic()
             rt.ready_wall = t.time
         log.info("process %s: %s%s", rt.cfg.name, state.value, f" ({reason})" if reason else "")
-        for listener in list(self.transition_listeners):
-            listener(rt.cfg.name, t)
+        _tell(self.transition_listeners, rt.cfg.name, t)
         self._notify()
 
     def _notify(self) -> None:
@@ -353,6 +352,11 @@ class Scheduler:
         except StartError as exc:
             if rt.state == S.STARTING:
                 self._set(rt, S.FAILED, str(exc))
+                self._after_failure(rt)
+        except Exception as exc:  # a bug, or a request the daemon client cannot encode
+            log.exception("process %s: cannot start", rt.cfg.name)
+            if rt.state == S.STARTING:
+                self._set(rt, S.FAILED, f"cannot start: {exc}")
                 self._after_failure(rt)
 
     async def _dependencies(self, rt: Runtime) -> None:
@@ -606,8 +610,7 @@ class Scheduler:
             if rt is None:
                 return
             rt.output.append(event)
-            for listener in list(self.output_listeners):
-                listener(event.name, event)
+            _tell(self.output_listeners, event.name, event)
             if rt.regex is not None and not rt.regex_seen and rt.regex.search(event.text):
                 rt.regex_seen = True
                 self._check_ready(rt)
@@ -685,8 +688,7 @@ class Scheduler:
             t = Transition(time.time(), rt.state, reason)
             rt.transitions.append(t)
             log.warning("process %s: %s", rt.cfg.name, reason)
-            for listener in list(self.transition_listeners):
-                listener(rt.cfg.name, t)
+            _tell(self.transition_listeners, rt.cfg.name, t)
             self._notify()
             return
         delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * (2 ** rt.restarts))
@@ -802,6 +804,15 @@ class Scheduler:
                 out.append(member)
             elif member in self.config.groups:
                 self._group_members(member, out, seen)
+
+
+def _tell(listeners: list[Callable[..., None]], *args: Any) -> None:
+    """Call every listener; one that raises must not stop the others or the scheduler."""
+    for listener in list(listeners):
+        try:
+            listener(*args)
+        except Exception:
+            log.exception("listener %r failed", listener)
 
 
 _SIGNALS = {int(s) for s in signal.Signals}

@@ -416,3 +416,40 @@ async def test_lost_dependency_restores_the_whole_chain(world_factory: list[Worl
     assert w.sched.procs["c"].state != S.STOPPED  # started as soon as b was ready
     await w.sched.wait_ready("all", LIMIT)
     assert w.daemon.spawned == ["a", "b", "c", "a", "b", "c"]
+
+
+class BrokenSpawnDaemon(FakeDaemon):
+    """Its SPAWN fails with an exception that is not the backend's error type (as a
+    spawn spec the client cannot encode would)."""
+
+    async def spawn(self, spec: Spec) -> Info:
+        raise UnicodeEncodeError("utf-8", "\udcff", 0, 1, "surrogates not allowed")
+
+
+async def test_unexpected_start_error_fails_the_process(world_factory: list[World]) -> None:
+    w = World(config(proc("a"), proc("b", depends_on=["a"])), BrokenSpawnDaemon())
+    world_factory.append(w)
+    w.sched.start("b")
+    tasks = [w.sched.procs[n].task for n in "ab"]
+    await asyncio.wait([t for t in tasks if t is not None], timeout=LIMIT)
+    assert [w.sched.procs[n].state for n in "ab"] == [S.FAILED, S.FAILED]
+    assert "surrogates not allowed" in w.sched.procs["a"].reason
+    with pytest.raises(StartError):
+        await w.sched.wait_ready("b", LIMIT)
+
+
+async def test_failing_listener_does_not_break_supervision(world_factory: list[World]) -> None:
+    """A listener that raises (say, printing to a closed stdout) neither hides a ready
+    line nor leaves a transition half done."""
+    w = make(world_factory, proc("a", "sh -c 'echo up; exec sleep 60'", ready_regex="^up"),
+             proc("b", "sh -c 'exit 3'", restart=model.Restart.ON_FAILURE, restart_limit=1,
+                  restart_delay=0.01))
+
+    def broken(*_: object) -> None:
+        raise BrokenPipeError("stdout is gone")
+    w.sched.output_listeners.insert(0, broken)
+    w.sched.transition_listeners.insert(0, broken)
+    w.sched.start("all")
+    await w.sched.wait_ready("a", LIMIT)
+    await until(lambda: "gave up" in w.sched.procs["b"].reason)
+    assert w.daemon.spawned.count("b") == 2
