@@ -641,6 +641,8 @@ class DaemonClient:
             self._task.cancel()
         with contextlib.suppress(asyncio.CancelledError):
             await self._task
+        # a reader cancelled before it ever ran did not get to shut the connection down
+        self._shutdown("connection closed")
         with contextlib.suppress(OSError):
             await self._writer.wait_closed()
 
