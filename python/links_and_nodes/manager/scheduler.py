@@ -334,6 +334,7 @@ class Scheduler:
             return rt.task
         if rt.state not in STARTABLE:
             return None
+        self._cancel_side(rt)  # a pending restart: this start is it
         rt.stop_requested = False
         rt.watchdog_fired = None
         rt.ready_at = None  # the restart count looks at how long this run stays ready

@@ -453,3 +453,18 @@ async def test_failing_listener_does_not_break_supervision(world_factory: list[W
     await w.sched.wait_ready("a", LIMIT)
     await until(lambda: "gave up" in w.sched.procs["b"].reason)
     assert w.daemon.spawned.count("b") == 2
+
+
+async def test_start_replaces_a_pending_restart(world_factory: list[World]) -> None:
+    """A start while a restart is pending is that restart: the pending one does not start
+    the process once more (after its limit, or out of its back-off)."""
+    w = make(world_factory, proc("p", "sh -c 'exit 1'", restart=model.Restart.ON_FAILURE,
+                                 restart_limit=1, restart_delay=5.0))
+    rt = w.sched.procs["p"]
+    w.sched.start("p")
+    await w.sched.wait(["p"], {S.FAILED}, LIMIT)  # its restart is due in 5 s
+    w.daemon.fail_spawn.add("p")
+    w.sched.start("p")
+    await until(lambda: "gave up" in rt.reason)
+    await until(lambda: not rt.side_tasks)
+    assert w.log.count(("p", S.STARTING)) == 2 and rt.state == S.FAILED
