@@ -90,6 +90,7 @@ class Runtime:
     stopped_for: str | None = None  # dependency whose loss stopped it (restarted with it)
     watchdog_fired: str | None = None  # why the watchdog is stopping it (then restarts it)
     daemon_record: bool = False  # the daemon may still hold a record of an earlier run
+    link: Any = None  # the daemon connection it was started (or found) through
     early_exit: Any = None  # an exit event that came before the daemon's spawn answer
     regex: re.Pattern[str] | None = None
     regex_seen: bool = False
@@ -153,7 +154,8 @@ class Scheduler:
         self._event_tasks: dict[int, asyncio.Task[None]] = {}
         self._links: dict[str, DaemonLink] = {}
         self._transient = 0
-        self._waiters: dict[str, asyncio.Future[Any]] = {}  # transient runs (state commands)
+        # transient runs (state commands): their exit, and the daemon connection they use
+        self._waiters: dict[str, tuple[asyncio.Future[Any], DaemonLink]] = {}
         self.output_listeners: list[Callable[[str, Any], None]] = []
         self.transition_listeners: list[Callable[[str, Transition], None]] = []
         registry.listeners.append(self._registry_changed)
@@ -443,6 +445,7 @@ class Scheduler:
                 await link.stop(cfg.name)
             raise
         rt.pid = info.pid
+        rt.link = link
         rt.daemon_record = True
         rt.started_at = time.time()
         rt.exit_code = rt.exit_signal = None
@@ -547,7 +550,7 @@ class Scheduler:
         except (OSError, self.backend.error_type) as exc:
             raise StartError(f"{label}: {exc}") from None
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        self._waiters[name] = future
+        self._waiters[name] = (future, link)
         env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
         env["LN_MANAGER"] = self.manager_address
         spec = self.backend.spawn_spec(name=name, command=command, shell=True, env=env,
@@ -616,7 +619,7 @@ class Scheduler:
                 rt.regex_seen = True
                 self._check_ready(rt)
         elif isinstance(event, self.backend.exited_type):
-            waiter = self._waiters.get(event.name)
+            waiter, _ = self._waiters.get(event.name, (None, None))
             if waiter is not None and not waiter.done():
                 waiter.set_result(event)
                 return
@@ -744,23 +747,23 @@ class Scheduler:
                 log.exception("handling daemon event %r", event)
 
     def _daemon_lost(self, link: DaemonLink, node: str) -> None:
-        """The daemon connection of `node` ended: what ran there is unknown now.  Those
-        processes fail (and restart by their policy, through a new connection)."""
-        for rt in self.procs.values():
-            if rt.state in ALIVE and self.config.node_map.get(rt.cfg.node, rt.cfg.node) == \
-                    self.config.node_map.get(node, node):
+        """The daemon connection `link` (first used for `node`) ended: what ran through it is
+        unknown now.  Those processes fail (and restart by their policy, through a new
+        connection)."""
+        for rt in list(self.procs.values()):
+            if rt.state in ALIVE and rt.link is link:
                 rt.pid = None
                 self._cancel_side(rt)
                 if rt.stop_requested:
                     self._set(rt, S.STOPPED, "stopped (daemon connection lost)")
                     continue
                 self._set(rt, S.FAILED, f"lost the connection to the ln_daemon of node "
-                                        f"{node!r}")
+                                        f"{rt.cfg.node!r}")
                 self._lost_dependency(rt)
                 if rt.cfg.restart != model.Restart.NEVER:
                     self._schedule_restart(rt)
-        for future in self._waiters.values():
-            if not future.done():
+        for future, used in self._waiters.values():
+            if used is link and not future.done():
                 future.set_exception(StartError(f"lost the ln_daemon of node {node!r}"))
 
     def _limiter(self, node: str) -> RateLimiter:
@@ -772,6 +775,7 @@ class Scheduler:
 
     async def _adopt(self, rt: Runtime, link: DaemonLink, info: Any) -> None:
         rt.daemon_record = True
+        rt.link = link
         recent = await link.output(info.name, rt.cfg.max_output_lines)
         rt.output.extend(recent)
         rt.started_at = info.started

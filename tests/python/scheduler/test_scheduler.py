@@ -468,3 +468,16 @@ async def test_start_replaces_a_pending_restart(world_factory: list[World]) -> N
     await until(lambda: "gave up" in rt.reason)
     await until(lambda: not rt.side_tasks)
     assert w.log.count(("p", S.STARTING)) == 2 and rt.state == S.FAILED
+
+
+async def test_lost_daemon_fails_every_process_it_ran(world_factory: list[World]) -> None:
+    """Two node names for one daemon (say `localhost` and the host's name): when its
+    connection ends, the processes of both are failed."""
+    w = make(world_factory, proc("a", node="localhost"), proc("b", node="thishost"))
+    w.sched.start("all")
+    await w.sched.wait_ready("all", LIMIT)
+    w.daemon.queue.put_nowait(None)  # the connection ended
+    await until(lambda: any(rt.state != S.READY for rt in w.sched.procs.values()))
+    for name in "ab":  # all at once
+        assert w.sched.procs[name].state == S.FAILED
+        assert "lost the connection to the ln_daemon" in w.sched.procs[name].reason
