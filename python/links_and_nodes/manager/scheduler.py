@@ -232,6 +232,7 @@ class Scheduler:
     async def attach(self) -> None:
         """Take over processes a daemon still runs for this instance (a new manager after
         the old one died): their true states and recent output."""
+        found: list[tuple[Runtime, DaemonLink, Any]] = []
         nodes = {rt.cfg.node for rt in self.procs.values()}
         for node in sorted(nodes):
             try:
@@ -242,9 +243,36 @@ class Scheduler:
                 continue
             for info in infos:
                 rt = self.procs.get(info.name)
-                if rt is None or rt.cfg.node != node:
+                if rt is None or rt.cfg.node != node or rt.state != S.STOPPED:
                     continue
-                await self._adopt(rt, link, info)
+                rt.daemon_record = True
+                if info.state in ("running", "stopping"):
+                    rt.pid = info.pid  # an exit from now on clears it (_on_exit)
+                found.append((rt, link, info))
+        adopted = []
+        for rt, link, info in found:
+            try:
+                recent = await link.output(info.name, rt.cfg.max_output_lines)
+            except (OSError, self.backend.error_type) as exc:
+                log.warning("process %s: cannot re-attach: %s", info.name, exc)
+                rt.pid = None
+                continue
+            adopted.append((rt, link, info, recent))
+        # From here on nothing is awaited, so no event comes in between, and every process
+        # has its state before any is found ready (which would start its start_on_ready).
+        for rt, link, info, recent in adopted:
+            self._adopt(rt, link, info, recent)
+        for rt, _, info, _ in adopted:
+            if rt.state != S.STARTED:
+                continue
+            if not rt.cfg.has_readiness:
+                self._set(rt, S.READY, "re-attached (no readiness condition)")
+                self._on_ready(rt, attached=True)
+                continue
+            if rt.cfg.ready_time is not None:
+                left = rt.cfg.ready_time - (time.time() - info.started)
+                self._side(rt, self._ready_timer(rt, max(0.0, left)))
+            self._check_ready(rt, attached=True)
 
     def apply_config(self, config: model.Config) -> dict[str, list[str]]:
         """Take a reloaded configuration: new processes are added (stopped), processes
@@ -468,8 +496,9 @@ class Scheduler:
         await asyncio.sleep(delay)
         self._check_ready(rt)
 
-    def _check_ready(self, rt: Runtime) -> None:
-        """READY once every readiness condition of rt holds."""
+    def _check_ready(self, rt: Runtime, *, attached: bool = False) -> None:
+        """READY once every readiness condition of rt holds (`attached`: found so by a
+        new manager)."""
         if rt.state != S.STARTED:
             return
         cfg = rt.cfg
@@ -492,11 +521,14 @@ class Scheduler:
                 return
             held.append(f"service {cfg.ready_on_service} is registered")
         self._set(rt, S.READY, ", ".join(held))
-        self._on_ready(rt)
+        self._on_ready(rt, attached=attached)
 
-    def _on_ready(self, rt: Runtime) -> None:
-        for name in rt.cfg.start_on_ready:
-            self._launch(self.procs[name])
+    def _on_ready(self, rt: Runtime, *, attached: bool = False) -> None:
+        """Its start_on_ready (unless it was found ready: the manager before did that, or
+        they were stopped since), its watchdog, the dependents its loss stopped."""
+        for name in [] if attached else rt.cfg.start_on_ready:
+            if name in self.procs:
+                self._launch(self.procs[name])
         if rt.cfg.watchdog is not None:
             self._side(rt, self._watchdog(rt, rt.cfg.watchdog))
         # dependents this process's earlier loss stopped come back with it
@@ -773,31 +805,29 @@ class Scheduler:
             self._limiters[host] = RateLimiter(h.process_start_rate_limit if h else None)
         return self._limiters[host]
 
-    async def _adopt(self, rt: Runtime, link: DaemonLink, info: Any) -> None:
-        rt.daemon_record = True
+    def _adopt(self, rt: Runtime, link: DaemonLink, info: Any, recent: list[Any]) -> None:
+        """rt as the daemon has it: `started` (readiness is checked by the caller), or
+        exited (before or while this scheduler attached)."""
         rt.link = link
-        recent = await link.output(info.name, rt.cfg.max_output_lines)
+        newer = [line for line in rt.output if not recent or line.time > recent[-1].time]
+        rt.output.clear()
         rt.output.extend(recent)
+        rt.output.extend(newer)  # came as events while attaching
         rt.started_at = info.started
-        if info.state in ("running", "stopping"):
-            rt.pid = info.pid
+        running = info.state in ("running", "stopping")
+        if running and rt.pid == info.pid:
             if rt.regex is not None:
-                rt.regex_seen = any(rt.regex.search(line.text) for line in recent)
+                rt.regex_seen = rt.regex_seen or any(rt.regex.search(line.text)
+                                                     for line in recent)
             self._set(rt, S.STARTED, f"re-attached to pid {info.pid}")
-            if not rt.cfg.has_readiness:
-                self._set(rt, S.READY, "re-attached (no readiness condition)")
-                self._on_ready(rt)
-            else:
-                if rt.cfg.ready_time is not None:
-                    left = rt.cfg.ready_time - (time.time() - info.started)
-                    self._side(rt, self._ready_timer(rt, max(0.0, left)))
-                self._check_ready(rt)
-        else:
+            return
+        if not running:
             rt.exit_code, rt.exit_signal = info.exit_code, info.signal
-            ok = info.exit_code == 0 and info.signal is None
-            self._set(rt, S.FINISHED if ok else S.FAILED,
-                      f"exited while no manager was attached (exit status {info.exit_code}, "
-                      f"signal {info.signal})")
+        # else it exited while attaching: _on_exit kept its status
+        ok = rt.exit_code == 0 and rt.exit_signal is None
+        self._set(rt, S.FINISHED if ok else S.FAILED,
+                  f"exited while no manager was attached (exit status {rt.exit_code}, "
+                  f"signal {rt.exit_signal})")
 
     # ---- groups ----------------------------------------------------------------------------
     def _group_members(self, group: str, out: list[str], seen: set[str]) -> None:

@@ -142,6 +142,7 @@ class FakeDaemon:
                 for n, p in self.procs.items()]
 
     async def output(self, name: str, n: int = 100) -> list[Line]:
+        await asyncio.sleep(0)  # an answer takes a while: events may come first
         p = self.procs.get(name)
         return list(p.lines)[-n:] if p else []
 

@@ -6,6 +6,8 @@ first."""
 from __future__ import annotations
 
 import asyncio
+import os
+import signal
 import sys
 import time
 from collections.abc import AsyncIterator, Callable
@@ -18,7 +20,7 @@ from links_and_nodes.manager.config import model
 from links_and_nodes.manager.process_states import ProcState as S
 from links_and_nodes.manager.scheduler import Scheduler, StartError, Transition
 
-from .fake_daemon import FakeDaemon, FakeRegistry, Info, Spec, backend
+from .fake_daemon import FakeDaemon, FakeRegistry, Info, Line, Spec, backend
 
 LIMIT = 60.0
 HERE = model.Location("test.lnc", 1, 1)
@@ -481,3 +483,57 @@ async def test_lost_daemon_fails_every_process_it_ran(world_factory: list[World]
     for name in "ab":  # all at once
         assert w.sched.procs[name].state == S.FAILED
         assert "lost the connection to the ln_daemon" in w.sched.procs[name].reason
+
+
+async def running_world(world_factory: list[World], daemon: FakeDaemon,
+                        *procs: model.Process) -> World:
+    """A scheduler that starts everything on `daemon` and is then closed (as a manager that
+    died), and a new one for the same daemon that has not attached yet."""
+    first = World(config(*procs), daemon)
+    world_factory.append(first)
+    first.sched.start("all")
+    await first.sched.wait_ready("all", LIMIT)
+    await first.sched.close()
+    second = World(config(*procs), daemon)
+    world_factory.append(second)
+    return second
+
+
+async def test_attach_does_not_start_what_runs_already(world_factory: list[World]) -> None:
+    """Re-attaching to a ready process with start_on_ready does not start its targets again
+    (they run, or were stopped on purpose)."""
+    w = await running_world(world_factory, FakeDaemon(), proc("a", start_on_ready=["b"]),
+                            proc("b"), proc("c"))
+    pids = {n: p.proc.pid for n, p in w.daemon.procs.items()}
+    await w.daemon.stop("b")
+    await until(lambda: w.daemon.procs["b"].exited is not None)
+    await w.sched.attach()
+    await until(lambda: all(rt.task is None or rt.task.done() for rt in w.sched.procs.values()))
+    assert w.daemon.spawned == ["a", "b", "c"]
+    assert {n: rt.state for n, rt in w.sched.procs.items()} == \
+        {"a": S.READY, "b": S.FAILED, "c": S.READY}
+    assert w.sched.procs["c"].pid == pids["c"]
+
+
+class ExitDuringAttachDaemon(FakeDaemon):
+    """Its process `c` exits while the new scheduler asks for its output (the exit event
+    overtakes the answer)."""
+
+    async def output(self, name: str, n: int = 100) -> list[Line]:
+        lines = await super().output(name, n)
+        p = self.procs[name]
+        if name == "c" and p.exited is None:
+            os.killpg(p.proc.pid, signal.SIGKILL)
+            async with asyncio.timeout(LIMIT):
+                while p.exited is None or not self.queue.empty():
+                    await asyncio.sleep(0.005)
+        return lines
+
+
+async def test_exit_during_attach_is_seen(world_factory: list[World]) -> None:
+    w = await running_world(world_factory, ExitDuringAttachDaemon(), proc("a"), proc("b"),
+                            proc("c"))
+    await w.sched.attach()
+    c = w.sched.procs["c"]
+    assert (c.state, c.pid, c.exit_signal) == (S.FAILED, None, signal.SIGKILL)
+    assert [w.sched.procs[n].state for n in "ab"] == [S.READY, S.READY]
