@@ -88,6 +88,8 @@ class Runtime:
     transitions: list[Transition] = field(default_factory=list)
     stop_requested: bool = False
     stopped_for: str | None = None  # dependency whose loss stopped it (restarted with it)
+    next_cfg: model.Process | None = None  # from a reload while it ran: for its next start
+    removed: bool = False  # no longer configured: goes as soon as it is not running
     watchdog_fired: str | None = None  # why the watchdog is stopping it (then restarts it)
     daemon_record: bool = False  # the daemon may still hold a record of an earlier run
     link: Any = None  # the daemon connection it was started (or found) through
@@ -192,8 +194,10 @@ class Scheduler:
     async def restart(self, target: str) -> list[str]:
         names = await self.stop(target)
         for name in names:
-            self.procs[name].restarts = 0
-            self._launch(self.procs[name])
+            rt = self.procs.get(name)
+            if rt is not None:  # not removed by a reload meanwhile
+                rt.restarts = 0
+                self._launch(rt)
         return names
 
     async def wait(self, names: Iterable[str], states: set[ProcState],
@@ -285,26 +289,39 @@ class Scheduler:
                 rt = Runtime(cfg, output=deque(maxlen=max(1, cfg.max_output_lines)))
                 self.procs[name] = rt
                 added.append(name)
-            elif rt.cfg != cfg:
-                changed.append(name)
-            else:
+            rt.removed = False
+            if (rt.next_cfg or rt.cfg) == cfg:
                 continue
-            rt.cfg = cfg
-            rt.regex = re.compile(cfg.ready_regex) if cfg.ready_regex is not None else None
+            if name not in added:
+                changed.append(name)
+            rt.next_cfg = cfg
+            if rt.state in STARTABLE:
+                self._configure(rt)
         for name in list(self.procs):
             if name not in config.processes:
                 if self.procs[name].state in STARTABLE:
                     del self.procs[name]
                     removed.append(name)
                 else:
+                    self.procs[name].removed = True
                     kept.append(name)
-        for name, st in config.states.items():
-            if name not in self.states or self.states[name].cfg != st:
-                self.states[name] = StateRuntime(st)
+        self.states = {name: (self.states[name] if name in self.states
+                              and self.states[name].cfg == st else StateRuntime(st))
+                       for name, st in config.states.items()}
         self.config = config
         self._limiters.clear()
         return {"added": added, "removed": removed, "changed": changed,
                 "removed_when_stopped": kept}
+
+    def _configure(self, rt: Runtime) -> None:
+        """Give rt the settings of the last reload (before it starts)."""
+        cfg, rt.next_cfg = rt.next_cfg, None
+        if cfg is None:
+            return
+        rt.cfg = cfg
+        rt.regex = re.compile(cfg.ready_regex) if cfg.ready_regex is not None else None
+        if rt.output.maxlen != max(1, cfg.max_output_lines):
+            rt.output = deque(rt.output, maxlen=max(1, cfg.max_output_lines))
 
     async def shutdown(self) -> None:
         """Stop every process the configuration runs (dependents first), except those with
@@ -336,6 +353,9 @@ class Scheduler:
             rt.ready_at = time.monotonic()
             rt.ready_wall = t.time
         log.info("process %s: %s%s", rt.cfg.name, state.value, f" ({reason})" if reason else "")
+        if rt.removed and state in STARTABLE and self.procs.get(rt.cfg.name) is rt:
+            del self.procs[rt.cfg.name]  # removed by a reload while it ran
+            log.info("process %s: removed (no longer configured)", rt.cfg.name)
         _tell(self.transition_listeners, rt.cfg.name, t)
         self._notify()
 
@@ -352,7 +372,7 @@ class Scheduler:
         task.add_done_callback(self._bg.discard)
 
     def _registry_changed(self) -> None:
-        for rt in self.procs.values():
+        for rt in list(self.procs.values()):
             if rt.state == S.STARTED:
                 self._check_ready(rt)
         self._notify()
@@ -362,8 +382,9 @@ class Scheduler:
         """Start rt's start task unless it runs or is up already."""
         if rt.task is not None and not rt.task.done():
             return rt.task
-        if rt.state not in STARTABLE:
-            return None
+        if rt.state not in STARTABLE or self.procs.get(rt.cfg.name) is not rt:
+            return None  # running, or removed by a reload
+        self._configure(rt)
         self._cancel_side(rt)  # a pending restart: this start is it
         rt.stop_requested = False
         rt.watchdog_fired = None
@@ -404,7 +425,9 @@ class Scheduler:
                 raise result
 
     async def _dependency_ready(self, rt: Runtime, dep: str) -> None:
-        d = self.procs[dep]
+        d = self.procs.get(dep)
+        if d is None:  # rt runs on with a configuration from before a reload
+            raise StartError(f"dependency {dep} is no longer configured")
         if d.state not in (S.READY, S.STARTED):
             self._launch(d)
         try:
@@ -413,7 +436,9 @@ class Scheduler:
             raise StartError(f"dependency {dep} did not become ready: {exc}") from None
 
     async def _dependency_finished(self, rt: Runtime, dep: str) -> None:
-        d = self.procs[dep]
+        d = self.procs.get(dep)
+        if d is None:
+            raise StartError(f"{dep} (start_before) is no longer configured")
         if d.state == S.FINISHED:
             return
         if d.state in STARTABLE:

@@ -18,9 +18,18 @@ import pytest
 
 from links_and_nodes.manager.config import model
 from links_and_nodes.manager.process_states import ProcState as S
-from links_and_nodes.manager.scheduler import Scheduler, StartError, Transition
+from links_and_nodes.manager.scheduler import Backend, Scheduler, StartError, Transition
 
-from .fake_daemon import FakeDaemon, FakeRegistry, Info, Line, Spec, backend
+from .fake_daemon import (
+    Exit,
+    FakeDaemon,
+    FakeError,
+    FakeRegistry,
+    Info,
+    Line,
+    Spec,
+    backend,
+)
 
 LIMIT = 60.0
 HERE = model.Location("test.lnc", 1, 1)
@@ -537,3 +546,52 @@ async def test_exit_during_attach_is_seen(world_factory: list[World]) -> None:
     c = w.sched.procs["c"]
     assert (c.state, c.pid, c.exit_signal) == (S.FAILED, None, signal.SIGKILL)
     assert [w.sched.procs[n].state for n in "ab"] == [S.READY, S.READY]
+
+
+async def test_reload_removes_a_running_process_once_it_stopped(
+        world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b"),
+             proc("c", "sh -c 'echo up; sleep 0.2; exit 1'", ready_regex="^up",
+                  restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             states=(model.State("net", HERE, check="true"),))
+    w.sched.start("all")
+    await w.sched.wait(["a", "b", "c"], {S.READY}, LIMIT)
+    result = w.sched.apply_config(config(proc("a")))
+    assert result["removed_when_stopped"] == ["b", "c"]
+    assert w.sched.states == {}
+    assert w.sched.targets("all") == ["a", "b", "c"]  # still running
+    await w.sched.stop("b")
+    # c fails: it goes, and is not restarted
+    await until(lambda: "c" not in w.sched.procs or w.daemon.spawned.count("c") > 1)
+    assert w.sched.targets("all") == ["a"]
+    await until(lambda: not w.sched.procs["a"].side_tasks)
+    assert w.daemon.spawned == ["a", "b", "c"]
+
+
+async def test_reload_changes_a_running_process_at_its_next_start(
+        world_factory: list[World]) -> None:
+    """A running process keeps what it was started with (its node, above all: it is
+    stopped through the daemon that runs it) until it starts again."""
+    daemons = {"n1": FakeDaemon(), "n2": FakeDaemon()}
+
+    async def link(node: str) -> FakeDaemon:
+        return daemons[node]
+    w = World(config(proc("a", node="n1", ready_regex="^up",
+                          command="sh -c 'echo up; exec sleep 60'")), daemons["n1"])
+    w.sched = Scheduler(w.sched.config, w.registry,
+                        Backend(link=link, spawn_spec=Spec, exited_type=Exit, output_type=Line,
+                                error_type=FakeError), manager_address="127.0.0.1:1")
+    world_factory.append(w)
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    result = w.sched.apply_config(config(proc("a", node="n2", ready_regex="^never")))
+    assert result["changed"] == ["a"]
+    stopping = asyncio.create_task(w.sched.stop("a"))
+    await until(lambda: stopping.done() or daemons["n2"].stops)
+    assert await stopping == ["a"] and daemons["n1"].stops == ["a"]
+    assert daemons["n2"].stops == []
+    w.sched.start("a")
+    await w.sched.wait(["a"], {S.STARTED}, LIMIT)
+    assert daemons["n2"].spawned == ["a"]
+    await w.sched.stop("a")
+    await daemons["n2"].kill_all()
