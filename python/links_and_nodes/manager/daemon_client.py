@@ -315,7 +315,9 @@ async def ensure_local_daemon(port: int, key_file: Path, log_file: Path | None =
 
 
 def _str(s: str | bytes) -> bytes:
-    b = s.encode() if isinstance(s, str) else s
+    # surrogateescape: what os.environ, sys.argv and os.fsdecode make of bytes that are
+    # not UTF-8 goes back as those bytes
+    b = s.encode(errors="surrogateescape") if isinstance(s, str) else s
     return struct.pack("<I", len(b)) + b
 
 
@@ -639,6 +641,8 @@ class DaemonClient:
             self._task.cancel()
         with contextlib.suppress(asyncio.CancelledError):
             await self._task
+        # a reader cancelled before it ever ran did not get to shut the connection down
+        self._shutdown("connection closed")
         with contextlib.suppress(OSError):
             await self._writer.wait_closed()
 

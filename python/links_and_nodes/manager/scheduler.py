@@ -88,8 +88,11 @@ class Runtime:
     transitions: list[Transition] = field(default_factory=list)
     stop_requested: bool = False
     stopped_for: str | None = None  # dependency whose loss stopped it (restarted with it)
+    next_cfg: model.Process | None = None  # from a reload while it ran: for its next start
+    removed: bool = False  # no longer configured: goes as soon as it is not running
     watchdog_fired: str | None = None  # why the watchdog is stopping it (then restarts it)
     daemon_record: bool = False  # the daemon may still hold a record of an earlier run
+    link: Any = None  # the daemon connection it was started (or found) through
     early_exit: Any = None  # an exit event that came before the daemon's spawn answer
     regex: re.Pattern[str] | None = None
     regex_seen: bool = False
@@ -153,7 +156,8 @@ class Scheduler:
         self._event_tasks: dict[int, asyncio.Task[None]] = {}
         self._links: dict[str, DaemonLink] = {}
         self._transient = 0
-        self._waiters: dict[str, asyncio.Future[Any]] = {}  # transient runs (state commands)
+        # transient runs (state commands): their exit, and the daemon connection they use
+        self._waiters: dict[str, tuple[asyncio.Future[Any], DaemonLink]] = {}
         self.output_listeners: list[Callable[[str, Any], None]] = []
         self.transition_listeners: list[Callable[[str, Transition], None]] = []
         registry.listeners.append(self._registry_changed)
@@ -190,8 +194,10 @@ class Scheduler:
     async def restart(self, target: str) -> list[str]:
         names = await self.stop(target)
         for name in names:
-            self.procs[name].restarts = 0
-            self._launch(self.procs[name])
+            rt = self.procs.get(name)
+            if rt is not None:  # not removed by a reload meanwhile
+                rt.restarts = 0
+                self._launch(rt)
         return names
 
     async def wait(self, names: Iterable[str], states: set[ProcState],
@@ -230,6 +236,7 @@ class Scheduler:
     async def attach(self) -> None:
         """Take over processes a daemon still runs for this instance (a new manager after
         the old one died): their true states and recent output."""
+        found: list[tuple[Runtime, DaemonLink, Any]] = []
         nodes = {rt.cfg.node for rt in self.procs.values()}
         for node in sorted(nodes):
             try:
@@ -240,9 +247,36 @@ class Scheduler:
                 continue
             for info in infos:
                 rt = self.procs.get(info.name)
-                if rt is None or rt.cfg.node != node:
+                if rt is None or rt.cfg.node != node or rt.state != S.STOPPED:
                     continue
-                await self._adopt(rt, link, info)
+                rt.daemon_record = True
+                if info.state in ("running", "stopping"):
+                    rt.pid = info.pid  # an exit from now on clears it (_on_exit)
+                found.append((rt, link, info))
+        adopted = []
+        for rt, link, info in found:
+            try:
+                recent = await link.output(info.name, rt.cfg.max_output_lines)
+            except (OSError, self.backend.error_type) as exc:
+                log.warning("process %s: cannot re-attach: %s", info.name, exc)
+                rt.pid = None
+                continue
+            adopted.append((rt, link, info, recent))
+        # From here on nothing is awaited, so no event comes in between, and every process
+        # has its state before any is found ready (which would start its start_on_ready).
+        for rt, link, info, recent in adopted:
+            self._adopt(rt, link, info, recent)
+        for rt, _, info, _ in adopted:
+            if rt.state != S.STARTED:
+                continue
+            if not rt.cfg.has_readiness:
+                self._set(rt, S.READY, "re-attached (no readiness condition)")
+                self._on_ready(rt, attached=True)
+                continue
+            if rt.cfg.ready_time is not None:
+                left = rt.cfg.ready_time - (time.time() - info.started)
+                self._side(rt, self._ready_timer(rt, max(0.0, left)))
+            self._check_ready(rt, attached=True)
 
     def apply_config(self, config: model.Config) -> dict[str, list[str]]:
         """Take a reloaded configuration: new processes are added (stopped), processes
@@ -255,26 +289,39 @@ class Scheduler:
                 rt = Runtime(cfg, output=deque(maxlen=max(1, cfg.max_output_lines)))
                 self.procs[name] = rt
                 added.append(name)
-            elif rt.cfg != cfg:
-                changed.append(name)
-            else:
+            rt.removed = False
+            if (rt.next_cfg or rt.cfg) == cfg:
                 continue
-            rt.cfg = cfg
-            rt.regex = re.compile(cfg.ready_regex) if cfg.ready_regex is not None else None
+            if name not in added:
+                changed.append(name)
+            rt.next_cfg = cfg
+            if rt.state in STARTABLE:
+                self._configure(rt)
         for name in list(self.procs):
             if name not in config.processes:
                 if self.procs[name].state in STARTABLE:
                     del self.procs[name]
                     removed.append(name)
                 else:
+                    self.procs[name].removed = True
                     kept.append(name)
-        for name, st in config.states.items():
-            if name not in self.states or self.states[name].cfg != st:
-                self.states[name] = StateRuntime(st)
+        self.states = {name: (self.states[name] if name in self.states
+                              and self.states[name].cfg == st else StateRuntime(st))
+                       for name, st in config.states.items()}
         self.config = config
         self._limiters.clear()
         return {"added": added, "removed": removed, "changed": changed,
                 "removed_when_stopped": kept}
+
+    def _configure(self, rt: Runtime) -> None:
+        """Give rt the settings of the last reload (before it starts)."""
+        cfg, rt.next_cfg = rt.next_cfg, None
+        if cfg is None:
+            return
+        rt.cfg = cfg
+        rt.regex = re.compile(cfg.ready_regex) if cfg.ready_regex is not None else None
+        if rt.output.maxlen != max(1, cfg.max_output_lines):
+            rt.output = deque(rt.output, maxlen=max(1, cfg.max_output_lines))
 
     async def shutdown(self) -> None:
         """Stop every process the configuration runs (dependents first), except those with
@@ -306,8 +353,10 @@ class Scheduler:
             rt.ready_at = time.monotonic()
             rt.ready_wall = t.time
         log.info("process %s: %s%s", rt.cfg.name, state.value, f" ({reason})" if reason else "")
-        for listener in list(self.transition_listeners):
-            listener(rt.cfg.name, t)
+        if rt.removed and state in STARTABLE and self.procs.get(rt.cfg.name) is rt:
+            del self.procs[rt.cfg.name]  # removed by a reload while it ran
+            log.info("process %s: removed (no longer configured)", rt.cfg.name)
+        _tell(self.transition_listeners, rt.cfg.name, t)
         self._notify()
 
     def _notify(self) -> None:
@@ -323,7 +372,7 @@ class Scheduler:
         task.add_done_callback(self._bg.discard)
 
     def _registry_changed(self) -> None:
-        for rt in self.procs.values():
+        for rt in list(self.procs.values()):
             if rt.state == S.STARTED:
                 self._check_ready(rt)
         self._notify()
@@ -333,10 +382,13 @@ class Scheduler:
         """Start rt's start task unless it runs or is up already."""
         if rt.task is not None and not rt.task.done():
             return rt.task
-        if rt.state not in STARTABLE:
-            return None
+        if rt.state not in STARTABLE or self.procs.get(rt.cfg.name) is not rt:
+            return None  # running, or removed by a reload
+        self._configure(rt)
+        self._cancel_side(rt)  # a pending restart: this start is it
         rt.stop_requested = False
         rt.watchdog_fired = None
+        rt.ready_at = None  # the restart count looks at how long this run stays ready
         self._set(rt, S.STARTING)
         rt.task = asyncio.get_running_loop().create_task(self._start(rt))
         return rt.task
@@ -353,6 +405,11 @@ class Scheduler:
             if rt.state == S.STARTING:
                 self._set(rt, S.FAILED, str(exc))
                 self._after_failure(rt)
+        except Exception as exc:  # a bug, or a request the daemon client cannot encode
+            log.exception("process %s: cannot start", rt.cfg.name)
+            if rt.state == S.STARTING:
+                self._set(rt, S.FAILED, f"cannot start: {exc}")
+                self._after_failure(rt)
 
     async def _dependencies(self, rt: Runtime) -> None:
         jobs = []
@@ -368,7 +425,9 @@ class Scheduler:
                 raise result
 
     async def _dependency_ready(self, rt: Runtime, dep: str) -> None:
-        d = self.procs[dep]
+        d = self.procs.get(dep)
+        if d is None:  # rt runs on with a configuration from before a reload
+            raise StartError(f"dependency {dep} is no longer configured")
         if d.state not in (S.READY, S.STARTED):
             self._launch(d)
         try:
@@ -377,7 +436,9 @@ class Scheduler:
             raise StartError(f"dependency {dep} did not become ready: {exc}") from None
 
     async def _dependency_finished(self, rt: Runtime, dep: str) -> None:
-        d = self.procs[dep]
+        d = self.procs.get(dep)
+        if d is None:
+            raise StartError(f"{dep} (start_before) is no longer configured")
         if d.state == S.FINISHED:
             return
         if d.state in STARTABLE:
@@ -437,6 +498,7 @@ class Scheduler:
                 await link.stop(cfg.name)
             raise
         rt.pid = info.pid
+        rt.link = link
         rt.daemon_record = True
         rt.started_at = time.time()
         rt.exit_code = rt.exit_signal = None
@@ -459,8 +521,9 @@ class Scheduler:
         await asyncio.sleep(delay)
         self._check_ready(rt)
 
-    def _check_ready(self, rt: Runtime) -> None:
-        """READY once every readiness condition of rt holds."""
+    def _check_ready(self, rt: Runtime, *, attached: bool = False) -> None:
+        """READY once every readiness condition of rt holds (`attached`: found so by a
+        new manager)."""
         if rt.state != S.STARTED:
             return
         cfg = rt.cfg
@@ -483,11 +546,14 @@ class Scheduler:
                 return
             held.append(f"service {cfg.ready_on_service} is registered")
         self._set(rt, S.READY, ", ".join(held))
-        self._on_ready(rt)
+        self._on_ready(rt, attached=attached)
 
-    def _on_ready(self, rt: Runtime) -> None:
-        for name in rt.cfg.start_on_ready:
-            self._launch(self.procs[name])
+    def _on_ready(self, rt: Runtime, *, attached: bool = False) -> None:
+        """Its start_on_ready (unless it was found ready: the manager before did that, or
+        they were stopped since), its watchdog, the dependents its loss stopped."""
+        for name in [] if attached else rt.cfg.start_on_ready:
+            if name in self.procs:
+                self._launch(self.procs[name])
         if rt.cfg.watchdog is not None:
             self._side(rt, self._watchdog(rt, rt.cfg.watchdog))
         # dependents this process's earlier loss stopped come back with it
@@ -541,7 +607,7 @@ class Scheduler:
         except (OSError, self.backend.error_type) as exc:
             raise StartError(f"{label}: {exc}") from None
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        self._waiters[name] = future
+        self._waiters[name] = (future, link)
         env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
         env["LN_MANAGER"] = self.manager_address
         spec = self.backend.spawn_spec(name=name, command=command, shell=True, env=env,
@@ -561,14 +627,23 @@ class Scheduler:
     def _dependents(self, name: str) -> list[Runtime]:
         return [rt for rt in self.procs.values() if name in rt.cfg.depends_on]
 
-    async def _stop(self, rt: Runtime, reason: str, *, force: bool = False) -> None:
+    async def _stop(self, rt: Runtime, reason: str, *, force: bool = False,
+                    restore: bool = False) -> None:
+        """Stop rt, dependents first.  `restore`: it is stopped because a dependency went
+        down (rt.stopped_for) and comes back with it, and so do its dependents; any other
+        stop keeps it down whatever its dependencies do."""
         if "disable_stop" in rt.cfg.flags and not force and reason == "stopped by request":
             raise StartError(f"{rt.cfg.name} has the flag disable_stop")
+        if not restore:
+            rt.stopped_for = None
+        rt.stop_requested = True  # before its dependents stop: they must not come back yet
         # dependents first
-        await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped", force=force)
-                               for d in self._dependents(rt.cfg.name)
-                               if d.state not in STARTABLE))
-        rt.stop_requested = True
+        dependents = [d for d in self._dependents(rt.cfg.name) if d.state not in STARTABLE]
+        if restore:
+            for d in dependents:
+                d.stopped_for = rt.cfg.name
+        await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped", force=force,
+                                          restore=restore) for d in dependents))
         self._cancel_side(rt)
         if rt.task is not None and not rt.task.done() and rt.task is not asyncio.current_task():
             rt.task.cancel()
@@ -576,6 +651,7 @@ class Scheduler:
                 await rt.task
         if rt.state == S.STARTING:
             self._set(rt, S.STOPPED, reason)
+        if rt.state in STARTABLE:
             self._restore(rt)
         if rt.state in (S.STARTED, S.READY):
             self._set(rt, S.STOPPING, reason)
@@ -584,7 +660,9 @@ class Scheduler:
             except (OSError, self.backend.error_type) as exc:
                 log.warning("process %s: stop failed: %s", rt.cfg.name, exc)
         if rt.state == S.STOPPING:
-            await self.wait([rt.cfg.name], {S.STOPPED, S.FINISHED, S.FAILED})
+            # not "until stopped": a restored dependent may be starting again at once
+            async with self._changed:
+                await self._changed.wait_for(lambda: rt.state != S.STOPPING)
 
     # ---- daemon events -------------------------------------------------------------------
     def _on_event(self, event: Any) -> None:
@@ -593,13 +671,12 @@ class Scheduler:
             if rt is None:
                 return
             rt.output.append(event)
-            for listener in list(self.output_listeners):
-                listener(event.name, event)
+            _tell(self.output_listeners, event.name, event)
             if rt.regex is not None and not rt.regex_seen and rt.regex.search(event.text):
                 rt.regex_seen = True
                 self._check_ready(rt)
         elif isinstance(event, self.backend.exited_type):
-            waiter = self._waiters.get(event.name)
+            waiter, _ = self._waiters.get(event.name, (None, None))
             if waiter is not None and not waiter.done():
                 waiter.set_result(event)
                 return
@@ -650,7 +727,8 @@ class Scheduler:
         """A dependent stopped because its dependency went down comes back as soon as the
         dependency is ready again (which may already be the case when its stop completes)."""
         dep = self.procs.get(rt.stopped_for) if rt.stopped_for else None
-        if dep is not None and dep.state == S.READY and rt.state in STARTABLE:
+        if dep is not None and dep.state == S.READY and not dep.stop_requested \
+                and rt.state in STARTABLE:
             rt.stopped_for = None
             self._launch(rt)
 
@@ -660,7 +738,7 @@ class Scheduler:
             if d.state not in STARTABLE:
                 d.stopped_for = rt.cfg.name
                 self._background(asyncio.get_running_loop().create_task(
-                    self._stop(d, f"dependency {rt.cfg.name} went down")))
+                    self._stop(d, f"dependency {rt.cfg.name} went down", restore=True)))
 
     def _schedule_restart(self, rt: Runtime) -> None:
         if rt.ready_at is not None and time.monotonic() - rt.ready_at >= STABLE_AFTER:
@@ -671,8 +749,7 @@ class Scheduler:
             t = Transition(time.time(), rt.state, reason)
             rt.transitions.append(t)
             log.warning("process %s: %s", rt.cfg.name, reason)
-            for listener in list(self.transition_listeners):
-                listener(rt.cfg.name, t)
+            _tell(self.transition_listeners, rt.cfg.name, t)
             self._notify()
             return
         delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * (2 ** rt.restarts))
@@ -727,23 +804,23 @@ class Scheduler:
                 log.exception("handling daemon event %r", event)
 
     def _daemon_lost(self, link: DaemonLink, node: str) -> None:
-        """The daemon connection of `node` ended: what ran there is unknown now.  Those
-        processes fail (and restart by their policy, through a new connection)."""
-        for rt in self.procs.values():
-            if rt.state in ALIVE and self.config.node_map.get(rt.cfg.node, rt.cfg.node) == \
-                    self.config.node_map.get(node, node):
+        """The daemon connection `link` (first used for `node`) ended: what ran through it is
+        unknown now.  Those processes fail (and restart by their policy, through a new
+        connection)."""
+        for rt in list(self.procs.values()):
+            if rt.state in ALIVE and rt.link is link:
                 rt.pid = None
                 self._cancel_side(rt)
                 if rt.stop_requested:
                     self._set(rt, S.STOPPED, "stopped (daemon connection lost)")
                     continue
                 self._set(rt, S.FAILED, f"lost the connection to the ln_daemon of node "
-                                        f"{node!r}")
+                                        f"{rt.cfg.node!r}")
                 self._lost_dependency(rt)
                 if rt.cfg.restart != model.Restart.NEVER:
                     self._schedule_restart(rt)
-        for future in self._waiters.values():
-            if not future.done():
+        for future, used in self._waiters.values():
+            if used is link and not future.done():
                 future.set_exception(StartError(f"lost the ln_daemon of node {node!r}"))
 
     def _limiter(self, node: str) -> RateLimiter:
@@ -753,30 +830,29 @@ class Scheduler:
             self._limiters[host] = RateLimiter(h.process_start_rate_limit if h else None)
         return self._limiters[host]
 
-    async def _adopt(self, rt: Runtime, link: DaemonLink, info: Any) -> None:
-        rt.daemon_record = True
-        recent = await link.output(info.name, rt.cfg.max_output_lines)
+    def _adopt(self, rt: Runtime, link: DaemonLink, info: Any, recent: list[Any]) -> None:
+        """rt as the daemon has it: `started` (readiness is checked by the caller), or
+        exited (before or while this scheduler attached)."""
+        rt.link = link
+        newer = [line for line in rt.output if not recent or line.time > recent[-1].time]
+        rt.output.clear()
         rt.output.extend(recent)
+        rt.output.extend(newer)  # came as events while attaching
         rt.started_at = info.started
-        if info.state in ("running", "stopping"):
-            rt.pid = info.pid
+        running = info.state in ("running", "stopping")
+        if running and rt.pid == info.pid:
             if rt.regex is not None:
-                rt.regex_seen = any(rt.regex.search(line.text) for line in recent)
+                rt.regex_seen = rt.regex_seen or any(rt.regex.search(line.text)
+                                                     for line in recent)
             self._set(rt, S.STARTED, f"re-attached to pid {info.pid}")
-            if not rt.cfg.has_readiness:
-                self._set(rt, S.READY, "re-attached (no readiness condition)")
-                self._on_ready(rt)
-            else:
-                if rt.cfg.ready_time is not None:
-                    left = rt.cfg.ready_time - (time.time() - info.started)
-                    self._side(rt, self._ready_timer(rt, max(0.0, left)))
-                self._check_ready(rt)
-        else:
+            return
+        if not running:
             rt.exit_code, rt.exit_signal = info.exit_code, info.signal
-            ok = info.exit_code == 0 and info.signal is None
-            self._set(rt, S.FINISHED if ok else S.FAILED,
-                      f"exited while no manager was attached (exit status {info.exit_code}, "
-                      f"signal {info.signal})")
+        # else it exited while attaching: _on_exit kept its status
+        ok = rt.exit_code == 0 and rt.exit_signal is None
+        self._set(rt, S.FINISHED if ok else S.FAILED,
+                  f"exited while no manager was attached (exit status {rt.exit_code}, "
+                  f"signal {rt.exit_signal})")
 
     # ---- groups ----------------------------------------------------------------------------
     def _group_members(self, group: str, out: list[str], seen: set[str]) -> None:
@@ -788,6 +864,15 @@ class Scheduler:
                 out.append(member)
             elif member in self.config.groups:
                 self._group_members(member, out, seen)
+
+
+def _tell(listeners: list[Callable[..., None]], *args: Any) -> None:
+    """Call every listener; one that raises must not stop the others or the scheduler."""
+    for listener in list(listeners):
+        try:
+            listener(*args)
+        except Exception:
+            log.exception("listener %r failed", listener)
 
 
 _SIGNALS = {int(s) for s in signal.Signals}

@@ -189,3 +189,18 @@ def test_connection_loss_ends_events_and_calls(daemon: Daemon) -> None:
         await client.close()
 
     asyncio.run(main())
+
+
+def test_close_right_after_connect(daemon: Daemon) -> None:
+    """A connection closed before anything came from the daemon (its reader had not run
+    yet) still closes, ends its events and refuses further calls."""
+    async def main() -> None:
+        client = await daemon.connect()
+        async with asyncio.timeout(WAIT):  # an upper bound: it used to hang
+            await client.close()  # in this task: its reader has not run yet
+        assert client.closed
+        assert await asyncio.wait_for(client.events().get(), WAIT) is None
+        with pytest.raises(dc.DaemonConnectionError):
+            await client.ping()
+
+    asyncio.run(main())

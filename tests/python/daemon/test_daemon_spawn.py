@@ -40,6 +40,18 @@ def test_environment_is_exactly_the_given_one(daemon: Daemon) -> None:
     assert sorted(lines) == sorted(f"{k}={v}" for k, v in env.items())
 
 
+def test_environment_bytes_that_are_not_utf8_pass_unchanged(daemon: Daemon) -> None:
+    """os.environ holds such bytes as lone surrogates (surrogateescape); the child gets the
+    original bytes, as from a shell."""
+    raw = os.fsdecode(b"a\xffb")
+    code = "import os; print(os.environb[b'RAW'].hex())"
+    s = dc.SpawnSpec("raw", f"{PY} -c \"{code}\"", False, {**PATH_ENV, "RAW": raw},
+                     use_pty=False)
+    lines, ex = output_of(daemon, s)
+    assert ex.exit_code == 0
+    assert lines == ["61ff62"]
+
+
 def test_working_directory(daemon: Daemon, tmp_path: Path) -> None:
     lines, _ = output_of(daemon, spec("pwd", "pwd", shell=False, cwd=str(tmp_path)))
     assert lines == [str(tmp_path)]

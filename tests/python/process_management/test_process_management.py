@@ -11,9 +11,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+from links_and_nodes.manager import daemon_client as dc
 from links_and_nodes.manager.scripting import Manager
 
-from .conftest import LIMIT, Lab, pids_with, wait_for
+from .conftest import LIMIT, Lab, free_port, parent, pids_with, wait_for
 
 CHILD = Path(__file__).with_name("child.py")
 
@@ -269,3 +270,36 @@ def test_sigterm_ends_wait_ready(lab: Lab) -> None:
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(timeout=LIMIT) == 0
     wait_for(lambda: pids_with(lab.instance) == [], "the process stopped with the manager")
+
+
+def test_processes_on_two_nodes_go_to_their_daemons(lab: Lab) -> None:
+    """A second daemon stands in for another host: node_map + hosts route `node: arm` to
+    it (its port, its address), `localhost` stays on the manager's own daemon."""
+    key_file = Path(lab.env["LN_DAEMON_KEY_FILE"])
+    dc.create_key_file(key_file)
+    other_port = free_port()
+    daemon = subprocess.run([dc.daemon_executable(), "--port", str(other_port), "--key-file",
+                             str(key_file), "--log", str(lab.tmp / "other-daemon.log")],
+                            capture_output=True, text=True, env=lab.env, timeout=LIMIT)
+    assert daemon.returncode == 0, daemon.stderr
+    m = lab.instance
+    body = (f"hosts\narm-pc: lo:127.0.0.1, daemon_port:{other_port}\n\n"
+            "node_map\narm: arm-pc\n\n"
+            + process("remote", "ready", "up", marker=m, extra="node: arm\nready_regex: up")
+            + process("local", "ready", "up", marker=m,
+                      extra="depends_on: remote\nready_regex: up"))
+    try:
+        with start(lab, body) as mgr:
+            mgr.start("local")
+            mgr.wait_ready("all", LIMIT)
+            nodes = {p["name"]: (p["node"], p["pid"]) for p in mgr.status()}
+            assert nodes["remote"][0] == "arm" and nodes["local"][0] == "localhost"
+            # each runs under its own daemon: the keeper's parent is that daemon
+            other = [pid for pid in pids_with(f"--port\0{other_port}\0")
+                     if parent(pid) not in pids_with(f"--port\0{other_port}\0")]
+            assert parent(parent(nodes["remote"][1])) in other
+            assert parent(parent(nodes["local"][1])) in lab.daemon_pids()
+            mgr.quit()
+    finally:
+        for pid in pids_with(f"--port\0{other_port}\0"):
+            os.kill(pid, signal.SIGKILL)

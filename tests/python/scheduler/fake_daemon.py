@@ -81,6 +81,7 @@ class FakeDaemon:
         self.procs: dict[str, _Proc] = {}
         self.queue: asyncio.Queue[object] = asyncio.Queue()
         self.spawned: list[str] = []  # names in spawn order
+        self.stops: list[str] = []  # names in the order STOP was asked for
         self.fail_spawn: set[str] = set()
         # names whose spawn answer comes only after the process's output and exit events
         self.late_answer: set[str] = set()
@@ -122,6 +123,7 @@ class FakeDaemon:
         await self.queue.put(p.exited)
 
     async def stop(self, name: str) -> None:
+        self.stops.append(name)
         p = self.procs.get(name)
         if p is None or p.exited is not None:
             raise FakeError(f"{name} is not running")
@@ -142,6 +144,7 @@ class FakeDaemon:
                 for n, p in self.procs.items()]
 
     async def output(self, name: str, n: int = 100) -> list[Line]:
+        await asyncio.sleep(0)  # an answer takes a while: events may come first
         p = self.procs.get(name)
         return list(p.lines)[-n:] if p else []
 

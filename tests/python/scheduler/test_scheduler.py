@@ -6,17 +6,30 @@ first."""
 from __future__ import annotations
 
 import asyncio
+import os
+import signal
 import sys
+import time
 from collections.abc import AsyncIterator, Callable
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
 from links_and_nodes.manager.config import model
 from links_and_nodes.manager.process_states import ProcState as S
-from links_and_nodes.manager.scheduler import Scheduler, StartError
+from links_and_nodes.manager.scheduler import Backend, Scheduler, StartError, Transition
 
-from .fake_daemon import FakeDaemon, FakeRegistry, Info, Spec, backend
+from .fake_daemon import (
+    Exit,
+    FakeDaemon,
+    FakeError,
+    FakeRegistry,
+    Info,
+    Line,
+    Spec,
+    backend,
+)
 
 LIMIT = 60.0
 HERE = model.Location("test.lnc", 1, 1)
@@ -307,3 +320,278 @@ async def test_output_and_exit_before_the_spawn_answer(world_factory: list[World
     assert w.sched.procs["quick"].reason == "exit status 4"
     w.sched.start("gated")
     await w.sched.wait_ready("gated", LIMIT)
+
+
+async def test_old_ready_period_does_not_reset_the_restart_count(
+        world_factory: list[World], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """"Stayed ready for 10 s" is about the run that just ended: a process that was ready
+    once and then keeps failing before it gets ready again still gives up.  The scheduler's
+    monotonic clock is the test's: every failure advances it by 6 s."""
+    from links_and_nodes.manager import scheduler as sched_mod
+
+    now = [0.0]
+    monkeypatch.setattr(sched_mod, "time",
+                        SimpleNamespace(time=time.time, monotonic=lambda: now[0]))
+    marker, gate = tmp_path / "ran", tmp_path / "gate"
+    cmd = (f"sh -c 'if [ -e {marker} ]; then exit 1; fi; touch {marker}; echo up; "
+           f"while [ ! -e {gate} ]; do sleep 0.01; done; exit 1'")
+    w = make(world_factory, proc("p", cmd, ready_regex="^up", restart=model.Restart.ON_FAILURE,
+                                 restart_limit=2, restart_delay=0.01))
+
+    def advance(name: str, t: Transition) -> None:
+        if t.state == S.FAILED:
+            now[0] += 6.0
+    w.sched.transition_listeners.append(advance)
+    w.sched.start("p")
+    await w.sched.wait_ready("p", LIMIT)  # ready at 0 s
+    gate.touch()  # fails at 6 s, then before being ready at 12 s, 18 s, ...
+    rt = w.sched.procs["p"]
+    await until(lambda: "gave up" in rt.reason or w.daemon.spawned.count("p") > 3)
+    assert w.daemon.spawned == ["p"] * 3
+    assert "gave up after 2 restarts" in rt.reason
+
+
+def crash_once(tmp_path: Path, gate: Path) -> str:
+    """A command that runs until `gate` exists and then fails, the first time; after that
+    it just runs."""
+    marker = tmp_path / f"{gate.name}-ran"
+    return (f"sh -c 'if [ -e {marker} ]; then exec sleep 60; fi; touch {marker}; "
+            f"while [ ! -e {gate} ]; do sleep 0.01; done; exit 1'")
+
+
+def slow_to_stop(tmp_path: Path, gate: Path) -> str:
+    """A command that, sent SIGTERM, exits only once `gate` exists."""
+    script = tmp_path / f"{gate.name}.py"
+    script.write_text(f"import os, signal, time\n"
+                      f"def term(*_):\n"
+                      f"    while not os.path.exists({str(gate)!r}): time.sleep(0.01)\n"
+                      f"    raise SystemExit(0)\n"
+                      f"signal.signal(signal.SIGTERM, term)\n"
+                      f"print('up', flush=True)\n"
+                      f"while True: time.sleep(1)\n")
+    return f"{PY} {script}"
+
+
+async def test_stopped_dependent_stays_stopped_when_its_dependency_returns(
+        world_factory: list[World], tmp_path: Path) -> None:
+    """A dependent stopped because its dependency went down comes back with it, unless it
+    was stopped on request meanwhile."""
+    gate = tmp_path / "crash"
+    w = make(world_factory, proc("a", crash_once(tmp_path, gate)),
+             proc("b", depends_on=["a"]))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    gate.touch()
+    await w.sched.wait(["a", "b"], {S.FAILED, S.STOPPED}, LIMIT)
+    await w.sched.stop("b")
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    assert w.sched.procs["b"].state == S.STOPPED
+    assert w.daemon.spawned == ["a", "b", "a"]
+
+
+async def test_stop_request_during_a_dependency_loss_stop_returns(
+        world_factory: list[World], tmp_path: Path) -> None:
+    """`stop b` while b is being stopped because its dependency crashed: b stays stopped
+    even though the dependency is ready again by then, and the stop returns."""
+    crash, release = tmp_path / "crash", tmp_path / "release"
+    w = make(world_factory, proc("a", crash_once(tmp_path, crash),
+                                 restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             proc("b", slow_to_stop(tmp_path, release), depends_on=["a"],
+                  ready_regex="^up", term_timeout=LIMIT))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    crash.touch()
+    await w.sched.wait(["b"], {S.STOPPING}, LIMIT)
+    stopping = asyncio.create_task(w.sched.stop("b"))
+    await until(lambda: w.daemon.spawned.count("a") == 2)
+    await w.sched.wait(["a"], {S.READY}, LIMIT)
+    release.touch()
+    await until(lambda: stopping.done() or w.daemon.spawned.count("b") > 1)
+    assert w.daemon.spawned.count("b") == 1 and w.sched.procs["b"].state == S.STOPPED
+    assert await stopping == ["b"]
+
+
+async def test_lost_dependency_restores_the_whole_chain(world_factory: list[World],
+                                                        tmp_path: Path) -> None:
+    """a <- b <- c: when a crashes both b and c are stopped, and both come back with a."""
+    gate = tmp_path / "crash"
+    w = make(world_factory, proc("a", crash_once(tmp_path, gate),
+                                 restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             proc("b", depends_on=["a"]), proc("c", depends_on=["b"]))
+    w.sched.start("c")
+    await w.sched.wait_ready("all", LIMIT)
+    gate.touch()
+    await until(lambda: w.daemon.spawned.count("b") == 2)
+    await w.sched.wait(["b"], {S.READY}, LIMIT)
+    assert w.sched.procs["c"].state != S.STOPPED  # started as soon as b was ready
+    await w.sched.wait_ready("all", LIMIT)
+    assert w.daemon.spawned == ["a", "b", "c", "a", "b", "c"]
+
+
+class BrokenSpawnDaemon(FakeDaemon):
+    """Its SPAWN fails with an exception that is not the backend's error type (as a
+    spawn spec the client cannot encode would)."""
+
+    async def spawn(self, spec: Spec) -> Info:
+        raise UnicodeEncodeError("utf-8", "\udcff", 0, 1, "surrogates not allowed")
+
+
+async def test_unexpected_start_error_fails_the_process(world_factory: list[World]) -> None:
+    w = World(config(proc("a"), proc("b", depends_on=["a"])), BrokenSpawnDaemon())
+    world_factory.append(w)
+    w.sched.start("b")
+    tasks = [w.sched.procs[n].task for n in "ab"]
+    await asyncio.wait([t for t in tasks if t is not None], timeout=LIMIT)
+    assert [w.sched.procs[n].state for n in "ab"] == [S.FAILED, S.FAILED]
+    assert "surrogates not allowed" in w.sched.procs["a"].reason
+    with pytest.raises(StartError):
+        await w.sched.wait_ready("b", LIMIT)
+
+
+async def test_failing_listener_does_not_break_supervision(world_factory: list[World]) -> None:
+    """A listener that raises (say, printing to a closed stdout) neither hides a ready
+    line nor leaves a transition half done."""
+    w = make(world_factory, proc("a", "sh -c 'echo up; exec sleep 60'", ready_regex="^up"),
+             proc("b", "sh -c 'exit 3'", restart=model.Restart.ON_FAILURE, restart_limit=1,
+                  restart_delay=0.01))
+
+    def broken(*_: object) -> None:
+        raise BrokenPipeError("stdout is gone")
+    w.sched.output_listeners.insert(0, broken)
+    w.sched.transition_listeners.insert(0, broken)
+    w.sched.start("all")
+    await w.sched.wait_ready("a", LIMIT)
+    await until(lambda: "gave up" in w.sched.procs["b"].reason)
+    assert w.daemon.spawned.count("b") == 2
+
+
+async def test_start_replaces_a_pending_restart(world_factory: list[World]) -> None:
+    """A start while a restart is pending is that restart: the pending one does not start
+    the process once more (after its limit, or out of its back-off)."""
+    w = make(world_factory, proc("p", "sh -c 'exit 1'", restart=model.Restart.ON_FAILURE,
+                                 restart_limit=1, restart_delay=5.0))
+    rt = w.sched.procs["p"]
+    w.sched.start("p")
+    await w.sched.wait(["p"], {S.FAILED}, LIMIT)  # its restart is due in 5 s
+    w.daemon.fail_spawn.add("p")
+    w.sched.start("p")
+    await until(lambda: "gave up" in rt.reason)
+    await until(lambda: not rt.side_tasks)
+    assert w.log.count(("p", S.STARTING)) == 2 and rt.state == S.FAILED
+
+
+async def test_lost_daemon_fails_every_process_it_ran(world_factory: list[World]) -> None:
+    """Two node names for one daemon (say `localhost` and the host's name): when its
+    connection ends, the processes of both are failed."""
+    w = make(world_factory, proc("a", node="localhost"), proc("b", node="thishost"))
+    w.sched.start("all")
+    await w.sched.wait_ready("all", LIMIT)
+    w.daemon.queue.put_nowait(None)  # the connection ended
+    await until(lambda: any(rt.state != S.READY for rt in w.sched.procs.values()))
+    for name in "ab":  # all at once
+        assert w.sched.procs[name].state == S.FAILED
+        assert "lost the connection to the ln_daemon" in w.sched.procs[name].reason
+
+
+async def running_world(world_factory: list[World], daemon: FakeDaemon,
+                        *procs: model.Process) -> World:
+    """A scheduler that starts everything on `daemon` and is then closed (as a manager that
+    died), and a new one for the same daemon that has not attached yet."""
+    first = World(config(*procs), daemon)
+    world_factory.append(first)
+    first.sched.start("all")
+    await first.sched.wait_ready("all", LIMIT)
+    await first.sched.close()
+    second = World(config(*procs), daemon)
+    world_factory.append(second)
+    return second
+
+
+async def test_attach_does_not_start_what_runs_already(world_factory: list[World]) -> None:
+    """Re-attaching to a ready process with start_on_ready does not start its targets again
+    (they run, or were stopped on purpose)."""
+    w = await running_world(world_factory, FakeDaemon(), proc("a", start_on_ready=["b"]),
+                            proc("b"), proc("c"))
+    pids = {n: p.proc.pid for n, p in w.daemon.procs.items()}
+    await w.daemon.stop("b")
+    await until(lambda: w.daemon.procs["b"].exited is not None)
+    await w.sched.attach()
+    await until(lambda: all(rt.task is None or rt.task.done() for rt in w.sched.procs.values()))
+    assert w.daemon.spawned == ["a", "b", "c"]
+    assert {n: rt.state for n, rt in w.sched.procs.items()} == \
+        {"a": S.READY, "b": S.FAILED, "c": S.READY}
+    assert w.sched.procs["c"].pid == pids["c"]
+
+
+class ExitDuringAttachDaemon(FakeDaemon):
+    """Its process `c` exits while the new scheduler asks for its output (the exit event
+    overtakes the answer)."""
+
+    async def output(self, name: str, n: int = 100) -> list[Line]:
+        lines = await super().output(name, n)
+        p = self.procs[name]
+        if name == "c" and p.exited is None:
+            os.killpg(p.proc.pid, signal.SIGKILL)
+            async with asyncio.timeout(LIMIT):
+                while p.exited is None or not self.queue.empty():
+                    await asyncio.sleep(0.005)
+        return lines
+
+
+async def test_exit_during_attach_is_seen(world_factory: list[World]) -> None:
+    w = await running_world(world_factory, ExitDuringAttachDaemon(), proc("a"), proc("b"),
+                            proc("c"))
+    await w.sched.attach()
+    c = w.sched.procs["c"]
+    assert (c.state, c.pid, c.exit_signal) == (S.FAILED, None, signal.SIGKILL)
+    assert [w.sched.procs[n].state for n in "ab"] == [S.READY, S.READY]
+
+
+async def test_reload_removes_a_running_process_once_it_stopped(
+        world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b"),
+             proc("c", "sh -c 'echo up; sleep 0.2; exit 1'", ready_regex="^up",
+                  restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             states=(model.State("net", HERE, check="true"),))
+    w.sched.start("all")
+    await w.sched.wait(["a", "b", "c"], {S.READY}, LIMIT)
+    result = w.sched.apply_config(config(proc("a")))
+    assert result["removed_when_stopped"] == ["b", "c"]
+    assert w.sched.states == {}
+    assert w.sched.targets("all") == ["a", "b", "c"]  # still running
+    await w.sched.stop("b")
+    # c fails: it goes, and is not restarted
+    await until(lambda: "c" not in w.sched.procs or w.daemon.spawned.count("c") > 1)
+    assert w.sched.targets("all") == ["a"]
+    await until(lambda: not w.sched.procs["a"].side_tasks)
+    assert w.daemon.spawned == ["a", "b", "c"]
+
+
+async def test_reload_changes_a_running_process_at_its_next_start(
+        world_factory: list[World]) -> None:
+    """A running process keeps what it was started with (its node, above all: it is
+    stopped through the daemon that runs it) until it starts again."""
+    daemons = {"n1": FakeDaemon(), "n2": FakeDaemon()}
+
+    async def link(node: str) -> FakeDaemon:
+        return daemons[node]
+    w = World(config(proc("a", node="n1", ready_regex="^up",
+                          command="sh -c 'echo up; exec sleep 60'")), daemons["n1"])
+    w.sched = Scheduler(w.sched.config, w.registry,
+                        Backend(link=link, spawn_spec=Spec, exited_type=Exit, output_type=Line,
+                                error_type=FakeError), manager_address="127.0.0.1:1")
+    world_factory.append(w)
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    result = w.sched.apply_config(config(proc("a", node="n2", ready_regex="^never")))
+    assert result["changed"] == ["a"]
+    stopping = asyncio.create_task(w.sched.stop("a"))
+    await until(lambda: stopping.done() or daemons["n2"].stops)
+    assert await stopping == ["a"] and daemons["n1"].stops == ["a"]
+    assert daemons["n2"].stops == []
+    w.sched.start("a")
+    await w.sched.wait(["a"], {S.STARTED}, LIMIT)
+    assert daemons["n2"].spawned == ["a"]
+    await w.sched.stop("a")
+    await daemons["n2"].kill_all()
