@@ -185,11 +185,30 @@ class Scheduler:
         return names
 
     async def stop(self, target: str, *, force: bool = False) -> list[str]:
-        """Stop what `target` names, dependents first; returns when all are down."""
+        """Stop what `target` names, dependents first; returns when all are down.
+        StartError, and nothing is stopped, if that includes a process with the flag
+        disable_stop (unless `force`)."""
         names = self.targets(target)
+        if not force:
+            self._refuse_disable_stop(names)
         await asyncio.gather(*(self._stop(self.procs[n], "stopped by request", force=force)
                                for n in names))
         return names
+
+    def _refuse_disable_stop(self, names: list[str]) -> None:
+        """StartError if stopping `names` would stop a process with disable_stop: one of
+        them, or a running dependent (which is stopped first)."""
+        todo = [(name, "") for name in names]
+        seen: set[str] = set()
+        while todo:
+            name, why = todo.pop()
+            if name in seen:
+                continue
+            seen.add(name)
+            if "disable_stop" in self.procs[name].cfg.flags:
+                raise StartError(f"{name} has the flag disable_stop{why}")
+            todo += [(d.cfg.name, f" (it depends on {name})")
+                     for d in self._dependents(name) if d.state not in STARTABLE]
 
     async def restart(self, target: str) -> list[str]:
         names = await self.stop(target)
@@ -325,10 +344,19 @@ class Scheduler:
 
     async def shutdown(self) -> None:
         """Stop every process the configuration runs (dependents first), except those with
-        the flag disable_stop, which are left running for the next manager."""
+        the flag disable_stop and what they depend on, which are left running for the next
+        manager."""
+        keep: set[str] = set()
+        todo = [name for name, rt in self.procs.items()
+                if "disable_stop" in rt.cfg.flags and rt.state not in STARTABLE]
+        while todo:
+            name = todo.pop()
+            if name in keep or name not in self.procs:
+                continue
+            keep.add(name)
+            todo += self.procs[name].cfg.depends_on
         await asyncio.gather(*(self._stop(rt, "manager shutting down")
-                               for rt in self.procs.values()
-                               if "disable_stop" not in rt.cfg.flags))
+                               for name, rt in self.procs.items() if name not in keep))
         await self.close()
 
     async def close(self) -> None:

@@ -595,3 +595,32 @@ async def test_reload_changes_a_running_process_at_its_next_start(
     assert daemons["n2"].spawned == ["a"]
     await w.sched.stop("a")
     await daemons["n2"].kill_all()
+
+
+async def test_shutdown_leaves_disable_stop_and_what_it_needs(
+        world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b", depends_on=["a"], flags={"disable_stop"}),
+             proc("c"))
+    w.sched.start("all")
+    await w.sched.wait_ready("all", LIMIT)
+    await w.sched.shutdown()
+    assert [w.sched.procs[n].state for n in "abc"] == [S.READY, S.READY, S.STOPPED]
+    assert w.daemon.stops == ["c"]
+
+
+async def test_disable_stop_refusal_stops_nothing(world_factory: list[World]) -> None:
+    """Stopping (or restarting) what includes or is needed by a process with disable_stop
+    is refused as a whole, before anything is stopped."""
+    w = make(world_factory, proc("a"), proc("b", depends_on=["a"], flags={"disable_stop"}),
+             proc("c"))
+    w.sched.start("all")
+    await w.sched.wait_ready("all", LIMIT)
+    with pytest.raises(StartError, match="b has the flag disable_stop"):
+        await w.sched.restart("all")
+    with pytest.raises(StartError, match=r"b has the flag disable_stop \(it depends on a\)"):
+        await w.sched.stop("a")
+    assert [w.sched.procs[n].state for n in "abc"] == [S.READY] * 3
+    await w.sched.restart("c")
+    await w.sched.stop("a", force=True)
+    assert [w.sched.procs[n].state for n in "ab"] == [S.STOPPED] * 2
+    assert sorted(w.daemon.spawned) == ["a", "b", "c", "c"]
