@@ -158,6 +158,7 @@ class Scheduler:
         self._transient = 0
         # transient runs (state commands): their exit, and the daemon connection they use
         self._waiters: dict[str, tuple[asyncio.Future[Any], DaemonLink]] = {}
+        self._bg: set[asyncio.Task[Any]] = set()  # stops of dependents, notifications
         self.output_listeners: list[Callable[[str, Any], None]] = []
         self.transition_listeners: list[Callable[[str, Transition], None]] = []
         registry.listeners.append(self._registry_changed)
@@ -363,7 +364,7 @@ class Scheduler:
         """Forget the daemons without stopping anything (processes keep running)."""
         tasks = [t for rt in self.procs.values() for t in ([rt.task] if rt.task else [])]
         tasks += [t for rt in self.procs.values() for t in rt.side_tasks]
-        tasks += list(self._event_tasks.values())
+        tasks += list(self._event_tasks.values()) + list(self._bg)
         for task in tasks:
             task.cancel()
         await asyncio.gather(*tasks, return_exceptions=True)
@@ -395,7 +396,6 @@ class Scheduler:
         self._background(task)
 
     def _background(self, task: asyncio.Task[Any]) -> None:
-        self._bg = getattr(self, "_bg", set())
         self._bg.add(task)
         task.add_done_callback(self._bg.discard)
 
@@ -519,11 +519,12 @@ class Scheduler:
         except self.backend.error_type as exc:
             raise StartError(f"cannot start: {exc}") from None
         except asyncio.CancelledError:
-            # Stopped while the daemon was starting it: let that finish, then stop it, so
-            # nothing runs that the scheduler believes stopped.
-            with contextlib.suppress(Exception):
-                await spawning
-                await link.stop(cfg.name)
+            # Stopped while the daemon was starting it: let that finish, then stop it and
+            # wait for its exit, so nothing runs that the scheduler believes stopped.  (Without
+            # a stop request this is the scheduler closing: the process runs on.)
+            if rt.stop_requested:
+                with contextlib.suppress(Exception):
+                    await self._stop_spawned(rt, link, await spawning)
             raise
         rt.pid = info.pid
         rt.link = link
@@ -544,6 +545,19 @@ class Scheduler:
         if cfg.ready_time is not None:
             self._side(rt, self._ready_timer(rt, cfg.ready_time))
         self._check_ready(rt)
+
+    async def _stop_spawned(self, rt: Runtime, link: DaemonLink, info: Any) -> None:
+        """Stop the run the daemon started for rt while rt was being stopped (still
+        `starting`); return once it has exited."""
+        rt.pid, rt.link, rt.daemon_record = info.pid, link, True
+        early, rt.early_exit = rt.early_exit, None
+        if early is not None and early.pid == info.pid:
+            rt.pid = None  # it has exited already
+            return
+        with contextlib.suppress(self.backend.error_type):  # it may have exited meanwhile
+            await link.stop(rt.cfg.name)
+        async with self._changed:  # its exit (_on_exit) or the connection's loss clears it
+            await self._changed.wait_for(lambda: rt.pid != info.pid)
 
     async def _ready_timer(self, rt: Runtime, delay: float) -> None:
         await asyncio.sleep(delay)
@@ -836,6 +850,9 @@ class Scheduler:
         unknown now.  Those processes fail (and restart by their policy, through a new
         connection)."""
         for rt in list(self.procs.values()):
+            if rt.link is link and rt.pid is not None and rt.state == S.STARTING:
+                rt.pid = None  # being stopped while it was spawned (_stop_spawned)
+                self._notify()
             if rt.state in ALIVE and rt.link is link:
                 rt.pid = None
                 self._cancel_side(rt)

@@ -624,3 +624,73 @@ async def test_disable_stop_refusal_stops_nothing(world_factory: list[World]) ->
     await w.sched.stop("a", force=True)
     assert [w.sched.procs[n].state for n in "ab"] == [S.STOPPED] * 2
     assert sorted(w.daemon.spawned) == ["a", "b", "c", "c"]
+
+
+class HeldSpawnDaemon(FakeDaemon):
+    """Starts the process at once but answers SPAWN only once `answer` is set."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.answer = asyncio.Event()
+
+    async def spawn(self, spec: Spec) -> Info:
+        info = await super().spawn(spec)
+        await self.answer.wait()
+        return info
+
+
+async def test_stop_while_spawning_waits_for_the_exit(world_factory: list[World],
+                                                      tmp_path: Path) -> None:
+    """A stop that comes while the daemon is starting the process stops it once it runs,
+    and is done (the process `stopped`) only when it has exited: a start right after it
+    does not find the old run still there."""
+    release = tmp_path / "release"
+    w = World(config(proc("p", slow_to_stop(tmp_path, release), ready_regex="^up",
+                          term_timeout=LIMIT)), HeldSpawnDaemon())
+    world_factory.append(w)
+    gone_when_stopped = []
+    w.sched.transition_listeners.append(
+        lambda n, t: gone_when_stopped.append(w.daemon.procs["p"].exited is not None)
+        if t.state == S.STOPPED else None)
+    w.sched.start("p")
+    await until(lambda: "p" in w.daemon.procs)
+    stopping = asyncio.create_task(w.sched.stop("p"))
+    await asyncio.sleep(0)
+    w.daemon.answer.set()
+    await until(lambda: w.daemon.stops == ["p"])
+    release.touch()
+    assert await stopping == ["p"]
+    assert gone_when_stopped == [True]
+    w.sched.start("p")
+    await w.sched.wait_ready("p", LIMIT)
+
+
+async def test_close_while_spawning_leaves_the_process(world_factory: list[World]) -> None:
+    """Closing the scheduler (detach) while a spawn is on its way stops nothing."""
+    w = World(config(proc("p")), HeldSpawnDaemon())
+    world_factory.append(w)
+    w.sched.start("p")
+    await until(lambda: "p" in w.daemon.procs)
+    closing = asyncio.create_task(w.sched.close())
+    await asyncio.sleep(0)
+    w.daemon.answer.set()
+    await closing
+    assert w.daemon.stops == [] and w.daemon.procs["p"].exited is None
+
+
+async def test_close_ends_every_task(world_factory: list[World], tmp_path: Path) -> None:
+    """After close() no task of the scheduler is left (here: the stop of a dependent whose
+    dependency crashed, waiting for an exit)."""
+    crash, release = tmp_path / "crash", tmp_path / "release"
+    w = make(world_factory, proc("a", crash_once(tmp_path, crash)),
+             proc("b", slow_to_stop(tmp_path, release), depends_on=["a"], ready_regex="^up",
+                  term_timeout=LIMIT))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    crash.touch()
+    await w.sched.wait(["b"], {S.STOPPING}, LIMIT)
+    await w.sched.close()
+    left = [t for t in asyncio.all_tasks()
+            if t.get_coro().__qualname__.startswith("Scheduler.")  # type: ignore[union-attr]
+            and not t.done()]
+    assert left == []
