@@ -96,6 +96,7 @@ class Runtime:
     early_exit: Any = None  # an exit event that came before the daemon's spawn answer
     regex: re.Pattern[str] | None = None
     regex_seen: bool = False
+    ready_time_passed: bool = False  # its ready_time (monotonic) has passed
     task: asyncio.Task[None] | None = None  # starting (dependencies, spawn, readiness)
     side_tasks: set[asyncio.Task[Any]] = field(default_factory=set)  # watchdog, restart timer
 
@@ -295,7 +296,10 @@ class Scheduler:
                 continue
             if rt.cfg.ready_time is not None:
                 left = rt.cfg.ready_time - (time.time() - info.started)
-                self._side(rt, self._ready_timer(rt, max(0.0, left)))
+                if left > 0:
+                    self._side(rt, self._ready_timer(rt, left))
+                else:
+                    rt.ready_time_passed = True
             self._check_ready(rt, attached=True)
 
     def apply_config(self, config: model.Config) -> dict[str, list[str]]:
@@ -511,7 +515,7 @@ class Scheduler:
             rt.daemon_record = False
         # Reset before the spawn, not after: the new run's first output can be handled
         # before this task resumes with the daemon's answer.
-        rt.regex_seen = False
+        rt.regex_seen = rt.ready_time_passed = False
         rt.early_exit = None
         spawning = asyncio.ensure_future(link.spawn(spec))
         try:
@@ -561,6 +565,7 @@ class Scheduler:
 
     async def _ready_timer(self, rt: Runtime, delay: float) -> None:
         await asyncio.sleep(delay)
+        rt.ready_time_passed = True
         self._check_ready(rt)
 
     def _check_ready(self, rt: Runtime, *, attached: bool = False) -> None:
@@ -575,8 +580,7 @@ class Scheduler:
                 return
             held.append(f"output matched {cfg.ready_regex!r}")
         if cfg.ready_time is not None:
-            assert rt.started_at is not None
-            if time.time() - rt.started_at < cfg.ready_time - 1e-3:
+            if not rt.ready_time_passed:
                 return
             held.append(f"{cfg.ready_time:g} s passed")
         if cfg.ready_on_topic is not None:

@@ -694,3 +694,19 @@ async def test_close_ends_every_task(world_factory: list[World], tmp_path: Path)
             if t.get_coro().__qualname__.startswith("Scheduler.")  # type: ignore[union-attr]
             and not t.done()]
     assert left == []
+
+
+async def test_ready_time_does_not_depend_on_the_wall_clock(
+        world_factory: list[World], monkeypatch: pytest.MonkeyPatch) -> None:
+    """ready_time counts on the monotonic clock: a wall clock set back meanwhile (here: one
+    that stands still) does not keep the process from getting ready."""
+    from links_and_nodes.manager import scheduler as sched_mod
+
+    monkeypatch.setattr(sched_mod, "time",
+                        SimpleNamespace(time=lambda: 1e9, monotonic=time.monotonic))
+    w = make(world_factory, proc("p", ready_time=0.05))
+    w.sched.start("p")
+    rt = w.sched.procs["p"]
+    await w.sched.wait(["p"], {S.STARTED}, LIMIT)
+    await until(lambda: not rt.side_tasks)  # the ready timer has run
+    assert rt.state == S.READY
