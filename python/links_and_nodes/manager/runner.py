@@ -55,7 +55,8 @@ class Runner:
         if self.args.wait_ready:
             try:
                 if not await self._unless_stopping(
-                        self.scheduler.wait_ready("all", self.args.ready_timeout)):
+                        self.scheduler.wait_ready("all", self.args.ready_timeout,
+                                                  final=True)):
                     return 0  # asked to stop while waiting
             except (StartError, TimeoutError) as exc:
                 text = str(exc) or "not ready within --ready-timeout"

@@ -99,6 +99,7 @@ class Runtime:
     ready_time_passed: bool = False  # its ready_time (monotonic) has passed
     task: asyncio.Task[None] | None = None  # starting (dependencies, spawn, readiness)
     side_tasks: set[asyncio.Task[Any]] = field(default_factory=set)  # watchdog, restart timer
+    restart_task: asyncio.Task[None] | None = None  # the last restart timer (a side task)
 
     def as_dict(self) -> dict[str, Any]:
         return {"name": self.cfg.name, "state": self.state.value, "pid": self.pid,
@@ -222,27 +223,31 @@ class Scheduler:
         return names
 
     async def wait(self, names: Iterable[str], states: set[ProcState],
-                   timeout: float | None = None, *, fail_on: set[ProcState] | None = None
-                   ) -> None:
+                   timeout: float | None = None, *, fail_on: set[ProcState] | None = None,
+                   final: bool = False) -> None:
         """Until every process of `names` is in one of `states`; StartError if one reaches
-        `fail_on` first (its reason), TimeoutError after `timeout` seconds."""
+        `fail_on` first (its reason; with `final` only if no restart of it is pending),
+        TimeoutError after `timeout` seconds."""
         rts = [self.procs[n] for n in names]
         fail_on = fail_on or set()
 
         def done() -> bool:
             for rt in rts:
-                if rt.state in fail_on and rt.state not in states:
+                if rt.state in fail_on and rt.state not in states and not (
+                        final and rt.restart_task is not None and not rt.restart_task.done()):
                     raise StartError(f"{rt.cfg.name}: {rt.state.value}: {rt.reason}")
             return all(rt.state in states for rt in rts)
 
         async with self._changed:
             await asyncio.wait_for(self._changed.wait_for(done), timeout)
 
-    async def wait_ready(self, target: str = "all", timeout: float | None = None) -> None:
+    async def wait_ready(self, target: str = "all", timeout: float | None = None, *,
+                         final: bool = False) -> None:
         """Until every process of `target` is ready (or finished, for ones that ran to
-        completion); StartError as soon as one fails."""
+        completion); StartError as soon as one fails (`final`: fails for good, with no
+        restart pending)."""
         await self.wait(self.targets(target), {S.READY, S.FINISHED}, timeout,
-                        fail_on={S.FAILED})
+                        fail_on={S.FAILED}, final=final)
 
     def status(self) -> list[dict[str, Any]]:
         return [rt.as_dict() for rt in self.procs.values()]
@@ -369,9 +374,11 @@ class Scheduler:
         tasks = [t for rt in self.procs.values() for t in ([rt.task] if rt.task else [])]
         tasks += [t for rt in self.procs.values() for t in rt.side_tasks]
         tasks += list(self._event_tasks.values()) + list(self._bg)
-        for task in tasks:
-            task.cancel()
-        await asyncio.gather(*tasks, return_exceptions=True)
+        while tasks:
+            for task in tasks:
+                task.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
+            tasks = list(self._bg)  # notifications of what the cancellations changed
         with contextlib.suppress(ValueError):
             self.registry.listeners.remove(self._registry_changed)
 
@@ -608,10 +615,11 @@ class Scheduler:
                 other.stopped_for = None
                 self._launch(other)
 
-    def _side(self, rt: Runtime, coro: Awaitable[None]) -> None:
+    def _side(self, rt: Runtime, coro: Awaitable[None]) -> asyncio.Task[None]:
         task = asyncio.get_running_loop().create_task(coro)  # type: ignore[arg-type]
         rt.side_tasks.add(task)
         task.add_done_callback(rt.side_tasks.discard)
+        return task
 
     def _cancel_side(self, rt: Runtime) -> None:
         current = asyncio.current_task()
@@ -802,7 +810,8 @@ class Scheduler:
         rt.restarts += 1
         log.info("process %s: restart %d of %d in %.3g s", rt.cfg.name, rt.restarts,
                  rt.cfg.restart_limit, delay)
-        self._side(rt, self._restart_later(rt, delay))
+        rt.restart_task = self._side(rt, self._restart_later(rt, delay))
+        rt.restart_task.add_done_callback(lambda _: self._notify())  # final if cancelled
 
     async def _restart_later(self, rt: Runtime, delay: float) -> None:
         await asyncio.sleep(delay)

@@ -710,3 +710,26 @@ async def test_ready_time_does_not_depend_on_the_wall_clock(
     await w.sched.wait(["p"], {S.STARTED}, LIMIT)
     await until(lambda: not rt.side_tasks)  # the ready timer has run
     assert rt.state == S.READY
+
+
+async def test_wait_ready_final_waits_through_a_restart(world_factory: list[World],
+                                                        tmp_path: Path) -> None:
+    """wait_ready(final=True) (--wait-ready) fails only on a failure for good: not on one
+    its restart repairs, but at once when a pending restart is called off."""
+    gate = tmp_path / "crash"
+    gate.touch()
+    w = make(world_factory, proc("flaky", crash_once(tmp_path, gate), ready_time=0.05,
+                                 restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             proc("slow", "sh -c 'exit 1'", ready_regex="never",
+                  restart=model.Restart.ON_FAILURE, restart_delay=LIMIT))
+    w.sched.start("flaky")
+    await w.sched.wait_ready("flaky", LIMIT, final=True)
+    assert w.log.count(("flaky", S.FAILED)) == 1
+    await w.sched.stop("flaky")  # nothing else changes from now on
+    w.sched.start("slow")
+    waiting = asyncio.create_task(w.sched.wait_ready("slow", LIMIT, final=True))
+    await w.sched.wait(["slow"], {S.FAILED}, LIMIT)
+    assert not waiting.done()  # its restart is pending
+    await w.sched.stop("slow")
+    with pytest.raises(StartError, match="slow: failed: exit status 1"):
+        await waiting
