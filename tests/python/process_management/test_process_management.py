@@ -255,6 +255,23 @@ def test_failure_that_restarts_is_not_final(lab: Lab) -> None:
     assert proc.wait(timeout=LIMIT) == 0
 
 
+def test_watchdog_restart_is_not_a_failure_for_good(lab: Lab) -> None:
+    """The watchdog restarts a process even with `restart: never`: --exit-on-failure does
+    not end the manager for it."""
+    body = process("quiet", "ready", "up", marker=lab.instance,
+                   extra="ready_regex: ^up\nwatchdog_topic: lab.nothing, 10\n"
+                         "restart_delay: 0.05")
+    config = lab.write(body)
+    proc = lab.manager(config, "--no-console", "--start-all", "--exit-on-failure")
+    lab.wait_listening(proc)
+    with lab.connect() as mgr:
+        wait_for(lambda: [t["state"] for t in mgr.history("quiet")].count("ready") >= 2,
+                 "the watchdog's restart")
+        assert proc.poll() is None
+        mgr.quit()
+    assert proc.wait(timeout=LIMIT) == 0
+
+
 def test_daemon_killed_marks_its_processes_failed(lab: Lab) -> None:
     body = process("a", "ready", "up", marker=lab.instance, extra="ready_regex: up")
     with start(lab, body) as mgr:
