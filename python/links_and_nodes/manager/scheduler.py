@@ -87,6 +87,7 @@ class Runtime:
     output: deque[Any] = field(default_factory=deque)
     transitions: list[Transition] = field(default_factory=list)
     stop_requested: bool = False
+    start_requested: bool = False  # asked to start while stopping: starts once stopped
     stopped_for: str | None = None  # dependency whose loss stopped it (restarted with it)
     next_cfg: model.Process | None = None  # from a reload while it ran: for its next start
     removed: bool = False  # no longer configured: goes as soon as it is not running
@@ -184,6 +185,8 @@ class Scheduler:
         for name in names:
             rt = self.procs[name]
             rt.stopped_for = None
+            if rt.state == S.STOPPING:
+                rt.start_requested = True  # _restore starts it once it stopped
             self._launch(rt)
         return names
 
@@ -425,7 +428,7 @@ class Scheduler:
             return None  # running, or removed by a reload
         self._configure(rt)
         self._cancel_side(rt)  # a pending restart: this start is it
-        rt.stop_requested = False
+        rt.stop_requested = rt.start_requested = False
         rt.watchdog_fired = None
         rt.ready_at = None  # the restart count looks at how long this run stays ready
         self._set(rt, S.STARTING)
@@ -690,6 +693,7 @@ class Scheduler:
             raise StartError(f"{rt.cfg.name} has the flag disable_stop")
         if not restore:
             rt.stopped_for = None
+            rt.start_requested = False
         rt.stop_requested = True  # before its dependents stop: they must not come back yet
         # dependents first
         dependents = [d for d in self._dependents(rt.cfg.name) if d.state not in STARTABLE]
@@ -778,8 +782,12 @@ class Scheduler:
             self._schedule_restart(rt)
 
     def _restore(self, rt: Runtime) -> None:
-        """A dependent stopped because its dependency went down comes back as soon as the
-        dependency is ready again (which may already be the case when its stop completes)."""
+        """A process asked to start while it was stopping starts now.  A dependent stopped
+        because its dependency went down comes back as soon as the dependency is ready again
+        (which may already be the case when its stop completes)."""
+        if rt.start_requested and rt.state in STARTABLE:
+            self._launch(rt)
+            return
         dep = self.procs.get(rt.stopped_for) if rt.stopped_for else None
         if dep is not None and dep.state == S.READY and not dep.stop_requested \
                 and rt.state in STARTABLE:
@@ -871,6 +879,7 @@ class Scheduler:
                 self._cancel_side(rt)
                 if rt.stop_requested:
                     self._set(rt, S.STOPPED, "stopped (daemon connection lost)")
+                    self._restore(rt)
                     continue
                 self._set(rt, S.FAILED, f"lost the connection to the ln_daemon of node "
                                         f"{rt.cfg.node!r}")

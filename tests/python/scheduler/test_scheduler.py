@@ -733,3 +733,23 @@ async def test_wait_ready_final_waits_through_a_restart(world_factory: list[Worl
     await w.sched.stop("slow")
     with pytest.raises(StartError, match="slow: failed: exit status 1"):
         await waiting
+
+
+async def test_start_while_stopping_starts_once_stopped(world_factory: list[World],
+                                                        tmp_path: Path) -> None:
+    """A start asked for while the process is still stopping is not lost: it starts again
+    once the stop is done."""
+    release = tmp_path / "release"
+    w = make(world_factory, proc("p", slow_to_stop(tmp_path, release), ready_regex="^up",
+                                 term_timeout=LIMIT))
+    rt = w.sched.procs["p"]
+    w.sched.start("p")
+    await w.sched.wait_ready("p", LIMIT)
+    stopping = asyncio.create_task(w.sched.stop("p"))
+    await w.sched.wait(["p"], {S.STOPPING}, LIMIT)
+    assert w.sched.start("p") == ["p"]
+    release.touch()
+    await stopping
+    assert rt.state in (S.STARTING, S.STARTED, S.READY)
+    await w.sched.wait_ready("p", LIMIT)
+    assert w.daemon.spawned == ["p", "p"]
