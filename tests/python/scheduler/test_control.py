@@ -11,10 +11,12 @@ from types import SimpleNamespace
 
 import pytest
 
+from links_and_nodes.manager import protocol as p
 from links_and_nodes.manager.console import Console
 from links_and_nodes.manager.control import Control
 from links_and_nodes.manager.process_states import ProcState as S
 from links_and_nodes.manager.scheduler import Scheduler
+from links_and_nodes.manager.scripting import Manager, ManagerError
 
 from .fake_daemon import FakeDaemon, FakeRegistry, backend
 from .test_scheduler import LIMIT, config, proc
@@ -96,3 +98,15 @@ async def test_console_stops_following_when_it_ends(control: Control) -> None:
 async def _until(predicate: object) -> None:
     while not predicate():  # type: ignore[operator]
         await asyncio.sleep(0.01)
+
+
+@pytest.mark.parametrize("answer", ["not json", "[1, 2]", '"ok"', "{\"ok\": false}",
+                                    '{"ok": false, "error": 7}'])
+def test_scripting_turns_a_malformed_answer_into_manager_error(answer: str) -> None:
+    """What `ln_manager status|...` prints as an error (exit status 1), not a traceback."""
+    mgr = Manager.__new__(Manager)
+    mgr.timeout, mgr._next_id = 1.0, 0
+    mgr._send = lambda msg: None  # type: ignore[method-assign]
+    mgr._receive = lambda timeout: p.ControlResult(1, answer)  # type: ignore[method-assign]
+    with pytest.raises(ManagerError):
+        mgr.command("status")
