@@ -65,17 +65,19 @@ class Console:
     async def run(self, stream: asyncio.StreamReader) -> None:
         """Read and run commands until `quit`/`detach` or the end of input (which ends only
         the console, not the manager)."""
-        while True:
-            raw = await stream.readline()
-            if not raw:
+        try:
+            while True:
+                raw = await stream.readline()
+                if not raw:
+                    return
+                line = raw.decode(errors="replace").strip()
                 self._unfollow()
-                return
-            line = raw.decode(errors="replace").strip()
+                if not line or line.startswith("#"):
+                    continue
+                if await self.execute(line):
+                    return
+        finally:
             self._unfollow()
-            if not line or line.startswith("#"):
-                continue
-            if await self.execute(line):
-                return
 
     async def execute(self, line: str) -> bool:
         """Run one command line; True when the console should end (quit, detach)."""
@@ -145,7 +147,7 @@ class Console:
         for word in it:
             if word == "-n":
                 value = next(it, "")
-                if not value.isdigit():
+                if not (value.isascii() and value.isdigit()):
                     raise ControlError("output: -n needs a number")
                 n = int(value)
             elif word == "-f":

@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import math
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -41,7 +42,10 @@ class Control:
     async def handle_json(self, text: str) -> str:
         """One CONTROL request to its CONTROL_RESULT text."""
         try:
-            command = json.loads(text)
+            try:
+                command = json.loads(text)
+            except RecursionError:
+                raise ControlError("command is not JSON: nested too deeply") from None
             if not isinstance(command, dict) or not isinstance(command.get("op"), str):
                 raise ControlError('a command is a JSON object with a string "op"')
             result = await self.handle(command)
@@ -60,6 +64,11 @@ class Control:
             result = await func(command)
         except (KeyError, StartError) as exc:
             raise ControlError(exc.args[0] if exc.args else str(exc)) from None
+        except (ControlError, asyncio.CancelledError):
+            raise
+        except Exception as exc:  # a bug of ours: answer it, keep the manager running
+            log.exception("control command %r failed", op)
+            raise ControlError(f"internal error: {exc}") from None
         return {"ok": True, **result}
 
     # ---- helpers -------------------------------------------------------------------------
@@ -78,9 +87,18 @@ class Control:
     @staticmethod
     def _timeout(command: dict[str, Any]) -> float | None:
         timeout = command.get("timeout")
-        if timeout is not None and (not isinstance(timeout, int | float) or timeout < 0):
+        if timeout is not None and (isinstance(timeout, bool)
+                                    or not isinstance(timeout, int | float)
+                                    or not math.isfinite(timeout) or timeout < 0):
             raise ControlError('"timeout" must be a number of seconds >= 0 or null')
         return timeout
+
+    @staticmethod
+    def _name(command: dict[str, Any], sched: Scheduler) -> str:
+        name = command.get("name")
+        if not isinstance(name, str) or name not in sched.procs:
+            raise ControlError(f"no process named {name!r}")
+        return name
 
     # ---- commands ------------------------------------------------------------------------
     async def status(self, command: dict[str, Any]) -> dict[str, Any]:
@@ -93,8 +111,10 @@ class Control:
         return {"processes": self._sched().start(self._target(command))}
 
     async def stop(self, command: dict[str, Any]) -> dict[str, Any]:
-        return {"processes": await self._sched().stop(self._target(command),
-                                                      force=bool(command.get("force")))}
+        force = command.get("force", False)
+        if not isinstance(force, bool):
+            raise ControlError('"force" must be true or false')
+        return {"processes": await self._sched().stop(self._target(command), force=force)}
 
     async def restart(self, command: dict[str, Any]) -> dict[str, Any]:
         return {"processes": await self._sched().restart(self._target(command))}
@@ -113,20 +133,16 @@ class Control:
 
     async def output(self, command: dict[str, Any]) -> dict[str, Any]:
         sched = self._sched()
-        name = command.get("name")
-        if name not in sched.procs:
-            raise ControlError(f"no process named {name!r}")
+        name = self._name(command, sched)
         n = command.get("n", 100)
-        if not isinstance(n, int) or not 0 <= n <= MAX_OUTPUT_LINES:
+        if isinstance(n, bool) or not isinstance(n, int) or not 0 <= n <= MAX_OUTPUT_LINES:
             raise ControlError(f'"n" must be 0..{MAX_OUTPUT_LINES}')
         return {"lines": [{"time": line.time, "stream": line.stream, "text": line.text}
                           for line in sched.output(name, n)]}
 
     async def history(self, command: dict[str, Any]) -> dict[str, Any]:
         sched = self._sched()
-        name = command.get("name")
-        if name not in sched.procs:
-            raise ControlError(f"no process named {name!r}")
+        name = self._name(command, sched)
         return {"transitions": [{"time": t.time, "state": t.state.value, "reason": t.reason}
                                 for t in sched.history(name)]}
 

@@ -55,7 +55,8 @@ class Runner:
         if self.args.wait_ready:
             try:
                 if not await self._unless_stopping(
-                        self.scheduler.wait_ready("all", self.args.ready_timeout)):
+                        self.scheduler.wait_ready("all", self.args.ready_timeout,
+                                                  final=True)):
                     return 0  # asked to stop while waiting
             except (StartError, TimeoutError) as exc:
                 text = str(exc) or "not ready within --ready-timeout"
@@ -83,13 +84,19 @@ class Runner:
         return False
 
     def _fail_fast(self, name: str, t: Transition) -> None:
+        if t.state == ProcState.FAILED:
+            # decided once the scheduler has scheduled its restart, if it restarts
+            asyncio.get_running_loop().call_soon(self._failed_for_good, name)
+
+    def _failed_for_good(self, name: str) -> None:
         rt = self.scheduler.procs.get(name)
-        if t.state != ProcState.FAILED or rt is None:
+        if rt is None or rt.state != ProcState.FAILED or self.exit_status:
             return
-        if rt.cfg.restart == model.Restart.NEVER or "gave up" in t.reason:
-            print(f"ln_manager: process {name} failed: {t.reason}", flush=True)
-            self.exit_status = 1
-            self.shutdown(True)
+        if rt.restart_task is not None and not rt.restart_task.done():
+            return  # by its restart policy, or its watchdog's restart
+        print(f"ln_manager: process {name} failed: {rt.reason}", flush=True)
+        self.exit_status = 1
+        self.shutdown(True)
 
     async def _run_console(self) -> None:
         try:

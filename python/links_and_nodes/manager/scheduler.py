@@ -87,6 +87,7 @@ class Runtime:
     output: deque[Any] = field(default_factory=deque)
     transitions: list[Transition] = field(default_factory=list)
     stop_requested: bool = False
+    start_requested: bool = False  # asked to start while stopping: starts once stopped
     stopped_for: str | None = None  # dependency whose loss stopped it (restarted with it)
     next_cfg: model.Process | None = None  # from a reload while it ran: for its next start
     removed: bool = False  # no longer configured: goes as soon as it is not running
@@ -96,8 +97,10 @@ class Runtime:
     early_exit: Any = None  # an exit event that came before the daemon's spawn answer
     regex: re.Pattern[str] | None = None
     regex_seen: bool = False
+    ready_time_passed: bool = False  # its ready_time (monotonic) has passed
     task: asyncio.Task[None] | None = None  # starting (dependencies, spawn, readiness)
     side_tasks: set[asyncio.Task[Any]] = field(default_factory=set)  # watchdog, restart timer
+    restart_task: asyncio.Task[None] | None = None  # the last restart timer (a side task)
 
     def as_dict(self) -> dict[str, Any]:
         return {"name": self.cfg.name, "state": self.state.value, "pid": self.pid,
@@ -158,6 +161,7 @@ class Scheduler:
         self._transient = 0
         # transient runs (state commands): their exit, and the daemon connection they use
         self._waiters: dict[str, tuple[asyncio.Future[Any], DaemonLink]] = {}
+        self._bg: set[asyncio.Task[Any]] = set()  # stops of dependents, notifications
         self.output_listeners: list[Callable[[str, Any], None]] = []
         self.transition_listeners: list[Callable[[str, Transition], None]] = []
         registry.listeners.append(self._registry_changed)
@@ -181,15 +185,36 @@ class Scheduler:
         for name in names:
             rt = self.procs[name]
             rt.stopped_for = None
+            if rt.state == S.STOPPING:
+                rt.start_requested = True  # _restore starts it once it stopped
             self._launch(rt)
         return names
 
     async def stop(self, target: str, *, force: bool = False) -> list[str]:
-        """Stop what `target` names, dependents first; returns when all are down."""
+        """Stop what `target` names, dependents first; returns when all are down.
+        StartError, and nothing is stopped, if that includes a process with the flag
+        disable_stop (unless `force`)."""
         names = self.targets(target)
+        if not force:
+            self._refuse_disable_stop(names)
         await asyncio.gather(*(self._stop(self.procs[n], "stopped by request", force=force)
                                for n in names))
         return names
+
+    def _refuse_disable_stop(self, names: list[str]) -> None:
+        """StartError if stopping `names` would stop a process with disable_stop: one of
+        them, or a running dependent (which is stopped first)."""
+        todo = [(name, "") for name in names]
+        seen: set[str] = set()
+        while todo:
+            name, why = todo.pop()
+            if name in seen:
+                continue
+            seen.add(name)
+            if "disable_stop" in self.procs[name].cfg.flags:
+                raise StartError(f"{name} has the flag disable_stop{why}")
+            todo += [(d.cfg.name, f" (it depends on {name})")
+                     for d in self._dependents(name) if d.state not in STARTABLE]
 
     async def restart(self, target: str) -> list[str]:
         names = await self.stop(target)
@@ -201,27 +226,31 @@ class Scheduler:
         return names
 
     async def wait(self, names: Iterable[str], states: set[ProcState],
-                   timeout: float | None = None, *, fail_on: set[ProcState] | None = None
-                   ) -> None:
+                   timeout: float | None = None, *, fail_on: set[ProcState] | None = None,
+                   final: bool = False) -> None:
         """Until every process of `names` is in one of `states`; StartError if one reaches
-        `fail_on` first (its reason), TimeoutError after `timeout` seconds."""
+        `fail_on` first (its reason; with `final` only if no restart of it is pending),
+        TimeoutError after `timeout` seconds."""
         rts = [self.procs[n] for n in names]
         fail_on = fail_on or set()
 
         def done() -> bool:
             for rt in rts:
-                if rt.state in fail_on and rt.state not in states:
+                if rt.state in fail_on and rt.state not in states and not (
+                        final and rt.restart_task is not None and not rt.restart_task.done()):
                     raise StartError(f"{rt.cfg.name}: {rt.state.value}: {rt.reason}")
             return all(rt.state in states for rt in rts)
 
         async with self._changed:
             await asyncio.wait_for(self._changed.wait_for(done), timeout)
 
-    async def wait_ready(self, target: str = "all", timeout: float | None = None) -> None:
+    async def wait_ready(self, target: str = "all", timeout: float | None = None, *,
+                         final: bool = False) -> None:
         """Until every process of `target` is ready (or finished, for ones that ran to
-        completion); StartError as soon as one fails."""
+        completion); StartError as soon as one fails (`final`: fails for good, with no
+        restart pending)."""
         await self.wait(self.targets(target), {S.READY, S.FINISHED}, timeout,
-                        fail_on={S.FAILED})
+                        fail_on={S.FAILED}, final=final)
 
     def status(self) -> list[dict[str, Any]]:
         return [rt.as_dict() for rt in self.procs.values()]
@@ -275,7 +304,10 @@ class Scheduler:
                 continue
             if rt.cfg.ready_time is not None:
                 left = rt.cfg.ready_time - (time.time() - info.started)
-                self._side(rt, self._ready_timer(rt, max(0.0, left)))
+                if left > 0:
+                    self._side(rt, self._ready_timer(rt, left))
+                else:
+                    rt.ready_time_passed = True
             self._check_ready(rt, attached=True)
 
     def apply_config(self, config: model.Config) -> dict[str, list[str]]:
@@ -325,20 +357,31 @@ class Scheduler:
 
     async def shutdown(self) -> None:
         """Stop every process the configuration runs (dependents first), except those with
-        the flag disable_stop, which are left running for the next manager."""
+        the flag disable_stop and what they depend on, which are left running for the next
+        manager."""
+        keep: set[str] = set()
+        todo = [name for name, rt in self.procs.items()
+                if "disable_stop" in rt.cfg.flags and rt.state not in STARTABLE]
+        while todo:
+            name = todo.pop()
+            if name in keep or name not in self.procs:
+                continue
+            keep.add(name)
+            todo += self.procs[name].cfg.depends_on
         await asyncio.gather(*(self._stop(rt, "manager shutting down")
-                               for rt in self.procs.values()
-                               if "disable_stop" not in rt.cfg.flags))
+                               for name, rt in self.procs.items() if name not in keep))
         await self.close()
 
     async def close(self) -> None:
         """Forget the daemons without stopping anything (processes keep running)."""
         tasks = [t for rt in self.procs.values() for t in ([rt.task] if rt.task else [])]
         tasks += [t for rt in self.procs.values() for t in rt.side_tasks]
-        tasks += list(self._event_tasks.values())
-        for task in tasks:
-            task.cancel()
-        await asyncio.gather(*tasks, return_exceptions=True)
+        tasks += list(self._event_tasks.values()) + list(self._bg)
+        while tasks:
+            for task in tasks:
+                task.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
+            tasks = list(self._bg)  # notifications of what the cancellations changed
         with contextlib.suppress(ValueError):
             self.registry.listeners.remove(self._registry_changed)
 
@@ -367,7 +410,6 @@ class Scheduler:
         self._background(task)
 
     def _background(self, task: asyncio.Task[Any]) -> None:
-        self._bg = getattr(self, "_bg", set())
         self._bg.add(task)
         task.add_done_callback(self._bg.discard)
 
@@ -386,7 +428,7 @@ class Scheduler:
             return None  # running, or removed by a reload
         self._configure(rt)
         self._cancel_side(rt)  # a pending restart: this start is it
-        rt.stop_requested = False
+        rt.stop_requested = rt.start_requested = False
         rt.watchdog_fired = None
         rt.ready_at = None  # the restart count looks at how long this run stays ready
         self._set(rt, S.STARTING)
@@ -483,7 +525,7 @@ class Scheduler:
             rt.daemon_record = False
         # Reset before the spawn, not after: the new run's first output can be handled
         # before this task resumes with the daemon's answer.
-        rt.regex_seen = False
+        rt.regex_seen = rt.ready_time_passed = False
         rt.early_exit = None
         spawning = asyncio.ensure_future(link.spawn(spec))
         try:
@@ -491,11 +533,12 @@ class Scheduler:
         except self.backend.error_type as exc:
             raise StartError(f"cannot start: {exc}") from None
         except asyncio.CancelledError:
-            # Stopped while the daemon was starting it: let that finish, then stop it, so
-            # nothing runs that the scheduler believes stopped.
-            with contextlib.suppress(Exception):
-                await spawning
-                await link.stop(cfg.name)
+            # Stopped while the daemon was starting it: let that finish, then stop it and
+            # wait for its exit, so nothing runs that the scheduler believes stopped.  (Without
+            # a stop request this is the scheduler closing: the process runs on.)
+            if rt.stop_requested:
+                with contextlib.suppress(Exception):
+                    await self._stop_spawned(rt, link, await spawning)
             raise
         rt.pid = info.pid
         rt.link = link
@@ -517,8 +560,22 @@ class Scheduler:
             self._side(rt, self._ready_timer(rt, cfg.ready_time))
         self._check_ready(rt)
 
+    async def _stop_spawned(self, rt: Runtime, link: DaemonLink, info: Any) -> None:
+        """Stop the run the daemon started for rt while rt was being stopped (still
+        `starting`); return once it has exited."""
+        rt.pid, rt.link, rt.daemon_record = info.pid, link, True
+        early, rt.early_exit = rt.early_exit, None
+        if early is not None and early.pid == info.pid:
+            rt.pid = None  # it has exited already
+            return
+        with contextlib.suppress(self.backend.error_type):  # it may have exited meanwhile
+            await link.stop(rt.cfg.name)
+        async with self._changed:  # its exit (_on_exit) or the connection's loss clears it
+            await self._changed.wait_for(lambda: rt.pid != info.pid)
+
     async def _ready_timer(self, rt: Runtime, delay: float) -> None:
         await asyncio.sleep(delay)
+        rt.ready_time_passed = True
         self._check_ready(rt)
 
     def _check_ready(self, rt: Runtime, *, attached: bool = False) -> None:
@@ -533,8 +590,7 @@ class Scheduler:
                 return
             held.append(f"output matched {cfg.ready_regex!r}")
         if cfg.ready_time is not None:
-            assert rt.started_at is not None
-            if time.time() - rt.started_at < cfg.ready_time - 1e-3:
+            if not rt.ready_time_passed:
                 return
             held.append(f"{cfg.ready_time:g} s passed")
         if cfg.ready_on_topic is not None:
@@ -562,10 +618,11 @@ class Scheduler:
                 other.stopped_for = None
                 self._launch(other)
 
-    def _side(self, rt: Runtime, coro: Awaitable[None]) -> None:
+    def _side(self, rt: Runtime, coro: Awaitable[None]) -> asyncio.Task[None]:
         task = asyncio.get_running_loop().create_task(coro)  # type: ignore[arg-type]
         rt.side_tasks.add(task)
         task.add_done_callback(rt.side_tasks.discard)
+        return task
 
     def _cancel_side(self, rt: Runtime) -> None:
         current = asyncio.current_task()
@@ -636,6 +693,7 @@ class Scheduler:
             raise StartError(f"{rt.cfg.name} has the flag disable_stop")
         if not restore:
             rt.stopped_for = None
+            rt.start_requested = False
         rt.stop_requested = True  # before its dependents stop: they must not come back yet
         # dependents first
         dependents = [d for d in self._dependents(rt.cfg.name) if d.state not in STARTABLE]
@@ -724,8 +782,12 @@ class Scheduler:
             self._schedule_restart(rt)
 
     def _restore(self, rt: Runtime) -> None:
-        """A dependent stopped because its dependency went down comes back as soon as the
-        dependency is ready again (which may already be the case when its stop completes)."""
+        """A process asked to start while it was stopping starts now.  A dependent stopped
+        because its dependency went down comes back as soon as the dependency is ready again
+        (which may already be the case when its stop completes)."""
+        if rt.start_requested and rt.state in STARTABLE:
+            self._launch(rt)
+            return
         dep = self.procs.get(rt.stopped_for) if rt.stopped_for else None
         if dep is not None and dep.state == S.READY and not dep.stop_requested \
                 and rt.state in STARTABLE:
@@ -756,7 +818,8 @@ class Scheduler:
         rt.restarts += 1
         log.info("process %s: restart %d of %d in %.3g s", rt.cfg.name, rt.restarts,
                  rt.cfg.restart_limit, delay)
-        self._side(rt, self._restart_later(rt, delay))
+        rt.restart_task = self._side(rt, self._restart_later(rt, delay))
+        rt.restart_task.add_done_callback(lambda _: self._notify())  # final if cancelled
 
     async def _restart_later(self, rt: Runtime, delay: float) -> None:
         await asyncio.sleep(delay)
@@ -808,11 +871,15 @@ class Scheduler:
         unknown now.  Those processes fail (and restart by their policy, through a new
         connection)."""
         for rt in list(self.procs.values()):
+            if rt.link is link and rt.pid is not None and rt.state == S.STARTING:
+                rt.pid = None  # being stopped while it was spawned (_stop_spawned)
+                self._notify()
             if rt.state in ALIVE and rt.link is link:
                 rt.pid = None
                 self._cancel_side(rt)
                 if rt.stop_requested:
                     self._set(rt, S.STOPPED, "stopped (daemon connection lost)")
+                    self._restore(rt)
                     continue
                 self._set(rt, S.FAILED, f"lost the connection to the ln_daemon of node "
                                         f"{rt.cfg.node!r}")

@@ -101,9 +101,14 @@ class Manager:
             raise ManagerError(reply.text)
         if not isinstance(reply, p.ControlResult) or reply.request_id != self._next_id:
             raise ManagerError(f"unexpected answer {reply.TYPE.name} to {op}")
-        result = json.loads(reply.result)
+        try:
+            result = json.loads(reply.result)
+        except ValueError as exc:
+            raise ManagerError(f"malformed answer from the manager: {exc}") from None
+        if not isinstance(result, dict):
+            raise ManagerError("malformed answer from the manager: not a JSON object")
         if not result.get("ok"):
-            raise ManagerError(result.get("error", "unknown error"))
+            raise ManagerError(str(result.get("error", "unknown error")))
         return result
 
     # ---- commands --------------------------------------------------------------------------

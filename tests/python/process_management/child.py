@@ -6,7 +6,9 @@ instance name, so the tests find every process they started in the process table
     child.py tree MARKER                  start a child and a setsid'd grandchild, print "ready"
     child.py publish TOPIC COUNT MARKER   publish COUNT samples at 200 Hz, print "ready" at the
                                           first, then stay alive without publishing
-    child.py ignore-term MARKER           ignore SIGTERM, print "ready", sleep"""
+    child.py ignore-term MARKER           ignore SIGTERM, print "ready", sleep
+    child.py crash-once FILE MARKER       the first time (FILE missing): create FILE, exit 1;
+                                          then print "ready" and sleep"""
 
 from __future__ import annotations
 
@@ -58,6 +60,12 @@ def main() -> None:
         sleep_forever()
     elif mode == "ignore-term":
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        print("ready", flush=True)
+        sleep_forever()
+    elif mode == "crash-once":
+        if not os.path.exists(args[0]):
+            open(args[0], "w").close()
+            sys.exit(1)
         print("ready", flush=True)
         sleep_forever()
 

@@ -241,6 +241,40 @@ def test_exit_on_failure(lab: Lab) -> None:
     assert "exit status 7" in proc.stdout.read()
 
 
+def test_failure_that_restarts_is_not_final(lab: Lab) -> None:
+    """--wait-ready --exit-on-failure waits through a failure its restart policy repairs."""
+    flag = lab.tmp / "crashed"
+    body = process("flaky", "crash-once", str(flag), marker=lab.instance,
+                   extra="ready_regex: ^ready\nrestart: on-failure\nrestart_delay: 0.05")
+    config = lab.write(body)
+    proc = lab.manager(config, "--no-console", "--start-all", "--wait-ready",
+                       "--exit-on-failure")
+    lab.wait_listening(proc)
+    assert proc.stdout is not None
+    assert proc.stdout.readline().strip() == "ln_manager: all 1 processes ready"
+    with lab.connect() as mgr:
+        assert [t["state"] for t in mgr.history("flaky")].count("failed") == 1
+        mgr.quit()
+    assert proc.wait(timeout=LIMIT) == 0
+
+
+def test_watchdog_restart_is_not_a_failure_for_good(lab: Lab) -> None:
+    """The watchdog restarts a process even with `restart: never`: --exit-on-failure does
+    not end the manager for it."""
+    body = process("quiet", "ready", "up", marker=lab.instance,
+                   extra="ready_regex: ^up\nwatchdog_topic: lab.nothing, 10\n"
+                         "restart_delay: 0.05")
+    config = lab.write(body)
+    proc = lab.manager(config, "--no-console", "--start-all", "--exit-on-failure")
+    lab.wait_listening(proc)
+    with lab.connect() as mgr:
+        wait_for(lambda: [t["state"] for t in mgr.history("quiet")].count("ready") >= 2,
+                 "the watchdog's restart")
+        assert proc.poll() is None
+        mgr.quit()
+    assert proc.wait(timeout=LIMIT) == 0
+
+
 def test_daemon_killed_marks_its_processes_failed(lab: Lab) -> None:
     body = process("a", "ready", "up", marker=lab.instance, extra="ready_regex: up")
     with start(lab, body) as mgr:

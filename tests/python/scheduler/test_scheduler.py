@@ -595,3 +595,161 @@ async def test_reload_changes_a_running_process_at_its_next_start(
     assert daemons["n2"].spawned == ["a"]
     await w.sched.stop("a")
     await daemons["n2"].kill_all()
+
+
+async def test_shutdown_leaves_disable_stop_and_what_it_needs(
+        world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"), proc("b", depends_on=["a"], flags={"disable_stop"}),
+             proc("c"))
+    w.sched.start("all")
+    await w.sched.wait_ready("all", LIMIT)
+    await w.sched.shutdown()
+    assert [w.sched.procs[n].state for n in "abc"] == [S.READY, S.READY, S.STOPPED]
+    assert w.daemon.stops == ["c"]
+
+
+async def test_disable_stop_refusal_stops_nothing(world_factory: list[World]) -> None:
+    """Stopping (or restarting) what includes or is needed by a process with disable_stop
+    is refused as a whole, before anything is stopped."""
+    w = make(world_factory, proc("a"), proc("b", depends_on=["a"], flags={"disable_stop"}),
+             proc("c"))
+    w.sched.start("all")
+    await w.sched.wait_ready("all", LIMIT)
+    with pytest.raises(StartError, match="b has the flag disable_stop"):
+        await w.sched.restart("all")
+    with pytest.raises(StartError, match=r"b has the flag disable_stop \(it depends on a\)"):
+        await w.sched.stop("a")
+    assert [w.sched.procs[n].state for n in "abc"] == [S.READY] * 3
+    await w.sched.restart("c")
+    await w.sched.stop("a", force=True)
+    assert [w.sched.procs[n].state for n in "ab"] == [S.STOPPED] * 2
+    assert sorted(w.daemon.spawned) == ["a", "b", "c", "c"]
+
+
+class HeldSpawnDaemon(FakeDaemon):
+    """Starts the process at once but answers SPAWN only once `answer` is set."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.answer = asyncio.Event()
+
+    async def spawn(self, spec: Spec) -> Info:
+        info = await super().spawn(spec)
+        await self.answer.wait()
+        return info
+
+
+async def test_stop_while_spawning_waits_for_the_exit(world_factory: list[World],
+                                                      tmp_path: Path) -> None:
+    """A stop that comes while the daemon is starting the process stops it once it runs,
+    and is done (the process `stopped`) only when it has exited: a start right after it
+    does not find the old run still there."""
+    release = tmp_path / "release"
+    w = World(config(proc("p", slow_to_stop(tmp_path, release), ready_regex="^up",
+                          term_timeout=LIMIT)), HeldSpawnDaemon())
+    world_factory.append(w)
+    gone_when_stopped = []
+    w.sched.transition_listeners.append(
+        lambda n, t: gone_when_stopped.append(w.daemon.procs["p"].exited is not None)
+        if t.state == S.STOPPED else None)
+    w.sched.start("p")
+    await until(lambda: "p" in w.daemon.procs)
+    stopping = asyncio.create_task(w.sched.stop("p"))
+    await asyncio.sleep(0)
+    w.daemon.answer.set()
+    await until(lambda: w.daemon.stops == ["p"])
+    release.touch()
+    assert await stopping == ["p"]
+    assert gone_when_stopped == [True]
+    w.sched.start("p")
+    await w.sched.wait_ready("p", LIMIT)
+
+
+async def test_close_while_spawning_leaves_the_process(world_factory: list[World]) -> None:
+    """Closing the scheduler (detach) while a spawn is on its way stops nothing."""
+    w = World(config(proc("p")), HeldSpawnDaemon())
+    world_factory.append(w)
+    w.sched.start("p")
+    await until(lambda: "p" in w.daemon.procs)
+    closing = asyncio.create_task(w.sched.close())
+    await asyncio.sleep(0)
+    w.daemon.answer.set()
+    await closing
+    assert w.daemon.stops == [] and w.daemon.procs["p"].exited is None
+
+
+async def test_close_ends_every_task(world_factory: list[World], tmp_path: Path) -> None:
+    """After close() no task of the scheduler is left (here: the stop of a dependent whose
+    dependency crashed, waiting for an exit)."""
+    crash, release = tmp_path / "crash", tmp_path / "release"
+    w = make(world_factory, proc("a", crash_once(tmp_path, crash)),
+             proc("b", slow_to_stop(tmp_path, release), depends_on=["a"], ready_regex="^up",
+                  term_timeout=LIMIT))
+    w.sched.start("b")
+    await w.sched.wait_ready("all", LIMIT)
+    crash.touch()
+    await w.sched.wait(["b"], {S.STOPPING}, LIMIT)
+    await w.sched.close()
+    left = [t for t in asyncio.all_tasks()
+            if t.get_coro().__qualname__.startswith("Scheduler.")  # type: ignore[union-attr]
+            and not t.done()]
+    assert left == []
+
+
+async def test_ready_time_does_not_depend_on_the_wall_clock(
+        world_factory: list[World], monkeypatch: pytest.MonkeyPatch) -> None:
+    """ready_time counts on the monotonic clock: a wall clock set back meanwhile (here: one
+    that stands still) does not keep the process from getting ready."""
+    from links_and_nodes.manager import scheduler as sched_mod
+
+    monkeypatch.setattr(sched_mod, "time",
+                        SimpleNamespace(time=lambda: 1e9, monotonic=time.monotonic))
+    w = make(world_factory, proc("p", ready_time=0.05))
+    w.sched.start("p")
+    rt = w.sched.procs["p"]
+    await w.sched.wait(["p"], {S.STARTED}, LIMIT)
+    await until(lambda: not rt.side_tasks)  # the ready timer has run
+    assert rt.state == S.READY
+
+
+async def test_wait_ready_final_waits_through_a_restart(world_factory: list[World],
+                                                        tmp_path: Path) -> None:
+    """wait_ready(final=True) (--wait-ready) fails only on a failure for good: not on one
+    its restart repairs, but at once when a pending restart is called off."""
+    gate = tmp_path / "crash"
+    gate.touch()
+    w = make(world_factory, proc("flaky", crash_once(tmp_path, gate), ready_time=0.05,
+                                 restart=model.Restart.ON_FAILURE, restart_delay=0.01),
+             proc("slow", "sh -c 'exit 1'", ready_regex="never",
+                  restart=model.Restart.ON_FAILURE, restart_delay=LIMIT))
+    w.sched.start("flaky")
+    await w.sched.wait_ready("flaky", LIMIT, final=True)
+    assert w.log.count(("flaky", S.FAILED)) == 1
+    await w.sched.stop("flaky")  # nothing else changes from now on
+    w.sched.start("slow")
+    waiting = asyncio.create_task(w.sched.wait_ready("slow", LIMIT, final=True))
+    await w.sched.wait(["slow"], {S.FAILED}, LIMIT)
+    assert not waiting.done()  # its restart is pending
+    await w.sched.stop("slow")
+    with pytest.raises(StartError, match="slow: failed: exit status 1"):
+        await waiting
+
+
+async def test_start_while_stopping_starts_once_stopped(world_factory: list[World],
+                                                        tmp_path: Path) -> None:
+    """A start asked for while the process is still stopping is not lost: it starts again
+    once the stop is done."""
+    release = tmp_path / "release"
+    w = make(world_factory, proc("p", slow_to_stop(tmp_path, release), ready_regex="^up",
+                                 term_timeout=LIMIT))
+    rt = w.sched.procs["p"]
+    w.sched.start("p")
+    await w.sched.wait_ready("p", LIMIT)
+    stopping = asyncio.create_task(w.sched.stop("p"))
+    await w.sched.wait(["p"], {S.STOPPING}, LIMIT)
+    assert w.sched.start("p") == ["p"]
+    release.touch()
+    await stopping
+    assert rt.state in (S.STARTING, S.STARTED, S.READY)
+    await w.sched.wait_ready("p", LIMIT)
+    assert w.daemon.spawned == ["p", "p"]
