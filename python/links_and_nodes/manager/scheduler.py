@@ -242,7 +242,8 @@ class Scheduler:
             return all(rt.state in states for rt in rts)
 
         async with self._changed:
-            await asyncio.wait_for(self._changed.wait_for(done), timeout)
+            if not done():  # (a timeout of 0 only looks)
+                await asyncio.wait_for(self._changed.wait_for(done), timeout)
 
     async def wait_ready(self, target: str = "all", timeout: float | None = None, *,
                          final: bool = False) -> None:
@@ -461,10 +462,17 @@ class Scheduler:
             else:
                 jobs.append(self._dependency_ready(rt, dep))
         jobs += [self._dependency_finished(rt, dep) for dep in rt.cfg.start_before]
-        results = await asyncio.gather(*jobs, return_exceptions=True)
-        for result in results:
-            if isinstance(result, BaseException):
-                raise result
+        tasks = [asyncio.ensure_future(job) for job in jobs]
+        try:
+            if tasks:  # the first failure fails the start: no waiting for the others
+                await asyncio.wait(tasks, return_when=asyncio.FIRST_EXCEPTION)
+        finally:
+            for task in tasks:
+                task.cancel()
+        errors = [task.exception() for task in tasks if task.done() and not task.cancelled()]
+        for error in errors:
+            if error is not None:
+                raise error
 
     async def _dependency_ready(self, rt: Runtime, dep: str) -> None:
         d = self.procs.get(dep)

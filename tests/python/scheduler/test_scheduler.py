@@ -753,3 +753,28 @@ async def test_start_while_stopping_starts_once_stopped(world_factory: list[Worl
     assert rt.state in (S.STARTING, S.STARTED, S.READY)
     await w.sched.wait_ready("p", LIMIT)
     assert w.daemon.spawned == ["p", "p"]
+
+
+async def test_one_failed_dependency_fails_the_start_at_once(
+        world_factory: list[World]) -> None:
+    """A dependency that fails ends the start even while another one is still on its way
+    (here: never ready)."""
+    w = make(world_factory, proc("a"), proc("b", ready_regex="never"),
+             proc("c", depends_on=["a", "b"]))
+    w.daemon.fail_spawn.add("a")
+    w.sched.start("c")
+    with pytest.raises(StartError, match="command not found"):
+        await w.sched.wait_ready("a", LIMIT)
+    await w.sched.wait(["b"], {S.STARTED}, LIMIT)
+    c = w.sched.procs["c"]
+    assert c.task is not None
+    await asyncio.wait([c.task], timeout=LIMIT)
+    assert c.state == S.FAILED and "dependency a did not become ready" in c.reason
+    assert w.sched.procs["b"].state == S.STARTED  # it goes on starting by itself
+
+
+async def test_wait_with_zero_timeout_sees_what_holds_now(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"))
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    await w.sched.wait_ready("a", 0)
