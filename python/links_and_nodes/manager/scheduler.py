@@ -822,7 +822,8 @@ class Scheduler:
             _tell(self.transition_listeners, rt.cfg.name, t)
             self._notify()
             return
-        delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * (2 ** rt.restarts))
+        # (2 ** restarts no longer fits a float after 1023 restarts)
+        delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * 2.0 ** min(rt.restarts, 1000))
         rt.restarts += 1
         log.info("process %s: restart %d of %d in %.3g s", rt.cfg.name, rt.restarts,
                  rt.cfg.restart_limit, delay)

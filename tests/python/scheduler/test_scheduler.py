@@ -778,3 +778,16 @@ async def test_wait_with_zero_timeout_sees_what_holds_now(world_factory: list[Wo
     w.sched.start("a")
     await w.sched.wait_ready("a", LIMIT)
     await w.sched.wait_ready("a", 0)
+
+
+async def test_back_off_after_many_restarts(world_factory: list[World]) -> None:
+    """The delay stays at its cap however many restarts came before (2 ** 1100 is too large
+    for a float)."""
+    w = make(world_factory, proc("p", "sh -c 'exit 1'", restart=model.Restart.ON_FAILURE,
+                                 restart_limit=10**6, restart_delay=0.01))
+    rt = w.sched.procs["p"]
+    rt.restarts = 1100  # a long-running system
+    w.sched.start("p")
+    await w.sched.wait(["p"], {S.FAILED}, LIMIT)
+    assert rt.restarts == 1101
+    assert rt.restart_task is not None and not rt.restart_task.done()
