@@ -703,13 +703,15 @@ class Scheduler:
             rt.stopped_for = None
             rt.start_requested = False
         rt.stop_requested = True  # before its dependents stop: they must not come back yet
-        # dependents first
-        dependents = [d for d in self._dependents(rt.cfg.name) if d.state not in STARTABLE]
-        if restore:
-            for d in dependents:
-                d.stopped_for = rt.cfg.name
-        await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped", force=force,
-                                          restore=restore) for d in dependents))
+        # dependents first (again if one was started meanwhile, on rt still up)
+        while dependents := [d for d in self._dependents(rt.cfg.name)
+                             if d.state not in STARTABLE]:
+            if restore:
+                for d in dependents:
+                    d.stopped_for = rt.cfg.name
+            await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped",
+                                              force=force, restore=restore)
+                                   for d in dependents))
         self._cancel_side(rt)
         if rt.task is not None and not rt.task.done() and rt.task is not asyncio.current_task():
             rt.task.cancel()

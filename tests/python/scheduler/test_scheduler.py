@@ -791,3 +791,24 @@ async def test_back_off_after_many_restarts(world_factory: list[World]) -> None:
     await w.sched.wait(["p"], {S.FAILED}, LIMIT)
     assert rt.restarts == 1101
     assert rt.restart_task is not None and not rt.restart_task.done()
+
+
+async def test_dependent_started_while_its_dependency_stops_is_stopped_too(
+        world_factory: list[World], tmp_path: Path) -> None:
+    """`start c` while `stop a` waits for a's other dependents: c, started on a that was
+    still ready, does not keep running on a stopped dependency."""
+    release = tmp_path / "release"
+    w = make(world_factory, proc("a"),
+             proc("b", slow_to_stop(tmp_path, release), depends_on=["a"], ready_regex="^up",
+                  term_timeout=LIMIT),
+             proc("c", depends_on=["a"]))
+    w.sched.start("b")
+    await w.sched.wait_ready("b", LIMIT)
+    stopping = asyncio.create_task(w.sched.stop("a"))
+    await w.sched.wait(["b"], {S.STOPPING}, LIMIT)
+    w.sched.start("c")
+    await w.sched.wait(["c"], {S.READY, S.FAILED}, LIMIT)
+    release.touch()
+    await stopping
+    assert {n: w.sched.procs[n].state for n in "abc"} == \
+        {"a": S.STOPPED, "b": S.STOPPED, "c": S.STOPPED}
