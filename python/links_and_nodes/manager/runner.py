@@ -48,6 +48,8 @@ class Runner:
     async def begin(self) -> int:
         """Start what was asked, open the console; non-zero if the manager must exit right
         away (--exit-on-failure)."""
+        if self.stopping.is_set():  # SIGTERM/SIGINT while attaching: on to the end
+            return self.exit_status
         if self.args.start_all:
             self.scheduler.start("all")
         if not self.args.no_console:

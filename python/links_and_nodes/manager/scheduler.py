@@ -242,7 +242,8 @@ class Scheduler:
             return all(rt.state in states for rt in rts)
 
         async with self._changed:
-            await asyncio.wait_for(self._changed.wait_for(done), timeout)
+            if not done():  # (a timeout of 0 only looks)
+                await asyncio.wait_for(self._changed.wait_for(done), timeout)
 
     async def wait_ready(self, target: str = "all", timeout: float | None = None, *,
                          final: bool = False) -> None:
@@ -461,10 +462,17 @@ class Scheduler:
             else:
                 jobs.append(self._dependency_ready(rt, dep))
         jobs += [self._dependency_finished(rt, dep) for dep in rt.cfg.start_before]
-        results = await asyncio.gather(*jobs, return_exceptions=True)
-        for result in results:
-            if isinstance(result, BaseException):
-                raise result
+        tasks = [asyncio.ensure_future(job) for job in jobs]
+        try:
+            if tasks:  # the first failure fails the start: no waiting for the others
+                await asyncio.wait(tasks, return_when=asyncio.FIRST_EXCEPTION)
+        finally:
+            for task in tasks:
+                task.cancel()
+        errors = [task.exception() for task in tasks if task.done() and not task.cancelled()]
+        for error in errors:
+            if error is not None:
+                raise error
 
     async def _dependency_ready(self, rt: Runtime, dep: str) -> None:
         d = self.procs.get(dep)
@@ -695,13 +703,15 @@ class Scheduler:
             rt.stopped_for = None
             rt.start_requested = False
         rt.stop_requested = True  # before its dependents stop: they must not come back yet
-        # dependents first
-        dependents = [d for d in self._dependents(rt.cfg.name) if d.state not in STARTABLE]
-        if restore:
-            for d in dependents:
-                d.stopped_for = rt.cfg.name
-        await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped", force=force,
-                                          restore=restore) for d in dependents))
+        # dependents first (again if one was started meanwhile, on rt still up)
+        while dependents := [d for d in self._dependents(rt.cfg.name)
+                             if d.state not in STARTABLE]:
+            if restore:
+                for d in dependents:
+                    d.stopped_for = rt.cfg.name
+            await asyncio.gather(*(self._stop(d, f"dependency {rt.cfg.name} stopped",
+                                              force=force, restore=restore)
+                                   for d in dependents))
         self._cancel_side(rt)
         if rt.task is not None and not rt.task.done() and rt.task is not asyncio.current_task():
             rt.task.cancel()
@@ -814,7 +824,8 @@ class Scheduler:
             _tell(self.transition_listeners, rt.cfg.name, t)
             self._notify()
             return
-        delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * (2 ** rt.restarts))
+        # (2 ** restarts no longer fits a float after 1023 restarts)
+        delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * 2.0 ** min(rt.restarts, 1000))
         rt.restarts += 1
         log.info("process %s: restart %d of %d in %.3g s", rt.cfg.name, rt.restarts,
                  rt.cfg.restart_limit, delay)

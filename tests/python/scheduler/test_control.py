@@ -110,3 +110,28 @@ def test_scripting_turns_a_malformed_answer_into_manager_error(answer: str) -> N
     mgr._receive = lambda timeout: p.ControlResult(1, answer)  # type: ignore[method-assign]
     with pytest.raises(ManagerError):
         mgr.command("status")
+
+
+async def test_runner_starts_nothing_once_asked_to_stop(tmp_path: object) -> None:
+    """SIGTERM while the manager attaches (which can take a while): --start-all does not
+    start everything only to stop it again."""
+    import argparse
+    from pathlib import Path
+
+    from links_and_nodes.manager.runner import Runner
+
+    args = argparse.Namespace(instance="t", daemon_key_file=None, exit_on_failure=False,
+                              start_all=True, no_console=True, wait_ready=True,
+                              ready_timeout=None)
+    stopping = asyncio.Event()
+    daemon = FakeDaemon()
+    runner = Runner(args, config(proc("a")), FakeRegistry(), Path(str(tmp_path)),  # type: ignore[arg-type]
+                    "127.0.0.1:1", lambda processes: stopping.set(), stopping)
+    runner.scheduler.backend = backend(daemon)
+    stopping.set()
+    try:
+        assert await asyncio.wait_for(runner.begin(), LIMIT) == 0
+        assert runner.scheduler.procs["a"].state == S.STOPPED
+    finally:
+        await runner.scheduler.close()
+        await daemon.kill_all()

@@ -753,3 +753,62 @@ async def test_start_while_stopping_starts_once_stopped(world_factory: list[Worl
     assert rt.state in (S.STARTING, S.STARTED, S.READY)
     await w.sched.wait_ready("p", LIMIT)
     assert w.daemon.spawned == ["p", "p"]
+
+
+async def test_one_failed_dependency_fails_the_start_at_once(
+        world_factory: list[World]) -> None:
+    """A dependency that fails ends the start even while another one is still on its way
+    (here: never ready)."""
+    w = make(world_factory, proc("a"), proc("b", ready_regex="never"),
+             proc("c", depends_on=["a", "b"]))
+    w.daemon.fail_spawn.add("a")
+    w.sched.start("c")
+    with pytest.raises(StartError, match="command not found"):
+        await w.sched.wait_ready("a", LIMIT)
+    await w.sched.wait(["b"], {S.STARTED}, LIMIT)
+    c = w.sched.procs["c"]
+    assert c.task is not None
+    await asyncio.wait([c.task], timeout=LIMIT)
+    assert c.state == S.FAILED and "dependency a did not become ready" in c.reason
+    assert w.sched.procs["b"].state == S.STARTED  # it goes on starting by itself
+
+
+async def test_wait_with_zero_timeout_sees_what_holds_now(world_factory: list[World]) -> None:
+    w = make(world_factory, proc("a"))
+    w.sched.start("a")
+    await w.sched.wait_ready("a", LIMIT)
+    await w.sched.wait_ready("a", 0)
+
+
+async def test_back_off_after_many_restarts(world_factory: list[World]) -> None:
+    """The delay stays at its cap however many restarts came before (2 ** 1100 is too large
+    for a float)."""
+    w = make(world_factory, proc("p", "sh -c 'exit 1'", restart=model.Restart.ON_FAILURE,
+                                 restart_limit=10**6, restart_delay=0.01))
+    rt = w.sched.procs["p"]
+    rt.restarts = 1100  # a long-running system
+    w.sched.start("p")
+    await w.sched.wait(["p"], {S.FAILED}, LIMIT)
+    assert rt.restarts == 1101
+    assert rt.restart_task is not None and not rt.restart_task.done()
+
+
+async def test_dependent_started_while_its_dependency_stops_is_stopped_too(
+        world_factory: list[World], tmp_path: Path) -> None:
+    """`start c` while `stop a` waits for a's other dependents: c, started on a that was
+    still ready, does not keep running on a stopped dependency."""
+    release = tmp_path / "release"
+    w = make(world_factory, proc("a"),
+             proc("b", slow_to_stop(tmp_path, release), depends_on=["a"], ready_regex="^up",
+                  term_timeout=LIMIT),
+             proc("c", depends_on=["a"]))
+    w.sched.start("b")
+    await w.sched.wait_ready("b", LIMIT)
+    stopping = asyncio.create_task(w.sched.stop("a"))
+    await w.sched.wait(["b"], {S.STOPPING}, LIMIT)
+    w.sched.start("c")
+    await w.sched.wait(["c"], {S.READY, S.FAILED}, LIMIT)
+    release.touch()
+    await stopping
+    assert {n: w.sched.procs[n].state for n in "abc"} == \
+        {"a": S.STOPPED, "b": S.STOPPED, "c": S.STOPPED}
