@@ -13,8 +13,9 @@ import signal
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
+from links_and_nodes.manager import daemon_client as dc
 from links_and_nodes.manager.scheduler import Backend
 
 
@@ -22,49 +23,11 @@ class FakeError(Exception):
     pass
 
 
-@dataclass
-class Spec:
-    name: str
-    command: str
-    shell: bool
-    env: dict[str, str]
-    cwd: str | None = None
-    rlimits: list[tuple[str, int | None, int | None]] = field(default_factory=list)
-    policy: str = "SCHED_OTHER"
-    priority: int = 0
-    affinity: list[int] | None = None
-    use_pty: bool = True
-    max_output_lines: int = 1000
-    output_log: tuple[str, int, int] | None = None
-    term_signal: int = 15
-    term_timeout: float = 5.0
-
-
-@dataclass
-class Info:
-    name: str
-    pid: int
-    state: str
-    exit_code: int | None
-    signal: int | None
-    started: float
-
-
-@dataclass
-class Line:
-    name: str
-    stream: str
-    text: str
-    time: float
-
-
-@dataclass
-class Exit:
-    name: str
-    pid: int
-    exit_code: int | None
-    signal: int | None
-    time: float
+# The daemon client's own request and event types, so the fake speaks exactly its API.
+Spec = dc.SpawnSpec
+Info = dc.ProcessInfo
+Line = dc.OutputLine
+Exit = dc.Exited
 
 
 @dataclass
