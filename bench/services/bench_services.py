@@ -24,7 +24,14 @@ TOPICS = HERE.parent / "topics"
 sys.path.insert(0, str(TOPICS))  # the process plumbing and pyzmq REQ/REP of bench/topics
 
 import services_report as report  # noqa: E402
-from topics_run import CaseError, Manager, Runner, can_pin  # noqa: E402
+from topics_run import (  # noqa: E402
+    CaseError,
+    Manager,
+    Runner,
+    can_pin,
+    run_facts,
+    warn_leftover,
+)
 
 PROGRAMS = ("svc_echo_raw", "svc_ln")
 COUNT, WARMUP, ROUNDS = 20000, 2000, 7  # calls per case, warm-up calls before them, rounds
@@ -183,15 +190,11 @@ def main() -> int:
     for lines in (report.tables(summary, names, header, unavailable), report.goals_table(goals)):
         print()
         print("\n".join(lines))
-    if leftover:
-        print(f"\nwarning: the manager left {len(leftover)} segment(s) behind (removed): "
-              f"{', '.join(leftover)}")
+    warn_leftover(leftover)
 
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({
-        "started": started, "quick": args.quick, "machine": platform.machine(),
-        "kernel": platform.release(), "python_version": platform.python_version(),
-        "cpu_count": os.cpu_count(), "usable_cpus": usable, "pinning": pin_text,
+        **run_facts(started, args.quick), "usable_cpus": usable, "pinning": pin_text,
         "placements": {k: {"cpus": where[k], "what": v} for k, v in names.items()},
         "loadavg_start": load_start, "loadavg_end": os.getloadavg(), "pyzmq": zmq_version,
         "unavailable": unavailable, "count": bench.count, "warmup": bench.warmup,

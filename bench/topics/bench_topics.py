@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import topics_report as report
-from topics_run import CaseError, Manager, Runner, can_pin
+from topics_run import CaseError, Manager, Runner, can_pin, run_facts, warn_leftover
 
 REPO = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
@@ -218,15 +218,11 @@ def main() -> int:
                   report.goals_table(goals)):
         print()
         print("\n".join(lines))
-    if leftover:
-        print(f"\nwarning: the manager left {len(leftover)} segment(s) behind (removed): "
-              f"{', '.join(leftover)}")
+    warn_leftover(leftover)
 
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({
-        "started": started, "quick": args.quick, "machine": platform.machine(),
-        "kernel": platform.release(), "python_version": platform.python_version(),
-        "cpu_count": os.cpu_count(), "usable_cpus": usable, "pinning": pin_text,
+        **run_facts(started, args.quick), "usable_cpus": usable, "pinning": pin_text,
         "placements": {k: {"cpus": v[0], "sizes": v[1], "what": names[k]} for k, v in where.items()},
         "perf_counters": perf, "loadavg_start": load_start, "loadavg_end": os.getloadavg(),
         "pyzmq": zmq_version,

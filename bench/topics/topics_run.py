@@ -5,10 +5,12 @@ the report prints (pinning).  Knows nothing about what is measured."""
 from __future__ import annotations
 
 import os
+import platform
 import subprocess
 import time
 import uuid
 from collections.abc import Callable
+from typing import Any
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -46,6 +48,20 @@ class Manager:
         for name in left:
             Path("/dev/shm", name).unlink(missing_ok=True)
         return left
+
+
+def run_facts(started: str, quick: bool) -> dict[str, Any]:
+    """The head of a result file: when, how, and on what machine the run was made."""
+    return {"started": started, "quick": quick, "machine": platform.machine(),
+            "kernel": platform.release(), "python_version": platform.python_version(),
+            "cpu_count": os.cpu_count()}
+
+
+def warn_leftover(leftover: list[str]) -> None:
+    """Say which segments the benchmark's manager left behind (already removed)."""
+    if leftover:
+        print(f"\nwarning: the manager left {len(leftover)} segment(s) behind (removed): "
+              f"{', '.join(leftover)}")
 
 
 def can_pin(cpus: list[int]) -> str | None:
