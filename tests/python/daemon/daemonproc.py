@@ -11,7 +11,6 @@ import signal
 import socket
 import struct
 import subprocess
-import time
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -20,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from links_and_nodes.manager import daemon_client as dc
+from polling import free_port, wait_for  # noqa: F401  (the daemon tests import them from here)
 
 REPO = Path(__file__).resolve().parents[3]
 DAEMON = REPO / "build" / "release" / "ln_daemon" / "ln_daemon"
@@ -75,15 +75,6 @@ def descendants(root: int) -> list[int]:
     return out
 
 
-def wait_for(predicate: Callable[[], object], what: str, timeout: float = WAIT) -> object:
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            pytest.fail(f"gave up waiting for {what}")
-        time.sleep(0.02)
 
 
 # ---- a private daemon ---------------------------------------------------------------------------
@@ -309,7 +300,3 @@ class RawConnection:
         return int(code), text
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]

@@ -12,7 +12,6 @@ import os
 import re
 import shlex
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -26,6 +25,7 @@ import pytest
 from links_and_nodes.manager.config import load, model
 from links_and_nodes.manager.launch import segments
 from links_and_nodes.manager.scripting import Manager, connect
+from polling import free_port
 
 REPO = Path(__file__).resolve().parents[3]
 CONFIG = REPO / "examples" / "robot" / "robot.lnc"
@@ -74,10 +74,6 @@ def test_model_defaults_and_overrides() -> None:
 
 
 # ---- end to end ---------------------------------------------------------------------------
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def live(pid: int) -> bool:

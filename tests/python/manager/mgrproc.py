@@ -9,13 +9,12 @@ import selectors
 import signal
 import subprocess
 import sys
-import time
 import uuid
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 from lnwire import WELCOME, WireClient
+from polling import wait_for  # noqa: F401  (the manager tests import it from here)
 
 REPO = Path(__file__).resolve().parents[3]
 SHM = Path("/dev/shm")
@@ -23,16 +22,6 @@ WAIT = 60.0  # seconds; only ever an upper bound while waiting for something to 
 READY = re.compile(r"^ln_manager: instance (.+) listening on (\S+):(\d+)$")
 
 
-def wait_for(predicate: Callable[[], object], what: str, timeout: float = WAIT) -> object:
-    """Poll until `predicate()` is true; fail the test naming `what` after `timeout`."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            pytest.fail(f"gave up waiting for {what}")
-        time.sleep(0.02)
 
 
 def segments(instance: str) -> list[str]:

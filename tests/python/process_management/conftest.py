@@ -8,10 +8,8 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
-import socket
 import subprocess
 import sys
-import time
 import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -20,15 +18,12 @@ from pathlib import Path
 import pytest
 
 from links_and_nodes.manager import scripting
+from polling import free_port, wait_for  # noqa: F401  (shared with the tests of this package)
 
 LIMIT = 60.0  # upper bound for anything to happen, never a measurement
 REPO = Path(__file__).resolve().parents[3]
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def pids_with(marker: str) -> list[int]:
@@ -135,11 +130,3 @@ def lab(tmp_path: Path) -> Iterator[Lab]:
                 os.kill(pid, signal.SIGKILL)
         assert not leftovers, f"processes of the test left running: {leftovers}"
 
-
-def wait_for(predicate: object, what: str) -> None:
-    """Poll (an upper bound, not a measurement)."""
-    deadline = time.monotonic() + LIMIT
-    while not predicate():  # type: ignore[operator]
-        if time.monotonic() > deadline:
-            pytest.fail(f"timed out waiting for {what}")
-        time.sleep(0.02)
