@@ -11,22 +11,12 @@
 #include <unistd.h>
 
 #include "auth.hpp"
-#include "ln_test.h"
+#include "daemon_test.hpp"
 #include "messages.hpp"
 #include "output.hpp"
 #include "protocol.hpp"
 
 using namespace lnd;
-
-// Compares as std::string: LN_CHECK_STREQ would keep a pointer into a temporary.
-#define CHECK_STR(a, b)                                                                       \
-    do {                                                                                      \
-        std::string ln_a_ = (a), ln_b_ = (b);                                                 \
-        if (ln_a_ != ln_b_) {                                                                 \
-            ln_test_fail(__FILE__, __LINE__, #a " == " #b);                                   \
-            std::fprintf(stderr, "    \"%s\" != \"%s\"\n", ln_a_.c_str(), ln_b_.c_str());     \
-        }                                                                                     \
-    } while (0)
 
 namespace {
 
