@@ -163,9 +163,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="ln_bench_services_") as tmp_name:
         tmp = Path(tmp_name)
         manager = Manager.start(tmp)
-        env = {**os.environ, "LN_MANAGER": manager.address,
-               "LN_RUNTIME_DIR": str(tmp / "runtime")}
-        runner = Runner(tmp, env)
+        runner = Runner(tmp, manager.process.env)  # LN_MANAGER and LN_RUNTIME_DIR set
         bench = Bench(args, runner)
         try:
             runs = run_all(bench, where, systems, rounds)

@@ -190,9 +190,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="ln_bench_topics_") as tmp_name:
         tmp = Path(tmp_name)
         manager = Manager.start(tmp)
-        env = {**os.environ, "LN_MANAGER": manager.address,
-               "LN_RUNTIME_DIR": str(tmp / "runtime")}
-        runner = Runner(tmp, env)
+        runner = Runner(tmp, manager.process.env)  # LN_MANAGER and LN_RUNTIME_DIR set
         try:
             latency, throughput, cost = run_all(Bench(args, runner, has_zmq), where)
         finally:
