@@ -47,27 +47,29 @@ def _error_name(code: int) -> str:
         return f"error {code}"
 
 
-def _exactly(sock: socket.socket, count: int) -> bytes:
+def _exactly(sock: socket.socket, count: int, error: type[Exception]) -> bytes:
     data = bytearray()
     while len(data) < count:
         chunk = sock.recv(min(count - len(data), 1 << 16))
         if not chunk:
-            raise ListingError("the manager closed the connection")
+            raise error("the manager closed the connection")
         data += chunk
     return bytes(data)
 
 
-def _receive(sock: socket.socket) -> p.Message:
+def receive(sock: socket.socket, error: type[Exception] = ListingError) -> p.Message:
+    """The next message from the manager on a blocking socket; `error` with the reason when
+    the connection ends or the frame is malformed (socket errors and timeouts pass)."""
     try:
-        length = p.frame_length(_exactly(sock, p.HEADER_SIZE))
-        return p.decode_payload(_exactly(sock, length))
+        length = p.frame_length(_exactly(sock, p.HEADER_SIZE, error))
+        return p.decode_payload(_exactly(sock, length, error))
     except p.ProtocolError as exc:
-        raise ListingError(f"malformed answer from the manager: {exc}") from None
+        raise error(f"malformed answer from the manager: {exc}") from None
 
 
 def _answer(sock: socket.socket, request: p.Message, expected: type[p.Message]) -> Any:
     sock.sendall(p.encode(request))
-    reply = _receive(sock)
+    reply = receive(sock)
     if isinstance(reply, p.Error):
         raise ListingError(f"the manager refused {request.TYPE.name}: "
                            f"{_error_name(reply.code)}: {reply.text}")

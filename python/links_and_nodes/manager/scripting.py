@@ -18,7 +18,7 @@ from typing import Any
 
 from .. import __version__
 from . import protocol as p
-from .listing import parse_address
+from .listing import parse_address, receive
 
 DEFAULT_TIMEOUT = 10.0  # seconds for connecting and for answers that do not wait
 
@@ -67,27 +67,14 @@ class Manager:
         except OSError as exc:
             raise ManagerError(f"connection to the manager lost: {exc}") from None
 
-    def _exactly(self, count: int) -> bytes:
-        data = bytearray()
-        while len(data) < count:
-            try:
-                chunk = self._sock.recv(min(count - len(data), 1 << 16))
-            except TimeoutError:
-                raise ManagerError("no answer from the manager in time") from None
-            except OSError as exc:
-                raise ManagerError(f"connection to the manager lost: {exc}") from None
-            if not chunk:
-                raise ManagerError("the manager closed the connection")
-            data += chunk
-        return bytes(data)
-
     def _receive(self, timeout: float | None) -> p.Message:
         self._sock.settimeout(timeout)
         try:
-            length = p.frame_length(self._exactly(p.HEADER_SIZE))
-            return p.decode_payload(self._exactly(length))
-        except p.ProtocolError as exc:
-            raise ManagerError(f"malformed answer from the manager: {exc}") from None
+            return receive(self._sock, ManagerError)
+        except TimeoutError:
+            raise ManagerError("no answer from the manager in time") from None
+        except OSError as exc:
+            raise ManagerError(f"connection to the manager lost: {exc}") from None
 
     def command(self, op: str, *, wait: float | None = None, **args: Any) -> dict[str, Any]:
         """Send one control command; its result dict.  `wait` is how long the command itself
