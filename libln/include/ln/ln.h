@@ -135,6 +135,11 @@ LN_EXPORT int ln_client_last_error(const ln_client* clnt, char* text, size_t siz
  * wait (up to its timeout) while a queued subscriber has no free buffer, instead of dropping
  * that subscriber's oldest sample. */
 #define LN_PUBLISH_WAIT_FOR_SUBSCRIBERS 0x1u
+/* Subscribers: how samples reach this subscriber's host when the publisher runs on another
+ * one (docs/network.md).  Neither bit: the topic's setting in the .lnc, else UDP.  A host
+ * gets a topic over TCP when any of its subscriptions (or the .lnc) asks for it. */
+#define LN_SUBSCRIBE_UDP 0x100u /* newest sample wins; lost datagrams are not repeated */
+#define LN_SUBSCRIBE_TCP 0x200u /* every sample, in order (bounded queue, drops counted) */
 /* Before a blocking read sleeps, it polls (yielding the CPU) for up to spin_us: a sample that
  * comes within that time is seen without a futex wake-up, which costs tens of microseconds when
  * it crosses CPUs.  0 sleeps at once; the cost is at most spin_us of CPU per blocking read that
@@ -323,6 +328,40 @@ LN_EXPORT int ln_ring_admin_retire(ln_ring_admin* admin, ln_ring_admin* successo
 LN_EXPORT int ln_ring_admin_purge_instance(const char* instance);
 /* Slot count and bytes of a ring for `message_size` and `slots` (the manager's limit check). */
 LN_EXPORT uint64_t ln_ring_segment_size(uint64_t message_size, uint32_t slots);
+/* Map the header of an existing segment (made by an earlier process, e.g. a daemon that was
+ * restarted) after checking its magic, version and geometry; LN_ENOTFOUND if there is none. */
+LN_EXPORT int ln_ring_admin_open(ln_ring_admin** out, const char* shm_name);
+
+/* ==== topic forwarding between hosts (used by ln_daemon) ==================================
+ * A tap maps a topic's ring like a port but needs no manager: the daemon of the publisher's
+ * host reads samples out of it, the daemon of a subscriber's host writes them in under their
+ * original sequence numbers and timestamps.  A tap holds no reader slot, so publishers never
+ * wait for it; what it falls behind on is counted as lost.  It follows the ring into its
+ * successor when the manager grows the topic. */
+typedef struct ln_ring_tap ln_ring_tap;
+#define LN_TAP_EVERY 0u  /* read: every sample in order while the ring still holds it */
+#define LN_TAP_NEWEST 1u /* read: always the newest sample, skipping older ones */
+LN_EXPORT int ln_ring_tap_open(ln_ring_tap** out, const char* shm_name, uint64_t layout_hash,
+                               uint64_t message_size, unsigned mode);
+LN_EXPORT void ln_ring_tap_close(ln_ring_tap* tap);
+/* Copy the next sample (per mode) into buf[message_size]: LN_OK with info (seq, timestamp_ns;
+ * overruns = samples skipped since the previous read), LN_ETIMEOUT if none came within
+ * `timeout` seconds (0: poll, < 0: forever).  A fresh tap starts after the newest sample. */
+LN_EXPORT int ln_ring_tap_read(ln_ring_tap* tap, void* buf, ln_sample_info* info,
+                               double timeout);
+/* Write one sample as sequence number `seq` with `timestamp_ns`, waking the ring's readers.
+ * LN_EOVERRUN (nothing written) if seq is not newer than the ring's newest sample. */
+LN_EXPORT int ln_ring_tap_inject(ln_ring_tap* tap, const void* data, uint64_t seq,
+                                 int64_t timestamp_ns);
+/* Newest sequence number in the (current) ring, 0 if none. */
+LN_EXPORT uint64_t ln_ring_tap_write_seq(ln_ring_tap* tap);
+/* The name of the segment the tap is on now (changes when it followed a successor). */
+LN_EXPORT const char* ln_ring_tap_segment(const ln_ring_tap* tap);
+
+/* This host's identity: $LN_HOST_ID if set, else "hostname/boot_id".  Clients tell it to the
+ * manager, which maps it to the host's ln_daemon; services compare it to pick Unix socket or
+ * TCP.  Writes at most size bytes including the NUL. */
+LN_EXPORT void ln_host_id(char* out, size_t size);
 
 #ifdef __cplusplus
 }
