@@ -97,6 +97,15 @@ ln_ring_admin_purge_instance = _declare("ln_ring_admin_purge_instance", ctypes.c
                                         [ctypes.c_char_p], _check)
 ln_ring_segment_size = _declare("ln_ring_segment_size", ctypes.c_uint64,
                                 [ctypes.c_uint64, ctypes.c_uint32])
+ln_host_id = _declare("ln_host_id", None, [ctypes.c_char_p, ctypes.c_size_t])
+
+
+def host_id() -> str:
+    """This host's identity as libln reports it to the manager ($LN_HOST_ID, else
+    hostname/boot_id)."""
+    buf = ctypes.create_string_buffer(256)
+    ln_host_id(buf, len(buf))
+    return buf.value.decode("utf-8", "replace")
 
 
 def _read_table() -> list[tuple[int, str, str]]:

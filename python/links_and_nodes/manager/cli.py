@@ -174,7 +174,9 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
     log.info("shutting down: closing %d client%s", len(core.registry.clients),
              "" if len(core.registry.clients) == 1 else "s")
     await server.close()
-    removed = core.shutdown()
+    removed = await core.shutdown()
+    if runner is not None:
+        await runner.finish()
     log.info("removed %d segment%s, exiting", removed, "" if removed == 1 else "s")
     return status
 

@@ -2,7 +2,8 @@
 on stdout.  Every command goes through control.Control, like remote ones.
 
     start|stop|restart NAME|GROUP|all    status    output NAME [-n N] [-f]
-    history NAME    topics    services    reload    quit    detach    help
+    history NAME    topics    services    hosts    network    reload    quit    detach
+    help
 """
 
 from __future__ import annotations
@@ -26,10 +27,20 @@ HELP = """commands:
   history NAME             every state transition of a process
   topics                   topics with publishers, subscribers and samples
   services                 services with provider, md and calls
+  hosts                    every host: its ln_daemon's state, host id, data port
+  network                  topics forwarded between hosts: rates, drops, per host pair
   reload                   read the configuration file again
   quit                     stop every process and exit
   detach                   exit, leaving the processes running under their daemons
   help                     this text"""
+
+
+def _bytes(n: float) -> str:
+    for unit in ("B", "KB", "MB"):
+        if n < 1000:
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1000
+    return f"{n:.1f} GB"
 
 
 def table(rows: list[list[str]]) -> list[str]:
@@ -130,6 +141,16 @@ class Console:
                              str(s["errors"])])
             for text in table(rows):
                 self.say(text)
+        elif cmd == "hosts":
+            rows = [["host", "state", "host id", "data port", "since", "why"]]
+            for h in (await c.handle({"op": "hosts"}))["hosts"]:
+                rows.append([h["name"] + (" *" if h["local"] else ""), h["state"],
+                             h["host_id"] or "-", str(h["data_port"] or "-"),
+                             f"{h['for_s']:.0f} s", h["error"]])
+            for text in table(rows):
+                self.say(text)
+        elif cmd == "network":
+            self._network(await c.handle({"op": "network"}))
         elif cmd == "reload":
             result = await c.handle({"op": "reload"})
             self.say("reloaded: " + "; ".join(f"{k}: {', '.join(v) or '-'}"
@@ -140,6 +161,26 @@ class Console:
         else:
             raise ControlError(f"unknown command {cmd!r} (try help)")
         return False
+
+    def _network(self, result: dict[str, Any]) -> None:
+        rows = [["topic", "from", "to", "via", "msgs/s", "bytes/s", "sent", "received",
+                 "drops", "stale", "error"]]
+        for s in result["streams"]:
+            rows.append([s["topic"], s["src"], s["dst"], s["transport"],
+                         f"{s['msgs_per_s']:.1f}", _bytes(s["bytes_per_s"]), str(s["sent"]),
+                         str(s["received"]), str(s["drops"]), str(s["stale"]), s["error"]])
+        for p in result["problems"]:
+            rows.append([p["topic"], p["src"], p["dst"], "-", "-", "-", "-", "-", "-", "-",
+                         p["error"]])
+        for text in table(rows):
+            self.say(text)
+        if result["pairs"]:
+            rows = [["from", "to", "topics", "msgs/s", "bytes/s", "drops"]]
+            for p in result["pairs"]:
+                rows.append([p["src"], p["dst"], str(p["topics"]), f"{p['msgs_per_s']:.1f}",
+                             _bytes(p["bytes_per_s"]), str(p["drops"])])
+            for text in table(rows):
+                self.say(text)
 
     async def _output(self, args: list[str]) -> None:
         name, n, follow = None, 20, False

@@ -37,7 +37,9 @@ class Control:
             "restart": self.restart, "wait_ready": self.wait_ready, "output": self.output,
             "history": self.history, "topics": self.topics, "services": self.services,
             "reload": self.reload, "quit": self.quit, "detach": self.detach,
+            "hosts": self.hosts, "network": self.network,
         }
+        self.network_view: Any = None  # network.Network of a multi-host configuration
 
     async def handle_json(self, text: str) -> str:
         """One CONTROL request to its CONTROL_RESULT text."""
@@ -156,6 +158,18 @@ class Control:
 
     async def services(self, command: dict[str, Any]) -> dict[str, Any]:
         return {"services": self.core.services()}
+
+    async def hosts(self, command: dict[str, Any]) -> dict[str, Any]:
+        """Every host of the configuration: daemon state, host id, data port."""
+        view = self.network_view
+        return {"hosts": view.host_listing() if view is not None else []}
+
+    async def network(self, command: dict[str, Any]) -> dict[str, Any]:
+        """Topic streams between hosts with their rates and drops, per host pair too."""
+        view = self.network_view
+        if view is None:
+            return {"streams": [], "pairs": [], "problems": []}
+        return view.stream_listing()
 
     async def reload(self, command: dict[str, Any]) -> dict[str, Any]:
         if self._reload is None:

@@ -1,18 +1,23 @@
 """The manager's answers: turns decoded requests of one connection into registry changes
-and segment operations, and those into reply messages; unlinks the socket files of
-services it removes.  Knows nothing of connections or asyncio (server.py does the I/O);
-keeps registry and segments consistent, also when a segment operation fails halfway."""
+and ring operations, and those into reply messages; unlinks the socket files of services
+it removes.  Knows nothing of connections (server.py does the I/O); keeps registry and
+rings consistent, also when a ring operation fails halfway.  Rings live on the host of the
+port that needs them: the manager's own host through libln (LocalRings), other hosts
+through their ln_daemon (network.py); requests are handled one at a time, since a remote
+ring operation awaits its daemon."""
 
 from __future__ import annotations
 
 import logging
+import asyncio
 from dataclasses import dataclass
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 from .. import _libln
 from . import protocol as p
 from .registry import Client, Port, PortKind, PortRequest, Registry, RequestError, Topic
+from .rings import LocalRings, Rings
 from .runtime import remove_service_socket
 from .segments import Segments
 from .services import Service, ServiceOffer, Services
@@ -49,6 +54,20 @@ class Session:
         return f"client {name} ({self.address})"
 
 
+class HostRings(Protocol):
+    """Which host's rings a client's ports use (network.Network implements it)."""
+
+    def rings_for(self, client: Client) -> Rings:
+        """The rings of the client's host; RequestError if that host cannot have any."""
+        ...
+
+    def all_rings(self) -> list[Rings]:
+        """The rings of every host (the local one included)."""
+        ...
+
+    def host_label(self, client: Client) -> str: ...
+
+
 class HandshakeRefused(Exception):
     """HELLO was answered with ERROR; the connection must be closed after sending it."""
 
@@ -63,7 +82,10 @@ class Core:
         self.instance = instance
         self.registry = registry
         self.segments = segments
+        self.local = LocalRings(segments)
+        self.hosts: HostRings | None = None  # set when the manager knows other hosts
         self.service_registry = services if services is not None else Services()
+        self._lock = asyncio.Lock()
         # Called after every change of clients, ports or services (the scheduler's readiness
         # and watchdog checks wait on them instead of polling).
         self.listeners: list[Callable[[], None]] = []
@@ -80,7 +102,12 @@ class Core:
     def topic_published(self, name: str) -> int:
         """Samples topic `name` has had (0 if there is no such topic)."""
         topic = self.registry.topics.get(name)
-        return self.segments.published(topic.id) if topic is not None else 0
+        if topic is None:
+            return 0
+        if self.segments.has(topic.id):
+            return self.segments.published(topic.id)
+        published = getattr(self.hosts, "published", None)  # counted on another host
+        return published(topic) if published is not None else 0
 
     def service_provided(self, name: str) -> bool:
         return name in self.service_registry.by_name
@@ -107,24 +134,25 @@ class Core:
         return p.Welcome(p.VERSION, client.id, client.name, self.instance)
 
     # ---- requests -----------------------------------------------------------------------
-    def request(self, session: Session, msg: p.Message) -> p.Message:
+    async def request(self, session: Session, msg: p.Message) -> p.Message:
         """The reply to one request of a registered client; refusals become ERROR."""
         try:
-            return self._request(session, msg)
+            async with self._lock:
+                return await self._request(session, msg)
         finally:
             self._changed()
 
-    def _request(self, session: Session, msg: p.Message) -> p.Message:
+    async def _request(self, session: Session, msg: p.Message) -> p.Message:
         assert session.client is not None
         request_id = msg.request_id  # type: ignore[attr-defined]
         try:
             if isinstance(msg, p.Publish | p.Subscribe):
-                return self._open_port(session, msg)
+                return await self._open_port(session, msg)
             if isinstance(msg, p.ClosePort):
                 port = self.registry.find_port(session.client, msg.port_id)
                 log.info("%s: closing port %d of topic %r", session.label, msg.port_id,
                          port.topic.name)
-                self._close_port(port)
+                await self._close_port(port)
                 return p.Ok(request_id)
             if isinstance(msg, p.TopicInfo):
                 topic = self.registry.topic(msg.topic)
@@ -145,11 +173,15 @@ class Core:
             return p.Error(request_id, error_code(exc.code), exc.text)
         raise AssertionError(f"not a request: {msg.TYPE.name}")
 
-    def disconnect(self, session: Session) -> int:
+    async def disconnect(self, session: Session) -> int:
         """Release everything the session's client held; how many ports."""
         client = session.client
         if client is None:
             return 0
+        async with self._lock:
+            return await self._disconnect(session, client)
+
+    async def _disconnect(self, session: Session, client: Client) -> int:
         gone = self.service_registry.remove_client(client)
         for service in gone:
             log.info("service %r of %s removed: its client disconnected (%d calls, %d "
@@ -157,16 +189,33 @@ class Core:
         self._remove_sockets(gone)
         ports = list(client.ports.values())
         for port in ports:
-            self._close_port(port)
+            await self._close_port(port)
         self.registry.remove_client(client)
         self._changed()
         return len(ports)
 
-    def shutdown(self) -> int:
+    async def shutdown(self) -> int:
         """Release every client and unlink every segment; how many segments."""
         for client in list(self.registry.clients.values()):
-            self.disconnect(Session(client.address, client))
-        return self.segments.remove_all()
+            await self.disconnect(Session(client.address, client))
+        removed = 0
+        for rings in self._every_rings():
+            for topic_id in rings.topic_ids():
+                removed += len(await rings.remove(topic_id))
+        return removed + self.segments.remove_all()
+
+    def transit(self) -> asyncio.Lock:
+        """Held while the network changes rings outside a client's request (gateways)."""
+        return self._lock
+
+    def _every_rings(self) -> list[Rings]:
+        return self.hosts.all_rings() if self.hosts is not None else [self.local]
+
+    def _rings_for(self, client: Client) -> Rings:
+        return self.hosts.rings_for(client) if self.hosts is not None else self.local
+
+    def _topic_rings(self, topic: Topic) -> list[Rings]:
+        return [r for r in self._every_rings() if r.has(topic.id)]
 
     def services(self) -> list[dict[str, Any]]:
         """Every registered service as plain data (docs/manager.md, "Services"), by name."""
@@ -222,62 +271,121 @@ class Core:
                 log.debug("left service socket %s: %s", path, reason)
 
     # ---- ports --------------------------------------------------------------------------
-    def _open_port(self, session: Session, msg: p.Publish | p.Subscribe) -> p.PortOk:
-        assert session.client is not None
+    async def _open_port(self, session: Session, msg: p.Publish | p.Subscribe) -> p.PortOk:
+        client = session.client
+        assert client is not None
         kind = PortKind.PUBLISHER if isinstance(msg, p.Publish) else PortKind.SUBSCRIBER
         request = PortRequest(kind, msg.topic, msg.md_name, msg.layout_hash, msg.message_size,
                               msg.buffers, msg.flags)
-        plan = self.registry.plan_port(session.client, request)
+        plan = self.registry.plan_port(client, request)
+        rings = self._rings_for(client)
         topic = plan.topic
+        if topic is not None and kind is PortKind.PUBLISHER:
+            self._check_publisher_host(topic, client, rings)
         if topic is None:
-            segment = self.segments.create(plan.topic_id, request.topic, request.md_name,
-                                           request.layout_hash, request.message_size,
-                                           plan.slots)
+            segment = await rings.create(plan.topic_id, request.topic, request.md_name,
+                                         request.layout_hash, request.message_size, plan.slots)
             topic = self.registry.add_topic(plan)
             log.info("topic %r created by %s: md %r (hash 0x%016x, %d bytes), %d slots in %s",
                      topic.name, session.label, topic.md_name, topic.layout_hash,
                      topic.message_size, topic.slots, segment)
-        elif plan.grow_to is not None:
-            segment = self.segments.grow(topic.id, topic.md_name, topic.layout_hash,
-                                         topic.message_size, plan.grow_to)
-            log.info("topic %r grown from %d to %d slots for %s: now %s", topic.name,
-                     topic.slots, plan.grow_to, session.label, segment)
-            self.registry.grow_topic(topic, plan.grow_to)
+        else:
+            if plan.grow_to is not None:
+                await self._grow(topic, plan.grow_to, session.label)
+            if not rings.has(topic.id):
+                segment = await rings.create(topic.id, topic.name, topic.md_name,
+                                             topic.layout_hash, topic.message_size,
+                                             topic.slots)
+                log.info("topic %r: ring on host %r for %s: %s", topic.name, rings.host,
+                         session.label, segment)
         try:
             if plan.reader_index is not None:
-                self.segments.reserve_reader(topic.id, plan.reader_index, session.client.pid,
-                                             request.buffers)
+                await rings.reserve_reader(topic.id, plan.reader_index, client.pid,
+                                           request.buffers)
         except RequestError:
-            self._drop_if_unused(topic)
+            await self._drop_unused_rings(topic)
             raise
         port = self.registry.add_port(plan, topic)
         try:
-            self.segments.set_counts(topic.id, topic.publishers, topic.subscribers)
+            await self._set_counts(topic)
         except RequestError:
-            self._close_port(port)
+            await self._close_port(port)
             raise
-        segment = self.segments.current(topic.id)
+        segment = rings.current(topic.id)
         log.info("%s: %s %r -> port %d, %s%s", session.label, kind.value, topic.name, port.id,
                  segment, "" if port.reader_index is None else f" reader {port.reader_index}")
         reader = p.NO_READER if port.reader_index is None else port.reader_index
         return p.PortOk(msg.request_id, port.id, segment, reader)
 
-    def _close_port(self, port: Port) -> None:
+    def _check_publisher_host(self, topic: Topic, client: Client, rings: Rings) -> None:
+        """All publishers of a topic run on one host: the sequence numbers of its samples are
+        counted in that host's ring, and every other host gets them from there."""
+        for port in topic.ports.values():
+            if port.kind is not PortKind.PUBLISHER:
+                continue
+            theirs = self._rings_for(port.client)
+            if theirs is not rings:
+                assert self.hosts is not None
+                raise RequestError("EBUSY", f"topic {topic.name!r} already has a publisher on "
+                                   f"host {self.hosts.host_label(port.client)!r} (client "
+                                   f"{port.client.name!r}); the publishers of a topic must "
+                                   f"run on one host, this client runs on "
+                                   f"{self.hosts.host_label(client)!r}")
+
+    async def _grow(self, topic: Topic, slots: int, label: str) -> None:
+        """Replace the topic's ring by a deeper generation on every host that has one."""
+        for rings in self._topic_rings(topic):
+            segment = await rings.grow(topic.id, topic.md_name, topic.layout_hash,
+                                       topic.message_size, slots)
+            log.info("topic %r grown from %d to %d slots for %s: now %s%s", topic.name,
+                     topic.slots, slots, label, segment,
+                     f" on host {rings.host!r}" if rings.host else "")
+        self.registry.grow_topic(topic, slots)
+
+    async def _set_counts(self, topic: Topic) -> None:
+        for rings in self._topic_rings(topic):
+            await rings.set_counts(topic.id, topic.publishers, topic.subscribers)
+
+    async def _close_port(self, port: Port) -> None:
         topic = port.topic
         if port.reader_index is not None:
-            self.segments.release_reader(topic.id, port.reader_index)
+            rings = self._rings_for_quietly(port.client)
+            if rings is not None and rings.has(topic.id):
+                await rings.release_reader(topic.id, port.reader_index)
         if self.registry.remove_port(port):
-            self._remove_segments(topic.id, topic.name)
+            await self._remove_rings(topic)
             return
+        await self._drop_unused_rings(topic)
         try:
-            self.segments.set_counts(topic.id, topic.publishers, topic.subscribers)
+            await self._set_counts(topic)
         except RequestError as exc:
             log.warning("%s", exc.text)
 
-    def _drop_if_unused(self, topic: Topic) -> None:
-        if self.registry.drop_topic_if_unused(topic):
-            self._remove_segments(topic.id, topic.name)
+    def _rings_for_quietly(self, client: Client) -> Rings | None:
+        try:
+            return self._rings_for(client)
+        except RequestError:
+            return None
 
-    def _remove_segments(self, topic_id: int, name: str) -> None:
-        removed = self.segments.remove(topic_id)
-        log.info("topic %r has no ports left: removed %s", name, ", ".join(removed))
+    async def _drop_unused_rings(self, topic: Topic) -> None:
+        """Remove the topic if it has no ports, else the rings of hosts without its ports
+        (the network decides about rings that only pass samples on: it adds them back)."""
+        if self.registry.drop_topic_if_unused(topic):
+            await self._remove_rings(topic)
+            return
+        used = {id(self._rings_for_quietly(port.client)) for port in topic.ports.values()}
+        for rings in self._topic_rings(topic):
+            if id(rings) not in used and not self._needed_elsewhere(topic, rings):
+                names = await rings.remove(topic.id)
+                log.info("topic %r has no ports on host %r left: removed %s", topic.name,
+                         rings.host, ", ".join(names))
+
+    def _needed_elsewhere(self, topic: Topic, rings: Rings) -> bool:
+        needs = getattr(self.hosts, "transit_needed", None)
+        return bool(needs and needs(topic, rings))
+
+    async def _remove_rings(self, topic: Topic) -> None:
+        removed: list[str] = []
+        for rings in self._topic_rings(topic):
+            removed += await rings.remove(topic.id)
+        log.info("topic %r has no ports left: removed %s", topic.name, ", ".join(removed))

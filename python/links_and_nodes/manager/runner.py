@@ -13,11 +13,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from . import routes
 from .config import ConfigError, load, model
 from .console import Console, stdin_reader
 from .control import Control, ControlError
 from .core import Core
 from .daemons import DaemonPool
+from .network import Network
 from .process_states import ProcState
 from .scheduler import Scheduler, StartError, Transition
 
@@ -37,13 +39,37 @@ class Runner:
         self.scheduler = Scheduler(config, core, self.pool.backend(), manager_address=address,
                                    extra_env={"LN_RUNTIME_DIR": str(runtime_dir)})
         self.control = Control(core, self.scheduler, reload=self.reload, shutdown=shutdown)
+        self.network: Network | None = None
+        nodes = [p.node for p in config.processes.values()]
+        nodes += [s.node for s in config.states.values() if s.node]
+        if any(not self.pool.is_local(node) for node in nodes):
+            self.network = Network(config, core, self.pool, args.instance)
+            self.control.network_view = self.network
+            self.scheduler.manager_address_for = self._manager_address_for
+        self.address = address
         self._console: asyncio.Task[None] | None = None
         if args.exit_on_failure:
             self.scheduler.transition_listeners.append(self._fail_fast)
 
     async def attach(self) -> None:
         """Take over what the daemons still run for this instance (before clients come)."""
+        if self.network is not None:
+            self.network.start()
         await self.scheduler.attach()
+
+    def _manager_address_for(self, node: str) -> str:
+        """LN_MANAGER for a process on `node`: the manager's own address unless that is a
+        loopback or wildcard one that another host cannot use; then the manager host's
+        address as the network sections say that host reaches it."""
+        host, _, port = self.address.rpartition(":")
+        if self.pool.is_local(node) or host.strip("[]") not in ("127.0.0.1", "::1",
+                                                                "localhost"):
+            return self.address
+        assert self.network is not None
+        target = routes.host_address(self.network.config,
+                                     self.network.config.node_map.get(node, node),
+                                     self.network.local_name())
+        return f"{target}:{port}" if target else self.address
 
     async def begin(self) -> int:
         """Start what was asked, open the console; non-zero if the manager must exit right
@@ -113,7 +139,10 @@ class Runner:
         except ConfigError as exc:
             raise ControlError(f"reload refused, the configuration is unchanged:\n{exc}") \
                 from None
-        return self.scheduler.apply_config(config)
+        result = self.scheduler.apply_config(config)
+        if self.network is not None:
+            self.network.config = config  # routes and topic transports of the new file
+        return result
 
     async def end(self, stop_processes: bool) -> None:
         if self._console is not None:
@@ -126,5 +155,11 @@ class Runner:
         else:
             log.info("detaching: processes keep running under their daemons")
             await self.scheduler.close()
-        await self.pool.close()
         sys.stdout.flush()
+
+    async def finish(self) -> None:
+        """Close the daemon links, after the core released every ring (remote ones go
+        through them)."""
+        if self.network is not None:
+            await self.network.close()
+        await self.pool.close()

@@ -146,6 +146,9 @@ class Scheduler:
         self.registry = registry
         self.backend = backend
         self.manager_address = manager_address
+        # The manager's address as processes on a node reach it (runner.py sets it for
+        # configurations spanning several hosts).
+        self.manager_address_for: Callable[[str], str] = lambda node: manager_address
         self.extra_env = dict(extra_env or {})
         self.procs: dict[str, Runtime] = {}
         for name, cfg in config.processes.items():
@@ -501,7 +504,7 @@ class Scheduler:
     def _environment(self, cfg: model.Process) -> dict[str, str]:
         env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
         env.update({k: os.environ[k] for k in cfg.pass_environment if k in os.environ})
-        env["LN_MANAGER"] = self.manager_address
+        env["LN_MANAGER"] = self.manager_address_for(cfg.node)
         env["LN_PROGRAM_NAME"] = cfg.name.replace("/", ".")
         dirs = cfg.message_definition_dirs + self.config.message_definition_dirs
         if dirs:

@@ -139,6 +139,19 @@ class Manager:
     def services(self) -> list[dict[str, Any]]:
         return self.command("services")["services"]
 
+    def hosts(self) -> list[dict[str, Any]]:
+        """One dict per configured host: name, state (connecting/up/unreachable), error,
+        host_id, data_port, local, for_s (seconds in that state), unknown_stream,
+        malformed (datagrams its daemon could not place)."""
+        return self.command("hosts")["hosts"]
+
+    def network(self) -> dict[str, Any]:
+        """Forwarding between hosts: {"streams": [per topic and hop: topic, src, dst,
+        transport, active, connected, sent, received, msgs_per_s, bytes_per_s, drops,
+        send_drops, recv_drops, stale, invalid, error], "pairs": [per host pair: src, dst,
+        topics, msgs_per_s, bytes_per_s, drops], "problems": [topic, src, dst, error]}."""
+        return self.command("network")
+
     def reload(self) -> dict[str, Any]:
         return self.command("reload")
 

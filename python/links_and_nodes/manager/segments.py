@@ -68,6 +68,12 @@ class Segments:
         except LnError as exc:
             raise _failure(f"removing stale segments /ln.{self.prefix}.*", exc) from None
 
+    def has(self, topic_id: int) -> bool:
+        return topic_id in self._rings
+
+    def topic_ids(self) -> list[int]:
+        return list(self._rings)
+
     def current(self, topic_id: int) -> str:
         return self._rings[topic_id].current
 

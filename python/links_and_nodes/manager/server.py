@@ -95,7 +95,7 @@ class Server:
         finally:
             self._writers.discard(writer)
             self._tasks.discard(task)
-            released = self.core.disconnect(session)
+            released = await self.core.disconnect(session)
             if session.client is not None:
                 log.info("%s: disconnected, released %d port%s", session.label, released,
                          "" if released == 1 else "s")
@@ -138,7 +138,7 @@ class Server:
                 continue
             if msg.TYPE not in _REQUESTS:
                 raise Closing(f"unexpected {msg.TYPE.name} frame from a client")
-            await self._send(writer, self.core.request(session, msg))
+            await self._send(writer, await self.core.request(session, msg))
 
     async def _control(self, msg: p.Control) -> p.Message:
         if self.control is None:

@@ -232,16 +232,16 @@ class _NoSegments:
     """Service requests never touch segments; this stands in for them."""
 
 
-def test_core_listing() -> None:
+async def test_core_listing() -> None:
     registry = Registry(lambda size, slots: size * slots)
     core = Core("inst", registry, _NoSegments(), Services())  # type: ignore[arg-type]
     session = Session("127.0.0.1:9")
     core.hello(session, p.Hello(p.MAGIC, p.VERSION, 42, "prov", "0.1.0"))
-    reply = core.request(session, p.RegisterService(1, "b.svc", MD, HASH, SIG, "grp", "hb",
-                                                    "/tmp/b.sock", "", 0))
+    reply = await core.request(session, p.RegisterService(1, "b.svc", MD, HASH, SIG, "grp",
+                                                          "hb", "/tmp/b.sock", "", 0))
     assert reply == p.Ok(1)
-    core.request(session, p.RegisterService(2, "a.svc", MD, 7, "x|y", "", "", "", "h", 9))
-    assert core.request(session, p.ServiceCalled(3, "b.svc", 12, 2)) == p.Ok(3)
+    await core.request(session, p.RegisterService(2, "a.svc", MD, 7, "x|y", "", "", "", "h", 9))
+    assert await core.request(session, p.ServiceCalled(3, "b.svc", 12, 2)) == p.Ok(3)
     listing = core.services()
     assert [e["name"] for e in listing] == ["a.svc", "b.svc"]
     assert listing[1] == {"name": "b.svc", "md_name": MD, "layout_hash": HASH,
@@ -249,16 +249,16 @@ def test_core_listing() -> None:
                           "provider_id": session.client.id,  # type: ignore[union-attr]
                           "host_id": "hb", "unix_path": "/tmp/b.sock", "tcp_host": "",
                           "tcp_port": 0, "calls": 12, "errors": 2}
-    found = core.request(session, p.FindService(4, "a.svc", "m/d", 7))
+    found = await core.request(session, p.FindService(4, "a.svc", "m/d", 7))
     assert found == p.ServiceInfo(4, "prov", "", "", "h", 9, "x|y")
-    assert core.request(session, p.ListServices(5)) == p.ServiceList(5, 2, (
+    assert await core.request(session, p.ListServices(5)) == p.ServiceList(5, 2, (
         p.ServiceEntry("a.svc", MD, 7, "prov", "", "", "", "h", 9, 0, 0),
         p.ServiceEntry("b.svc", MD, HASH, "prov", "grp", "hb", "/tmp/b.sock", "", 0, 12, 2)))
-    assert core.disconnect(session) == 0
+    assert await core.disconnect(session) == 0
     assert core.services() == []
     other = Session("127.0.0.1:10")
     core.hello(other, p.Hello(p.MAGIC, p.VERSION, 43, "user", "0.1.0"))
-    assert core.request(other, p.ListServices(1)) == p.ServiceList(1, 0, ())
+    assert await core.request(other, p.ListServices(1)) == p.ServiceList(1, 0, ())
 
 
 def test_service_limit(start_manager: Start, instance: str) -> None:

@@ -1,0 +1,515 @@
+"""The manager's view of its hosts and the topic streams between them (docs/network.md).
+
+Keeps a link to the ln_daemon of every host of the configuration (reconnecting, pinging,
+marking a host unreachable with the reason), learns each host's id and data port, gives
+core.py the rings of a client's host, and makes the daemons forward every topic from the
+host of its publishers to each host with subscribers (through gateway hosts where the
+`network` sections say so).  Polls the daemons' stream counters into per-topic and
+per-host-pair rates for the console and the scripting API."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import secrets
+import socket
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from .. import _libln
+from . import daemon_client as dc
+from . import routes
+from .config import model
+from .core import Core
+from .daemons import DaemonPool
+from .registry import Client, PortKind, RequestError, Topic
+from .rings import LocalRings, RemoteRings, Rings
+from .segments import sanitize_instance
+
+log = logging.getLogger("ln_manager")
+
+POLL_INTERVAL = 1.0  # seconds between pings / counter polls of one daemon
+PING_TIMEOUT = 3.0  # a daemon that does not answer within this is unreachable
+CONNECT_TIMEOUT = 3.0
+SUBSCRIBE_UDP = 0x100  # LN_SUBSCRIBE_UDP
+SUBSCRIBE_TCP = 0x200  # LN_SUBSCRIBE_TCP
+
+
+@dataclass(eq=False)
+class HostState:
+    """One host of the configuration and its daemon link."""
+
+    name: str
+    node: str  # what DaemonPool.link takes for it
+    state: str = "connecting"  # connecting | up | unreachable
+    error: str = ""
+    host_id: str = ""
+    data_port: int = 0
+    since: float = field(default_factory=time.monotonic)
+    client: Any = None  # dc.DaemonClient while up
+    local: bool = False  # the manager's own host (its rings are core.local)
+    rings: RemoteRings | None = None
+    purged: bool = False  # stale segments of an earlier manager removed (once)
+    published: dict[int, int] = field(default_factory=dict)  # topic id -> write seq
+
+    def info(self) -> dict[str, Any]:
+        return {"name": self.name, "state": self.state, "error": self.error,
+                "host_id": self.host_id, "data_port": self.data_port, "local": self.local,
+                "for_s": round(time.monotonic() - self.since, 1)}
+
+
+@dataclass
+class _Side:
+    """Counters of one end of a stream, and their rates."""
+
+    stat: Any = None  # dc.StreamStat
+    at: float = 0.0
+    samples_per_s: float = 0.0
+    bytes_per_s: float = 0.0
+
+    def update(self, stat: Any, now: float) -> None:
+        if self.stat is not None and now > self.at:
+            dt = now - self.at
+            self.samples_per_s = max(0, stat.samples - self.stat.samples) / dt
+            self.bytes_per_s = max(0, stat.bytes - self.stat.bytes) / dt
+        self.stat, self.at = stat, now
+
+
+@dataclass(eq=False)
+class Stream:
+    """One topic's samples from host `src` to host `dst` (one hop of a route)."""
+
+    topic_id: int
+    topic: str
+    src: str
+    dst: str
+    token: int
+    transport: str
+    address: str
+    final: bool  # dst has subscribers (not only a gateway)
+    installed_src: tuple[Any, ...] | None = None
+    installed_dst: tuple[Any, ...] | None = None
+    error: str = ""
+    send: _Side = field(default_factory=_Side)
+    recv: _Side = field(default_factory=_Side)
+
+    def info(self) -> dict[str, Any]:
+        s, r = self.send.stat, self.recv.stat
+        return {"topic": self.topic, "src": self.src, "dst": self.dst,
+                "transport": self.transport, "token": f"{self.token:016x}",
+                "active": self.installed_src is not None and self.installed_dst is not None,
+                "error": self.error or (s.last_error if s else "") or
+                (r.last_error if r else ""),
+                "connected": bool(s.connected) if s else False,
+                "sent": s.samples if s else 0, "received": r.samples if r else 0,
+                "msgs_per_s": round(self.recv.samples_per_s if r else
+                                    self.send.samples_per_s, 1),
+                "bytes_per_s": round(self.recv.bytes_per_s if r else self.send.bytes_per_s),
+                "send_drops": s.drops if s else 0, "recv_drops": r.drops if r else 0,
+                "drops": (s.drops if s else 0) + (r.drops if r else 0),
+                "stale": r.stale if r else 0, "invalid": r.invalid if r else 0}
+
+
+def topic_hosts(config: model.Config) -> list[tuple[str, str]]:
+    """(host name, a node that maps to it) of every host the configuration names: the
+    `hosts` section, node_map targets and the nodes of processes and states."""
+    found: dict[str, str] = {}
+    for node, host in config.node_map.items():
+        found.setdefault(host, node)
+    for name in config.hosts:
+        found.setdefault(name, name)
+    nodes = [p.node for p in config.processes.values()]
+    nodes += [s.node for s in config.states.values() if s.node]
+    for node in nodes:
+        found.setdefault(config.node_map.get(node, node), node)
+    return sorted(found.items())
+
+
+class Network:
+    """Implements core.HostRings; runs the host monitors and the stream reconciler."""
+
+    def __init__(self, config: model.Config, core: Core, pool: DaemonPool,
+                 instance: str) -> None:
+        self.config = config
+        self.core = core
+        self.pool = pool
+        self.prefix = sanitize_instance(instance)
+        self.local_id = _libln.host_id()
+        self.hosts: dict[str, HostState] = {}
+        for index, (name, node) in enumerate(topic_hosts(config), start=1):
+            host = HostState(name, node)
+            host.rings = RemoteRings(name, self.prefix, f"h{index}")
+            self.hosts[name] = host
+        self.streams: dict[tuple[int, str, str], Stream] = {}
+        self.problems: dict[tuple[int, str, str], str] = {}  # no route etc.
+        self.totals: dict[str, tuple[int, int]] = {}  # host -> unknown, malformed
+        self._dirty = asyncio.Event()
+        self._tasks: list[asyncio.Task[None]] = []
+        self._closing = False
+
+    # ---- core.HostRings -------------------------------------------------------------------
+    def _host_of(self, client: Client) -> HostState | None:
+        """The client's host; None for the manager's own."""
+        if not client.host_id or client.host_id == self.local_id:
+            return None
+        for host in self.hosts.values():
+            if host.host_id == client.host_id:
+                return None if host.local else host
+        known = ", ".join(f"{h.name}={h.host_id or '?'}" for h in self.hosts.values())
+        raise RequestError("ENOTFOUND", f"client {client.name!r} runs on host id "
+                           f"{client.host_id!r}, which is none of this manager's hosts "
+                           f"({known}); name its host in the configuration and run an "
+                           f"ln_daemon there")
+
+    def rings_for(self, client: Client) -> Rings:
+        host = self._host_of(client)
+        if host is None:
+            return self.core.local
+        assert host.rings is not None
+        return host.rings
+
+    def all_rings(self) -> list[Rings]:
+        return [self.core.local] + [h.rings for h in self.hosts.values()
+                                    if h.rings is not None and not h.local]
+
+    def host_label(self, client: Client) -> str:
+        try:
+            host = self._host_of(client)
+        except RequestError:
+            return client.host_id
+        return host.name if host is not None else self.local_name()
+
+    def local_name(self) -> str:
+        for host in self.hosts.values():
+            if host.local:
+                return host.name
+        for host in self.hosts.values():
+            if self.pool.is_local(host.node):
+                return host.name
+        for host in self.hosts.values():  # before its daemon answered: by its addresses
+            configured = self.config.hosts.get(host.name)
+            if configured and any(_own_address(a) for a in configured.interfaces.values()):
+                return host.name
+        return "localhost"
+
+    def transit_needed(self, topic: Topic, rings: Rings) -> bool:
+        return any(s.topic_id == topic.id and s.dst == rings.host and not s.final
+                   for s in self.streams.values())
+
+    def published(self, topic: Topic) -> int:
+        return max((h.published.get(topic.id, 0) for h in self.hosts.values()), default=0)
+
+    # ---- life -----------------------------------------------------------------------------
+    def start(self) -> None:
+        loop = asyncio.get_running_loop()
+        self.core.hosts = self
+        self.core.listeners.append(self._dirty.set)
+        for host in self.hosts.values():
+            self._tasks.append(loop.create_task(self._monitor(host)))
+        self._tasks.append(loop.create_task(self._reconciler()))
+
+    async def close(self) -> None:
+        """Stop monitoring and remove this manager's streams from the daemons."""
+        self._closing = True
+        for task in self._tasks:
+            task.cancel()
+        for task in self._tasks:
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+        for stream in list(self.streams.values()):
+            await self._uninstall(stream)
+        self.streams.clear()
+
+    # ---- monitoring -----------------------------------------------------------------------
+    async def _monitor(self, host: HostState) -> None:
+        while True:
+            try:
+                await self._check(host)
+            except asyncio.CancelledError:
+                raise
+            except Exception as exc:  # DaemonError, OSError, TimeoutError, ...
+                await self._down(host, _reason(exc))
+            await asyncio.sleep(POLL_INTERVAL)
+
+    async def _check(self, host: HostState) -> None:
+        client = await asyncio.wait_for(self.pool.link(host.node), CONNECT_TIMEOUT)
+        if client is not host.client:
+            await self._up(host, client)
+        await asyncio.wait_for(client.ping(), PING_TIMEOUT)
+        stats, totals = await asyncio.wait_for(client.stream_stats(), PING_TIMEOUT)
+        self._take_stats(host, stats, totals)
+        if host.rings is not None and not host.local:
+            for topic in list(self.core.registry.topics.values()):
+                if host.rings.has(topic.id) and self._publisher_host(topic) == host.name:
+                    seq = await asyncio.wait_for(
+                        client.ring_write_seq(host.rings.current(topic.id)), PING_TIMEOUT)
+                    host.published[topic.id] = seq
+
+    async def _up(self, host: HostState, client: Any) -> None:
+        info = await asyncio.wait_for(client.net_info(), PING_TIMEOUT)
+        configured = self.config.hosts.get(host.name)
+        host.client = client
+        host.host_id = info.host_id
+        host.data_port = (configured.data_port if configured is not None
+                          and getattr(configured, "data_port", None) else info.data_port)
+        host.local = info.host_id == self.local_id
+        was = host.state
+        host.state, host.error, host.since = "up", "", time.monotonic()
+        log.info("host %r is up: ln_daemon with host id %r, data port %d%s", host.name,
+                 host.host_id, host.data_port, " (the manager's host)" if host.local else "")
+        if host.local:
+            self.core.local.host = host.name
+        elif host.rings is not None:
+            if not host.purged:
+                # segments and streams an earlier manager of this instance left there
+                removed = await client.ring_purge()
+                host.purged = True
+                if removed:
+                    log.info("host %r: removed %d stale segment%s of this instance",
+                             host.name, removed, "" if removed == 1 else "s")
+            host.rings.link = client
+            if was != "connecting":
+                await host.rings.resync()
+        for stream in self.streams.values():  # a new daemon knows none of them
+            if stream.src == host.name:
+                stream.installed_src = None
+            if stream.dst == host.name:
+                stream.installed_dst = None
+        self._dirty.set()
+
+    async def _down(self, host: HostState, reason: str) -> None:
+        if host.state != "unreachable" or host.error != reason:
+            log.warning("host %r unreachable: %s", host.name, reason)
+        if host.state == "up":
+            host.since = time.monotonic()
+        host.state, host.error = "unreachable", reason
+        client, host.client = host.client, None
+        if host.rings is not None:
+            host.rings.link = None
+            host.rings.down_reason = reason
+        if client is not None:
+            with contextlib.suppress(Exception):
+                await client.close()
+        for stream in self.streams.values():
+            if host.name in (stream.src, stream.dst):
+                stream.error = f"host {host.name!r} unreachable: {reason}"
+
+    def _take_stats(self, host: HostState, stats: list[Any], totals: Any) -> None:
+        now = time.monotonic()
+        by_token = {s.token: s for s in self.streams.values()}
+        for stat in stats:
+            stream = by_token.get(stat.token)
+            if stream is None:
+                continue
+            if stat.sending and stream.src == host.name:
+                stream.send.update(stat, now)
+            elif not stat.sending and stream.dst == host.name:
+                stream.recv.update(stat, now)
+        self.totals[host.name] = (totals.unknown_stream, totals.malformed)
+
+    # ---- streams --------------------------------------------------------------------------
+    async def _reconciler(self) -> None:
+        while True:
+            await self._dirty.wait()
+            self._dirty.clear()
+            try:
+                await self.reconcile()
+            except asyncio.CancelledError:
+                raise
+            except Exception:
+                log.exception("forwarding: reconciling the streams failed")
+
+    def _client_host(self, client: Client) -> str | None:
+        try:
+            host = self._host_of(client)
+        except RequestError:
+            return None
+        return host.name if host is not None else self.local_name()
+
+    def _publisher_host(self, topic: Topic) -> str | None:
+        hosts = {self._client_host(p.client) for p in topic.ports.values()
+                 if p.kind is PortKind.PUBLISHER}
+        return next(iter(hosts)) if len(hosts) == 1 else None
+
+    def _transport(self, topic: Topic, host: str) -> str:
+        """TCP if a subscription on `host` asks for it, else UDP if one asks for that, else
+        the configuration's setting for the topic, else UDP."""
+        flags = 0
+        for port in topic.ports.values():
+            if port.kind is PortKind.SUBSCRIBER and self._client_host(port.client) == host:
+                flags |= port.flags
+        if flags & SUBSCRIBE_TCP:
+            return "tcp"
+        if flags & SUBSCRIBE_UDP:
+            return "udp"
+        return model.topic_transport(self.config, topic.name) or "udp"
+
+    def desired(self) -> dict[tuple[int, str, str], tuple[str, str, bool]]:
+        """(topic id, src, dst) -> (transport, address, final) of every needed hop."""
+        want: dict[tuple[int, str, str], tuple[str, str, bool]] = {}
+        self.problems = {}
+        for topic in self.core.registry.topics.values():
+            src = self._publisher_host(topic)
+            if src is None:
+                continue
+            sinks = {self._client_host(p.client) for p in topic.ports.values()
+                     if p.kind is PortKind.SUBSCRIBER} - {src, None}
+            for dst in sorted(h for h in sinks if h is not None):
+                transport = self._transport(topic, dst)
+                try:
+                    hops = routes.route(self.config, src, dst)
+                except routes.NoRoute as exc:
+                    self.problems[(topic.id, src, dst)] = str(exc)
+                    continue
+                for hop in hops:
+                    key = (topic.id, hop.src, hop.dst)
+                    final = hop.dst == dst or want.get(key, ("", "", False))[2]
+                    old = want.get(key)
+                    if old is not None and old[0] == "tcp":
+                        transport = "tcp"
+                    want[key] = (transport, hop.address, final)
+        return want
+
+    async def reconcile(self) -> None:
+        want = self.desired()
+        for key in [k for k in self.streams if k not in want]:
+            stream = self.streams.pop(key)
+            await self._uninstall(stream)
+            log.info("forwarding of topic %r from %r to %r ended", stream.topic, stream.src,
+                     stream.dst)
+        topics = {t.id: t for t in self.core.registry.topics.values()}
+        for key, (transport, address, final) in want.items():
+            topic = topics[key[0]]
+            stream = self.streams.get(key)
+            if stream is None or stream.transport != transport:
+                if stream is not None:
+                    await self._uninstall(stream)
+                stream = Stream(topic.id, topic.name, key[1], key[2],
+                                secrets.randbits(63) | 1, transport, address, final)
+                self.streams[key] = stream
+                log.info("forwarding topic %r from %r to %r over %s", topic.name, key[1],
+                         key[2], transport.upper())
+            stream.address, stream.final = address, final
+            await self._install(stream, topic)
+        await self._drop_transit_rings()
+
+    def _rings_of(self, name: str) -> Rings | None:
+        host = self.hosts.get(name)
+        if host is None or host.local:
+            return self.core.local if name == self.local_name() else None
+        return host.rings
+
+    def _daemon(self, name: str) -> HostState | None:
+        host = self.hosts.get(name)
+        return host if host is not None and host.state == "up" else None
+
+    async def _install(self, stream: Stream, topic: Topic) -> None:
+        src, dst = self._daemon(stream.src), self._daemon(stream.dst)
+        if src is None or dst is None:
+            down = stream.src if src is None else stream.dst
+            stream.error = f"waiting for host {down!r}: " + (
+                self.hosts[down].error if down in self.hosts else "not a configured host")
+            return
+        src_rings, dst_rings = self._rings_of(stream.src), self._rings_of(stream.dst)
+        if src_rings is None or dst_rings is None or not src_rings.has(topic.id):
+            stream.error = "no ring on the sending host yet"
+            return
+        async with self.core.transit():
+            if not dst_rings.has(topic.id):  # a gateway: a ring that only passes samples on
+                try:
+                    await dst_rings.create(topic.id, topic.name, topic.md_name,
+                                           topic.layout_hash, topic.message_size,
+                                           topic.slots)
+                    await dst_rings.set_counts(topic.id, topic.publishers, topic.subscribers)
+                except RequestError as exc:
+                    stream.error = exc.text
+                    return
+        try:
+            want_dst = (dst_rings.current(topic.id), stream.transport)
+            if stream.installed_dst != want_dst:
+                await dst.client.stream_recv(stream.token, want_dst[0], topic.layout_hash,
+                                             topic.message_size, stream.transport)
+                stream.installed_dst = want_dst
+            want_src = (src_rings.current(topic.id), stream.transport, stream.address,
+                        dst.data_port)
+            if stream.installed_src != want_src:
+                await src.client.stream_send(stream.token, want_src[0], topic.layout_hash,
+                                             topic.message_size, stream.transport,
+                                             stream.address, dst.data_port)
+                stream.installed_src = want_src
+            stream.error = ""
+        except (dc.DaemonError, OSError) as exc:
+            stream.error = _reason(exc)
+            log.warning("forwarding topic %r from %r to %r: %s", topic.name, stream.src,
+                        stream.dst, stream.error)
+
+    async def _uninstall(self, stream: Stream) -> None:
+        for name, installed in ((stream.src, stream.installed_src),
+                                (stream.dst, stream.installed_dst)):
+            host = self._daemon(name)
+            if installed is not None and host is not None:
+                with contextlib.suppress(Exception):
+                    await host.client.stream_remove(stream.token)
+        stream.installed_src = stream.installed_dst = None
+
+    async def _drop_transit_rings(self) -> None:
+        """Remove gateway rings no stream passes through any more."""
+        async with self.core.transit():
+            for topic in list(self.core.registry.topics.values()):
+                for host in self.hosts.values():
+                    rings = host.rings
+                    if host.local or rings is None or not rings.has(topic.id):
+                        continue
+                    if any(self._client_host(p.client) == host.name
+                           for p in topic.ports.values()):
+                        continue
+                    if not self.transit_needed(topic, rings):
+                        await rings.remove(topic.id)
+
+    # ---- listings -------------------------------------------------------------------------
+    def host_listing(self) -> list[dict[str, Any]]:
+        out = []
+        for host in self.hosts.values():
+            info = host.info()
+            unknown, malformed = self.totals.get(host.name, (0, 0))
+            info["unknown_stream"], info["malformed"] = unknown, malformed
+            out.append(info)
+        return out
+
+    def stream_listing(self) -> dict[str, Any]:
+        streams = [s.info() for s in sorted(self.streams.values(),
+                                            key=lambda s: (s.topic, s.src, s.dst))]
+        pairs: dict[tuple[str, str], dict[str, Any]] = {}
+        for s in streams:
+            pair = pairs.setdefault((s["src"], s["dst"]), {
+                "src": s["src"], "dst": s["dst"], "topics": 0, "msgs_per_s": 0.0,
+                "bytes_per_s": 0, "drops": 0})
+            pair["topics"] += 1
+            pair["msgs_per_s"] = round(pair["msgs_per_s"] + s["msgs_per_s"], 1)
+            pair["bytes_per_s"] += s["bytes_per_s"]
+            pair["drops"] += s["drops"]
+        topics = {t.id: t.name for t in self.core.registry.topics.values()}
+        problems = [{"topic": topics.get(k[0], "?"), "src": k[1], "dst": k[2], "error": text}
+                    for k, text in sorted(self.problems.items())]
+        return {"streams": streams, "pairs": list(pairs.values()), "problems": problems}
+
+
+def _own_address(address: str) -> bool:
+    """True if `address` is one of this machine's (this network namespace's) addresses."""
+    family = socket.AF_INET6 if ":" in address else socket.AF_INET
+    try:
+        with socket.socket(family, socket.SOCK_DGRAM) as sock:
+            sock.bind((address, 0))
+    except OSError:
+        return False
+    return True
+
+
+def _reason(exc: BaseException) -> str:
+    if isinstance(exc, TimeoutError | asyncio.TimeoutError):
+        return "no answer from its ln_daemon"
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
+    return str(exc) or type(exc).__name__
