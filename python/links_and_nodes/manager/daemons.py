@@ -11,12 +11,11 @@ import socket
 from pathlib import Path
 
 from . import daemon_client as dc
+from . import routes
 from .config import model
 from .scheduler import Backend
 
 log = logging.getLogger("ln_manager")
-
-LOCAL_NAMES = {"localhost", "127.0.0.1", "::1"}
 
 
 def arbiter_port() -> int:
@@ -26,8 +25,10 @@ def arbiter_port() -> int:
 
 class DaemonPool:
     def __init__(self, config: model.Config, instance: str, *, key_file: Path | None = None,
-                 log_dir: Path | None = None, start_local: bool = True) -> None:
+                 log_dir: Path | None = None, start_local: bool = True,
+                 local_host: str | None = None) -> None:
         self.config = config
+        self.local_host = local_host or socket.gethostname()  # the manager's host
         self.instance = instance
         self.key_file = key_file or dc.default_key_file()
         self.log_dir = log_dir
@@ -37,20 +38,21 @@ class DaemonPool:
         self._key: bytes | None = None
 
     def is_local(self, node: str) -> bool:
-        host = self.config.node_map.get(node, node)
-        return host in LOCAL_NAMES or host == socket.gethostname()
+        return routes.host_of(self.config, node, self.local_host) == self.local_host
 
     def address(self, node: str) -> tuple[str, int]:
-        """Where the daemon of `node` listens: node_map, then the host's first interface
-        address (or its name), and its daemon_port (or LN_ARBITER_PORT / 54376)."""
-        host_name = self.config.node_map.get(node, node)
-        host = self.config.hosts.get(host_name)
+        """Where the daemon of `node` listens: 127.0.0.1 on the manager's host; else the
+        address of the node's host (node_map) in a network it shares with the manager's
+        host, or, without such a network, its first interface address (or its name); and
+        its daemon_port (or LN_ARBITER_PORT / 54376)."""
+        host_name = routes.host_of(self.config, node, self.local_host)
+        written = self.config.node_map.get(node, node)  # a `localhost` entry in hosts counts
+        host = self.config.hosts.get(written) or self.config.hosts.get(host_name)
         port = (host.daemon_port if host and host.daemon_port else None) or arbiter_port()
-        if self.is_local(node):
-            return "127.0.0.1", port
-        if host and host.interfaces:
-            return next(iter(host.interfaces.values())), port
-        return host_name, port
+        if host_name == self.local_host:
+            return routes.LOOPBACK, port
+        address = routes.host_address(self.config, self.local_host, host_name)
+        return address or routes.default_address(self.config, host_name), port
 
     def _read_key(self, create: bool) -> bytes:
         if self._key is None:

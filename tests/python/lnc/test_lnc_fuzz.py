@@ -26,6 +26,8 @@ WORDS = [
     "term_signal:", "INT", "eth0:1.2.3.4", "daemon_port:5", "allow_empty", "output_logfile:",
     "add_message_definition_dir:", "max_output_lines:", "restart:", "always", "ready_time:",
     "1ms", "check:", "\\", "a/b", "\t", "    ", "\r", "\ufeff", "\x00", "é",
+    "topics", "member_interfaces:", "preferred_gateways:", "a/eth0", "!a/eth0", "10.0.0.0/8",
+    "fd00::/64", "a:", "eth0:10.0.0.1,", "transport:tcp", "transport:", "robot.*:", "data_port:5",
 ]
 
 lines = st.lists(st.sampled_from(WORDS), max_size=8).map(" ".join)

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from .model import Group, Host, Location, Process, State
+from .model import Group, Host, Location, Member, Network, Process, State, TopicSetting
 from .text import Piece
 
 
@@ -80,6 +80,37 @@ class GroupDraft:
     failed: set[str] = field(default_factory=set)
 
 
+@dataclass(frozen=True)
+class HostRef:
+    """A host name written in a network's `preferred_gateways`."""
+
+    name: str
+    loc: Location
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class MemberRef:
+    """An item of `member_interfaces` as read; `HOST/IFACE` items are checked against
+    `hosts` once all files are read."""
+
+    member: Member
+    exclude: bool
+    detail_loc: Location  # of the interface label (HOST/IFACE), else of the item
+    note: str = ""
+
+
+@dataclass
+class NetworkDraft:
+    network: Network
+    name_loc: Location
+    items: list[MemberRef] = field(default_factory=list)
+    items_loc: Location | None = None  # of the last line that set member_interfaces
+    items_note: str = ""
+    gateways: list[HostRef] = field(default_factory=list)
+    failed: set[str] = field(default_factory=set)
+
+
 @dataclass
 class InstanceDraft:
     loc: Location
@@ -99,6 +130,8 @@ class Drafts:
     instance: InstanceDraft | None = None
     hosts: dict[str, Host] = field(default_factory=dict)
     node_map: dict[str, str] = field(default_factory=dict)
+    networks: dict[str, NetworkDraft] = field(default_factory=dict)
+    topic_settings: list[TopicSetting] = field(default_factory=list)
     processes: dict[str, ProcessDraft] = field(default_factory=dict)
     states: dict[str, StateDraft] = field(default_factory=dict)
     groups: dict[str, GroupDraft] = field(default_factory=dict)

@@ -14,8 +14,8 @@ from .errors import Problem
 from .model import Location
 from .text import closing_quote
 
-SECTION_WORDS = ("instance", "defines", "hosts", "node_map", "network", "process", "state",
-                 "group", "template", "process_template")
+SECTION_WORDS = ("instance", "defines", "hosts", "node_map", "network", "topics", "process",
+                 "state", "group", "template", "process_template")
 _HEADER_RE = re.compile(r"\s*(" + "|".join(SECTION_WORDS) + r")(\s|$)(?!\s*:)")
 _OPEN_RE = re.compile(r":\s*\[\Z")
 _CLOSE_RE = re.compile(r"\s*\]\s*(#.*)?\Z")

@@ -5,6 +5,8 @@ template replayed, every name prefixed, every reference checked.  A leaf module.
 from __future__ import annotations
 
 import enum
+import fnmatch
+import ipaddress
 import signal
 from dataclasses import dataclass, field
 
@@ -75,10 +77,72 @@ class Host:
 
     name: str
     location: Location
-    interfaces: dict[str, str] = field(default_factory=dict)  # label -> IPv4 address
+    interfaces: dict[str, str] = field(default_factory=dict)  # label -> IPv4/IPv6 address
     process_start_rate_limit: float | None = None  # starts per second, None: unlimited
     daemon_port: int | None = None  # None: LN_ARBITER_PORT or DEFAULT_ARBITER_PORT
     daemon_start_script: str | None = None
+    data_port: int | None = None  # the daemon's forwarding data port; None: ask the daemon
+
+
+@dataclass(frozen=True)
+class Interface:
+    """An interface of a host as given in `hosts`: its label and address."""
+
+    host: str
+    label: str
+    address: str
+
+
+@dataclass(frozen=True)
+class Member:
+    """One item of a network's `member_interfaces`: either an interface of a host
+    (`HOST/IFACE`: `host` and `interface` set) or a subnet (`IP/BITS`: `subnet` set,
+    normalised, e.g. "10.0.0.0/24")."""
+
+    location: Location
+    host: str | None = None
+    interface: str | None = None
+    subnet: str | None = None
+
+    def __str__(self) -> str:
+        return self.subnet if self.subnet is not None else f"{self.host}/{self.interface}"
+
+    def matches(self, iface: Interface) -> bool:
+        if self.subnet is None:
+            return iface.host == self.host and iface.label == self.interface
+        return ipaddress.ip_address(iface.address) in ipaddress.ip_network(self.subnet)
+
+
+@dataclass
+class Network:
+    """A `network NAME` section: interfaces that reach each other directly.  Hosts with an
+    interface in a common network talk directly; others need a host that forwards."""
+
+    name: str
+    location: Location  # of the section header
+    members: list[Member] = field(default_factory=list)
+    excluded: list[Member] = field(default_factory=list)  # `!` items
+    preferred_gateways: list[str] = field(default_factory=list)  # host names
+    # The resolved members: every interface in `hosts` that a member matches and no
+    # exclusion does, in the order of `hosts` and of each host's interfaces.
+    interfaces: list[Interface] = field(default_factory=list)
+
+    def hosts(self) -> list[str]:
+        """The hosts with an interface in this network, without repeats, in order."""
+        return list(dict.fromkeys(i.host for i in self.interfaces))
+
+
+@dataclass(frozen=True)
+class TopicSetting:
+    """One line of a `topics` section: the settings of the topics `pattern` matches (a
+    topic name or an fnmatch glob, case-sensitive)."""
+
+    pattern: str
+    transport: str  # "udp" or "tcp": how samples go to other hosts
+    location: Location
+
+    def matches(self, topic: str) -> bool:
+        return fnmatch.fnmatchcase(topic, self.pattern)
 
 
 @dataclass
@@ -150,7 +214,18 @@ class Config:
     defines: dict[str, str] = field(default_factory=dict)  # final values
     hosts: dict[str, Host] = field(default_factory=dict)
     node_map: dict[str, str] = field(default_factory=dict)  # logical node -> host
+    networks: dict[str, Network] = field(default_factory=dict)  # in file order
+    topic_settings: list[TopicSetting] = field(default_factory=list)  # in file order
     processes: dict[str, Process] = field(default_factory=dict)  # in file order
     states: dict[str, State] = field(default_factory=dict)
     groups: dict[str, Group] = field(default_factory=dict)
     message_definition_dirs: list[str] = field(default_factory=list)
+
+
+def topic_transport(config: Config, topic: str) -> str | None:
+    """The transport the `topics` sections give `topic` ("udp" or "tcp"): that of the first
+    line, in file order, whose pattern matches it; None if none does."""
+    for setting in config.topic_settings:
+        if setting.matches(topic):
+            return setting.transport
+    return None

@@ -14,23 +14,35 @@ import glob
 import os
 import re
 
-from .drafts import Ctx, Drafts, GroupDraft, InstanceDraft, KeyLine, ProcessDraft, StateDraft
+from .drafts import (
+    Ctx,
+    Drafts,
+    GroupDraft,
+    InstanceDraft,
+    KeyLine,
+    NetworkDraft,
+    ProcessDraft,
+    StateDraft,
+)
 from .errors import Gather, LineError, Problem, describe, did_you_mean, relative, shift
 from .expand import Evaluator
 from .lexer import SECTION_WORDS, RawLine, decode, lex
-from .model import Group, Location, Process, State
+from .model import Group, Location, Network, Process, State
 from .process_keys import KNOWN as PROCESS_KEYS
 from .sections import (
+    NETWORK_NAME_RE,
     BrokenSection,
     DefinesSection,
     GroupSection,
     HostsSection,
     InstanceSection,
+    NetworkSection,
     NodeMapSection,
     ProcessSection,
     Section,
     StateSection,
     TemplateSection,
+    TopicsSection,
 )
 from .templates import Template, check_arity, parse_header, split_call
 from .text import Piece, Value, find_top, split_top, unquote
@@ -48,7 +60,7 @@ _VERSION_RE = re.compile(r"[0-9]+(\.[0-9]+)*\Z")
 # Directives that end a template's body instead of being recorded in it.
 _FILE_DIRECTIVE_RE = re.compile(r"(optional_)?include(_glob)?(\s|:|$)|(push|pop)_name_prefix"
                                 r"(\s|:|$)|requires_version(\s|:|$)")
-_SIMPLE_SECTIONS = frozenset({"instance", "defines", "hosts", "node_map"})  # no name
+_SIMPLE_SECTIONS = frozenset({"instance", "defines", "hosts", "node_map", "topics"})  # no name
 
 
 class Parser:
@@ -287,10 +299,6 @@ class Parser:
                 raise LineError.at(rest_loc, f"section '{word}' takes no name")
             self.section = self._simple_section(word, line.loc)
             return
-        if word == "network":
-            raise LineError.at(line.loc, "'network' sections of the original Links and Nodes "
-                                         "are not supported (hosts must reach each other "
-                                         "directly)")
         if not rest:
             raise LineError.at(line.loc, f"section '{word}' needs a name")
         if word in ("template", "process_template"):
@@ -305,6 +313,9 @@ class Parser:
             self.section = TemplateSection(template)
             return
         name = self.value(Piece(rest, rest_loc), ctx).text.strip()
+        if word == "network":
+            self.network(name, line.loc, rest_loc)
+            return
         if not name or _BAD_NAME_RE.search(name):
             raise LineError.at(rest_loc, f"bad {word} name '{name}' (no , * ? [ ] ! \" % # "
                                          "or control characters; '/' only between parts)")
@@ -326,6 +337,20 @@ class Parser:
             self.drafts.groups[full] = gdraft
             self.section = GroupSection(gdraft)
 
+    def network(self, name: str, loc: Location, name_loc: Location) -> None:
+        """A `network NAME` header.  Networks are not prefixed: they describe hosts."""
+        if not NETWORK_NAME_RE.match(name):
+            raise LineError.at(name_loc, f"bad network name '{name}' (letters, digits, "
+                                         "_ . -)")
+        first = self.drafts.networks.get(name)
+        if first is not None:
+            where = describe(first.name_loc, loc.file, self.drafts.root)
+            raise LineError.at(name_loc, f"duplicate network '{name}' (first defined at "
+                                         f"{where})")
+        draft = NetworkDraft(Network(name, loc), name_loc)
+        self.drafts.networks[name] = draft
+        self.section = NetworkSection(draft)
+
     def _simple_section(self, word: str, loc: Location) -> Section:
         if word == "instance":
             if self.drafts.instance is None:
@@ -333,6 +358,8 @@ class Parser:
             return InstanceSection(self.drafts.instance, self.evaluator)
         if word == "defines":
             return DefinesSection(self.evaluator)
+        if word == "topics":
+            return TopicsSection()
         return HostsSection() if word == "hosts" else NodeMapSection()
 
     # ------------------------------------------------------------------ directives

@@ -2,7 +2,8 @@
 
 Runs after every file is read: required keys, priority against policy, the names in
 depends_on/start_before/start_on_ready and group members (looked up relative to the name
-prefixes where they were written), dependency cycles and group recursion.
+prefixes where they were written), dependency cycles, group recursion, and the hosts and
+interfaces that networks name.
 """
 
 from __future__ import annotations
@@ -10,9 +11,9 @@ from __future__ import annotations
 import fnmatch
 from collections.abc import Iterable, Mapping
 
-from .drafts import Drafts, GroupDraft, ProcessDraft, Ref
+from .drafts import Drafts, GroupDraft, MemberRef, NetworkDraft, ProcessDraft, Ref
 from .errors import Problem, did_you_mean
-from .model import Config, Instance, Location, OutputLog, Policy, Process
+from .model import Config, Instance, Interface, Location, OutputLog, Policy, Process
 
 _GLOB_CHARS = "*?["
 
@@ -30,6 +31,8 @@ def build(drafts: Drafts, defines: Mapping[str, str], manager: str | None,
     r.references()
     r.cycles()
     r.groups()
+    for n in drafts.networks.values():
+        r.network(n)
     if r.problems or instance is None:
         return None, r.problems
     config = Config(
@@ -38,6 +41,8 @@ def build(drafts: Drafts, defines: Mapping[str, str], manager: str | None,
         defines=dict(defines),
         hosts=drafts.hosts,
         node_map=drafts.node_map,
+        networks={name: d.network for name, d in drafts.networks.items()},
+        topic_settings=list(drafts.topic_settings),
         processes={name: d.process for name, d in drafts.processes.items()},
         states={name: d.state for name, d in drafts.states.items()},
         groups={name: d.group for name, d in drafts.groups.items()},
@@ -197,6 +202,53 @@ class _Resolver:
             if hits:
                 return hits
         return []
+
+
+    # ------------------------------------------------------------------ networks
+
+    def network(self, d: NetworkDraft) -> None:
+        net = d.network
+        where = f"network '{net.name}'"
+        before = len(self.problems)
+        for ref in d.items:
+            if ref.member.subnet is None:
+                self._check_interface(ref, where)
+            (net.excluded if ref.exclude else net.members).append(ref.member)
+        members_ok = len(self.problems) == before
+        hosts = self.d.hosts
+        for g in d.gateways:
+            if g.name not in hosts:
+                self.problem(g.loc, f"unknown host '{g.name}' in 'preferred_gateways' of "
+                                    f"{where}{did_you_mean(g.name, hosts)}{g.note}")
+            elif g.name not in net.preferred_gateways:
+                net.preferred_gateways.append(g.name)
+        net.interfaces = [
+            i for i in (Interface(h.name, label, address) for h in hosts.values()
+                        for label, address in h.interfaces.items())
+            if any(m.matches(i) for m in net.members)
+            and not any(m.matches(i) for m in net.excluded)]
+        if "member_interfaces" in d.failed or not members_ok or net.interfaces:
+            return
+        if d.items_loc is None:
+            self.problem(net.location, f"{where} has no 'member_interfaces'")
+        else:
+            self.problem(d.items_loc, f"{where} has no member interfaces (no interface in "
+                                      "'hosts' matches 'member_interfaces' without being "
+                                      f"excluded){d.items_note}")
+
+    def _check_interface(self, ref: MemberRef, where: str) -> None:
+        m = ref.member
+        assert m.host is not None and m.interface is not None
+        host = self.d.hosts.get(m.host)
+        if host is None:
+            self.problem(m.location, f"unknown host '{m.host}' in 'member_interfaces' of "
+                                     f"{where}{did_you_mean(m.host, self.d.hosts)}{ref.note}")
+        elif m.interface not in host.interfaces:
+            hint = (did_you_mean(m.interface, host.interfaces) if host.interfaces
+                    else f" (host '{m.host}' has no interfaces in 'hosts')")
+            self.problem(ref.detail_loc, f"unknown interface '{m.interface}' of host "
+                                         f"'{m.host}' in 'member_interfaces' of {where}"
+                                         f"{hint}{ref.note}")
 
 
 def find(ref: Ref, table: Mapping[str, object]) -> str | None:

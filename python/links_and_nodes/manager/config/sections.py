@@ -3,23 +3,48 @@ process_keys.py).  A section object receives the key lines written under its hea
 
 from __future__ import annotations
 
+import ipaddress
 import re
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from .drafts import GroupDraft, InstanceDraft, KeyLine, ProcessDraft, StateDraft
+from ..registry import topic_name_problem
+from .drafts import (
+    GroupDraft,
+    HostRef,
+    InstanceDraft,
+    KeyLine,
+    MemberRef,
+    NetworkDraft,
+    ProcessDraft,
+    StateDraft,
+)
 from .errors import LineError, Problem, closest, did_you_mean
 from .expand import BUILTINS, Evaluator
-from .model import Host
+from .model import Host, Member, TopicSetting
 from .process_keys import process_key, ref_items
 from .templates import Template
 from .text import Value, split_value, unquote
-from .values import fail, parse_address, parse_duration, parse_float, parse_int, parse_ipv4
+from .values import (
+    fail,
+    parse_address,
+    parse_duration,
+    parse_float,
+    parse_int,
+    parse_ip,
+    parse_subnet,
+)
 
 if TYPE_CHECKING:
     from .parser import Parser
 
 DEFINE_NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-/]*\Z")
 HOST_NAME_RE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*\Z")
+SETTING_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")  # host settings, interface labels
+NETWORK_NAME_RE = HOST_NAME_RE
+TRANSPORTS = ("udp", "tcp")
+# Topic names (registry rules) and the fnmatch characters.
+_TOPIC_PATTERN_RE = re.compile(r"[A-Za-z0-9_.:/\-*?\[\]!]+\Z")
 GROUP_FLAGS = frozenset({"allow_empty", "show_opened", "show_closed", "sorted", "unsorted"})
 
 
@@ -105,6 +130,30 @@ class DefinesSection(Section):
             p.evaluator.broken.discard(name)
 
 
+def setting_items(p: Parser, kl: KeyLine, what: str,
+                  handle: Callable[[str, Value, Value], None]) -> int:
+    """Feed the `SETTING:VALUE, SETTING:VALUE` items of a hosts or topics line to
+    `handle(name, item, value)` (the value unquoted, at its own column); the problems of
+    all items are raised together.  Returns the number of items."""
+    problems, count = [], 0
+    for v in p.values(kl):
+        for item in split_value(v):
+            count += 1
+            name, colon, text = item.text.partition(":")
+            try:
+                if not colon or not SETTING_RE.match(name.strip()):
+                    raise fail(item, f"{what} setting '{item.text}' must be SETTING:VALUE")
+                raw, quoted = unquote(text.strip())
+                offset = len(name) + 1 + len(text) - len(text.lstrip()) + int(quoted)
+                handle(name.strip(), item,
+                       Value(raw, item.at(offset), item.exact and not quoted))
+            except LineError as exc:
+                problems.extend(exc.problems)
+    if problems:
+        raise LineError(problems)
+    return count
+
+
 class HostsSection(Section):
     kind = "hosts"
     general_keys = True
@@ -115,35 +164,20 @@ class HostsSection(Section):
         if not HOST_NAME_RE.match(name):
             raise LineError.at(kl.loc, f"bad host name '{name}'")
         host = p.drafts.hosts.setdefault(name, Host(name, kl.loc))
-        problems = []
-        for v in p.values(kl):
-            for item in split_value(v):
-                try:
-                    self._setting(host, item)
-                except LineError as exc:
-                    problems.extend(exc.problems)
-        if problems:
-            raise LineError(problems)
+        setting_items(p, kl, "host", lambda setting, _, value: self._setting(host, setting, value))
 
     @staticmethod
-    def _setting(host: Host, item: Value) -> None:
-        name, colon, text = item.text.partition(":")
-        if not colon or not re.match(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z", name.strip()):
-            raise fail(item, f"host setting '{item.text}' must be SETTING:VALUE")
-        raw, quoted = unquote(text.strip())
-        offset = len(name) + 1 + len(text) - len(text.lstrip()) + int(quoted)
-        value = Value(raw, item.at(offset), item.exact and not quoted)
-        name = name.strip()
+    def _setting(host: Host, name: str, value: Value) -> None:
         if name == "process_start_rate_limit":
             host.process_start_rate_limit = parse_float(value, name, 0.0, above=True)
-        elif name == "daemon_port":
-            host.daemon_port = parse_int(value, name, 1, 65535)
+        elif name in ("daemon_port", "data_port"):
+            setattr(host, name, parse_int(value, name, 1, 65535))
         elif name == "daemon_start_script":
             if not value.text:
                 raise fail(value, "'daemon_start_script' needs a value")
             host.daemon_start_script = value.text
         else:
-            host.interfaces[name] = parse_ipv4(value, name)
+            host.interfaces[name] = parse_ip(value, name)
 
 
 class NodeMapSection(Section):
@@ -159,6 +193,133 @@ class NodeMapSection(Section):
         if not HOST_NAME_RE.match(v.text):
             raise fail(v, f"node '{name}' must map to a host name, got '{v.text}'")
         p.drafts.node_map[name] = v.text
+
+
+class NetworkSection(Section):
+    """`network NAME`: `member_interfaces` (HOST/IFACE, IP/BITS, `!` exclusions) and
+    `preferred_gateways` (hosts).  HOST/IFACE and the gateways are checked against
+    `hosts` once all files are read (resolve.py)."""
+
+    kind = "network"
+    KEYS = frozenset({"member_interfaces", "preferred_gateways"})
+
+    def __init__(self, draft: NetworkDraft) -> None:
+        self.draft = draft
+
+    def key(self, p: Parser, kl: KeyLine) -> None:
+        name = self.draft.network.name
+        if kl.key not in self.KEYS:
+            raise self.unknown(kl, self.KEYS, f"network '{name}'")
+        values = p.values(kl)
+        items = [item for v in values for item in split_value(v)]
+        where = f"'{kl.key}' of network '{name}'"
+        if not items:
+            what = ("HOST/IFACE, IP/BITS and !EXCLUSIONS" if kl.key == "member_interfaces"
+                    else "hosts")
+            raise LineError.at(values[0].loc if values else kl.block_loc or kl.loc,
+                               f"{where} needs a comma list of {what}")
+        note = kl.ctx.note
+        problems = []
+        if kl.key == "preferred_gateways":
+            gateways = []
+            for item in items:
+                if HOST_NAME_RE.match(item.text):
+                    gateways.append(HostRef(item.text, item.loc, note))
+                else:
+                    problems.append(Problem(item.loc, f"bad host name '{item.text}' in "
+                                                      f"{where}"))
+            if problems:
+                raise LineError(problems)
+            if not kl.add:
+                self.draft.gateways.clear()
+            self.draft.gateways.extend(gateways)
+            return
+        members = []
+        for item in items:
+            try:
+                members.append(self._member(item, where, note))
+            except LineError as exc:
+                problems.extend(exc.problems)
+        if problems:
+            raise LineError(problems)
+        if not kl.add:
+            self.draft.items.clear()
+        self.draft.items.extend(members)
+        self.draft.items_loc, self.draft.items_note = kl.loc, note
+
+    @staticmethod
+    def _member(item: Value, where: str, note: str) -> MemberRef:
+        text, offset, exclude = item.text, 0, item.text.startswith("!")
+        if exclude:
+            rest = text[1:]
+            offset = 1 + len(rest) - len(rest.lstrip())
+            text = rest.strip()
+            if not text:
+                raise fail(item, f"'!' without HOST/IFACE or IP/BITS in {where}")
+        v = Value(text, item.at(offset), item.exact)
+        head, slash, tail = text.rpartition("/")
+        if slash and re.match(r"[0-9]+\Z", tail):
+            return MemberRef(Member(v.loc, subnet=parse_subnet(v, where)), exclude, v.loc, note)
+        if slash and HOST_NAME_RE.match(head) and SETTING_RE.match(tail):
+            member = Member(v.loc, host=head, interface=tail)
+            return MemberRef(member, exclude, v.at(len(head) + 1), note)
+        try:
+            ipaddress.ip_address(text)
+            hint = f"; one address is '{text}/{32 if ':' not in text else 128}'"
+        except ValueError:
+            hint = ""
+        raise fail(v, f"bad member '{text}' in {where} (expected HOST/IFACE, IP/BITS or "
+                      f"!EXCLUSION{hint})")
+
+    def failed(self, key: str) -> None:
+        self.draft.failed.add(key)
+
+
+class TopicsSection(Section):
+    """`PATTERN: SETTING:VALUE, ...` lines: settings of the topics a name or fnmatch glob
+    matches; the first matching line in file order wins."""
+
+    kind = "topics"
+    general_keys = True
+    SETTINGS = ("transport",)
+
+    def key(self, p: Parser, kl: KeyLine) -> None:
+        _no_add(kl)
+        pattern = p.expand_key(kl)
+        problem = topic_pattern_problem(pattern)
+        if problem:
+            raise LineError.at(kl.loc, problem)
+        found: dict[str, str] = {}
+
+        def handle(name: str, item: Value, value: Value) -> None:
+            if name not in self.SETTINGS:
+                raise fail(item, f"unknown topic setting '{name}'"
+                                 f"{did_you_mean(name, self.SETTINGS)}")
+            word = value.text.strip().lower()
+            if word not in TRANSPORTS:
+                raise fail(value, f"'transport' must be udp or tcp, got '{value.text}'"
+                                  f"{did_you_mean(word, TRANSPORTS)}")
+            found[name] = word
+
+        if not setting_items(p, kl, "topic", handle):
+            values = p.values(kl)
+            raise LineError.at(values[0].loc if values else kl.block_loc or kl.loc,
+                               f"topic pattern '{pattern}' needs settings like "
+                               "transport:udp")
+        p.drafts.topic_settings.append(TopicSetting(pattern, found["transport"], kl.loc))
+
+
+def topic_pattern_problem(pattern: str) -> str | None:
+    """Why `pattern` cannot stand for topics, or None: a name needs the registry's rules,
+    a glob may add * ? [ ] !."""
+    if not pattern:
+        return "empty topic pattern"
+    if not any(c in pattern for c in "*?["):
+        return topic_name_problem(pattern)
+    if not _TOPIC_PATTERN_RE.match(pattern):
+        return (f"bad topic pattern '{pattern}' (topic names may only contain A-Z a-z 0-9 "
+                "_ . : / -, patterns also * ? [ ] !)")
+    return None
 
 
 class ProcessSection(Section):

@@ -228,11 +228,27 @@ def env_name(v: Value, key: str) -> str:
     return v.text
 
 
-def parse_ipv4(v: Value, label: str) -> str:
+def parse_ip(v: Value, label: str) -> str:
+    """An interface address, IPv4 or IPv6; returned in its normal form."""
     try:
-        return str(ipaddress.IPv4Address(v.text))
+        return str(ipaddress.ip_address(v.text))
     except ValueError:
-        raise fail(v, f"interface '{label}' needs an IPv4 address, got '{v.text}'") from None
+        raise fail(v, f"interface '{label}' needs an IPv4 or IPv6 address, "
+                      f"got '{v.text}'") from None
+
+
+def parse_subnet(v: Value, where: str) -> str:
+    """`IP/BITS`, IPv4 (BITS 0..32) or IPv6 (0..128); host bits may be set, as in
+    `ip addr` (`10.0.0.7/24` is 10.0.0.0/24).  Returned normalised."""
+    address, slash, bits = v.text.rpartition("/")
+    try:
+        if not slash or not re.match(r"[0-9]{1,3}\Z", bits):
+            raise ValueError
+        return str(ipaddress.ip_network(f"{ipaddress.ip_address(address)}/{int(bits)}",
+                                        strict=False))
+    except ValueError:
+        raise fail(v, f"bad subnet '{v.text}' in {where} (expected IP/BITS: an IPv4 address "
+                      "and 0..32, or an IPv6 address and 0..128)") from None
 
 
 def parse_address(v: Value, key: str) -> str:
