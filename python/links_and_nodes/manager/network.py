@@ -25,7 +25,7 @@ from .config import model
 from .core import Core
 from .daemons import DaemonPool
 from .registry import Client, PortKind, RequestError, Topic
-from .rings import LocalRings, RemoteRings, Rings
+from .rings import RemoteRings, Rings
 from .segments import sanitize_instance
 
 log = logging.getLogger("ln_manager")
