@@ -132,9 +132,9 @@ LN_EXPORT int ln_client_last_error(const ln_client* clnt, char* text, size_t siz
 /* Port options: buffers = 1 is a *latest* subscriber (always the newest sample), N > 1 a
  * *queued* one that sees every sample while it is at most N sequence numbers behind (older
  * ones are dropped and counted as overruns; on a host that gets the topic from another one,
- * numbers lost on the network count like dropped samples).  For publishers, LN_PUBLISH_WAIT_FOR_SUBSCRIBERS makes ln_write
- * wait (up to its timeout) while a queued subscriber has no free buffer, instead of dropping
- * that subscriber's oldest sample. */
+ * numbers lost on the network count like dropped samples).  For publishers,
+ * LN_PUBLISH_WAIT_FOR_SUBSCRIBERS makes ln_write wait (up to its timeout) while a queued
+ * subscriber has no free buffer, instead of dropping that subscriber's oldest sample. */
 #define LN_PUBLISH_WAIT_FOR_SUBSCRIBERS 0x1u
 /* Subscribers: how samples reach this subscriber's host when the publisher runs on another
  * one (docs/network.md).  Neither bit: the topic's setting in the .lnc, else UDP.  A host
