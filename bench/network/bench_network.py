@@ -1,0 +1,203 @@
+"""Benchmark of topics between hosts: ping-pong latency and 1 MiB throughput of links_and_nodes
+from host a to host b (emulated: network namespaces on a bridge, tests/python/netlab.py)
+beside raw UDP and TCP between the same hosts and beside ln on one host, in alternating
+rounds (builds nothing: run scons first; needs root).  Prints tables and the goals with
+PASS/MISS, writes bench/results/network.json, exits 0 either way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[1]
+sys.path.insert(0, str(HERE.parent / "topics"))  # percentiles of raw round trips
+sys.path.insert(0, str(REPO / "tests" / "python"))  # the lab
+for _p in (REPO, REPO / "python"):
+    if str(_p) not in sys.path:
+        sys.path.insert(0, str(_p))
+
+import network_report as report  # noqa: E402
+from netlab import NetLab, netlab_available  # noqa: E402
+from network_cases import RAW_PORT, CaseError, Lab, Proc, json_line  # noqa: E402
+from topics_report import one_way_stats  # noqa: E402
+
+PROGRAMS = ("pingpong", "ln_pingpong")
+MIB = report.MIB
+LAT_COUNT = {64: 20000, MIB: 1000}  # round trips per case; a tenth more as warm-up
+THR_COUNT = 2000  # 1 MiB samples per throughput case
+ROUNDS, QUICK_ROUNDS, QUICK_SCALE = 5, 2, 10
+Record = dict[str, Any]
+
+
+def log(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+class Bench:
+    """The cases: each runs its pair in the lab and returns one record."""
+
+    def __init__(self, lab: Lab, quick: bool) -> None:
+        self.lab = lab
+        scale = QUICK_SCALE if quick else 1
+        self.lat = {size: (n // scale, n // scale // 10) for size, n in LAT_COUNT.items()}
+        self.thr_count = THR_COUNT // scale
+
+    def unavailable(self, system: str) -> str | None:
+        return self.lab.multihost_missing if system in ("ln_udp", "ln_tcp") else None
+
+    def latency(self, size: int, system: str) -> Record:
+        count, warmup = self.lat[size]
+        out = self.lab.path("rtt")
+        tail = [str(size), str(count), str(warmup), str(out)]
+        if system.startswith("raw_"):
+            proto, prog = system[4:], self.lab.prog("pingpong")
+            server = [prog, f"{proto}-echo", str(RAW_PORT)] + ([str(size)] if proto == "tcp"
+                                                              else [])
+            _, text = self.lab.raw_pair(server, [prog, f"{proto}-ping", self.lab.b.address,
+                                                 str(RAW_PORT), *tail], system)
+            result = json_line(text, system)
+        else:
+            manager, near, far = self.lab.ln_placement(system)
+            mode = {"ln_udp": "udp", "ln_tcp": "tcp"}.get(system, "default")
+            prog = self.lab.prog("ln_pingpong")
+            got = self.lab.managed(manager, [
+                Proc("pong", far, [prog, "pong", "bench", str(size), mode], ready=True),
+                Proc("ping", near, [prog, "ping", "bench", str(size), mode, str(count),
+                                    str(warmup), str(out)])], ["ping"], system)
+            result = got["ping"]
+        if result["round_trips"] == 0:
+            raise CaseError(f"{system}: every round trip needed a resend")
+        return {**one_way_stats(out), "warmup": warmup, "resent": result["resent"]}
+
+    def throughput(self, size: int, system: str) -> Record:
+        count = self.thr_count
+        if system == "raw_tcp":
+            prog = self.lab.prog("pingpong")
+            got_text, sent_text = self.lab.raw_pair(
+                [prog, "tcp-sink", str(RAW_PORT), str(size)],
+                [prog, "tcp-source", self.lab.b.address, str(RAW_PORT), str(size), str(count)],
+                system)
+            got, sent = json_line(got_text, "tcp-sink"), json_line(sent_text, "tcp-source")
+        else:
+            manager, near, far = self.lab.ln_placement(system)
+            mode = {"ln_udp": "udp", "ln_tcp": "tcp"}.get(system, "default")
+            prog = self.lab.prog("ln_pingpong")
+            res = self.lab.managed(manager, [
+                Proc("sink", far, [prog, "sink", "bench", str(size), mode, str(count)],
+                     ready=True),
+                Proc("source", near, [prog, "source", "bench", str(size), mode, str(count),
+                                      "0"])], ["sink", "source"], system)
+            got, sent = res["sink"], res["source"]
+        return report.throughput_stats(sent, got, size)
+
+
+def run_all(bench: Bench, rounds: int) -> list[Record]:
+    """Every round runs every case; the order rotates from round to round, so drifting
+    background load does not always hit the same system."""
+    cases = ([("latency", s, sys_) for s, sys_ in report.LATENCY_CASES]
+             + [("throughput", s, sys_) for s, sys_ in report.THROUGHPUT_CASES])
+    runs: list[Record] = []
+    for rnd in range(rounds):
+        log(f"round {rnd + 1}/{rounds}")
+        k = rnd % len(cases)
+        for kind, size, system in cases[k:] + cases[:k]:
+            head = {"round": rnd, "kind": kind, "size": size, "system": system}
+            why = bench.unavailable(system)
+            if why:
+                runs.append({**head, "unavailable": why})
+                continue
+            t0 = time.monotonic()
+            try:
+                rec = (bench.latency if kind == "latency" else bench.throughput)(size, system)
+                figure = (f"p50 {rec['p50_us']:.2f} µs" if kind == "latency"
+                          else f"{rec['mb_per_s']:,.0f} MB/s, lost {rec['lost']}")
+                log(f"  {kind} {report.size_label(size)} {system}: {figure} "
+                    f"({time.monotonic() - t0:.1f} s)")
+            except (CaseError, ValueError, OSError) as exc:
+                log(f"  {kind} {report.size_label(size)} {system}: ERROR {exc}")
+                rec = {"error": str(exc)}
+            runs.append({**head, **rec})
+    return runs
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=" ".join(__doc__.split()))
+    parser.add_argument("--quick", action="store_true",
+                        help=f"{QUICK_ROUNDS} rounds of a tenth of everything: a smoke run, "
+                             "not a measurement")
+    parser.add_argument("--rounds", type=int, help=f"rounds (default {ROUNDS}, --quick "
+                                                   f"{QUICK_ROUNDS})")
+    parser.add_argument("--force-multihost", action="store_true",
+                        help="run the ln a->b cases even where the multi-host system looks "
+                             "missing (to try a partial implementation)")
+    parser.add_argument("--build-dir", type=Path, default=REPO / "build" / "release",
+                        help="SCons variant directory with bench/network/ (build/release)")
+    parser.add_argument("--json", type=Path, default=REPO / "bench" / "results" / "network.json",
+                        help="where the results go (bench/results/network.json)")
+    args = parser.parse_args()
+    rounds = args.rounds or (QUICK_ROUNDS if args.quick else ROUNDS)
+    bin_dir = args.build_dir / "bench" / "network"
+    missing = [p for p in PROGRAMS if not (bin_dir / p).exists()]
+    if missing:
+        print(f"bench_network: {', '.join(missing)} missing under {bin_dir}: build them "
+              "first with `scons -j2`", file=sys.stderr)
+        return 2
+    why = netlab_available()
+    if why:
+        print(f"bench_network: network namespaces unavailable: {why}", file=sys.stderr)
+        return 2
+    load_start = os.getloadavg()
+    started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+
+    with tempfile.TemporaryDirectory(prefix="ln_bench_network_") as tmp, \
+            NetLab(Path(tmp)) as netlab:
+        lab = Lab(netlab, bin_dir, args.force_multihost)
+        bench = Bench(lab, args.quick)
+        runs = run_all(bench, rounds)
+        shm_left = lab.shm_left()
+    summary = report.summarize(runs)
+    goals = report.goals(summary)
+
+    print(f"goal: ln 64 B p50 between hosts <= {report.GOAL_FACTOR:g}x the raw floor of its "
+          f"transport + {report.GOAL_ADD_US:g} µs (UDP: raw UDP, TCP: raw TCP); 1 MiB "
+          "throughput over UDP and TCP beside raw TCP")
+    print(f"hosts: network namespaces a, b, mgr on one bridge (veth), on {os.cpu_count()} "
+          f"CPUs shared by all; load average at start {load_start[0]:.2f}, at end "
+          f"{os.getloadavg()[0]:.2f}; python {platform.python_version()}, kernel "
+          f"{platform.release()}"
+          + ("; --quick: a smoke run, the numbers are not a measurement" if args.quick else ""))
+    if lab.multihost_missing:
+        print(f"ln between hosts: NOT MEASURED, not available yet: {lab.multihost_missing}")
+    for lines in (report.latency_tables(summary, bench.lat),
+                  report.throughput_table(summary, bench.thr_count),
+                  report.goals_table(goals)):
+        print()
+        print("\n".join(lines))
+    if shm_left:
+        print(f"\nwarning: segments left behind in /dev/shm: {shm_left}")
+
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps({
+        "started": started, "quick": args.quick, "machine": platform.machine(),
+        "kernel": platform.release(), "python_version": platform.python_version(),
+        "cpu_count": os.cpu_count(), "loadavg_start": load_start,
+        "loadavg_end": os.getloadavg(), "rounds": rounds,
+        "latency_counts": {str(k): v for k, v in bench.lat.items()},
+        "throughput_count": bench.thr_count, "multihost_missing": lab.multihost_missing,
+        "runs": runs, "summary": summary, "goals": goals, "shm_left": shm_left,
+    }, indent=2) + "\n")
+    print(f"\nwrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
