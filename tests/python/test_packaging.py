@@ -1,7 +1,9 @@
 """The packaging metadata agrees with the code: one version in ln.h, the Python package and
-debian/changelog; pyproject.toml installs every folder of message_definitions/; and
-debian/libln1.symbols lists exactly what libln exports (needs the built library; skipped
-without it only outside CI, where it must fail)."""
+debian/changelog; pyproject.toml installs every folder of message_definitions/; every
+console script is installed alike by pip, SCons and the Debian package, with a manual page
+and a place in the installed-system test; and debian/libln1.symbols lists exactly what
+libln exports (needs the built library; skipped without it only outside CI, where it must
+fail)."""
 
 import os
 import re
@@ -40,6 +42,36 @@ def test_pip_installs_every_message_definition_folder() -> None:
     assert not [p for p in md_root.glob("*/*") if p.is_dir()]
     assert data_files == {f"share/links_and_nodes/message_definitions/{f}":
                           [f"message_definitions/{f}/*"] for f in folders}
+
+
+def debian_lines(name: str) -> list[str]:
+    text = (REPO / "debian" / name).read_text()
+    return [line for line in text.splitlines() if line and not line.startswith("#")]
+
+
+def test_console_scripts_are_packaged_alike() -> None:
+    scripts = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["scripts"]
+    # SCons launchers run MODULE.main(): python/SConscript's LAUNCHERS list of
+    # ('name', 'module') and literal install_launcher(env, 'name', 'module') calls.
+    launchers: dict[str, str] = {}
+    for sconscript in ("python/SConscript", "ln_generate/SConscript"):
+        text = (REPO / sconscript).read_text()
+        launchers.update(re.findall(r"\('(\w+)', '([\w.]+)'\)", text))
+        launchers.update(re.findall(r"install_launcher\(env, '(\w+)', '([\w.]+)'\)", text))
+    assert {name: f"{module}:main" for name, module in launchers.items()} == scripts
+    installed = {line.removeprefix("usr/bin/")
+                 for line in debian_lines("python3-links-and-nodes.install")
+                 if line.startswith("usr/bin/")}
+    assert installed == set(scripts)
+    manpages = {Path(line).name for line in debian_lines("python3-links-and-nodes.manpages")}
+    assert manpages == {f"{name}.1" for name in scripts}
+    assert all((REPO / "debian" / "man" / page).exists() for page in manpages)
+    smoke = (REPO / "tests" / "installed" / "run").read_text()
+    commands = re.search(r"^for cmd in ([\w ]+); do$", smoke, re.M)
+    assert commands, "tests/installed/run no longer checks the commands on PATH"
+    assert set(scripts) <= set(commands.group(1).split())
+    leftovers = (REPO / "scripts" / "test-packages").read_text()
+    assert all(f"-name '{name}*'" in leftovers for name in scripts)
 
 
 def test_symbols_file_lists_exactly_the_exports() -> None:
