@@ -320,16 +320,10 @@ class Core:
         except RequestError:
             await self._close_port(port)
             raise
-<<<<<<< HEAD
         segment = rings.current(topic.id)
-        log.info("%s: %s %r -> port %d, %s%s", session.label, kind.value, topic.name, port.id,
-                 segment, "" if port.reader_index is None else f" reader {port.reader_index}")
-=======
-        segment = self.segments.current(topic.id)
         log.info("%s: %s %r -> port %d, %s%s%s", session.label, kind.value, topic.name, port.id,
                  segment, "" if port.reader_index is None else f" reader {port.reader_index}",
                  _transport_note(port.flags))
->>>>>>> libln-tap
         reader = p.NO_READER if port.reader_index is None else port.reader_index
         return p.PortOk(msg.request_id, port.id, segment, reader)
 
