@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 import netlab as netlab_module
-from netlab import NetLab, namespaces, sweep_stale
+from netlab import NetLab, namespace_pids, namespaces, sweep_stale
+from polling import wait_for
 
 
 def alive(pid: int) -> bool:
@@ -66,6 +67,8 @@ def test_stale_labs_of_dead_creators_are_swept() -> None:
         subprocess.run(["ip", "netns", "add", name], check=True)
     orphan = subprocess.Popen(["ip", "netns", "exec", stale, "sleep", "1000"])
     try:
+        # until `ip netns exec` has entered the namespace there is nothing there to kill
+        wait_for(lambda: orphan.pid in namespace_pids(stale), "the orphan in its namespace")
         assert sweep_stale(prefix) == [stale]
         assert orphan.wait(timeout=netlab_module.WAIT) == -9
         assert stale not in namespaces() and living in namespaces()
