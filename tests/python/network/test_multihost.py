@@ -1,0 +1,190 @@
+"""Topics and services across hosts, on separate network stacks (docs/network.md): a
+publisher on host a with subscribers on b and c, 8 MiB samples over UDP, TCP and UDP
+through 20 % injected loss (ln_relay between the daemons), remote service calls, a daemon
+killed and restarted, a host cut off.  Every assertion is about what arrived, never about
+how fast."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from conftest import DAEMON_PORT, System
+from polling import wait_for
+
+TIMEOUT = 60.0
+RELAY_PORT = 54400
+
+
+def _consecutive(counters: list[int]) -> bool:
+    return all(b == a + 1 for a, b in zip(counters, counters[1:], strict=False))
+
+
+def _start_relay(system: System, host: str, loss: float) -> None:
+    """ln_relay in front of `host`'s daemon: its data port is advertised as RELAY_PORT,
+    where the relay listens (UDP and TCP) and passes data on with seeded loss."""
+    h = system.lab[host]
+    ready = system.tmp / f"relay-{host}.json"
+    target = f"127.0.0.1:{DAEMON_PORT + 1}"
+    h.popen([sys.executable, "-m", "links_and_nodes.relay.cli",
+             "--udp", f"{h.address}:{RELAY_PORT}", target,
+             "--tcp", f"{h.address}:{RELAY_PORT}", target,
+             "--loss", str(loss), "--seed", "7", "--ready-file", str(ready)],
+            env=system.env(h), log=f"relay-{host}.log")
+    wait_for(ready.exists, "the relay to listen")
+    assert json.loads(ready.read_text())["seed"] == 7
+
+
+def test_big_samples_reach_two_hosts_over_udp(system: System) -> None:
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.blob nettest/blob --rate 4", "publishing")
+        + system.process("sub_b", "b", "sub net.blob nettest/blob", "subscribed")
+        + system.process("sub_c", "c", "sub net.blob nettest/blob", "subscribed"))
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    for sub in ("sub_b", "sub_c"):
+        got = wait_for(lambda sub=sub: len(r := system.received(system.output(sub))) >= 4
+                       and r, f"{sub} to receive 8 MiB samples", timeout=TIMEOUT)
+        assert all(ok for _, _, ok in got), f"{sub}: corrupt 8 MiB sample"
+        # the original sequence numbers: the publisher's n-th sample is seq n on every host
+        assert all(seq == counter for seq, counter, _ in got), got
+    stream = system.stream("net.blob", "a", "b")
+    assert stream is not None and stream["transport"] == "udp" and stream["active"]
+    wait_for(lambda: (s := system.stream("net.blob", "a", "c")) and s["received"] >= 4,
+             "the manager's statistics to count a -> c")
+    pairs = {(p["src"], p["dst"]) for p in system.mgr.network()["pairs"]}
+    assert pairs == {("a", "b"), ("a", "c")}
+    hosts = {h["name"]: h for h in system.mgr.hosts()}
+    assert all(hosts[h]["state"] == "up" for h in "abc"), hosts
+
+
+def test_tcp_topic_delivers_every_sample_through_loss(system: System) -> None:
+    system.start_daemon("a")
+    system.start_daemon("b", "--advertise-data-port", str(RELAY_PORT))
+    system.start_daemon("c")
+    _start_relay(system, "b", 0.2)
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.log nettest/sample --rate 50", "publishing")
+        + system.process("sub", "b", "sub net.log nettest/sample --buffers 64",
+                         "subscribed"),
+        extra="topics\nnet.*: transport: tcp\n")
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    got = wait_for(lambda: len(r := system.received(system.output("sub"))) >= 150 and r,
+                   "150 samples over TCP through 20 % loss", timeout=TIMEOUT * 2)
+    counters = [counter for _, counter, _ in got]
+    assert _consecutive(counters), f"TCP lost samples: {counters}"
+    assert all(seq == counter for seq, counter, _ in got)
+    stream = system.stream("net.log", "a", "b")
+    assert stream is not None and stream["transport"] == "tcp"
+    assert stream["drops"] == 0
+    relay_log = system.log("relay-b.log")
+    assert "tcp" in relay_log
+
+
+def test_udp_topic_keeps_the_newest_samples_through_loss(system: System) -> None:
+    system.start_daemon("a")
+    system.start_daemon("b", "--advertise-data-port", str(RELAY_PORT))
+    system.start_daemon("c")
+    _start_relay(system, "b", 0.2)
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.ctl nettest/sample --rate 200", "publishing")
+        + system.process("sub", "b", "sub net.ctl nettest/sample --transport udp",
+                         "subscribed"))
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    got = wait_for(lambda: len(r := system.received(system.output("sub"))) >= 200 and r,
+                   "200 samples over UDP through 20 % loss", timeout=TIMEOUT * 2)
+    counters = [counter for _, counter, _ in got]
+    assert counters == sorted(set(counters)), "UDP delivered an older sample after a newer"
+    assert not _consecutive(counters), "no sample was lost: the relay is not in the path"
+    assert all(seq == counter for seq, counter, _ in got)
+    first_max = counters[-1]
+    # and it goes on: newer samples keep arriving despite the loss
+    wait_for(lambda: system.received(system.output("sub"))[-1][1] > first_max + 100,
+             "newer samples after the first 200")
+    stream = system.stream("net.ctl", "a", "b")
+    assert stream is not None and stream["transport"] == "udp"
+
+
+def test_service_calls_across_hosts(system: System) -> None:
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(
+        system.process("provider", "a", "provide net.echo", "providing")
+        + system.process("caller", "b", "call net.echo --count 12", "calls done"))
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    calls = [line for line in system.output("caller") if line.startswith("call ")]
+    assert len(calls) == 12 and all(" OK " in line for line in calls), calls
+    service = {s["name"]: s for s in mgr.services()}["net.echo"]
+    # provided on a, called from b: the caller had to take the TCP address
+    assert service["host_id"] == system.lab["a"].host_id
+    assert service["tcp_host"] == system.lab["a"].address and service["tcp_port"] > 0
+
+
+def test_daemon_restart_resumes_forwarding(system: System) -> None:
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.state nettest/sample --rate 100", "publishing")
+        + system.process("sub_c", "c", "sub net.state nettest/sample", "subscribed"))
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    sub_b = system.client("b", "sub", "net.state", "nettest/sample")
+    wait_for(lambda: len(system.client_received(sub_b)) >= 20, "b to receive")
+    before = {k: system.stream("net.state", "a", k) for k in "bc"}
+    daemon_a = system.daemons["a"]
+    pid_a = daemon_a.pid
+    system.daemons["b"].kill()
+    wait_for(lambda: {h["name"]: h for h in mgr.hosts()}["b"]["state"] == "unreachable",
+             "the manager to see b's daemon gone")
+    c_during = len(system.received(system.output("sub_c")))
+    system.daemons["b"].restart()
+    wait_for(lambda: {h["name"]: h for h in mgr.hosts()}["b"]["state"] == "up",
+             "b's daemon back")
+    seen = system.client_received(sub_b)[-1][1]
+    wait_for(lambda: system.client_received(sub_b)[-1][1] > seen + 50,
+             "forwarding to b to resume after its daemon's restart")
+    # a and c were not touched: same daemon, same streams, c kept receiving
+    assert daemon_a.pid == pid_a and daemon_a.running()
+    after = {k: system.stream("net.state", "a", k) for k in "bc"}
+    assert before["b"] is not None and after["b"] is not None
+    assert after["b"]["token"] == before["b"]["token"]
+    assert before["c"] is not None and after["c"] is not None
+    assert after["c"]["token"] == before["c"]["token"]
+    assert len(system.received(system.output("sub_c"))) > c_during
+    got_b = system.client_received(sub_b)
+    assert all(seq == counter for seq, counter, _ in got_b)
+
+
+def test_unreachable_host_is_reported_and_others_go_on(system: System) -> None:
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.state nettest/sample --rate 100", "publishing")
+        + system.process("sub_b", "b", "sub net.state nettest/sample", "subscribed")
+        + system.process("sub_c", "c", "sub net.state nettest/sample", "subscribed"))
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    wait_for(lambda: len(system.received(system.output("sub_b"))) >= 20, "b to receive")
+    system.lab["c"].disconnect()
+    host_c = wait_for(lambda: (h := {h["name"]: h for h in mgr.hosts()}["c"])["state"]
+                      == "unreachable" and h, "the manager to mark c unreachable")
+    assert host_c["error"], "an unreachable host must say why"
+    seen = system.received(system.output("sub_b"))[-1][1]
+    wait_for(lambda: system.received(system.output("sub_b"))[-1][1] > seen + 100,
+             "a -> b to go on while c is unreachable")
+    hosts = {h["name"]: h for h in mgr.hosts()}
+    assert hosts["a"]["state"] == "up" and hosts["b"]["state"] == "up"
+    system.lab["c"].reconnect()
+    wait_for(lambda: {h["name"]: h for h in mgr.hosts()}["c"]["state"] == "up",
+             "c back", timeout=TIMEOUT)
