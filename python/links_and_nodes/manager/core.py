@@ -76,6 +76,11 @@ class HostRings(Protocol):
 
     def host_label(self, client: Client) -> str: ...
 
+    async def identify(self, client: Client) -> None:
+        """Wait (boundedly) until the client's host is known, e.g. while the daemon that
+        started it has not told its host id yet."""
+        ...
+
 
 class HandshakeRefused(Exception):
     """HELLO was answered with ERROR; the connection must be closed after sending it."""
@@ -146,6 +151,9 @@ class Core:
     async def request(self, session: Session, msg: p.Message) -> p.Message:
         """The reply to one request of a registered client; refusals become ERROR."""
         try:
+            if self.hosts is not None and session.client is not None \
+                    and isinstance(msg, p.Publish | p.Subscribe):
+                await self.hosts.identify(session.client)  # not under the lock: it waits
             async with self._lock:
                 return await self._request(session, msg)
         finally:

@@ -33,6 +33,7 @@ log = logging.getLogger("ln_manager")
 POLL_INTERVAL = 1.0  # seconds between pings / counter polls of one daemon
 PING_TIMEOUT = 3.0  # a daemon that does not answer within this is unreachable
 CONNECT_TIMEOUT = 3.0
+IDENTIFY_TIMEOUT = 10.0  # how long a port request waits for its client's host to be known
 SUBSCRIBE_UDP = 0x100  # LN_SUBSCRIBE_UDP
 SUBSCRIBE_TCP = 0x200  # LN_SUBSCRIBE_TCP
 
@@ -146,6 +147,7 @@ class Network:
         self.problems: dict[tuple[int, str, str], str] = {}  # no route etc.
         self.totals: dict[str, tuple[int, int]] = {}  # host -> unknown, malformed
         self._dirty = asyncio.Event()
+        self._identified = asyncio.Event()  # set (and replaced) whenever a host comes up
         self._tasks: list[asyncio.Task[None]] = []
         self._closing = False
 
@@ -193,6 +195,20 @@ class Network:
             if configured and any(_own_address(a) for a in configured.interfaces.values()):
                 return host.name
         return "localhost"
+
+    def _known(self, host_id: str) -> bool:
+        return (not host_id or host_id == self.local_id
+                or any(h.host_id == host_id for h in self.hosts.values()))
+
+    async def identify(self, client: Client) -> None:
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + IDENTIFY_TIMEOUT
+        while not self._known(client.host_id):
+            left = deadline - loop.time()
+            if left <= 0 or all(h.state == "up" for h in self.hosts.values()):
+                return  # rings_for tells the client why its host is unknown
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._identified.wait(), min(left, POLL_INTERVAL))
 
     def transit_needed(self, topic: Topic, rings: Rings) -> bool:
         return any(s.topic_id == topic.id and s.dst == rings.host and not s.final
@@ -250,18 +266,8 @@ class Network:
     async def _up(self, host: HostState, client: Any) -> None:
         info = await asyncio.wait_for(client.net_info(), PING_TIMEOUT)
         configured = self.config.hosts.get(host.name)
-        host.client = client
-        host.host_id = info.host_id
-        host.data_port = (configured.data_port if configured is not None
-                          and getattr(configured, "data_port", None) else info.data_port)
-        host.local = info.host_id == self.local_id
-        was = host.state
-        host.state, host.error, host.since = "up", "", time.monotonic()
-        log.info("host %r is up: ln_daemon with host id %r, data port %d%s", host.name,
-                 host.host_id, host.data_port, " (the manager's host)" if host.local else "")
-        if host.local:
-            self.core.local.host = host.name
-        elif host.rings is not None:
+        local = info.host_id == self.local_id
+        if not local and host.rings is not None:
             if not host.purged:
                 # segments and streams an earlier manager of this instance left there
                 removed = await client.ring_purge()
@@ -270,8 +276,21 @@ class Network:
                     log.info("host %r: removed %d stale segment%s of this instance",
                              host.name, removed, "" if removed == 1 else "s")
             host.rings.link = client
-            if was != "connecting":
+            if host.state != "connecting":
                 await host.rings.resync()
+        # known from here on: clients of this host get rings there (identify)
+        host.client = client
+        host.host_id = info.host_id
+        host.data_port = (configured.data_port if configured is not None
+                          and configured.data_port else info.data_port)
+        host.local = local
+        host.state, host.error, host.since = "up", "", time.monotonic()
+        log.info("host %r is up: ln_daemon with host id %r, data port %d%s", host.name,
+                 host.host_id, host.data_port, " (the manager's host)" if host.local else "")
+        if host.local:
+            self.core.local.host = host.name
+        self._identified.set()
+        self._identified = asyncio.Event()
         for stream in self.streams.values():  # a new daemon knows none of them
             if stream.src == host.name:
                 stream.installed_src = None
