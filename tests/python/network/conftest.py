@@ -115,7 +115,7 @@ add_message_definition_dir: {HERE / 'md'}
         return proc
 
     def output(self, name: str) -> list[str]:
-        return [line["text"] for line in self.mgr.output(name, 10000)]
+        return list(self.mgr.output(name, 10000))
 
     @staticmethod
     def received(lines: list[str]) -> list[tuple[int, int, bool]]:
