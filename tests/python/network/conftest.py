@@ -75,9 +75,10 @@ add_message_definition_dir: {HERE / 'md'}
         return path
 
     @staticmethod
-    def process(name: str, node: str, args: str, ready: str) -> str:
+    def process(name: str, node: str, args: str, ready: str, depends_on: str = "") -> str:
+        depends = f"\n    depends_on: {depends_on}" if depends_on else ""
         return f"""process {name}
-    node: {node}
+    node: {node}{depends}
     command: {sys.executable} {HERE / 'netclient.py'} {args}
     pass_environment: PYTHONPATH
     ready_regex: ^{ready}

@@ -117,7 +117,8 @@ def test_service_calls_across_hosts(system: System) -> None:
         system.start_daemon(host)
     lnc = system.lnc(
         system.process("provider", "a", "provide net.echo", "providing")
-        + system.process("caller", "b", "call net.echo --count 12", "calls done"))
+        + system.process("caller", "b", "call net.echo --count 12", "calls done",
+                         depends_on="provider"))
     mgr = system.start_manager(lnc)
     mgr.start("all")
     mgr.wait_ready("all", timeout=TIMEOUT)
