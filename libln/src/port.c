@@ -55,38 +55,24 @@ static int bad_port(const void* port, uint32_t magic, const char* what)
     return LN_OK;
 }
 
-#define LN_MAX_GENERATION_HOPS 64
+/* Failures inside the ring are recorded per thread; keep them on the client as well. */
+static int on_client(ln_port_common* p, int rc)
+{
+    if (rc < 0 && rc != LN_EAGAIN)
+        ln_client_store_error(p->clnt, rc, ln_last_error());
+    return rc;
+}
 
 /* Move one generation on, to the successor of the current (retired) ring. */
 static int follow_once(ln_port_common* p)
 {
-    char next[LN_RING_NAME_MAX];
-    memcpy(next, p->ring.hdr->successor, sizeof(next));
-    next[sizeof(next) - 1] = '\0';
-    if (!next[0] || strcmp(next, p->ring.name) == 0)
-        return ln_set_error(p->clnt, LN_EPROTOCOL, "topic '%s': ring '%s' is retired without a "
-                            "valid successor", p->topic, p->ring.name);
-    ln_ring fresh;
-    int rc = ln_ring_attach(&fresh, next, p->layout_hash, p->size);
-    if (rc != LN_OK)
-        return rc;
-    ln_ring_detach(&p->ring);
-    p->ring = fresh;
-    return LN_OK;
+    return on_client(p, ln_ring_follow_once(&p->ring));
 }
 
 /* Move to the newest generation (publishers: they only ever write the newest ring). */
 static int follow(ln_port_common* p)
 {
-    for (int hop = 0; atomic_load_explicit(&p->ring.hdr->retired, memory_order_acquire); hop++) {
-        if (hop == LN_MAX_GENERATION_HOPS)
-            return ln_set_error(p->clnt, LN_EPROTOCOL, "topic '%s': more than %d retired rings "
-                                "in a row (a cycle?)", p->topic, LN_MAX_GENERATION_HOPS);
-        int rc = follow_once(p);
-        if (rc != LN_OK)
-            return rc;
-    }
-    return LN_OK;
+    return on_client(p, ln_ring_follow(&p->ring));
 }
 
 /* NaN is the one timeout that means nothing. */
@@ -305,14 +291,6 @@ static int begin_write(ln_outport* p, ln_deadline* d, ln_ring_slot** slot)
         if (rc != LN_OK)
             return timeout_code(rc, d);
     }
-}
-
-/* Failures inside the ring are recorded per thread; keep them on the client as well. */
-static int on_client(ln_port_common* p, int rc)
-{
-    if (rc < 0 && rc != LN_EAGAIN)
-        ln_client_store_error(p->clnt, rc, ln_last_error());
-    return rc;
 }
 
 int ln_write(ln_outport* p, const void* data, size_t size, double timeout)

@@ -224,7 +224,7 @@ int ln_service_provider_register(ln_service_provider* p, const char* group)
         close_listeners(p, ufd, tfd);
         return rc;
     }
-    ln_svc_host_id(host_id, sizeof host_id);
+    ln_host_id(host_id, sizeof host_id);
 
     ln_wbuf body;
     ln_wbuf_init(&body);

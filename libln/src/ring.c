@@ -24,6 +24,32 @@ uint64_t ln_ring_stride(uint64_t message_size)
     return (sizeof(ln_ring_slot) + message_size + 63) / 64 * 64;
 }
 
+int ln_ring_check_header(const ln_ring_header* h, uint64_t size, const char* name)
+{
+    const char* why = NULL;
+    if (size < ln_ring_header_bytes())
+        why = "too small for a ring header";
+    else if (atomic_load_explicit((const _Atomic uint64_t*)&h->magic, memory_order_acquire) !=
+             LN_RING_MAGIC)
+        why = "no ring magic";
+    else if (h->version != LN_RING_VERSION)
+        return ln_set_error(NULL, LN_EVERSION, "shared memory '%s' is a topic ring of format "
+                            "version %u, this library uses %u", name, h->version,
+                            LN_RING_VERSION);
+    else if (h->header_size != ln_ring_header_bytes())
+        why = "its header size differs from this library's";
+    else if (h->segment_size != size)
+        why = "its recorded size differs from the segment's";
+    else if (h->slot_count < 2 || h->slot_count > LN_RING_MAX_SLOTS || h->message_size == 0 ||
+             h->slot_stride == 0 || h->slot_stride != ln_ring_stride(h->message_size) ||
+             h->header_size + (uint64_t)h->slot_count * h->slot_stride != size)
+        why = "inconsistent ring geometry";
+    if (why)
+        return ln_set_error(NULL, LN_EPROTOCOL, "shared memory '%s' is not a usable topic ring: "
+                            "%s", name, why);
+    return LN_OK;
+}
+
 int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64_t message_size)
 {
     uint64_t size = 0;
@@ -32,23 +58,9 @@ int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64
     if (rc != LN_OK)
         return rc;
     ln_ring_header* h = ring->map.addr;
-    const char* why = NULL;
-    if (size < ln_ring_header_bytes())
-        why = "too small for a ring header";
-    else if (h->magic != LN_RING_MAGIC)
-        why = "no ring magic";
-    else if (h->version != LN_RING_VERSION)
-        why = "ring format version differs from this library's";
-    else if (h->slot_count < 2 || h->slot_count > LN_RING_MAX_SLOTS || h->message_size == 0 ||
-             h->slot_stride == 0 || h->slot_stride != ln_ring_stride(h->message_size) ||
-             h->segment_size != size ||
-             h->header_size != ln_ring_header_bytes() ||
-             h->header_size + (uint64_t)h->slot_count * h->slot_stride != size)
-        why = "inconsistent ring geometry";
-    if (why) {
+    if ((rc = ln_ring_check_header(h, size, name)) != LN_OK) {
         ln_shm_unmap(&ring->map);
-        return ln_set_error(NULL, LN_EPROTOCOL, "shared memory '%s' is not a usable topic ring: %s",
-                            name, why);
+        return rc;
     }
     if (h->layout_hash != layout_hash || h->message_size != message_size) {
         rc = ln_set_error(NULL, LN_ELAYOUT,
@@ -65,6 +77,8 @@ int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64
     ring->slots = (uint8_t*)h + h->header_size;
     ring->slot_count = h->slot_count;
     ring->stride = h->slot_stride;
+    ring->layout_hash = layout_hash;
+    ring->message_size = message_size;
     snprintf(ring->name, sizeof(ring->name), "%s", name);
     return LN_OK;
 }
@@ -74,6 +88,39 @@ void ln_ring_detach(ln_ring* ring)
     ln_shm_unmap(&ring->map);
     ring->hdr = NULL;
     ring->slots = NULL;
+}
+
+#define LN_MAX_GENERATION_HOPS 64
+
+int ln_ring_follow_once(ln_ring* ring)
+{
+    char next[LN_RING_NAME_MAX];
+    memcpy(next, ring->hdr->successor, sizeof(next));
+    next[sizeof(next) - 1] = '\0';
+    if (!next[0] || strcmp(next, ring->name) == 0)
+        return ln_set_error(NULL, LN_EPROTOCOL, "topic '%.*s': ring '%s' is retired without a "
+                            "valid successor", LN_RING_NAME_MAX, ring->hdr->topic, ring->name);
+    ln_ring fresh;
+    int rc = ln_ring_attach(&fresh, next, ring->layout_hash, ring->message_size);
+    if (rc != LN_OK)
+        return rc;
+    ln_ring_detach(ring);
+    *ring = fresh;
+    return LN_OK;
+}
+
+int ln_ring_follow(ln_ring* ring)
+{
+    for (int hop = 0; atomic_load_explicit(&ring->hdr->retired, memory_order_acquire); hop++) {
+        if (hop == LN_MAX_GENERATION_HOPS)
+            return ln_set_error(NULL, LN_EPROTOCOL, "topic '%.*s': more than %d retired rings "
+                                "in a row (a cycle?)", LN_RING_NAME_MAX, ring->hdr->topic,
+                                LN_MAX_GENERATION_HOPS);
+        int rc = ln_ring_follow_once(ring);
+        if (rc != LN_OK)
+            return rc;
+    }
+    return LN_OK;
 }
 
 const struct timespec* ln_deadline_at(ln_deadline* d)
@@ -211,25 +258,34 @@ int ln_ring_sleep_for_space(ln_ring* ring, ln_deadline* d)
     return LN_OK;
 }
 
-ln_ring_slot* ln_ring_begin(ln_ring* ring)
+ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq)
 {
-    uint64_t n = atomic_load_explicit(&ring->hdr->write_seq, memory_order_relaxed) + 1;
-    ln_ring_slot* slot = ln_ring_slot_at(ring, n);
-    atomic_store_explicit(&slot->seq, LN_SLOT_WORD(n, LN_SLOT_WRITING), memory_order_relaxed);
+    ln_ring_slot* slot = ln_ring_slot_at(ring, seq);
+    atomic_store_explicit(&slot->seq, LN_SLOT_WORD(seq, LN_SLOT_WRITING), memory_order_relaxed);
     atomic_thread_fence(memory_order_release);
     return slot;
 }
 
+void ln_ring_commit_seq(ln_ring* ring, ln_ring_slot* slot, uint64_t seq, int64_t timestamp_ns)
+{
+    slot->timestamp_ns = timestamp_ns;
+    atomic_store_explicit(&slot->seq, LN_SLOT_WORD(seq, LN_SLOT_COMMITTED), memory_order_release);
+    atomic_store_explicit(&ring->hdr->write_seq, seq, memory_order_seq_cst);
+    ln_ring_wake_readers(ring);
+}
+
+ln_ring_slot* ln_ring_begin(ln_ring* ring)
+{
+    uint64_t n = atomic_load_explicit(&ring->hdr->write_seq, memory_order_relaxed) + 1;
+    return ln_ring_begin_seq(ring, n);
+}
+
 void ln_ring_commit(ln_ring* ring, ln_ring_slot* slot)
 {
-    ln_ring_header* h = ring->hdr;
-    uint64_t n = atomic_load_explicit(&h->write_seq, memory_order_relaxed) + 1;
+    uint64_t n = atomic_load_explicit(&ring->hdr->write_seq, memory_order_relaxed) + 1;
     struct timespec now;
     clock_gettime(CLOCK_REALTIME, &now);
-    slot->timestamp_ns = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
-    atomic_store_explicit(&slot->seq, LN_SLOT_WORD(n, LN_SLOT_COMMITTED), memory_order_release);
-    atomic_store_explicit(&h->write_seq, n, memory_order_seq_cst);
-    ln_ring_wake_readers(ring);
+    ln_ring_commit_seq(ring, slot, n, (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec);
 }
 
 void ln_ring_wake_readers(ln_ring* ring)
@@ -259,17 +315,23 @@ int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t
             *word = got;
             return LN_OK;
         }
-        if (LN_SLOT_SEQ(got) < n && c->buffers == 1) {
-            /* The slot never held n in this ring: a successor ring starts with the old ring's
-             * sequence number but no samples.  A latest reader waits for the next one. */
+        if (c->buffers == 1) {
+            /* The newest sample is not in its slot.  Either the slot never held it in this
+             * ring (a successor ring starts with the old ring's sequence number but no
+             * samples), or a writer is replacing it already: normally with write_seq moved
+             * on, but a forwarded sample whose number jumped by a multiple of slot_count
+             * lands in this very slot, and its writer may die before publishing it.  Pick
+             * again only if write_seq moved; otherwise wait for the next sample instead of
+             * spinning on this one. */
+            if (atomic_load_explicit(&h->write_seq, memory_order_acquire) != w)
+                continue;
             c->next = n + 1;
             return LN_EAGAIN;
         }
-        /* The slot moved on to a newer sample (or never had n): n is gone. */
-        if (c->buffers > 1) {
-            c->pending += 1;
-            c->next = n + 1;
-        }
+        /* The slot moved on to a newer sample, or never had n (a gap in forwarded numbers,
+         * or a sample aborted or given up by its writer): n is gone. */
+        c->pending += 1;
+        c->next = n + 1;
     }
 }
 

@@ -5,7 +5,8 @@
  * state: COMMITTED or WRITING) followed by the publish timestamp and the payload.
  *
  * Memory-ordering protocol (a seqlock per slot, C11 atomics):
- *  writer (holding write_lock):  n = write_seq + 1; slot = n % slot_count
+ *  writer (holding write_lock):  n = write_seq + 1 (a forwarding tap: any n > write_seq);
+ *      slot = n % slot_count
  *      store(slot.seq, n|WRITING, relaxed); fence(release)      -- readers see WRITING first
  *      copy payload, timestamp
  *      store(slot.seq, n|COMMITTED, release)                     -- payload before seq
@@ -14,6 +15,10 @@
  *  reader:  w = load(write_seq, acquire); pick n <= w; s1 = load(slot.seq, acquire)
  *      s1 must be n|COMMITTED; copy payload; fence(acquire); s2 = load(slot.seq, relaxed)
  *      s1 != s2 means a writer reused the slot meanwhile: the copy is discarded (never torn).
+ * Sequence numbers are gap-free on the publisher's host.  A ring fed by a forwarding tap
+ * (samples from another host) has gaps where the network lost samples: a number below
+ * write_seq whose slot does not hold it is simply not there; queued readers count it as lost,
+ * latest readers never ask for it.
  *  sleeping reader: v = fetch_or(data_futex, SLEEPERS) (seq_cst); re-check write_seq
  *      (seq_cst); futex_wait(data_futex, v).  The seq_cst pairs (write_seq store, futex load)
  *      and (futex fetch_or, write_seq load) guarantee that either the writer sees the sleeper
@@ -46,6 +51,7 @@ enum { LN_SLOT_COMMITTED = 0, LN_SLOT_WRITING = 1 };
 #define LN_SLOT_SEQ(word) ((word) >> 2)
 #define LN_SLOT_STATE(word) ((unsigned)((word) & 3u))
 #define LN_SLOT_WORD(seq, state) (((seq) << 2) | (uint64_t)(state))
+#define LN_RING_MAX_SEQ (UINT64_MAX >> 2) /* what fits beside the state bits */
 
 typedef struct ln_ring_reader {
     _Atomic uint32_t active; /* 1 while a subscriber holds this slot */
@@ -100,12 +106,23 @@ typedef struct ln_ring {
     uint8_t* slots;
     uint32_t slot_count;
     uint32_t stride;
+    uint64_t layout_hash; /* what attach checked, again for successors */
+    uint64_t message_size;
     char name[LN_RING_NAME_MAX];
 } ln_ring;
 
+/* LN_OK if h (the first bytes of segment `name` of `size` bytes, at least the header's if
+ * size says so) is a ring of this library's format with consistent geometry; else
+ * LN_EPROTOCOL (LN_EVERSION for another ring format version) with a text saying why. */
+int ln_ring_check_header(const ln_ring_header* h, uint64_t size, const char* name);
 /* Map segment `name` and check that it is a ring of this version for the expected layout. */
 int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64_t message_size);
 void ln_ring_detach(ln_ring* ring);
+/* The ring is retired: attach its successor (same layout checks) and detach it.  On failure
+ * the ring stays as it was. */
+int ln_ring_follow_once(ln_ring* ring);
+/* Follow successors until the ring is not retired (publishers: they write only the newest). */
+int ln_ring_follow(ln_ring* ring);
 
 static inline ln_ring_slot* ln_ring_slot_at(const ln_ring* ring, uint64_t seq)
 {
@@ -149,8 +166,13 @@ int ln_ring_has_space(const ln_ring* ring);
 int ln_ring_sleep_for_space(ln_ring* ring, ln_deadline* d);
 /* Under the lock: start sample write_seq+1 and return its slot (marked WRITING). */
 ln_ring_slot* ln_ring_begin(ln_ring* ring);
-/* Under the lock: publish the slot begun last, then wake sleeping readers. */
+/* Under the lock: publish the slot begun last with the current time, then wake sleeping
+ * readers. */
 void ln_ring_commit(ln_ring* ring, ln_ring_slot* slot);
+/* The same for a sample with a given number seq > write_seq (numbers may be skipped) and a
+ * given timestamp: a forwarded sample keeps those of the publisher's host. */
+ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq);
+void ln_ring_commit_seq(ln_ring* ring, ln_ring_slot* slot, uint64_t seq, int64_t timestamp_ns);
 void ln_ring_wake_readers(ln_ring* ring);
 
 /* Reader side.  A cursor is one subscriber's position: `next` is the next sequence number it

@@ -94,6 +94,34 @@ int ln_ring_admin_create(ln_ring_admin** out, const char* shm_name, const char* 
     return LN_OK;
 }
 
+int ln_ring_admin_open(ln_ring_admin** out, const char* shm_name)
+{
+    if (!out || !shm_name)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_admin_open: NULL argument");
+    *out = NULL;
+    ln_ring_admin* a = calloc(1, sizeof(*a));
+    if (!a)
+        return ln_set_error(NULL, LN_ENOMEM, "out of memory");
+    uint64_t size = 0;
+    int rc = ln_shm_open(shm_name, ln_ring_header_bytes(), &a->map, &size);
+    if (rc == LN_EPROTOCOL) /* shorter than a header */
+        rc = ln_set_error(NULL, LN_EPROTOCOL, "shared memory '%s' is not a usable topic ring: "
+                          "%llu bytes is too small for a ring header", shm_name,
+                          (unsigned long long)size);
+    if (rc != LN_OK)
+        goto fail;
+    if ((rc = ln_ring_check_header(a->map.addr, size, shm_name)) != LN_OK)
+        goto fail;
+    a->hdr = a->map.addr;
+    a->magic = LN_ADMIN_MAGIC;
+    *out = a;
+    return LN_OK;
+fail:
+    ln_shm_unmap(&a->map);
+    free(a);
+    return rc;
+}
+
 void ln_ring_admin_close(ln_ring_admin* a)
 {
     if (check(a) != LN_OK)

@@ -248,7 +248,7 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
                            const struct timespec* deadline)
 {
     char mine[256];
-    ln_svc_host_id(mine, sizeof mine);
+    ln_host_id(mine, sizeof mine);
     int err = ENOENT;
     if (unix_path[0] != '\0' && strcmp(host_id, mine) == 0) {
         err = ln_svc_connect_unix(unix_path, deadline, &s->fd);

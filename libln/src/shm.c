@@ -59,12 +59,16 @@ int ln_shm_open(const char* name, size_t map_len, ln_map* out, uint64_t* size_ou
     struct stat st;
     int rc;
     int fd = shm_open(name, O_RDWR | O_CLOEXEC, 0);
+    if (fd < 0 && errno == ENOENT)
+        return ln_set_error(NULL, LN_ENOTFOUND, "there is no shared memory '%s'", name);
     if (fd < 0)
         return ln_set_errno_error(NULL, errno, "cannot open shared memory '%s'", name);
     if (fstat(fd, &st) != 0) {
         rc = ln_set_errno_error(NULL, errno, "cannot stat shared memory '%s'", name);
         goto done;
     }
+    if (size_out)
+        *size_out = (uint64_t)st.st_size;
     if (map_len == 0)
         map_len = (size_t)st.st_size;
     if (map_len == 0 || (uint64_t)st.st_size < map_len) {
@@ -72,8 +76,6 @@ int ln_shm_open(const char* name, size_t map_len, ln_map* out, uint64_t* size_ou
                           name, (long long)st.st_size, map_len);
         goto done;
     }
-    if (size_out)
-        *size_out = (uint64_t)st.st_size;
     rc = map_fd(fd, name, map_len, out);
 done:
     close(fd);

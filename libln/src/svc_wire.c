@@ -1,5 +1,5 @@
-/* svc_wire.c — frames of the caller <-> provider protocol, the host identity, the socket
- * directory and the listening/connecting sockets of services. */
+/* svc_wire.c — frames of the caller <-> provider protocol, the socket directory and the
+ * listening/connecting sockets of services. */
 #include <errno.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -57,27 +57,6 @@ void ln_svc_put_error(ln_wbuf* b, uint32_t call_id, int code, const char* text)
     ln_wbuf_i32(b, code);
     ln_wbuf_str(b, cut);
     ln_svc_frame_end(b, start);
-}
-
-void ln_svc_host_id(char* out, size_t size)
-{
-    const char* env = getenv("LN_HOST_ID");
-    if (env != NULL && *env != '\0') {
-        snprintf(out, size, "%s", env);
-        return;
-    }
-    char host[256] = "";
-    char boot[64] = "";
-    if (gethostname(host, sizeof host - 1) != 0)
-        host[0] = '\0';
-    FILE* f = fopen("/proc/sys/kernel/random/boot_id", "re");
-    if (f != NULL) {
-        if (fgets(boot, sizeof boot, f) == NULL)
-            boot[0] = '\0';
-        fclose(f);
-        boot[strcspn(boot, "\n")] = '\0';
-    }
-    snprintf(out, size, "%.200s/%.40s", host, boot);
 }
 
 /* mkdir with mode 0700 unless it exists as a directory. */

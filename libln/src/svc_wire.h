@@ -1,6 +1,6 @@
 /* svc_wire.h — the caller <-> provider protocol of services (docs/services.md, "Wire") and
- * the socket plumbing both sides share: frames, Unix/TCP listeners and connects, the host
- * identity and where a provider's Unix socket lives.  Internal, never installed. */
+ * the socket plumbing both sides share: frames, Unix/TCP listeners and connects and where a
+ * provider's Unix socket lives (the host identity is ln.h's ln_host_id()).  Internal. */
 #ifndef LN_SVC_WIRE_H
 #define LN_SVC_WIRE_H
 
@@ -42,9 +42,6 @@ int ln_svc_frame_end(ln_wbuf* b, size_t start);
  * boundary (and replaced if it is not UTF-8). */
 void ln_svc_put_error(ln_wbuf* b, uint32_t call_id, int code, const char* text);
 
-/* "HOSTNAME/BOOT_ID", or $LN_HOST_ID: callers with the same host id as the provider use its
- * Unix socket. */
-void ln_svc_host_id(char* out, size_t size);
 /* The directory for this client's service sockets: $LN_RUNTIME_DIR, else
  * $XDG_RUNTIME_DIR/ln/<instance>, else /tmp/ln-<uid>/<instance> (the manager's rule), created
  * with mode 0700 where missing.  LN_OK, or an error (recorded) when it cannot be used. */

@@ -168,7 +168,9 @@ LN_EXPORT int ln_unsubscribe(ln_inport* port);
 
 /* What a read returns besides the data. */
 typedef struct ln_sample_info {
-    uint64_t seq;          /* publish sequence number of the topic, from 1, gap-free per topic */
+    uint64_t seq;          /* publish sequence number of the topic, from 1; gap-free on the
+                            * publisher's host, on other hosts samples lost on the network
+                            * leave gaps (a queued port counts them in overruns) */
     int64_t timestamp_ns;  /* CLOCK_REALTIME when it was published */
     uint64_t overruns;     /* samples this port lost since its previous read */
 } ln_sample_info;
@@ -329,7 +331,9 @@ LN_EXPORT int ln_ring_admin_purge_instance(const char* instance);
 /* Slot count and bytes of a ring for `message_size` and `slots` (the manager's limit check). */
 LN_EXPORT uint64_t ln_ring_segment_size(uint64_t message_size, uint32_t slots);
 /* Map the header of an existing segment (made by an earlier process, e.g. a daemon that was
- * restarted) after checking its magic, version and geometry; LN_ENOTFOUND if there is none. */
+ * restarted) after checking its magic, version and geometry; LN_ENOTFOUND if there is none,
+ * LN_EVERSION for a ring of another format version, LN_EPROTOCOL (ln_last_error() says what)
+ * for anything that is not a consistent ring.  Free *out with ln_ring_admin_close(). */
 LN_EXPORT int ln_ring_admin_open(ln_ring_admin** out, const char* shm_name);
 
 /* ==== topic forwarding between hosts (used by ln_daemon) ==================================
@@ -337,25 +341,41 @@ LN_EXPORT int ln_ring_admin_open(ln_ring_admin** out, const char* shm_name);
  * host reads samples out of it, the daemon of a subscriber's host writes them in under their
  * original sequence numbers and timestamps.  A tap holds no reader slot, so publishers never
  * wait for it; what it falls behind on is counted as lost.  It follows the ring into its
- * successor when the manager grows the topic. */
+ * successor when the manager grows the topic.  Use a tap either for reading or for injecting
+ * (injecting moves it to the newest ring at once, past samples a reader had not read yet),
+ * from one thread at a time; different taps of one ring may be used concurrently. */
 typedef struct ln_ring_tap ln_ring_tap;
 #define LN_TAP_EVERY 0u  /* read: every sample in order while the ring still holds it */
 #define LN_TAP_NEWEST 1u /* read: always the newest sample, skipping older ones */
+/* Map ring `shm_name` (following it to its newest successor if it is retired) after checking
+ * it has layout_hash and message_size (LN_ELAYOUT if not; LN_ENOTFOUND if there is no such
+ * segment; LN_EINVAL for another mode).  *out belongs to the caller: ln_ring_tap_close. */
 LN_EXPORT int ln_ring_tap_open(ln_ring_tap** out, const char* shm_name, uint64_t layout_hash,
                                uint64_t message_size, unsigned mode);
 LN_EXPORT void ln_ring_tap_close(ln_ring_tap* tap);
 /* Copy the next sample (per mode) into buf[message_size]: LN_OK with info (seq, timestamp_ns;
- * overruns = samples skipped since the previous read), LN_ETIMEOUT if none came within
- * `timeout` seconds (0: poll, < 0: forever).  A fresh tap starts after the newest sample. */
+ * overruns = how many sequence numbers lie between the previous sample read and this one:
+ * overwritten before the tap got to them, skipped for the newest, or never written into this
+ * ring), LN_ETIMEOUT if none came within `timeout` seconds (0: poll, also LN_ETIMEOUT;
+ * < 0: forever; NaN: LN_EINVAL).  A fresh tap starts after the newest sample present at
+ * open.  A blocked read sleeps on the ring's futex and is woken by every write, inject and
+ * retirement.  On a retired ring it first reads what is left there (NEWEST: its newest
+ * sample), then moves on to the successor, so EVERY loses nothing to ring growth. */
 LN_EXPORT int ln_ring_tap_read(ln_ring_tap* tap, void* buf, ln_sample_info* info,
                                double timeout);
-/* Write one sample as sequence number `seq` with `timestamp_ns`, waking the ring's readers.
- * LN_EOVERRUN (nothing written) if seq is not newer than the ring's newest sample. */
+/* Write one sample as sequence number `seq` (numbers may jump: readers count the gap as lost)
+ * with `timestamp_ns`, waking the ring's readers.  Moves to the newest successor first if
+ * the ring is retired.  Never waits for queued readers (their unread samples are overwritten
+ * and counted as overruns); waits at most 1 s for the topic's write lock (LN_ETIMEOUT if a
+ * local publisher holds it with a loan).  LN_EOVERRUN (nothing written) if seq is not newer
+ * than the ring's newest sample; LN_EINVAL if seq >= 2^62. */
 LN_EXPORT int ln_ring_tap_inject(ln_ring_tap* tap, const void* data, uint64_t seq,
                                  int64_t timestamp_ns);
-/* Newest sequence number in the (current) ring, 0 if none. */
+/* Newest sequence number of the topic, 0 if none: of the ring the tap is on, or of its
+ * newest successor if that one is retired (without moving the tap).  0 for a bad handle. */
 LN_EXPORT uint64_t ln_ring_tap_write_seq(ln_ring_tap* tap);
-/* The name of the segment the tap is on now (changes when it followed a successor). */
+/* The name of the segment the tap is on now (changes when it followed a successor); owned
+ * by the tap.  NULL for a bad handle. */
 LN_EXPORT const char* ln_ring_tap_segment(const ln_ring_tap* tap);
 
 /* This host's identity: $LN_HOST_ID if set, else "hostname/boot_id".  Clients tell it to the

@@ -1,0 +1,201 @@
+/* ring_tap.c — taps: a topic ring mapped without the manager and without a reader slot, for the
+ * daemons that forward topics between hosts.  Reading takes samples out like a subscriber
+ * that never holds publishers back; injecting writes forwarded samples in under their
+ * original sequence numbers and timestamps (the seqlock of ring.h, numbers may jump). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "client_internal.h"
+#include "ring.h"
+
+#define LN_TAP_MAGIC 0x4c4e5450u
+/* How long inject waits for the write lock: another publisher of the topic on this host may
+ * hold it with a loan; the daemon's stream must not hang on that. */
+#define LN_TAP_LOCK_TIMEOUT 1.0
+
+struct ln_ring_tap {
+    uint32_t magic;
+    unsigned mode;
+    ln_ring ring;
+    ln_ring_cursor cur; /* reading; holds no reader slot (reader = -1) */
+};
+
+static int bad_tap(const ln_ring_tap* t, const char* what)
+{
+    if (!t || t->magic != LN_TAP_MAGIC)
+        return ln_set_error(NULL, LN_EBADHANDLE, "%s: invalid or closed tap handle", what);
+    return LN_OK;
+}
+
+/* EVERY reads like a queued subscriber with as many buffers as the ring has slots: whatever
+ * the ring still holds. */
+static void fit_cursor(ln_ring_tap* t)
+{
+    t->cur.buffers = t->mode == LN_TAP_EVERY ? t->ring.slot_count : 1;
+}
+
+int ln_ring_tap_open(ln_ring_tap** out, const char* shm_name, uint64_t layout_hash,
+                     uint64_t message_size, unsigned mode)
+{
+    if (!out)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_open: out is NULL");
+    *out = NULL;
+    if (!shm_name || message_size == 0)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_open: a segment name and a message "
+                            "size are required");
+    if (mode != LN_TAP_EVERY && mode != LN_TAP_NEWEST)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_open: mode %u is neither "
+                            "LN_TAP_EVERY nor LN_TAP_NEWEST", mode);
+    ln_ring_tap* t = calloc(1, sizeof(*t));
+    if (!t)
+        return ln_set_error(NULL, LN_ENOMEM, "out of memory");
+    int rc = ln_ring_attach(&t->ring, shm_name, layout_hash, message_size);
+    if (rc != LN_OK) {
+        free(t);
+        return rc;
+    }
+    rc = ln_ring_follow(&t->ring);
+    if (rc != LN_OK) {
+        ln_ring_detach(&t->ring);
+        free(t);
+        return rc;
+    }
+    t->mode = mode;
+    t->cur.reader = -1;
+    fit_cursor(t);
+    t->cur.next = atomic_load_explicit(&t->ring.hdr->write_seq, memory_order_acquire) + 1;
+    t->magic = LN_TAP_MAGIC;
+    *out = t;
+    return LN_OK;
+}
+
+void ln_ring_tap_close(ln_ring_tap* t)
+{
+    if (!t || t->magic != LN_TAP_MAGIC)
+        return;
+    ln_ring_detach(&t->ring);
+    t->magic = 0;
+    free(t);
+}
+
+/* Find the next sample per mode, waiting per the deadline.  A retired ring is left only once
+ * nothing more can come from it, so EVERY loses nothing across ring growth. */
+static int next_sample(ln_ring_tap* t, double timeout, ln_ring_slot** slot, uint64_t* word)
+{
+    ln_deadline d = ln_deadline_in(timeout);
+    for (;;) {
+        /* `retired` first: a sample committed before the retirement is then seen by pick. */
+        int retired = atomic_load_explicit(&t->ring.hdr->retired, memory_order_acquire);
+        int rc = ln_ring_pick(&t->ring, &t->cur, slot, word);
+        if (rc != LN_EAGAIN)
+            return rc;
+        if (retired) {
+            if ((rc = ln_ring_follow_once(&t->ring)) != LN_OK)
+                return rc;
+            fit_cursor(t);
+            continue;
+        }
+        if (timeout == 0 || ln_ring_wait_data(&t->ring, t->cur.next, &d) == LN_ETIMEOUT)
+            return ln_set_error(NULL, LN_ETIMEOUT, "tap on '%s': no sample within %g s",
+                                t->ring.name, timeout);
+    }
+}
+
+int ln_ring_tap_read(ln_ring_tap* t, void* buf, ln_sample_info* info, double timeout)
+{
+    int rc = bad_tap(t, "ln_ring_tap_read");
+    if (rc != LN_OK)
+        return rc;
+    if (!buf)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_read: buf is NULL");
+    if (isnan(timeout))
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_read: timeout is NaN");
+    uint64_t expected = t->cur.next;
+    for (;;) {
+        ln_ring_slot* slot;
+        uint64_t word;
+        rc = next_sample(t, timeout, &slot, &word);
+        if (rc != LN_OK)
+            return rc;
+        memcpy(buf, ln_ring_payload(slot), t->ring.message_size);
+        int64_t ts = slot->timestamp_ns;
+        if (ln_ring_finish(&t->ring, &t->cur, slot, word, 1) != LN_OK)
+            continue; /* overwritten while copied: counted, take the next one */
+        uint64_t seq = LN_SLOT_SEQ(word);
+        if (info) {
+            info->seq = seq;
+            info->timestamp_ns = ts;
+            /* Every number between the previous sample and this one, in both modes: samples
+             * overwritten before the tap got to them, skipped for the newest, or never
+             * written here (lost on the network). */
+            info->overruns = seq - expected;
+        }
+        t->cur.pending = 0;
+        return LN_OK;
+    }
+}
+
+int ln_ring_tap_inject(ln_ring_tap* t, const void* data, uint64_t seq, int64_t timestamp_ns)
+{
+    int rc = bad_tap(t, "ln_ring_tap_inject");
+    if (rc != LN_OK)
+        return rc;
+    if (!data)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject: data is NULL");
+    if (seq > LN_RING_MAX_SEQ)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject: sequence number %llu is "
+                            "beyond %llu", (unsigned long long)seq,
+                            (unsigned long long)LN_RING_MAX_SEQ);
+    ln_deadline d = ln_deadline_in(LN_TAP_LOCK_TIMEOUT);
+    for (;;) {
+        if ((rc = ln_ring_lock(&t->ring, &d)) != LN_OK)
+            return rc;
+        if (!atomic_load_explicit(&t->ring.hdr->retired, memory_order_acquire))
+            break;
+        /* Retired: its sequence numbers live on in the successor; write there. */
+        ln_ring_unlock(&t->ring);
+        if ((rc = ln_ring_follow(&t->ring)) != LN_OK)
+            return rc;
+        fit_cursor(t);
+    }
+    uint64_t newest = atomic_load_explicit(&t->ring.hdr->write_seq, memory_order_relaxed);
+    if (seq <= newest) {
+        ln_ring_unlock(&t->ring);
+        return ln_set_error(NULL, LN_EOVERRUN, "tap on '%s': sample %llu is not newer than "
+                            "the ring's newest, %llu", t->ring.name, (unsigned long long)seq,
+                            (unsigned long long)newest);
+    }
+    /* No waiting for queued readers: a slot they have not read yet is overwritten and they
+     * count it as lost, as with any publisher that does not wait. */
+    ln_ring_slot* slot = ln_ring_begin_seq(&t->ring, seq);
+    memcpy(ln_ring_payload(slot), data, t->ring.message_size);
+    ln_ring_commit_seq(&t->ring, slot, seq, timestamp_ns);
+    return ln_ring_unlock(&t->ring);
+}
+
+uint64_t ln_ring_tap_write_seq(ln_ring_tap* t)
+{
+    if (bad_tap(t, "ln_ring_tap_write_seq") != LN_OK)
+        return 0;
+    const ln_ring_header* h = t->ring.hdr;
+    if (!atomic_load_explicit(&h->retired, memory_order_acquire))
+        return atomic_load_explicit(&h->write_seq, memory_order_acquire);
+    /* A private walk along the successors: the tap itself moves on only when it reads past
+     * the end of this ring or injects. */
+    ln_ring peek;
+    uint64_t seq = atomic_load_explicit(&h->write_seq, memory_order_acquire);
+    if (ln_ring_attach(&peek, t->ring.name, t->ring.layout_hash, t->ring.message_size) != LN_OK)
+        return seq;
+    if (ln_ring_follow(&peek) == LN_OK)
+        seq = atomic_load_explicit(&peek.hdr->write_seq, memory_order_acquire);
+    ln_ring_detach(&peek);
+    return seq;
+}
+
+const char* ln_ring_tap_segment(const ln_ring_tap* t)
+{
+    if (bad_tap(t, "ln_ring_tap_segment") != LN_OK)
+        return NULL;
+    return t->ring.name;
+}
