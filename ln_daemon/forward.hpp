@@ -58,6 +58,8 @@ struct Options {
     size_t udp_payload = 1400;               // payload bytes per datagram (fragment)
     size_t udp_max_incomplete = 4;           // samples being reassembled per stream, at most
     size_t udp_reassembly_bytes = 256u << 20; // memory of all reassembly buffers, at most
+    double udp_incomplete_timeout = 1.0;      // seconds without a fragment before an
+                                              // incomplete sample is given up
     int socket_buffer = 64 << 20;             // SO_RCVBUF(FORCE)/SO_SNDBUF wanted
     size_t tcp_queue_samples = 1024;          // per TCP sending stream, at most
     size_t tcp_queue_bytes = 256u << 20;      // per TCP sending stream, at most
@@ -67,6 +69,8 @@ struct Options {
 struct Totals {
     uint64_t unknown_stream = 0; // datagrams/connections with a token no RecvSpec has
     uint64_t malformed = 0;      // datagrams/frames that do not parse at all
+    uint64_t reassembly_bytes = 0; // memory held by incomplete UDP samples now
+    uint64_t reassembly_peak = 0;  // the most it ever held (<= udp_reassembly_bytes)
 };
 
 // Owns the data sockets and every stream's threads.  Thread-safe: the daemon's poll loop
