@@ -13,6 +13,7 @@
 
 #include "auth.hpp"
 #include "fd.hpp"
+#include "network.hpp"
 #include "process.hpp"
 #include "protocol.hpp"
 #include "supervisor.hpp"
@@ -30,8 +31,10 @@ struct Connection;
 class Server final : public Sink {
 public:
     // `listener` is a bound, listening, non-blocking socket; `signals` a signalfd for
-    // SIGCHLD, SIGTERM, SIGINT and SIGHUP.  `log_path` is reopened on SIGHUP.
-    Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path);
+    // SIGCHLD, SIGTERM, SIGINT and SIGHUP.  `log_path` is reopened on SIGHUP.  `net` takes
+    // the ring and stream requests and must outlive the server.
+    Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
+           NetCommands &net);
     ~Server() override;
     // Runs until SIGTERM/SIGINT has stopped every process; returns the exit status.
     int run();
@@ -64,6 +67,7 @@ private:
     UniqueFd signals_;
     std::string log_path_;
     Supervisor supervisor_;
+    NetCommands &net_;
     std::map<uint64_t, std::unique_ptr<Connection>> conns_;
     uint64_t next_conn_ = 1;
     uint64_t next_token_ = 1;

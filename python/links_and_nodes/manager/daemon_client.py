@@ -332,10 +332,12 @@ async def _probe(host: str, port: int, timeout: float) -> bool:
 
 
 async def ensure_local_daemon(port: int, key_file: Path, log_file: Path | None = None,
-                              timeout: float = 10.0) -> None:
+                              timeout: float = 10.0, *, data_port: int | None = None) -> None:
     """Make sure an ln_daemon listens on 127.0.0.1:`port`: if none answers, start one with
-    `key_file` (and `log_file`) in its own session, so it outlives the caller, and return
-    once it accepts connections.  DaemonError with the daemon's message if it cannot start."""
+    `key_file` (and `log_file`, and `data_port` for forwarding: None is the daemon's
+    default, port + 1; 0 a free one) in its own session, so it outlives the caller, and
+    return once it accepts connections.  DaemonError with the daemon's message if it cannot
+    start."""
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     if await _probe("127.0.0.1", port, timeout):
@@ -343,6 +345,8 @@ async def ensure_local_daemon(port: int, key_file: Path, log_file: Path | None =
     args = [daemon_executable(), "--port", str(port), "--key-file", os.fspath(key_file)]
     if log_file is not None:
         args += ["--log", os.fspath(log_file)]
+    if data_port is not None:
+        args += ["--data-port", str(data_port)]
     try:
         # Without --foreground the daemon detaches itself once it listens; this process
         # is only its launcher and ends at once with the start-up verdict.
@@ -715,7 +719,7 @@ class DaemonClient:
     async def ping(self) -> None:
         await self._call(Msg.PING, b"", Msg.OK)
 
-    # -- rings and forwarding (docs/network.md) --
+    # -- rings and forwarding (docs/daemon.md, "Rings and forwarding") --
     # Ring names must lie in this instance's namespace, /ln.<sanitized instance>.*; a
     # failing libln call raises DaemonError with code RING_FAILED and libln's text.
 
