@@ -3,6 +3,7 @@
 // with errno and names that libln keeps for the calling thread.
 #include "rings.hpp"
 
+#include <cerrno>
 #include <cmath>
 #include <fcntl.h>
 #include <ln/ln.h>
@@ -107,11 +108,17 @@ bool RingTable::create(const std::string &instance, const RingCreateRequest &req
     limit = false;
     if (!ring_in_namespace(instance, req.name, error))
         return false;
-    if (rings_.count(req.name)) {
-        if (req.adopt) // still held from before the manager went away
+    auto held = rings_.find(req.name);
+    if (held != rings_.end()) {
+        UniqueFd fd(::shm_open(req.name.c_str(), O_RDONLY | O_CLOEXEC, 0));
+        if (!fd && errno == ENOENT) {
+            rings_.erase(held); // unlinked behind our back: the handle is stale
+        } else if (req.adopt) { // still held from before the manager went away
             return check_geometry(req, error);
-        error = "ring " + req.name + " exists already";
-        return false;
+        } else {
+            error = "ring " + req.name + " exists already";
+            return false;
+        }
     }
     if (rings_.size() >= kMaxRings) {
         limit = true;

@@ -273,6 +273,13 @@ void test_ring_table()
         req.adopt = true;
         LN_CHECK(table.create(instance, req, limit, error)); // held: fine
         LN_CHECK_EQ(table.size(), 1);
+        // Unlinked by someone else: the stale handle gives way to a new segment.
+        LN_CHECK_EQ(ln_ring_admin_unlink(req.name.c_str()), LN_OK);
+        req.adopt = false;
+        LN_CHECK(table.create(instance, req, limit, error));
+        LN_CHECK_EQ(shm_size(req.name), ln_ring_segment_size(64, 4));
+        LN_CHECK_EQ(table.size(), 1);
+        req.adopt = true;
 
         RingCountsRequest counts{req.name, 1, 2};
         LN_CHECK(table.counts(instance, counts, error));
