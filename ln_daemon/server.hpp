@@ -1,7 +1,8 @@
 // The daemon's poll loop and its TCP side: accepting connections, the authentication
-// handshake, framing with per-frame tags, dispatching commands to the Supervisor, and
-// turning the Supervisor's news into replies and events.  A connection that misbehaves is
-// closed with one log line; nothing it sends can affect another connection or a process.
+// handshake, framing with per-frame tags, dispatching commands to the Supervisor (processes)
+// and to NetCommands (rings, forwarding), and turning the Supervisor's news into replies and
+// events.  A connection that misbehaves is closed with one log line; nothing it sends can
+// affect another connection or a process.
 #pragma once
 
 #include <cstdint>
