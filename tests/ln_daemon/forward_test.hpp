@@ -33,14 +33,15 @@ constexpr uint64_t kHash = 0xf0e1d2c3b4a59687ull;
 // A ring as the manager would create it; unlinked again by the destructor.
 class TestRing {
 public:
-    TestRing(uint64_t message_size, uint32_t slots) : size_(message_size)
+    TestRing(uint64_t message_size, uint32_t slots, uint64_t layout_hash = kHash)
+        : size_(message_size), hash_(layout_hash)
     {
         static std::atomic<int> counter{0};
         name_ = "/ln.fwdtest" + std::to_string(::getpid()) + "." +
                 std::to_string(counter.fetch_add(1)) + ".0";
         ln_ring_admin_unlink(name_.c_str());
-        int rc = ln_ring_admin_create(&admin_, name_.c_str(), "fwd.topic", "test/fwd", kHash,
-                                      message_size, slots);
+        int rc = ln_ring_admin_create(&admin_, name_.c_str(), "fwd.topic", "test/fwd",
+                                      layout_hash, message_size, slots);
         LN_CHECK_EQ(rc, LN_OK);
         if (rc != LN_OK)
             std::fprintf(stderr, "    %s\n", ln_last_error());
@@ -57,6 +58,7 @@ public:
 
     const std::string &name() const { return name_; }
     uint64_t size() const { return size_; }
+    uint64_t hash() const { return hash_; }
     uint64_t newest() const
     {
         uint64_t seq = 0;
@@ -66,7 +68,7 @@ public:
 
 private:
     std::string name_;
-    uint64_t size_;
+    uint64_t size_, hash_;
     ln_ring_admin *admin_ = nullptr;
 };
 
@@ -78,7 +80,7 @@ using TapPtr = std::unique_ptr<ln_ring_tap, TapDeleter>;
 inline TapPtr open_tap(const TestRing &ring, unsigned mode)
 {
     ln_ring_tap *t = nullptr;
-    LN_CHECK_EQ(ln_ring_tap_open(&t, ring.name().c_str(), kHash, ring.size(), mode), LN_OK);
+    LN_CHECK_EQ(ln_ring_tap_open(&t, ring.name().c_str(), ring.hash(), ring.size(), mode), LN_OK);
     return TapPtr(t);
 }
 
@@ -176,7 +178,7 @@ inline lnd::fwd::SendSpec send_spec(uint64_t token, const TestRing &ring, lnd::f
     lnd::fwd::SendSpec s;
     s.token = token;
     s.ring = ring.name();
-    s.layout_hash = kHash;
+    s.layout_hash = ring.hash();
     s.message_size = ring.size();
     s.transport = t;
     s.host = "127.0.0.1";
@@ -189,7 +191,7 @@ inline lnd::fwd::RecvSpec recv_spec(uint64_t token, const TestRing &ring, lnd::f
     lnd::fwd::RecvSpec r;
     r.token = token;
     r.ring = ring.name();
-    r.layout_hash = kHash;
+    r.layout_hash = ring.hash();
     r.message_size = ring.size();
     r.transport = t;
     return r;
