@@ -8,58 +8,25 @@ import ctypes
 import os
 from pathlib import Path
 
+from links_and_nodes import _clientlib as C
 from links_and_nodes import _libln
+from links_and_nodes.errors import LnError
 from links_and_nodes.manager.segments import sanitize_instance
-
-TAP_EVERY = 0
-TAP_NEWEST = 1
-_OK, _ETIMEOUT = 0, -3
-
-
-class _SampleInfo(ctypes.Structure):
-    _fields_ = [("seq", ctypes.c_uint64), ("timestamp_ns", ctypes.c_int64),
-                ("overruns", ctypes.c_uint64)]
-
-
-_lib = _libln.lib
-_lib.ln_ring_tap_open.restype = ctypes.c_int
-_lib.ln_ring_tap_open.argtypes = [ctypes.POINTER(ctypes.c_void_p), ctypes.c_char_p,
-                                  ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint]
-_lib.ln_ring_tap_close.restype = None
-_lib.ln_ring_tap_close.argtypes = [ctypes.c_void_p]
-_lib.ln_ring_tap_read.restype = ctypes.c_int
-_lib.ln_ring_tap_read.argtypes = [ctypes.c_void_p, ctypes.c_void_p,
-                                  ctypes.POINTER(_SampleInfo), ctypes.c_double]
-_lib.ln_ring_tap_inject.restype = ctypes.c_int
-_lib.ln_ring_tap_inject.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
-                                    ctypes.c_int64]
-_lib.ln_ring_tap_write_seq.restype = ctypes.c_uint64
-_lib.ln_ring_tap_write_seq.argtypes = [ctypes.c_void_p]
-_lib.ln_last_error.restype = ctypes.c_char_p
-_lib.ln_last_error.argtypes = []
-
-
-class TapError(Exception):
-    def __init__(self, what: str, code: int) -> None:
-        super().__init__(f"{what}: {code}: {_lib.ln_last_error().decode(errors='replace')}")
-        self.code = code
 
 
 class Tap:
-    """A libln ring tap: reads or injects samples of `message_size` bytes."""
+    """A libln ring tap (LN_TAP_EVERY): reads or injects samples of `message_size` bytes.
+    libln's failures raise its LnError classes."""
 
-    def __init__(self, name: str, layout_hash: int, message_size: int,
-                 mode: int = TAP_EVERY) -> None:
+    def __init__(self, name: str, layout_hash: int, message_size: int) -> None:
         self.size = message_size
         self._handle = ctypes.c_void_p()
-        rc = _lib.ln_ring_tap_open(ctypes.byref(self._handle), name.encode(), layout_hash,
-                                   message_size, mode)
-        if rc != _OK:
-            raise TapError(f"ln_ring_tap_open({name})", rc)
+        C.ln_ring_tap_open(ctypes.byref(self._handle), name.encode(), layout_hash,
+                           message_size, C.LN_TAP_EVERY)
 
     def close(self) -> None:
         if self._handle:
-            _lib.ln_ring_tap_close(self._handle)
+            C.ln_ring_tap_close(self._handle)
             self._handle = ctypes.c_void_p()
 
     def __enter__(self) -> Tap:
@@ -70,23 +37,22 @@ class Tap:
 
     def inject(self, data: bytes, seq: int, timestamp_ns: int = 0) -> None:
         buf = ctypes.create_string_buffer(data.ljust(self.size, b"\0"), self.size)
-        rc = _lib.ln_ring_tap_inject(self._handle, buf, seq, timestamp_ns)
-        if rc != _OK:
-            raise TapError(f"ln_ring_tap_inject(seq {seq})", rc)
+        C.ln_ring_tap_inject(self._handle, buf, seq, timestamp_ns)
 
     def read(self, timeout: float) -> tuple[int, bytes] | None:
         """(seq, data) of the next sample, None if none came within `timeout` seconds."""
         buf = ctypes.create_string_buffer(self.size)
-        info = _SampleInfo()
-        rc = _lib.ln_ring_tap_read(self._handle, buf, ctypes.byref(info), timeout)
-        if rc == _ETIMEOUT:
-            return None
-        if rc != _OK:
-            raise TapError("ln_ring_tap_read", rc)
+        info = C.SampleInfo()
+        try:
+            C.ln_ring_tap_read(self._handle, buf, ctypes.byref(info), timeout)
+        except LnError as exc:
+            if exc.name == "ETIMEOUT":
+                return None
+            raise
         return int(info.seq), buf.raw
 
     def write_seq(self) -> int:
-        return int(_lib.ln_ring_tap_write_seq(self._handle))
+        return int(C.ln_ring_tap_write_seq(self._handle))
 
 
 def segment_size(name: str) -> int | None:

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 from daemonproc import WAIT, alive, daemon_exe, free_port, wait_for
+from polling import free_daemon_port
 
 from links_and_nodes.manager import daemon_client as dc
 
@@ -104,24 +105,8 @@ def test_data_port_usage_errors(tmp_path: Path, args: list[str], text: str) -> N
     assert result.stderr.startswith(f"ln_daemon: error: {text}\n")
 
 
-def _pair_of_free_ports() -> int:
-    """A port P with P and P + 1 free for TCP and UDP right now."""
-    for _ in range(100):
-        port = free_port()
-        try:
-            with contextlib.ExitStack() as stack:
-                for p, kind in ((port, socket.SOCK_DGRAM), (port + 1, socket.SOCK_STREAM),
-                                (port + 1, socket.SOCK_DGRAM)):
-                    s = stack.enter_context(socket.socket(socket.AF_INET, kind))
-                    s.bind(("127.0.0.1", p))
-            return port
-        except OSError:
-            continue
-    pytest.fail("no two free neighbouring ports")
-
-
 def test_default_data_port(tmp_path: Path) -> None:
-    port = _pair_of_free_ports()
+    port = free_daemon_port()
     path = key_file(tmp_path, HEX, 0o600)
     proc = subprocess.Popen([daemon_exe(), "--port", str(port), "--bind", "127.0.0.1",
                              "--key-file", str(path), "--foreground"], stdout=subprocess.PIPE,
