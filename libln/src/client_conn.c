@@ -132,6 +132,9 @@ static int handshake(ln_client* c, const char* name, const struct timespec* dead
     ln_wbuf_u32(&c->tx, (uint32_t)c->pid);
     ln_wbuf_str(&c->tx, name);
     ln_wbuf_str(&c->tx, ln_version());
+    char host_id[LN_HOST_ID_MAX];
+    ln_host_id(host_id, sizeof host_id); /* the manager finds this host's ln_daemon by it */
+    ln_wbuf_str(&c->tx, host_id);
     int rc = ln_proto_frame_end(&c->tx, start);
     if (rc != LN_OK)
         return ln_set_error(c, rc, "cannot encode HELLO: %s", ln_strerror(rc));

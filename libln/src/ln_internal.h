@@ -14,4 +14,7 @@
 enum { LN_ERROR_COUNT = 0 LN_ERRNO_MAP(LN_ERRNO_COUNT_) };
 #undef LN_ERRNO_COUNT_
 
+/* Bytes of an ln_host_id() buffer, NUL included: the manager takes host ids of at most 255. */
+#define LN_HOST_ID_MAX 256
+
 #endif /* LN_INTERNAL_H */

@@ -97,6 +97,23 @@ static int close_remote(ln_port_common* p)
     return rc;
 }
 
+/* The flags of one kind of port: LN_PUBLISH_* for publishers, at most one LN_SUBSCRIBE_*
+ * transport for subscribers. */
+static int check_flags(ln_client* clnt, uint16_t msg, uint32_t flags)
+{
+    const uint32_t transports = LN_SUBSCRIBE_UDP | LN_SUBSCRIBE_TCP;
+    if (msg == LN_MSG_PUBLISH && (flags & transports))
+        return ln_set_error(clnt, LN_EINVAL, "ln_publish: flags 0x%x hold LN_SUBSCRIBE_* bits, "
+                            "which only subscribers take", flags);
+    if (msg == LN_MSG_SUBSCRIBE && (flags & LN_PUBLISH_WAIT_FOR_SUBSCRIBERS))
+        return ln_set_error(clnt, LN_EINVAL, "ln_subscribe: LN_PUBLISH_WAIT_FOR_SUBSCRIBERS is a "
+                            "publisher flag");
+    if ((flags & transports) == transports)
+        return ln_set_error(clnt, LN_EINVAL, "ln_subscribe: LN_SUBSCRIBE_UDP and "
+                            "LN_SUBSCRIBE_TCP together; choose one transport");
+    return LN_OK;
+}
+
 /* Register a port with the manager and map the ring it names. */
 static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const char* topic,
                      const char* md_name, uint64_t hash, size_t size, const ln_port_options* o,
@@ -116,6 +133,8 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
     if (strlen(topic) >= sizeof(p->topic))
         return ln_set_error(clnt, LN_EINVAL, "topic name longer than %zu bytes",
                             sizeof(p->topic) - 1);
+    if ((rc = check_flags(clnt, msg, o->flags)) != LN_OK)
+        return rc;
     ln_wbuf body;
     ln_rbuf reply;
     uint16_t type = 0;

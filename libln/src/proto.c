@@ -251,7 +251,7 @@ static const struct {
     const char* fields;
     const char* name;
 } msg_types[] = {
-    {LN_MSG_HELLO, 0, 0, "dwdss", "HELLO"},
+    {LN_MSG_HELLO, 0, 0, "dwdsss", "HELLO"},
     {LN_MSG_WELCOME, 0, 1, "wdss", "WELCOME"},
     {LN_MSG_ERROR, 0, 1, "dis", "ERROR"},
     {LN_MSG_PUBLISH, LN_MSG_PORT_OK, 0, "dssqddd", "PUBLISH"},

@@ -9,7 +9,7 @@
 
 #include "ln_internal.h"
 
-#define LN_PROTO_VERSION 1
+#define LN_PROTO_VERSION 2
 #define LN_PROTO_MAGIC 0x504D4E4Cu     /* "LNMP" */
 #define LN_PROTO_MAX_FRAME (1u << 20)  /* max `length` (type + body) */
 #define LN_PROTO_MAX_STR 1024          /* max bytes of a str field */

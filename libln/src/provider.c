@@ -218,7 +218,7 @@ int ln_service_provider_register(ln_service_provider* p, const char* group)
     if (rc != LN_OK)
         return rc;
     int ufd, tfd;
-    char host[256], host_id[256];
+    char host[256], host_id[LN_HOST_ID_MAX];
     rc = open_listeners(p, &ufd, &tfd, host, sizeof host);
     if (rc != LN_OK) {
         close_listeners(p, ufd, tfd);

@@ -247,7 +247,7 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
                            const char* tcp_host, uint16_t tcp_port,
                            const struct timespec* deadline)
 {
-    char mine[256];
+    char mine[LN_HOST_ID_MAX];
     ln_host_id(mine, sizeof mine);
     int err = ENOENT;
     if (unix_path[0] != '\0' && strcmp(host_id, mine) == 0) {

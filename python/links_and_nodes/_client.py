@@ -71,10 +71,14 @@ class client:  # noqa: N801 - the LN name
         return port
 
     def subscribe(self, topic_name: str, message_definition_name: str,
-                  buffers: int = 1, spin_us: int | None = None) -> subscriber:
+                  buffers: int = 1, spin_us: int | None = None,
+                  transport: str | None = None) -> subscriber:
         """buffers=1: *latest* mode; buffers=N > 1: *queued* mode with N buffers.  spin_us:
-        how long a blocking read polls before it sleeps (default: libln's, 20 us)."""
-        port = subscriber(self, topic_name, message_definition_name, buffers, spin_us)
+        how long a blocking read polls before it sleeps (default: libln's, 20 us).
+        transport: "udp" or "tcp", how samples of a publisher on another host reach this
+        one (docs/network.md); None leaves it to the topic's setting."""
+        port = subscriber(self, topic_name, message_definition_name, buffers, spin_us,
+                          transport)
         self._ports.append(port)
         return port
 
@@ -175,6 +179,8 @@ def _close_pool_clients() -> None:
 
 _ln_read = C.ln_read
 _ln_write = C.ln_write
+# subscribe(transport=...): the LN_SUBSCRIBE_* flag of each name
+_TRANSPORTS = {"udp": C.LN_SUBSCRIBE_UDP, "tcp": C.LN_SUBSCRIBE_TCP}
 
 
 class _CallArgs:
@@ -285,11 +291,15 @@ class subscriber(_Port):  # noqa: N801
     _close_fn = staticmethod(C.ln_unsubscribe)
 
     def __init__(self, clnt: client, topic_name: str, md_name: str, buffers: int = 1,
-                 spin_us: int | None = None) -> None:
+                 spin_us: int | None = None, transport: str | None = None) -> None:
+        if transport is not None and transport not in _TRANSPORTS:
+            raise ValueError(f"transport must be None, 'udp' or 'tcp', not {transport!r}")
         super().__init__(clnt, topic_name, md_name)
         self.buffers = buffers
+        self.transport = transport
         self.info = C.SampleInfo()
-        self._open(C.ln_subscribe, buffers, 0, spin_us)
+        flags = 0 if transport is None else _TRANSPORTS[transport]
+        self._open(C.ln_subscribe, buffers, flags, spin_us)
         self._args = _CallArgs(self.handle, self.packet)
         self._info_ref = ctypes.byref(self.info)
 

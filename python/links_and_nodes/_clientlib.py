@@ -48,6 +48,8 @@ LN_EAGAIN = -4
 LN_ETIMEOUT = -3
 LN_EOVERRUN = -15
 LN_PUBLISH_WAIT_FOR_SUBSCRIBERS = 0x1
+LN_SUBSCRIBE_UDP = 0x100
+LN_SUBSCRIBE_TCP = 0x200
 
 ln_client_options_init = _declare("ln_client_options_init", None, [ctypes.POINTER(ClientOptions)])
 ln_client_create = _declare("ln_client_create", c_int, [ctypes.POINTER(c_void_p), c_char_p,
@@ -55,6 +57,7 @@ ln_client_create = _declare("ln_client_create", c_int, [ctypes.POINTER(c_void_p)
 ln_client_destroy = _declare("ln_client_destroy", c_int, [c_void_p], _check)
 ln_client_name = _declare("ln_client_name", c_char_p, [c_void_p])
 ln_client_last_error = _declare("ln_client_last_error", c_int, [c_void_p, c_char_p, c_size_t])
+ln_host_id = _declare("ln_host_id", None, [c_char_p, c_size_t])
 ln_port_options_init = _declare("ln_port_options_init", None, [ctypes.POINTER(PortOptions)])
 _port_args = [c_void_p, ctypes.POINTER(c_void_p), c_char_p, c_char_p, c_uint64, c_size_t,
               ctypes.POINTER(PortOptions)]
@@ -76,6 +79,20 @@ ln_read_release = _declare("ln_read_release", c_int, [c_void_p])
 ln_outport_subscriber_count = _declare("ln_outport_subscriber_count", c_int, [c_void_p], _check)
 ln_inport_publisher_count = _declare("ln_inport_publisher_count", c_int, [c_void_p], _check)
 ln_inport_overruns = _declare("ln_inport_overruns", c_uint64, [c_void_p])
+
+# ---- topic forwarding between hosts (ln_daemon's taps; for tests and tools) -------------
+LN_TAP_EVERY = 0
+LN_TAP_NEWEST = 1
+ln_ring_tap_open = _declare("ln_ring_tap_open", c_int, [
+    ctypes.POINTER(c_void_p), c_char_p, c_uint64, c_uint64, ctypes.c_uint], _check)
+ln_ring_tap_close = _declare("ln_ring_tap_close", None, [c_void_p])
+ln_ring_tap_read = _declare("ln_ring_tap_read", c_int, [c_void_p, c_void_p,
+                                                        ctypes.POINTER(SampleInfo), c_double],
+                            _check)
+ln_ring_tap_inject = _declare("ln_ring_tap_inject", c_int, [c_void_p, c_void_p, c_uint64,
+                                                            ctypes.c_int64], _check)
+ln_ring_tap_write_seq = _declare("ln_ring_tap_write_seq", c_uint64, [c_void_p])
+ln_ring_tap_segment = _declare("ln_ring_tap_segment", c_char_p, [c_void_p])
 
 # ---- services ----------------------------------------------------------------------------
 LN_EINTR = -21

@@ -95,6 +95,8 @@ ln_ring_admin_retire = _declare("ln_ring_admin_retire", ctypes.c_int, [
     RingAdminHandle, RingAdminHandle, ctypes.c_char_p, ctypes.c_double], _check)
 ln_ring_admin_purge_instance = _declare("ln_ring_admin_purge_instance", ctypes.c_int,
                                         [ctypes.c_char_p], _check)
+ln_ring_admin_open = _declare("ln_ring_admin_open", ctypes.c_int, [
+    ctypes.POINTER(RingAdminHandle), ctypes.c_char_p], _check)
 ln_ring_segment_size = _declare("ln_ring_segment_size", ctypes.c_uint64,
                                 [ctypes.c_uint64, ctypes.c_uint32])
 

@@ -51,6 +51,7 @@ struct fake {
     uint32_t hello_magic, hello_pid;
     uint16_t hello_version;
     char hello_name[LN_PROTO_MAX_STR + 1], hello_lib[LN_PROTO_MAX_STR + 1];
+    char hello_host[LN_PROTO_MAX_STR + 1];
     uint32_t closed_port; /* port id of the last CLOSE_PORT */
     uint8_t rx[65536];
 };
@@ -173,6 +174,7 @@ FAKE_FN int fake_hello(struct fake* f, int fd)
     f->hello_pid = ln_rbuf_u32(&r);
     ln_rbuf_str(&r, f->hello_name, sizeof f->hello_name);
     ln_rbuf_str(&r, f->hello_lib, sizeof f->hello_lib);
+    ln_rbuf_str(&r, f->hello_host, sizeof f->hello_host);
     FAKE_CHECK(f, ln_rbuf_end(&r) == LN_OK);
     return type == LN_MSG_HELLO;
 }

@@ -45,29 +45,68 @@ static void test_handshake(void)
     LN_CHECK_EQ(f.hello_pid, getpid());
     LN_CHECK_STREQ(f.hello_name, "cam");
     LN_CHECK_STREQ(f.hello_lib, ln_version());
+    char host[LN_HOST_ID_MAX];
+    ln_host_id(host, sizeof host);
+    LN_CHECK(host[0] != '\0');
+    LN_CHECK_STREQ(f.hello_host, host);
     LN_CHECK(f.saw_eof); /* destroy closed the connection */
+}
+
+static void test_hello_carries_host_id(void)
+{
+    char saved[LN_HOST_ID_MAX] = "";
+    const char* env = getenv("LN_HOST_ID");
+    if (env)
+        snprintf(saved, sizeof saved, "%s", env);
+    setenv("LN_HOST_ID", "rack-\xc3\xa4/7", 1);
+    struct fake f;
+    fake_start(&f, script_welcome, 0);
+    ln_client_options o = fake_options(&f);
+    ln_client* c = connect_ok("cam", &o);
+    if (c != NULL)
+        ln_client_destroy(c);
+    fake_stop(&f);
+    LN_CHECK_STREQ(f.hello_host, "rack-\xc3\xa4/7");
+    /* Cut to the buffer, never inside a UTF-8 character (it must still encode). */
+    char small[7];
+    ln_host_id(small, sizeof small);
+    LN_CHECK_STREQ(small, "rack-");
+    char tiny[8];
+    ln_host_id(tiny, sizeof tiny);
+    LN_CHECK_STREQ(tiny, "rack-\xc3\xa4");
+    ln_host_id(NULL, 10); /* no-op */
+    ln_host_id(tiny, 0);
+    LN_CHECK_STREQ(tiny, "rack-\xc3\xa4");
+    /* Without the variable: hostname/boot_id, one line. */
+    unsetenv("LN_HOST_ID");
+    char host[LN_HOST_ID_MAX];
+    ln_host_id(host, sizeof host);
+    LN_CHECK(strchr(host, '/') != NULL && strchr(host, '\n') == NULL);
+    if (saved[0])
+        setenv("LN_HOST_ID", saved, 1);
 }
 
 static void script_refuse_version(struct fake* f, int fd)
 {
     if (fake_hello(f, fd))
-        fake_error(f, fd, 0, LN_EVERSION, "client speaks protocol 1, manager speaks 2");
+        fake_error(f, fd, 0, LN_EVERSION, "client speaks protocol 2, manager speaks 3");
 }
 
-static void script_welcome_v2(struct fake* f, int fd)
+static void script_welcome_next(struct fake* f, int fd)
 {
     if (fake_hello(f, fd))
-        fake_welcome(f, fd, 2, "cam");
+        fake_welcome(f, fd, LN_PROTO_VERSION + 1, "cam");
 }
 
 static void test_version_mismatch(void)
 {
     LN_CHECK_EQ(create_against(script_refuse_version, 0, 10), LN_EVERSION);
     LN_CHECK(error_has("refused client \"cam\""));
-    LN_CHECK(error_has("client speaks protocol 1, manager speaks 2"));
+    LN_CHECK(error_has("client speaks protocol 2, manager speaks 3"));
     /* The client notices a WELCOME it does not understand by itself. */
-    LN_CHECK_EQ(create_against(script_welcome_v2, 0, 10), LN_EVERSION);
-    LN_CHECK(error_has("client speaks protocol 1, manager speaks 2"));
+    LN_CHECK_EQ(LN_PROTO_VERSION, 2);
+    LN_CHECK_EQ(create_against(script_welcome_next, 0, 10), LN_EVERSION);
+    LN_CHECK(error_has("client speaks protocol 2, manager speaks 3"));
 }
 
 static void script_refuse_other(struct fake* f, int fd)
@@ -265,6 +304,7 @@ static void test_last_error_per_thread(void)
 int main(void)
 {
     LN_TEST_RUN(test_handshake);
+    LN_TEST_RUN(test_hello_carries_host_id);
     LN_TEST_RUN(test_version_mismatch);
     LN_TEST_RUN(test_refused_with_other_code);
     LN_TEST_RUN(test_manager_closes_during_handshake);

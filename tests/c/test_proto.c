@@ -356,6 +356,40 @@ static void test_message_types(void)
     LN_CHECK(ln_proto_to_client(LN_MSG_SERVICE_INFO) && !ln_proto_to_client(LN_MSG_FIND_SERVICE));
 }
 
+/* A protocol-2 HELLO by hand: magic, version, pid, client name, libln version, host id. */
+static const char hello_bytes[] =
+    "\x1d\x00\x00\x00" "\x01\x00"          /* length 29, type 1 */
+    "\x4c\x4e\x4d\x50" "\x02\x00"          /* "LNMP", version 2 */
+    "\x39\x30\x00\x00"                     /* pid 12345 */
+    "\x03\x00" "cam" "\x05\x00" "0.1.0"    /* client name, libln version */
+    "\x03\x00" "h/1";                      /* host id */
+#define HELLO_LEN (sizeof hello_bytes - 1)
+
+static void test_hello_has_host_id(void)
+{
+    ln_wbuf b;
+    ln_wbuf_init(&b);
+    size_t start = ln_proto_frame_begin(&b, LN_MSG_HELLO);
+    ln_wbuf_u32(&b, LN_PROTO_MAGIC);
+    ln_wbuf_u16(&b, LN_PROTO_VERSION);
+    ln_wbuf_u32(&b, 12345);
+    ln_wbuf_str(&b, "cam");
+    ln_wbuf_str(&b, "0.1.0");
+    ln_wbuf_str(&b, "h/1");
+    LN_CHECK_EQ(ln_proto_frame_end(&b, start), LN_OK);
+    LN_CHECK(bytes_equal(&b, hello_bytes, HELLO_LEN));
+    uint16_t type = 0;
+    ln_rbuf body;
+    LN_CHECK_EQ(ln_proto_decode_frame(b.data, b.len, &type, &body), LN_OK);
+    LN_CHECK_EQ(type, LN_MSG_HELLO);
+    LN_CHECK_EQ(ln_proto_check_fields(LN_MSG_HELLO, &body), LN_OK);
+    /* A protocol-1 HELLO (no host id) does not have HELLO's fields any more. */
+    ln_rbuf old = body;
+    old.left -= 5;
+    LN_CHECK_EQ(ln_proto_check_fields(LN_MSG_HELLO, &old), LN_EPROTOCOL);
+    ln_wbuf_free(&b);
+}
+
 static void test_check_fields(void)
 {
     /* PUBLISH from the reference bytes, then every shortening and one byte too many. */
@@ -394,6 +428,7 @@ int main(void)
     LN_TEST_RUN(test_bad_utf8_rejected);
     LN_TEST_RUN(test_reading_past_end);
     LN_TEST_RUN(test_frame_encoding_and_round_trip);
+    LN_TEST_RUN(test_hello_has_host_id);
     LN_TEST_RUN(test_every_truncation_rejected);
     LN_TEST_RUN(test_trailing_bytes_rejected);
     LN_TEST_RUN(test_header_bounds);

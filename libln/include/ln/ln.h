@@ -130,14 +130,16 @@ LN_EXPORT const char* ln_last_error(void);
 LN_EXPORT int ln_client_last_error(const ln_client* clnt, char* text, size_t size);
 
 /* Port options: buffers = 1 is a *latest* subscriber (always the newest sample), N > 1 a
- * *queued* one that sees every sample while it is at most N behind (older ones are dropped
- * and counted as overruns).  For publishers, LN_PUBLISH_WAIT_FOR_SUBSCRIBERS makes ln_write
- * wait (up to its timeout) while a queued subscriber has no free buffer, instead of dropping
- * that subscriber's oldest sample. */
+ * *queued* one that sees every sample while it is at most N sequence numbers behind (older
+ * ones are dropped and counted as overruns; on a host that gets the topic from another one,
+ * numbers lost on the network count like dropped samples).  For publishers,
+ * LN_PUBLISH_WAIT_FOR_SUBSCRIBERS makes ln_write wait (up to its timeout) while a queued
+ * subscriber has no free buffer, instead of dropping that subscriber's oldest sample. */
 #define LN_PUBLISH_WAIT_FOR_SUBSCRIBERS 0x1u
 /* Subscribers: how samples reach this subscriber's host when the publisher runs on another
  * one (docs/network.md).  Neither bit: the topic's setting in the .lnc, else UDP.  A host
- * gets a topic over TCP when any of its subscriptions (or the .lnc) asks for it. */
+ * gets a topic over TCP when any of its subscriptions (or the .lnc) asks for it.  Both bits,
+ * an LN_SUBSCRIBE_* bit on a publisher or LN_PUBLISH_* on a subscriber: LN_EINVAL. */
 #define LN_SUBSCRIBE_UDP 0x100u /* newest sample wins; lost datagrams are not repeated */
 #define LN_SUBSCRIBE_TCP 0x200u /* every sample, in order (bounded queue, drops counted) */
 /* Before a blocking read sleeps, it polls (yielding the CPU) for up to spin_us: a sample that
@@ -147,7 +149,7 @@ LN_EXPORT int ln_client_last_error(const ln_client* clnt, char* text, size_t siz
 #define LN_DEFAULT_SPIN_US 20u
 typedef struct ln_port_options {
     uint32_t buffers; /* 1 .. 1024, default 1 */
-    uint32_t flags;   /* LN_PUBLISH_* */
+    uint32_t flags;   /* publishers: LN_PUBLISH_*; subscribers: at most one LN_SUBSCRIBE_* */
     uint32_t spin_us; /* subscribers: poll before sleeping, default LN_DEFAULT_SPIN_US */
 } ln_port_options;
 

@@ -73,9 +73,13 @@ public:
     {
         return outport<T>(c_, topic, md_traits<T>::md_name, md_traits<T>::layout_hash, flags);
     }
-    template <typename T> inport<T> subscribe(const std::string& topic, unsigned buffers = 1)
+    // flags: LN_SUBSCRIBE_UDP or LN_SUBSCRIBE_TCP to choose how samples of a publisher on
+    // another host reach this one (0: the topic's setting).
+    template <typename T>
+    inport<T> subscribe(const std::string& topic, unsigned buffers = 1, unsigned flags = 0)
     {
-        return inport<T>(c_, topic, md_traits<T>::md_name, md_traits<T>::layout_hash, buffers);
+        return inport<T>(c_, topic, md_traits<T>::md_name, md_traits<T>::layout_hash, buffers,
+                         flags);
     }
 
     // Services: T is a generated service type (e.g. robot::set_gains_t).
@@ -185,12 +189,13 @@ template <typename T> class inport {
 
 public:
     inport(detail::client_ptr c, const std::string& topic, const char* md_name,
-           std::uint64_t layout_hash, unsigned buffers = 1)
+           std::uint64_t layout_hash, unsigned buffers = 1, unsigned flags = 0)
         : c_(std::move(c))
     {
         ln_port_options opts;
         ln_port_options_init(&opts);
         opts.buffers = buffers;
+        opts.flags = flags;
         check(ln_subscribe(c_.get(), &p_, topic.c_str(), md_name, layout_hash, sizeof(T), &opts));
     }
     inport(inport&& o) noexcept : c_(std::move(o.c_)), p_(std::exchange(o.p_, nullptr)) {}

@@ -28,6 +28,15 @@ def error_code(name: str) -> int:
     return _CODES[name]
 
 
+def _transport_note(flags: int) -> str:
+    """For the port log line: the transport a subscriber asked for, if any."""
+    if flags & p.SUBSCRIBE_TCP:
+        return ", transport tcp"
+    if flags & p.SUBSCRIBE_UDP:
+        return ", transport udp"
+    return ""
+
+
 def _service_entry(service: Service) -> p.ServiceEntry:
     o = service.offer
     return p.ServiceEntry(o.name, o.md_name, o.layout_hash, service.provider.name, o.group,
@@ -100,7 +109,7 @@ class Core:
             if hello.pid > _MAX_PID:
                 raise RequestError("EINVAL", f"pid {hello.pid} out of range")
             client = self.registry.add_client(hello.client_name, hello.pid, session.address,
-                                              hello.libln_version)
+                                              hello.libln_version, hello.host_id)
         except RequestError as exc:
             raise HandshakeRefused(p.Error(0, error_code(exc.code), exc.text)) from None
         session.client = client
@@ -257,8 +266,9 @@ class Core:
             self._close_port(port)
             raise
         segment = self.segments.current(topic.id)
-        log.info("%s: %s %r -> port %d, %s%s", session.label, kind.value, topic.name, port.id,
-                 segment, "" if port.reader_index is None else f" reader {port.reader_index}")
+        log.info("%s: %s %r -> port %d, %s%s%s", session.label, kind.value, topic.name, port.id,
+                 segment, "" if port.reader_index is None else f" reader {port.reader_index}",
+                 _transport_note(port.flags))
         reader = p.NO_READER if port.reader_index is None else port.reader_index
         return p.PortOk(msg.request_id, port.id, segment, reader)
 

@@ -84,7 +84,7 @@ def fetch(host: str, port: int, timeout: float = TIMEOUT) -> p.ServiceList:
     where = f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
     try:
         with socket.create_connection((host, port), timeout=timeout) as sock:
-            _answer(sock, p.Hello(p.MAGIC, p.VERSION, os.getpid(), CLIENT_NAME, __version__),
+            _answer(sock, p.Hello(p.MAGIC, p.VERSION, os.getpid(), CLIENT_NAME, __version__, ""),
                     p.Welcome)
             listing: p.ServiceList = _answer(sock, p.ListServices(1), p.ServiceList)
     except TimeoutError:

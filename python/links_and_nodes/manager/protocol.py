@@ -11,12 +11,16 @@ from enum import IntEnum
 from typing import Any, ClassVar
 
 MAGIC = 0x504D4E4C  # "LNMP" read as a little-endian u32
-VERSION = 1
+VERSION = 2
 HEADER_SIZE = 4  # the u32 length field
 MIN_LENGTH = 2  # type only, empty body
 MAX_LENGTH = 1 << 20  # bytes after the length field: type + body
 MAX_STR = 1024  # bytes of UTF-8 in one str field
 NO_READER = 0xFFFFFFFF  # reader_index of a publisher's PORT_OK
+# Bits of PUBLISH/SUBSCRIBE `flags` (ln.h): the manager stores them with the port.
+PUBLISH_WAIT_FOR_SUBSCRIBERS = 0x1
+SUBSCRIBE_UDP = 0x100
+SUBSCRIBE_TCP = 0x200
 
 
 class ProtocolError(Exception):
@@ -75,9 +79,10 @@ class Hello(Message):
     pid: int
     client_name: str
     libln_version: str
+    host_id: str  # ln_host_id() of the client's host; "" from tools without ports
     TYPE = MsgType.HELLO
     FIELDS = (("magic", "u32"), ("version", "u16"), ("pid", "u32"),
-              ("client_name", "str"), ("libln_version", "str"))
+              ("client_name", "str"), ("libln_version", "str"), ("host_id", "str"))
     FROM_CLIENT = True
 
 

@@ -57,6 +57,7 @@ class Client:
     address: str
     libln_version: str
     ports: dict[int, Port] = field(default_factory=dict)
+    host_id: str = ""  # from HELLO: which host (hence which ln_daemon) the client runs on
 
 
 @dataclass(eq=False)
@@ -167,16 +168,21 @@ class Registry:
         self._next_topic_id = 1
 
     # ---- clients ------------------------------------------------------------------------
-    def add_client(self, name: str, pid: int, address: str, libln_version: str) -> Client:
+    def add_client(self, name: str, pid: int, address: str, libln_version: str,
+                   host_id: str = "") -> Client:
         """Register a client under `name`, or `name-2`, `name-3`, ... if that is taken."""
         problem = client_name_problem(name)
         if problem:
             raise RequestError("EINVAL", problem)
+        host_bytes = len(host_id.encode("utf-8"))
+        if host_bytes > MAX_NAME:
+            raise RequestError("EINVAL", f"host id of {host_bytes} bytes, at most {MAX_NAME}")
         taken = {c.name for c in self.clients.values()}
         unique, suffix = name, 2
         while unique in taken:
             unique, suffix = f"{name}-{suffix}", suffix + 1
-        client = Client(self._next_client_id, unique, pid, address, libln_version)
+        client = Client(self._next_client_id, unique, pid, address, libln_version,
+                        host_id=host_id)
         self._next_client_id += 1
         self.clients[client.id] = client
         return client

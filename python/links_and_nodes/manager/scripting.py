@@ -41,7 +41,7 @@ class Manager:
             raise ManagerError(f"cannot reach the manager at {address}: "
                                f"{exc.strerror or exc}") from None
         self._next_id = 0
-        self._send(p.Hello(p.MAGIC, p.VERSION, os.getpid(), name, __version__))
+        self._send(p.Hello(p.MAGIC, p.VERSION, os.getpid(), name, __version__, ""))
         welcome = self._receive(timeout)
         if isinstance(welcome, p.Error):
             self.close()

@@ -123,8 +123,8 @@ class Server:
         await self._send(writer, welcome)
         client = session.client
         assert client is not None
-        log.info("%s: connected (pid %d, library %s)", session.label, client.pid,
-                 client.libln_version)
+        log.info("%s: connected (pid %d, library %s, host %s)", session.label, client.pid,
+                 client.libln_version, client.host_id or "?")
         while True:
             frame = await self._read(reader)
             if frame is None:

@@ -1,7 +1,9 @@
 // topic_tool_cpp.cpp — the C++ side of the cross-language topic tests, through ln.hpp:
 //   topic_tool_cpp pub-joint TOPIC COUNT           same values as topic_tool.c's pub-joint
-//   topic_tool_cpp sub-joint TOPIC COUNT TIMEOUT   queued; prints like topic_tool.c's sub-joint,
-//                                                  odd samples by copy, even ones borrowed
+//   topic_tool_cpp sub-joint TOPIC COUNT TIMEOUT [udp|tcp]
+//                                                  queued; prints like topic_tool.c's sub-joint,
+//                                                  odd samples by copy, even ones borrowed;
+//                                                  udp/tcp: the transport flag it subscribes with
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -18,10 +20,11 @@ static void print_joint(const robot::joint_state_t& js)
     std::printf("\n");
 }
 
-static int sub_joint(const char* topic, unsigned long long count, double timeout)
+static int sub_joint(const char* topic, unsigned long long count, double timeout,
+                     unsigned flags)
 {
     ln::client clnt("topic_tool_cpp");
-    auto sub = clnt.subscribe<robot::joint_state_t>(topic, 1024);
+    auto sub = clnt.subscribe<robot::joint_state_t>(topic, 1024, flags);
     std::printf("ready\n");
     std::fflush(stdout);
     for (unsigned long long n = 1; n <= count; n++) {
@@ -47,9 +50,13 @@ static int sub_joint(const char* topic, unsigned long long count, double timeout
 
 int main(int argc, char** argv)
 {
-    if (argc == 5 && std::strcmp(argv[1], "sub-joint") == 0) {
+    if ((argc == 5 || argc == 6) && std::strcmp(argv[1], "sub-joint") == 0) {
+        unsigned flags = 0;
+        if (argc == 6)
+            flags = std::strcmp(argv[5], "tcp") == 0 ? LN_SUBSCRIBE_TCP : LN_SUBSCRIBE_UDP;
         try {
-            return sub_joint(argv[2], std::strtoull(argv[3], nullptr, 10), std::atof(argv[4]));
+            return sub_joint(argv[2], std::strtoull(argv[3], nullptr, 10), std::atof(argv[4]),
+                             flags);
         } catch (const ln::error& e) {
             std::fprintf(stderr, "topic_tool_cpp: %s (%d)\n", e.what(), e.code());
             return 2;

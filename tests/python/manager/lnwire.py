@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 MAGIC = 0x504D4E4C
-VERSION = 1
+VERSION = 2
 NO_READER = 0xFFFFFFFF
 HELLO, WELCOME, ERROR = 1, 2, 3
 PUBLISH, SUBSCRIBE, PORT_OK, CLOSE_PORT, OK, TOPIC_INFO, TOPIC_INFO_OK = range(10, 17)
@@ -31,9 +31,10 @@ def frame(type_: int, body: bytes) -> bytes:
 
 
 def hello_body(name: str | bytes, version: int = VERSION, magic: int = MAGIC,
-               pid: int | None = None, library: str = "0.1.0") -> bytes:
+               pid: int | None = None, library: str = "0.1.0",
+               host_id: str | bytes = "test-host/1") -> bytes:
     return (struct.pack("<IHI", magic, version, os.getpid() if pid is None else pid)
-            + s(name) + s(library))
+            + s(name) + s(library) + s(host_id))
 
 
 def port_body(request_id: int, topic: str | bytes, md: str, layout_hash: int, size: int,

@@ -30,7 +30,7 @@ ENTRIES = st.builds(p.ServiceEntry, TEXT, TEXT, U64, TEXT, TEXT, TEXT, TEXT, TEX
                     U64)
 
 MESSAGES = st.one_of(
-    st.builds(p.Hello, U32, st.integers(0, 0xFFFF), U32, TEXT, TEXT),
+    st.builds(p.Hello, U32, st.integers(0, 0xFFFF), U32, TEXT, TEXT, TEXT),
     st.builds(p.Welcome, st.integers(0, 0xFFFF), U32, TEXT, TEXT),
     st.builds(p.Error, U32, st.integers(-(1 << 31), (1 << 31) - 1), TEXT),
     st.builds(p.Publish, REQUEST_ID, TEXT, TEXT, st.integers(0, (1 << 64) - 1), U32, U32, U32),
@@ -57,9 +57,10 @@ def body(msg: p.Message) -> bytes:
 
 
 def test_hello_bytes_match_the_document() -> None:
-    encoded = p.encode(p.Hello(p.MAGIC, 1, 4242, "ctl", "0.1.0"))
-    assert encoded == frame(1, hello_body("ctl", pid=4242))
-    assert encoded[:12] == struct.pack("<IHIH", len(encoded) - 4, 1, 0x504D4E4C, 1)
+    encoded = p.encode(p.Hello(p.MAGIC, 2, 4242, "ctl", "0.1.0", "rack/1"))
+    assert encoded == frame(1, hello_body("ctl", pid=4242, host_id="rack/1"))
+    assert encoded[:12] == struct.pack("<IHIH", len(encoded) - 4, 1, 0x504D4E4C, 2)
+    assert encoded.endswith(b"\x06\x00rack/1")  # host_id is the last field
     assert encoded[6:10] == b"LNMP"
 
 
@@ -205,7 +206,7 @@ def test_unknown_type() -> None:
 
 
 def test_every_truncation_of_every_message_is_refused() -> None:
-    samples = [p.Hello(p.MAGIC, 1, 1, "n", "v"), p.Welcome(1, 1, "n", "i"),
+    samples = [p.Hello(p.MAGIC, 2, 1, "n", "v", "h"), p.Welcome(1, 1, "n", "i"),
                p.Error(1, -1, "t"), p.Publish(1, "t", "m/d", 1, 2, 3, 0),
                p.Subscribe(1, "t", "m/d", 1, 2, 3, 0), p.PortOk(1, 2, "/s", 3),
                p.ClosePort(1, 2), p.Ok(1), p.TopicInfo(1, "t"),
@@ -271,7 +272,7 @@ def test_decode_frame_checks_the_length_field() -> None:
 
 
 def test_hello_version_reads_only_magic_and_version() -> None:
-    assert p.hello_version(hello_body("n")) == 1
+    assert p.hello_version(hello_body("n")) == 2
     # another protocol version may have another HELLO layout after the version
     assert p.hello_version(struct.pack("<IH", p.MAGIC, 2) + b"anything") == 2
     with pytest.raises(p.ProtocolError, match="wrong magic 0x504d4e4d, expected 0x504d4e4c"):

@@ -69,6 +69,25 @@ def test_client_names_get_suffixes() -> None:
     assert registry.add_client("ctl-2", 1, "a", "v").name == "ctl-2-2"
 
 
+def test_client_keeps_its_host_id() -> None:
+    registry = Registry(ring_size)
+    assert registry.add_client("a", 1, "x", "v").host_id == ""
+    assert registry.add_client("b", 1, "x", "v", "rack-ä/42").host_id == "rack-ä/42"
+    assert registry.add_client("c", 1, "x", "v", "h" * 255).host_id == "h" * 255
+    with pytest.raises(RequestError) as info:
+        registry.add_client("d", 1, "x", "v", "ä" * 128)
+    assert (info.value.code, info.value.text) == ("EINVAL", "host id of 256 bytes, at most 255")
+
+
+def test_ports_keep_their_flags() -> None:
+    world = World()
+    publisher = world.open(PortRequest(PUB, "t.flags", "m/d", HASH, 8, 1, 0x1))
+    tcp = world.open(PortRequest(SUB, "t.flags", "m/d", HASH, 8, 1, 0x200))
+    udp = world.open(PortRequest(SUB, "t.flags", "m/d", HASH, 8, 4, 0x100))
+    assert (publisher.flags, tcp.flags, udp.flags) == (0x1, 0x200, 0x100)
+    assert world.registry.topics["t.flags"].ports[tcp.id].flags == 0x200
+
+
 @pytest.mark.parametrize("name", ["", "a\nb", "x" * 256, "tab\there"])
 def test_bad_client_names(name: str) -> None:
     with pytest.raises(RequestError) as info:

@@ -236,7 +236,7 @@ def test_core_listing() -> None:
     registry = Registry(lambda size, slots: size * slots)
     core = Core("inst", registry, _NoSegments(), Services())  # type: ignore[arg-type]
     session = Session("127.0.0.1:9")
-    core.hello(session, p.Hello(p.MAGIC, p.VERSION, 42, "prov", "0.1.0"))
+    core.hello(session, p.Hello(p.MAGIC, p.VERSION, 42, "prov", "0.1.0", ""))
     reply = core.request(session, p.RegisterService(1, "b.svc", MD, HASH, SIG, "grp", "hb",
                                                     "/tmp/b.sock", "", 0))
     assert reply == p.Ok(1)
@@ -257,7 +257,7 @@ def test_core_listing() -> None:
     assert core.disconnect(session) == 0
     assert core.services() == []
     other = Session("127.0.0.1:10")
-    core.hello(other, p.Hello(p.MAGIC, p.VERSION, 43, "user", "0.1.0"))
+    core.hello(other, p.Hello(p.MAGIC, p.VERSION, 43, "user", "0.1.0", ""))
     assert core.request(other, p.ListServices(1)) == p.ServiceList(1, 0, ())
 
 

@@ -1,11 +1,13 @@
 """The contract between libln's own client code and ln_manager: a C client (driven through
 the ctypes layer) registers, gets its segments from the manager, moves data through them,
 follows a ring into its next generation, gets the manager's refusals as LN_E* errors with
-the manager's text, and leaves nothing behind when destroyed."""
+the manager's text, and leaves nothing behind when destroyed; its HELLO names its host and
+its subscribers' transport flags reach the manager."""
 
 from __future__ import annotations
 
 import ctypes
+import re
 from collections.abc import Callable
 
 import pytest
@@ -33,10 +35,11 @@ class Client:
         self.name = C.ln_client_name(handle).decode()
 
     def port(self, fn: Callable[..., int], topic: str, buffers: int = 1,
-             layout_hash: int = HASH, size: int = SIZE) -> ctypes.c_void_p:
+             layout_hash: int = HASH, size: int = SIZE, flags: int = 0) -> ctypes.c_void_p:
         opts = C.PortOptions()
         C.ln_port_options_init(ctypes.byref(opts))
         opts.buffers = buffers
+        opts.flags = flags
         port = ctypes.c_void_p()
         fn(self.handle, ctypes.byref(port), topic.encode(), MD, layout_hash, size,
            ctypes.byref(opts))
@@ -104,4 +107,45 @@ def test_refusals_arrive_as_errors_with_the_managers_text(manager: Manager) -> N
     with pytest.raises(ln.LnLimitError):  # only the manager knows this limit
         client.subscribe("big", buffers=16, size=64 << 20)
     assert "the limit per topic is 1073741824" in C.last_error()
+    client.destroy()
+
+
+def test_hello_tells_the_host_id(manager: Manager) -> None:
+    client = Client(manager, "hosted")
+    host = ctypes.create_string_buffer(256)
+    C.ln_host_id(host, len(host))
+    assert host.value  # $LN_HOST_ID or hostname/boot_id, never empty
+    manager.wait_log(rf"client hosted \(127\.0\.0\.1:\d+\): connected \(pid \d+, library "
+                     rf"[0-9.]+, host {re.escape(host.value.decode())}\)")
+    client.destroy()
+
+
+def test_transport_flags_reach_the_manager(manager: Manager) -> None:
+    client = Client(manager, "transport")
+    client.publish("pair", flags=C.LN_PUBLISH_WAIT_FOR_SUBSCRIBERS)
+    client.subscribe("pair", flags=C.LN_SUBSCRIBE_TCP)
+    client.subscribe("pair", buffers=4, flags=C.LN_SUBSCRIBE_UDP)
+    client.subscribe("pair")
+    manager.wait_log(r"client transport \(\S+\): subscriber 'pair' -> port 4,")
+    log = manager.log()
+    ports = re.findall(r"client transport \(\S+\): (\w+) 'pair' -> port \d+, \S+"
+                       r"(?: reader \d+)?(.*)", log)
+    assert ports == [("publisher", ""), ("subscriber", ", transport tcp"),
+                     ("subscriber", ", transport udp"), ("subscriber", "")]
+    client.destroy()
+
+
+@pytest.mark.parametrize("kind, flags, text", [
+    ("subscribe", 0x300, "LN_SUBSCRIBE_UDP and LN_SUBSCRIBE_TCP together"),
+    ("subscribe", 0x1, "LN_PUBLISH_WAIT_FOR_SUBSCRIBERS is a publisher flag"),
+    ("publish", 0x200, "ln_publish: flags 0x200 hold LN_SUBSCRIBE_* bits"),
+    ("publish", 0x101, "ln_publish: flags 0x101 hold LN_SUBSCRIBE_* bits"),
+])
+def test_flags_of_the_wrong_kind_are_refused_by_libln(manager: Manager, kind: str,
+                                                       flags: int, text: str) -> None:
+    client = Client(manager, "wrongflags")
+    with pytest.raises(ln.LnInvalError):
+        getattr(client, kind)("pair", flags=flags)
+    assert text in C.last_error()
+    assert segments(manager.instance) == []  # the manager never heard of it
     client.destroy()
