@@ -237,10 +237,12 @@ std::string TcpSender::try_connect()
         io = read_full(fd.get(), raw, sizeof raw, stop_, kReplyTimeoutMs, io_error);
         if (io == Io::ok) {
             wire::Reply reply;
-            if (!wire::decode_reply(raw, reply) || reply.token != spec_.token)
+            if (!wire::decode_reply(raw, reply))
                 return "the receiver's reply is not one of this protocol version";
-            if (reply.kind == wire::Kind::reject)
+            if (reply.kind == wire::Kind::reject) // a busy receiver rejects before the hello
                 return reject_text(reply.reason);
+            if (reply.token != spec_.token)
+                return "the receiver accepted another stream";
             sock_ = std::move(fd);
             return "";
         }

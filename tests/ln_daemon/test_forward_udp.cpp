@@ -244,7 +244,9 @@ void test_reordered_datagrams()
     CHECK_STR(rx.set_recv(recv_spec(2, big, Transport::udp)), "");
     Reader small_reader(small), big_reader(big);
     UdpSocket sock;
-    auto send = [&](const std::vector<uint8_t> &d) { sock.send_to(rx.data_port(), d.data(), d.size()); };
+    auto send = [&](const std::vector<uint8_t> &d) {
+        sock.send_to(rx.data_port(), d.data(), d.size());
+    };
 
     for (uint64_t seq : {10, 8, 10, 12, 11, 13})
         send(datagram(1, seq, 64, 1400, 0));
