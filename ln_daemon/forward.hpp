@@ -58,22 +58,27 @@ struct Options {
     size_t udp_payload = 1400;               // payload bytes per datagram (fragment)
     size_t udp_max_incomplete = 4;           // samples being reassembled per stream, at most
     size_t udp_reassembly_bytes = 256u << 20; // memory of all reassembly buffers, at most
+    double udp_incomplete_timeout = 1.0;      // seconds without a fragment before an
+                                              // incomplete sample is given up
     int socket_buffer = 64 << 20;             // SO_RCVBUF(FORCE)/SO_SNDBUF wanted
-    size_t tcp_queue_samples = 1024;          // per TCP sending stream, at most
-    size_t tcp_queue_bytes = 256u << 20;      // per TCP sending stream, at most
+    size_t tcp_queue_samples = 1024;          // per TCP sending stream, at most (with the
+    size_t tcp_queue_bytes = 256u << 20;      // sample being sent; one read buffer on top)
 };
 
 // Global counters of the receive side that belong to no stream.
 struct Totals {
     uint64_t unknown_stream = 0; // datagrams/connections with a token no RecvSpec has
     uint64_t malformed = 0;      // datagrams/frames that do not parse at all
+    uint64_t reassembly_bytes = 0; // memory held by incomplete UDP samples now
+    uint64_t reassembly_peak = 0;  // the most it ever held (<= udp_reassembly_bytes)
 };
 
 // Owns the data sockets and every stream's threads.  Thread-safe: the daemon's poll loop
 // calls it while stream threads run.
 class Forwarder {
 public:
-    // Binds the UDP and TCP data sockets (throws std::system_error with a clear text).
+    // Binds the UDP and TCP data sockets (throws std::system_error with a clear text, also
+    // with EINVAL for options that cannot work).
     explicit Forwarder(const Options &options);
     ~Forwarder(); // stops and joins every thread
     Forwarder(const Forwarder &) = delete;
@@ -81,9 +86,12 @@ public:
 
     uint16_t data_port() const;
     // Add or replace (same token) a stream; "" on success, else why not (bad ring, ...).
+    // Replacing or removing a sending stream joins its threads first, which can take up to
+    // ~0.1 s (their ring wait).  Names are resolved by the stream's threads, never here.
     std::string set_send(const SendSpec &spec);
     std::string set_recv(const RecvSpec &spec);
-    // Stop and forget a stream; false if there is none with that token.
+    // Stop and forget a stream (sending and receiving with that token); false if there is
+    // none.  Once it returned nothing more is sent or written into the ring for it.
     bool remove(uint64_t token);
     std::vector<StreamStats> stats() const;
     Totals totals() const;

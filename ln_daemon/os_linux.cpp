@@ -1,9 +1,11 @@
-// LinuxOs (os_linux.hpp).  The daemon is single-threaded, so the forked keeper and child may
-// use anything; still, all they need is prepared before the fork.  Every descriptor the
+// LinuxOs (os_linux.hpp).  The daemon runs Forwarder threads besides its poll loop, so the
+// forked keeper and child only make system calls (no allocation, no locks another thread may
+// have held at the fork): all they need is prepared before the fork.  Every descriptor the
 // daemon opens is O_CLOEXEC, and the keeper closes all it does not need.
 #include "os_linux.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <climits>
 #include <csignal>
@@ -82,7 +84,7 @@ bool open_pty(UniqueFd &master, UniqueFd &slave, std::string &error)
 }
 
 // Closes every descriptor from 3 up except those in `keep`.
-void close_all_except(std::vector<int> keep) noexcept
+void close_all_except(std::array<int, 4> keep) noexcept
 {
     std::sort(keep.begin(), keep.end());
     unsigned lo = 3;

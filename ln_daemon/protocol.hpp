@@ -32,11 +32,26 @@ enum class Msg : uint8_t {
     output = 0x14,
     forget = 0x15,
     ping = 0x16,
+    net_info = 0x40, // rings and forwarding (docs/daemon.md, "Rings and forwarding")
+    ring_create = 0x41,
+    ring_retire = 0x42,
+    ring_reader = 0x43,
+    ring_counts = 0x44,
+    ring_remove = 0x45,
+    ring_purge = 0x46,
+    ring_seq = 0x47,
+    stream_send = 0x48,
+    stream_recv = 0x49,
+    stream_remove = 0x4a,
+    stream_stats = 0x4b,
     ok = 0x20,
     error = 0x21,
     spawned = 0x22,
     process_list = 0x23,
     output_lines = 0x24,
+    net_details = 0x25, // reply to NET_INFO
+    value = 0x26,       // u64 reply to RING_PURGE and RING_SEQ
+    stream_list = 0x27, // reply to STREAM_STATS
     ev_output = 0x30,
     ev_exited = 0x31,
     ev_state = 0x32,
@@ -55,6 +70,9 @@ enum class Err : uint16_t {
     invalid_spec = 10, // a SPAWN field the daemon refuses before starting anything
     limit = 11,        // too many processes
     os_error = 12,     // a system call failed (kill, ...)
+    ring_failed = 13,    // a ring request refused, or libln failed (ln_last_error's text)
+    stream_failed = 14,  // the forwarder refused a stream (its text)
+    unknown_stream = 15, // STREAM_REMOVE of a token this instance has no stream for
 };
 
 enum class Stream : uint8_t { pty = 0, out = 1, err = 2 };

@@ -22,6 +22,7 @@
 
 #include "log.hpp"
 #include "messages.hpp"
+#include "net_messages.hpp"
 
 namespace lnd {
 
@@ -90,16 +91,19 @@ const char *msg_name(uint8_t type) noexcept
         return "PING";
     case Msg::client_hello:
         return "CLIENT_HELLO";
-    default:
-        return "unknown";
+    default: {
+        const char *net = net_msg_name(type);
+        return net ? net : "unknown";
+    }
     }
 }
 
 } // namespace
 
-Server::Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path)
+Server::Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
+               NetCommands &net)
     : os_(os), key_(key), listener_(std::move(listener)), signals_(std::move(signals)),
-      log_path_(std::move(log_path)), supervisor_(os, *this)
+      log_path_(std::move(log_path)), supervisor_(os, *this), net_(net)
 {
 }
 
@@ -366,6 +370,8 @@ void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Re
         SpawnRequest sr;
         if (!decode_spawn(r, sr))
             return malformed();
+        // Clients report the host they run on; this daemon's id names this host.
+        env_default(sr.env, "LN_HOST_ID", net_.host_id());
         uint64_t token = next_token_++;
         if (shutdown_signals_) {
             send_error(c, req, Err::spawn_failed, "the daemon is shutting down");
@@ -433,8 +439,20 @@ void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Re
             return malformed();
         return send(c, Msg::ok, req, {});
     default:
+        break;
+    }
+    if (!NetCommands::handles(type)) {
         refuse(c, req, Err::bad_request, "unknown message type " + std::to_string(type));
         return;
+    }
+    NetOutcome out = net_.handle(c.instance, type, r);
+    switch (out.kind) {
+    case NetOutcome::Kind::malformed:
+        return malformed();
+    case NetOutcome::Kind::error:
+        return send_error(c, req, out.code, out.text);
+    case NetOutcome::Kind::reply:
+        return send(c, out.type, req, out.payload);
     }
 }
 

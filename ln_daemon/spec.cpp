@@ -83,6 +83,15 @@ bool valid_name(const std::string &s) noexcept
     return true;
 }
 
+void env_default(std::vector<std::string> &env, const std::string &name,
+                 const std::string &value)
+{
+    for (const auto &e : env)
+        if (e.size() > name.size() && e[name.size()] == '=' && e.compare(0, name.size(), name) == 0)
+            return;
+    env.push_back(name + "=" + value);
+}
+
 const char *policy_name(int policy) noexcept
 {
     for (const auto &p : kPolicies)

@@ -53,6 +53,10 @@ constexpr uint32_t kMaxLogKeep = 1000;
 // True if `s` is a valid instance or process name: 1..255 bytes, no control characters.
 bool valid_name(const std::string &s) noexcept;
 
+// Appends NAME=value to `env` unless it has an entry for NAME already.
+void env_default(std::vector<std::string> &env, const std::string &name,
+                 const std::string &value);
+
 // Checks `req`; false and a sentence in `error` if anything is refused.
 bool check_spawn(const SpawnRequest &req, LaunchSpec &launch, ProcessConfig &config,
                  std::string &error);

@@ -1,8 +1,10 @@
 """Helpers the end-to-end tests share: waiting for a condition with an upper bound (which is
-never a measurement, only how long a test may hang before it fails) and a free TCP port."""
+never a measurement, only how long a test may hang before it fails), a free TCP port and a
+free port for an ln_daemon (with its data port beside it)."""
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import time
 from collections.abc import Callable
@@ -30,3 +32,21 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
+
+
+def free_daemon_port() -> int:
+    """A port P for an ln_daemon that takes its default data port P + 1: P is free for TCP
+    and P + 1 for TCP and UDP on every interface right now.  (The kernel hands out ports
+    of the form P + 1 as source ports of outgoing connections, which then hold them for a
+    while: a plain free_port() for a daemon would now and then find its data port taken.)"""
+    for _ in range(100):
+        port = free_port()
+        try:
+            with contextlib.ExitStack() as stack:
+                for kind in (socket.SOCK_STREAM, socket.SOCK_DGRAM):
+                    s = stack.enter_context(socket.socket(socket.AF_INET, kind))
+                    s.bind(("0.0.0.0", port + 1))
+            return port
+        except OSError:
+            continue
+    pytest.fail("found no free port with a free neighbour for an ln_daemon")

@@ -40,11 +40,26 @@ class Msg(enum.IntEnum):
     OUTPUT = 0x14
     FORGET = 0x15
     PING = 0x16
+    NET_INFO = 0x40
+    RING_CREATE = 0x41
+    RING_RETIRE = 0x42
+    RING_READER = 0x43
+    RING_COUNTS = 0x44
+    RING_REMOVE = 0x45
+    RING_PURGE = 0x46
+    RING_SEQ = 0x47
+    STREAM_SEND = 0x48
+    STREAM_RECV = 0x49
+    STREAM_REMOVE = 0x4A
+    STREAM_STATS = 0x4B
     OK = 0x20
     ERROR = 0x21
     SPAWNED = 0x22
     PROCESS_LIST = 0x23
     OUTPUT_LINES = 0x24
+    NET_DETAILS = 0x25
+    VALUE = 0x26
+    STREAM_LIST = 0x27
     EV_OUTPUT = 0x30
     EV_EXITED = 0x31
     EV_STATE = 0x32
@@ -63,12 +78,17 @@ class ErrorCode(enum.IntEnum):
     INVALID_SPEC = 10
     LIMIT = 11
     OS_ERROR = 12
+    RING_FAILED = 13
+    STREAM_FAILED = 14
+    UNKNOWN_STREAM = 15
 
 
 STREAMS = {0: "pty", 1: "stdout", 2: "stderr"}
 STATES = {0: "starting", 1: "running", 2: "stopping", 3: "exited"}
 _EXIT_CODE, _EXIT_SIGNAL = 1, 2
 _SPAWN_SHELL, _SPAWN_PTY = 1, 2
+TRANSPORTS = {"udp": 0, "tcp": 1}
+_TRANSPORT_NAMES = {v: k for k, v in TRANSPORTS.items()}
 DEFAULT_PORT = 54376  # the LN "arbiter" port
 
 
@@ -137,6 +157,44 @@ class StateChanged:
     name: str
     pid: int
     state: str
+
+
+@dataclass(frozen=True)
+class NetInfo:
+    """What a daemon tells managers about its host: the id its clients report (LN_HOST_ID)
+    and the data port other daemons forward topics to."""
+
+    host_id: str
+    data_port: int
+
+
+@dataclass(frozen=True)
+class StreamStat:
+    """One forwarding stream of this instance on a daemon.  sending: this host sends (else
+    it receives); peer: where it sends to, or the last source seen; drops: samples not sent
+    (sender) or incomplete samples given up (receiver); stale: received samples not newer
+    than the ring's newest; invalid: malformed datagrams or frames of this stream."""
+
+    token: int
+    sending: bool
+    transport: str  # "udp" | "tcp"
+    ring: str
+    peer: str
+    samples: int
+    bytes: int
+    drops: int
+    stale: int
+    invalid: int
+    connected: bool
+    last_error: str
+
+
+@dataclass(frozen=True)
+class StreamTotals:
+    """Receive-side counters of a daemon that belong to no stream (all instances)."""
+
+    unknown_stream: int
+    malformed: int
 
 
 class DaemonError(Exception):
@@ -274,10 +332,12 @@ async def _probe(host: str, port: int, timeout: float) -> bool:
 
 
 async def ensure_local_daemon(port: int, key_file: Path, log_file: Path | None = None,
-                              timeout: float = 10.0) -> None:
+                              timeout: float = 10.0, *, data_port: int | None = None) -> None:
     """Make sure an ln_daemon listens on 127.0.0.1:`port`: if none answers, start one with
-    `key_file` (and `log_file`) in its own session, so it outlives the caller, and return
-    once it accepts connections.  DaemonError with the daemon's message if it cannot start."""
+    `key_file` (and `log_file`, and `data_port` for forwarding: None is the daemon's
+    default, port + 1; 0 a free one) in its own session, so it outlives the caller, and
+    return once it accepts connections.  DaemonError with the daemon's message if it cannot
+    start."""
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     if await _probe("127.0.0.1", port, timeout):
@@ -285,6 +345,8 @@ async def ensure_local_daemon(port: int, key_file: Path, log_file: Path | None =
     args = [daemon_executable(), "--port", str(port), "--key-file", os.fspath(key_file)]
     if log_file is not None:
         args += ["--log", os.fspath(log_file)]
+    if data_port is not None:
+        args += ["--data-port", str(data_port)]
     try:
         # Without --foreground the daemon detaches itself once it listens; this process
         # is only its launcher and ends at once with the start-up verdict.
@@ -408,6 +470,36 @@ def _decode_info(r: _Reader) -> ProcessInfo:
                        signal=value if kind == _EXIT_SIGNAL else None, started=started,
                        exited=exited if STATES.get(state) == "exited" else None,
                        output_lines=kept, output_total=total)
+
+
+def _pack(what: str, fmt: str, *values: object) -> bytes:
+    try:
+        return struct.pack(fmt, *values)
+    except struct.error as e:
+        raise DaemonError(f"invalid {what}: {e}") from None
+
+
+def _transport(transport: str) -> int:
+    try:
+        return TRANSPORTS[transport]
+    except KeyError:
+        raise DaemonError(f"unknown transport {transport!r} (known: udp, tcp)") from None
+
+
+def _decode_stream_list(payload: bytes) -> tuple[list[StreamStat], StreamTotals]:
+    r = _Reader(payload)
+    unknown, malformed, count = r.take("<QQI")
+    streams = []
+    for _ in range(count):
+        token, sending, transport = r.take("<QBB")
+        ring, peer = r.text(), r.text()
+        samples, nbytes, drops, stale, invalid, connected = r.take("<QQQQQB")
+        streams.append(StreamStat(
+            token=token, sending=bool(sending),
+            transport=_TRANSPORT_NAMES.get(transport, str(transport)),
+            ring=ring, peer=peer, samples=samples, bytes=nbytes, drops=drops, stale=stale,
+            invalid=invalid, connected=bool(connected), last_error=r.text()))
+    return streams, StreamTotals(unknown_stream=unknown, malformed=malformed)
 
 
 # ---- the client ------------------------------------------------------------------------------
@@ -626,6 +718,95 @@ class DaemonClient:
 
     async def ping(self) -> None:
         await self._call(Msg.PING, b"", Msg.OK)
+
+    # -- rings and forwarding (docs/daemon.md, "Rings and forwarding") --
+    # Ring names must lie in this instance's namespace, /ln.<sanitized instance>.*; a
+    # failing libln call raises DaemonError with code RING_FAILED and libln's text.
+
+    async def net_info(self) -> NetInfo:
+        """The daemon's host id and the data port it advertises."""
+        try:
+            r = _Reader(await self._call(Msg.NET_INFO, b"", Msg.NET_DETAILS))
+            host_id = r.text()
+            (port,) = r.take("<H")
+        except _Malformed as e:
+            raise DaemonError(f"malformed NET_INFO reply: {e}") from None
+        return NetInfo(host_id=host_id, data_port=port)
+
+    async def ring_create(self, name: str, topic: str, md_name: str, layout_hash: int,
+                          message_size: int, slots: int, *, adopt: bool = False) -> None:
+        """Create a topic's ring segment on the daemon's host.  adopt: take over the
+        segment if it exists (e.g. after a daemon restart) instead of failing."""
+        await self._call(Msg.RING_CREATE, _str(name) + _str(topic) + _str(md_name)
+                         + _pack("ring", "<QQIB", layout_hash, message_size, slots, adopt),
+                         Msg.OK)
+
+    async def ring_retire(self, old: str, successor: str, timeout: float = 1.0) -> None:
+        """Hand ring `old` over to `successor` (created before); `timeout` bounds the wait
+        for a publisher's loan (0..10 s; the daemon waits in its poll loop)."""
+        await self._call(Msg.RING_RETIRE, _str(old) + _str(successor)
+                         + _pack("timeout", "<d", timeout), Msg.OK)
+
+    async def ring_reserve_reader(self, name: str, index: int, pid: int, buffers: int) -> None:
+        await self._call(Msg.RING_READER, _str(name)
+                         + _pack("reader slot", "<IiIB", index, pid, buffers, 1), Msg.OK)
+
+    async def ring_release_reader(self, name: str, index: int) -> None:
+        await self._call(Msg.RING_READER, _str(name)
+                         + _pack("reader slot", "<IiIB", index, 0, 0, 0), Msg.OK)
+
+    async def ring_set_counts(self, name: str, publishers: int, subscribers: int) -> None:
+        await self._call(Msg.RING_COUNTS, _str(name)
+                         + _pack("port counts", "<II", publishers, subscribers), Msg.OK)
+
+    async def ring_remove(self, name: str) -> None:
+        """Close the daemon's handle of the ring (if any) and unlink the segment."""
+        await self._call(Msg.RING_REMOVE, _str(name), Msg.OK)
+
+    async def ring_purge(self) -> int:
+        """Unlink every segment of this instance on the daemon's host, close its handles and
+        remove its streams; how many segments were unlinked."""
+        return await self._value(Msg.RING_PURGE, b"")
+
+    async def ring_write_seq(self, name: str) -> int:
+        """The newest sequence number written into the ring (0: none yet)."""
+        return await self._value(Msg.RING_SEQ, _str(name))
+
+    async def stream_send(self, token: int, ring: str, layout_hash: int, message_size: int,
+                          transport: str, host: str, port: int) -> None:
+        """Send every sample of local `ring` to the daemon at host:port (its data port),
+        which writes them into the ring it has for `token`.  Replaces a stream of the same
+        token.  DaemonError STREAM_FAILED with the forwarder's reason."""
+        await self._call(Msg.STREAM_SEND, _pack("token", "<Q", token) + _str(ring)
+                         + _pack("stream", "<QQB", layout_hash, message_size,
+                                 _transport(transport))
+                         + _str(host) + _pack("port", "<H", port), Msg.OK)
+
+    async def stream_recv(self, token: int, ring: str, layout_hash: int, message_size: int,
+                          transport: str) -> None:
+        """Write the samples arriving for `token` into local `ring`."""
+        await self._call(Msg.STREAM_RECV, _pack("token", "<Q", token) + _str(ring)
+                         + _pack("stream", "<QQB", layout_hash, message_size,
+                                 _transport(transport)), Msg.OK)
+
+    async def stream_remove(self, token: int) -> None:
+        """Stop a stream of this instance; DaemonError UNKNOWN_STREAM if there is none."""
+        await self._call(Msg.STREAM_REMOVE, _pack("token", "<Q", token), Msg.OK)
+
+    async def stream_stats(self) -> tuple[list[StreamStat], StreamTotals]:
+        """Counters of this instance's streams, and the daemon's counters of traffic that
+        belongs to no stream."""
+        payload = await self._call(Msg.STREAM_STATS, b"", Msg.STREAM_LIST)
+        try:
+            return _decode_stream_list(payload)
+        except _Malformed as e:
+            raise DaemonError(f"malformed STREAM_STATS reply: {e}") from None
+
+    async def _value(self, mtype: Msg, payload: bytes) -> int:
+        reply = await self._call(mtype, payload, Msg.VALUE)
+        if len(reply) != 8:
+            raise DaemonError(f"malformed {mtype.name} reply of {len(reply)} bytes")
+        return int(struct.unpack("<Q", reply)[0])
 
     def events(self) -> asyncio.Queue[OutputLine | Exited | StateChanged | None]:
         """The queue of events; None, as the last item, means the connection is gone."""

@@ -88,6 +88,7 @@ class Daemon:
     key_file: Path
     log: Path
     instance: str
+    data_port: int
     extra: list[subprocess.Popen[bytes]] = field(default_factory=list)
 
     async def connect(self, instance: str | None = None, *, key: bytes | None = None,
@@ -100,11 +101,12 @@ class Daemon:
         return self.log.read_text(errors="replace")
 
 
-def start_daemon(tmp: Path, *args: str, user: int | None = None,
-                 group: int | None = None) -> Daemon:
+def start_daemon(tmp: Path, *args: str, user: int | None = None, group: int | None = None,
+                 env: dict[str, str] | None = None) -> Daemon:
     """ln_daemon --port 0 --foreground with a fresh key file in `tmp`; returns once it
-    listens (its ready line says on which port).  With `user`, the daemon runs as that
-    user (and `group`), who then owns the key file."""
+    listens (its ready line says on which ports).  With `user`, the daemon runs as that
+    user (and `group`), who then owns the key file.  `env` is added to the daemon's
+    environment."""
     key_file = tmp / f"daemon-{uuid.uuid4().hex[:6]}.key"
     key = dc.create_key_file(key_file)
     log = tmp / f"{key_file.stem}.log"
@@ -115,6 +117,7 @@ def start_daemon(tmp: Path, *args: str, user: int | None = None,
     proc = subprocess.Popen([daemon_exe(), "--port", "0", "--bind", "127.0.0.1", "--key-file",
                              str(key_file), "--log", str(log), "--foreground", *args],
                             stdout=subprocess.PIPE, stdin=subprocess.DEVNULL,
+                            env={**os.environ, **(env or {})},
                             **as_user)  # type: ignore[call-overload]
     assert proc.stdout is not None
     sel = selectors.DefaultSelector()
@@ -128,7 +131,8 @@ def start_daemon(tmp: Path, *args: str, user: int | None = None,
         proc.wait()
         pytest.fail(f"ln_daemon did not start: {line!r}")
     port = int(line.split(" listening on ", 1)[1].split()[0].rsplit(":", 1)[1])
-    return Daemon(proc, port, key, key_file, log, unique_instance())
+    data_port = int(line.rsplit(" data port ", 1)[1])
+    return Daemon(proc, port, key, key_file, log, unique_instance(), data_port)
 
 
 def stop_daemon(daemon: Daemon) -> list[str]:

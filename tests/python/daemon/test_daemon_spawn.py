@@ -33,11 +33,18 @@ def output_of(daemon: Daemon, s: dc.SpawnSpec) -> tuple[list[str], dc.Exited]:
 
 
 def test_environment_is_exactly_the_given_one(daemon: Daemon) -> None:
+    """... and LN_HOST_ID, the daemon's host id, unless the environment has one."""
     env = {**PATH_ENV, "FOO": "bar baz", "EMPTY": ""}
     s = dc.SpawnSpec("env", "env", False, env, use_pty=False)
     lines, ex = output_of(daemon, s)
     assert ex.exit_code == 0
-    assert sorted(lines) == sorted(f"{k}={v}" for k, v in env.items())
+
+    async def host_id() -> str:
+        async with await daemon.connect() as client:
+            return (await client.net_info()).host_id
+
+    with_id = {**env, "LN_HOST_ID": asyncio.run(host_id())}
+    assert sorted(lines) == sorted(f"{k}={v}" for k, v in with_id.items())
 
 
 def test_environment_bytes_that_are_not_utf8_pass_unchanged(daemon: Daemon) -> None:

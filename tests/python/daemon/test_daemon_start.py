@@ -5,6 +5,7 @@ daemon in its own session once, and reuses it afterwards."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import re
 import signal
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import pytest
 from daemonproc import WAIT, alive, daemon_exe, free_port, wait_for
+from polling import free_daemon_port
 
 from links_and_nodes.manager import daemon_client as dc
 
@@ -86,6 +88,76 @@ def test_usage_errors(tmp_path: Path) -> None:
     assert f"cannot listen on 127.0.0.1:{port}: Address already in use" in result.stderr
 
 
+@pytest.mark.parametrize(("args", "text"), [
+    (["--udp-fragment-size", "255"], "--udp-fragment-size needs a number 256..65000"),
+    (["--udp-fragment-size", "65001"], "--udp-fragment-size needs a number 256..65000"),
+    (["--udp-fragment-size", "1k"], "--udp-fragment-size needs a number 256..65000"),
+    (["--data-port", "65536"], "--data-port needs a number 0..65535"),
+    (["--data-port", "-1"], "--data-port needs a number 0..65535"),
+    (["--advertise-data-port", "0"], "--advertise-data-port needs a number 1..65535"),
+    (["--port", "65535"], "the default data port (--port + 1) would be 65536; give --data-port"),
+    (["--port", "4000", "--data-port", "4000"], "--data-port must differ from --port"),
+])
+def test_data_port_usage_errors(tmp_path: Path, args: list[str], text: str) -> None:
+    path = key_file(tmp_path, HEX, 0o600)
+    result = run_daemon("--key-file", str(path), "--foreground", *args)
+    assert result.returncode == 2
+    assert result.stderr.startswith(f"ln_daemon: error: {text}\n")
+
+
+def test_default_data_port(tmp_path: Path) -> None:
+    port = free_daemon_port()
+    path = key_file(tmp_path, HEX, 0o600)
+    proc = subprocess.Popen([daemon_exe(), "--port", str(port), "--bind", "127.0.0.1",
+                             "--key-file", str(path), "--foreground"], stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert line == (f"ln_daemon: listening on 127.0.0.1:{port} (pid {proc.pid}), "
+                        f"data port {port + 1}\n")
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(WAIT) == 0
+        if proc.stdout is not None:
+            proc.stdout.close()
+
+
+def _pids_with(text: str) -> list[int]:
+    pids = []
+    for entry in Path("/proc").iterdir():
+        try:
+            if entry.name.isdigit() and text.encode() in (entry / "cmdline").read_bytes():
+                pids.append(int(entry.name))
+        except OSError:
+            continue
+    return pids
+
+
+@pytest.mark.parametrize("foreground", [True, False])
+def test_data_port_in_use(tmp_path: Path, foreground: bool) -> None:
+    """Refused with the daemon's error before the launcher exits, also when detaching (the
+    data port is opened after the fork), and nothing is left running."""
+    path = key_file(tmp_path, HEX, 0o600)
+    with contextlib.ExitStack() as stack:
+        tcp = stack.enter_context(socket.socket())
+        tcp.bind(("127.0.0.1", 0))
+        tcp.listen()
+        port = tcp.getsockname()[1]
+        udp = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        with contextlib.suppress(OSError):  # the TCP port alone is enough
+            udp.bind(("127.0.0.1", port))
+        result = subprocess.run([daemon_exe(), "--port", "0", "--bind", "127.0.0.1",
+                                 "--key-file", str(path), "--data-port", str(port),
+                                 *(["--foreground"] if foreground else [])],
+                                capture_output=True, text=True, timeout=WAIT)
+    assert result.returncode == 1, result
+    assert result.stdout == ""
+    assert result.stderr.startswith("ln_daemon: error: ") and str(port) in result.stderr
+    assert result.stderr.count("\n") == 1
+    wait_for(lambda: not _pids_with(str(path)), "the refused daemon to be gone")
+
+
 def test_key_file_helpers(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     path = tmp_path / "a" / "b" / "daemon.key"
     key = dc.create_key_file(path)
@@ -121,7 +193,7 @@ def test_ensure_local_daemon(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) ->
     port = free_port()
     pid = None
     try:
-        asyncio.run(dc.ensure_local_daemon(port, key_path, log))
+        asyncio.run(dc.ensure_local_daemon(port, key_path, log, data_port=0))
         text = wait_for(lambda: log.exists() and re.search(r"ln_daemon\[(\d+)\]: listening",
                                                            log.read_text()),
                         "the daemon's log line")
@@ -133,6 +205,7 @@ def test_ensure_local_daemon(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) ->
         async def use() -> None:
             client = await dc.DaemonClient.connect("127.0.0.1", port, key, "ensure")
             await client.ping()
+            assert (await client.net_info()).data_port not in (0, port)
             await client.close()
             # A second call finds it answering and starts nothing.
             await dc.ensure_local_daemon(port, key_path, log)

@@ -25,7 +25,7 @@ import pytest
 from links_and_nodes.manager.config import load, model
 from links_and_nodes.manager.launch import segments
 from links_and_nodes.manager.scripting import Manager, connect
-from polling import free_port
+from polling import free_daemon_port, free_port
 
 REPO = Path(__file__).resolve().parents[3]
 CONFIG = REPO / "examples" / "robot" / "robot.lnc"
@@ -180,7 +180,7 @@ def demo(tmp_path: Path) -> Iterator[Demo]:
     for exe in ("arm_sensor", "arm_controller"):
         if not (REPO / "build" / "release" / "examples" / "robot" / exe).exists():
             pytest.fail(f"examples/robot/{exe} is not built: run scons first")
-    manager_port, daemon_port = free_port(), free_port()
+    manager_port, daemon_port = free_port(), free_daemon_port()
     env = {**os.environ, "LN_RUNTIME_DIR": str(tmp_path / "run"),
            "LN_DAEMON_KEY_FILE": str(tmp_path / "key" / "daemon.key"),
            "LN_ARBITER_PORT": str(daemon_port), "LN_DEMO_PORT": str(manager_port),

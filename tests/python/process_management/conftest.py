@@ -18,7 +18,11 @@ from pathlib import Path
 import pytest
 
 from links_and_nodes.manager import scripting
-from polling import free_port, wait_for  # noqa: F401  (shared with the tests of this package)
+from polling import (  # noqa: F401  (shared with the tests of this package)
+    free_daemon_port,
+    free_port,
+    wait_for,
+)
 
 LIMIT = 60.0  # upper bound for anything to happen, never a measurement
 REPO = Path(__file__).resolve().parents[3]
@@ -106,7 +110,7 @@ def lab(tmp_path: Path) -> Iterator[Lab]:
     runtime = tmp_path / "run"
     env = {**os.environ, "LN_RUNTIME_DIR": str(runtime),
            "LN_DAEMON_KEY_FILE": str(tmp_path / "keys" / "daemon.key"),
-           "LN_ARBITER_PORT": str(free_port()), "PYTHONUNBUFFERED": "1"}
+           "LN_ARBITER_PORT": str(free_daemon_port()), "PYTHONUNBUFFERED": "1"}
     lab = Lab(tmp_path, instance, env, free_port(), int(env["LN_ARBITER_PORT"]))
     try:
         yield lab

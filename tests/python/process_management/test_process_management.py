@@ -14,7 +14,7 @@ from pathlib import Path
 from links_and_nodes.manager import daemon_client as dc
 from links_and_nodes.manager.scripting import Manager
 
-from .conftest import LIMIT, Lab, free_port, parent, pids_with, wait_for
+from .conftest import LIMIT, Lab, free_daemon_port, parent, pids_with, wait_for
 
 CHILD = Path(__file__).with_name("child.py")
 
@@ -311,7 +311,7 @@ def test_processes_on_two_nodes_go_to_their_daemons(lab: Lab) -> None:
     it (its port, its address), `localhost` stays on the manager's own daemon."""
     key_file = Path(lab.env["LN_DAEMON_KEY_FILE"])
     dc.create_key_file(key_file)
-    other_port = free_port()
+    other_port = free_daemon_port()
     daemon = subprocess.run([dc.daemon_executable(), "--port", str(other_port), "--key-file",
                              str(key_file), "--log", str(lab.tmp / "other-daemon.log")],
                             capture_output=True, text=True, env=lab.env, timeout=LIMIT)

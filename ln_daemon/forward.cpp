@@ -1,0 +1,223 @@
+// Forwarder (forward.hpp): the data sockets, the table of sending and receiving streams,
+// and the order in which their threads start and stop.  Changes of the table are
+// serialized by one mutex held across stopping and joining the old threads; stats() and
+// the receive threads only take the tables' own short locks, so they never wait for that.
+#include "forward.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <exception>
+#include <map>
+#include <mutex>
+#include <system_error>
+#include <utility>
+
+#include "forward_net.hpp"
+#include "forward_reassembly.hpp"
+#include "forward_recv_stream.hpp"
+#include "forward_send_stream.hpp"
+#include "forward_tcp_recv.hpp"
+#include "forward_tcp_send.hpp"
+#include "forward_udp_recv.hpp"
+#include "forward_udp_send.hpp"
+#include "forward_wire.hpp"
+
+namespace lnd::fwd {
+
+namespace {
+
+const Options &checked(const Options &o)
+{
+    auto invalid = [](const std::string &what) {
+        throw std::system_error(EINVAL, std::generic_category(), "forwarder options: " + what);
+    };
+    if (o.udp_payload == 0 || o.udp_payload > wire::kMaxChunk)
+        invalid("udp_payload must be 1.." + std::to_string(wire::kMaxChunk));
+    if (o.udp_max_incomplete == 0)
+        invalid("udp_max_incomplete must be at least 1");
+    if (o.tcp_queue_samples == 0 || o.tcp_queue_bytes == 0)
+        invalid("the TCP queue bounds must be at least 1");
+    if (!(o.udp_incomplete_timeout > 0))
+        invalid("udp_incomplete_timeout must be positive");
+    return o;
+}
+
+std::string check_common(uint64_t token, const std::string &ring, uint64_t message_size)
+{
+    if (token == 0)
+        return "stream token 0 is not allowed";
+    if (ring.empty())
+        return "no ring named";
+    if (message_size == 0)
+        return "message size 0";
+    return "";
+}
+
+} // namespace
+
+struct Forwarder::Impl {
+    explicit Impl(const Options &o)
+        : options(checked(o)),
+          sockets(bind_data_sockets(o.bind_address, o.data_port, o.socket_buffer)),
+          budget(o.udp_reassembly_bytes), udp(sockets.udp.get(), receivers, totals, options),
+          tcp(sockets.tcp.get(), receivers, totals)
+    {
+        udp.start();
+        try {
+            tcp.start();
+        } catch (...) {
+            udp.stop();
+            throw;
+        }
+    }
+
+    ~Impl()
+    {
+        udp.stop();
+        tcp.stop();
+        std::lock_guard<std::mutex> lock(control);
+        std::map<uint64_t, std::unique_ptr<SendStream>> all;
+        {
+            std::lock_guard<std::mutex> table_lock(senders_mutex);
+            all.swap(senders);
+        }
+        for (auto &entry : all) // stop all first, so their waits end together
+            entry.second->stop();
+        for (auto &entry : all)
+            entry.second->join();
+        for (const auto &stream : receivers.all())
+            stream->close();
+    }
+
+    std::unique_ptr<SendStream> take_sender(uint64_t token)
+    {
+        std::lock_guard<std::mutex> lock(senders_mutex);
+        auto it = senders.find(token);
+        if (it == senders.end())
+            return nullptr;
+        std::unique_ptr<SendStream> old = std::move(it->second);
+        senders.erase(it);
+        return old;
+    }
+
+    // After a receiving stream left the table: nothing more reaches its ring.
+    void retire(const std::shared_ptr<RecvStream> &old)
+    {
+        old->close();
+        if (old->spec.transport == Transport::tcp)
+            tcp.drop_stream(old->spec.token);
+    }
+
+    const Options options;
+    DataSockets sockets;
+    ReassemblyBudget budget; // before the streams, whose reassemblers give memory back
+    TotalCounters totals;
+    RecvTable receivers;
+    std::mutex control; // one set_send/set_recv/remove at a time
+    std::mutex senders_mutex;
+    std::map<uint64_t, std::unique_ptr<SendStream>> senders;
+    UdpReceiver udp;
+    TcpReceiver tcp;
+};
+
+Forwarder::Forwarder(const Options &options) : impl_(std::make_unique<Impl>(options)) {}
+
+Forwarder::~Forwarder() = default;
+
+uint16_t Forwarder::data_port() const
+{
+    return impl_->sockets.port;
+}
+
+std::string Forwarder::set_send(const SendSpec &spec)
+{
+    std::string error = check_common(spec.token, spec.ring, spec.message_size);
+    if (error.empty() && spec.host.empty())
+        error = "no receiving host named";
+    if (error.empty() && spec.port == 0)
+        error = "no receiving port named";
+    if (!error.empty())
+        return error;
+    try {
+        std::unique_ptr<SendStream> stream;
+        error = spec.transport == Transport::tcp
+                    ? TcpSender::create(spec, impl_->options, stream)
+                    : UdpSender::create(spec, impl_->options, stream);
+        if (!error.empty())
+            return error;
+        std::lock_guard<std::mutex> lock(impl_->control);
+        if (std::unique_ptr<SendStream> old = impl_->take_sender(spec.token)) {
+            old->stop();
+            old->join();
+        }
+        stream->start();
+        std::lock_guard<std::mutex> table_lock(impl_->senders_mutex);
+        impl_->senders[spec.token] = std::move(stream);
+        return "";
+    } catch (const std::exception &e) {
+        return std::string("cannot start the stream: ") + e.what();
+    }
+}
+
+std::string Forwarder::set_recv(const RecvSpec &spec)
+{
+    std::string error = check_common(spec.token, spec.ring, spec.message_size);
+    if (!error.empty())
+        return error;
+    try {
+        std::shared_ptr<RecvStream> stream;
+        error = RecvStream::open(spec, impl_->budget, impl_->options.udp_max_incomplete, stream);
+        if (!error.empty())
+            return error;
+        std::lock_guard<std::mutex> lock(impl_->control);
+        if (std::shared_ptr<RecvStream> old = impl_->receivers.put(std::move(stream)))
+            impl_->retire(old);
+        return "";
+    } catch (const std::exception &e) {
+        return std::string("cannot start the stream: ") + e.what();
+    }
+}
+
+bool Forwarder::remove(uint64_t token)
+{
+    std::lock_guard<std::mutex> lock(impl_->control);
+    bool found = false;
+    if (std::unique_ptr<SendStream> old = impl_->take_sender(token)) {
+        old->stop();
+        old->join();
+        found = true;
+    }
+    if (std::shared_ptr<RecvStream> old = impl_->receivers.take(token)) {
+        impl_->retire(old);
+        found = true;
+    }
+    return found;
+}
+
+std::vector<StreamStats> Forwarder::stats() const
+{
+    std::vector<StreamStats> out;
+    {
+        std::lock_guard<std::mutex> lock(impl_->senders_mutex);
+        for (const auto &entry : impl_->senders)
+            out.push_back(entry.second->stats());
+    }
+    for (const auto &stream : impl_->receivers.all())
+        out.push_back(stream->counters.snapshot());
+    std::stable_sort(out.begin(), out.end(), [](const StreamStats &a, const StreamStats &b) {
+        return a.token < b.token;
+    });
+    return out;
+}
+
+Totals Forwarder::totals() const
+{
+    Totals t;
+    t.unknown_stream = impl_->totals.unknown_stream.load(std::memory_order_relaxed);
+    t.malformed = impl_->totals.malformed.load(std::memory_order_relaxed);
+    t.reassembly_bytes = impl_->budget.used();
+    t.reassembly_peak = impl_->budget.peak();
+    return t;
+}
+
+} // namespace lnd::fwd

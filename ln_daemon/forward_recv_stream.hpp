@@ -1,0 +1,80 @@
+// The receiving end of one stream (RecvStream: the local ring's tap, counters, reassembly)
+// and the table the receive threads look streams up in by token (RecvTable).  A stream is
+// shared between the table and the threads using it at that moment; close() guarantees that
+// nothing is written into the ring after it returns, whoever still holds the object.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <string>
+#include <vector>
+
+#include "forward.hpp"
+#include "forward_net.hpp"
+#include "forward_reassembly.hpp"
+#include "forward_stats.hpp"
+#include "forward_tap.hpp"
+
+namespace lnd::fwd {
+
+class RecvStream {
+public:
+    // Opens the ring; "" and `out` set, or the reason.
+    static std::string open(const RecvSpec &spec, ReassemblyBudget &budget,
+                            size_t max_incomplete, std::shared_ptr<RecvStream> &out);
+    RecvStream(const RecvSpec &spec, Tap tap, ReassemblyBudget &budget, size_t max_incomplete);
+
+    const RecvSpec spec;
+    StreamCounters counters;
+
+    // Writes a complete sample into the ring and counts it (written, or stale if it is not
+    // newer than the ring's newest).  Nothing happens once the stream is closed.
+    void write(const uint8_t *data, uint64_t seq, int64_t timestamp_ns);
+    // The ring's newest sequence number (0 when closed: nothing will be written anyway).
+    uint64_t newest();
+    void close() noexcept;
+    bool closed() const noexcept { return closed_.load(std::memory_order_acquire); }
+
+    // TCP: connections carrying this stream now; `connected` in the stats is "> 0".
+    void attach(const std::string &peer);
+    void detach() noexcept;
+
+    // UDP receive thread only.
+    Reassembler reassembler;
+    Address last_source; // to update the peer text only when the source changes
+
+private:
+    std::mutex mutex_; // serializes the tap: writers are the UDP thread and TCP connections
+    Tap tap_;
+    std::atomic<bool> closed_{false};
+    std::atomic<int> connections_{0};
+};
+
+// Streams by token, looked up by the receive threads on every datagram or connection.
+// generation() changes with every change of the table, so a thread may cache lookups.
+class RecvTable {
+public:
+    std::shared_ptr<RecvStream> find(uint64_t token) const;
+    // Inserts or replaces; returns the stream it replaced, if any.
+    std::shared_ptr<RecvStream> put(std::shared_ptr<RecvStream> stream);
+    std::shared_ptr<RecvStream> take(uint64_t token);
+    std::vector<std::shared_ptr<RecvStream>> all() const;
+    uint64_t generation() const noexcept { return generation_.load(std::memory_order_acquire); }
+
+private:
+    mutable std::shared_mutex mutex_;
+    std::map<uint64_t, std::shared_ptr<RecvStream>> streams_;
+    std::atomic<uint64_t> generation_{0};
+};
+
+// Counters of the receive side that belong to no stream.
+struct TotalCounters {
+    std::atomic<uint64_t> unknown_stream{0};
+    std::atomic<uint64_t> malformed{0};
+};
+
+} // namespace lnd::fwd

@@ -1,0 +1,215 @@
+// The TCP receive threads (forward_tcp_recv.hpp).  A frame's size is checked against the
+// stream before its payload is read, so a bad sender costs its connection, never memory.
+#include "forward_tcp_recv.hpp"
+
+#include <cerrno>
+#include <new>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <system_error>
+#include <vector>
+
+#include "forward_wire.hpp"
+
+namespace lnd::fwd {
+
+namespace {
+
+constexpr int kHelloTimeoutMs = 10000;
+constexpr int kAcceptWakeMs = 1000;      // to reap ended connections without new ones
+// A sender host that died is noticed after about idle + interval * count seconds.
+constexpr int kKeepIdle = 10, kKeepInterval = 2, kKeepCount = 3;
+
+void send_reply(int fd, wire::Kind kind, wire::Reject reason, uint64_t token,
+                const StopSignal &stop)
+{
+    uint8_t raw[wire::kReplySize];
+    wire::encode_reply(raw, {kind, reason, token});
+    iovec iov = {raw, sizeof raw};
+    std::string error;
+    write_full(fd, &iov, 1, stop, error);
+}
+
+} // namespace
+
+TcpReceiver::TcpReceiver(int listener, RecvTable &table, TotalCounters &totals)
+    : listener_(listener), table_(table), totals_(totals)
+{
+}
+
+TcpReceiver::~TcpReceiver()
+{
+    stop();
+}
+
+void TcpReceiver::start()
+{
+    acceptor_ = std::thread([this] { accept_loop(); });
+}
+
+void TcpReceiver::stop() noexcept
+{
+    stop_.raise();
+    if (acceptor_.joinable())
+        acceptor_.join();
+    std::list<std::unique_ptr<Connection>> all;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        all.swap(connections_);
+    }
+    for (auto &c : all)
+        if (c->thread.joinable())
+            c->thread.join(); // each watches stop_ in every wait
+}
+
+void TcpReceiver::drop_stream(uint64_t token) noexcept
+{
+    std::list<std::unique_ptr<Connection>> mine;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (auto it = connections_.begin(); it != connections_.end();) {
+            auto next = std::next(it);
+            if ((*it)->token.load() == token) {
+                ::shutdown((*it)->fd.get(), SHUT_RDWR); // wakes its thread's poll
+                mine.splice(mine.end(), connections_, it);
+            }
+            it = next;
+        }
+    }
+    for (auto &c : mine)
+        if (c->thread.joinable())
+            c->thread.join();
+}
+
+void TcpReceiver::reap()
+{
+    std::list<std::unique_ptr<Connection>> ended;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (auto it = connections_.begin(); it != connections_.end();) {
+            auto next = std::next(it);
+            if ((*it)->done.load())
+                ended.splice(ended.end(), connections_, it);
+            it = next;
+        }
+    }
+    for (auto &c : ended)
+        if (c->thread.joinable())
+            c->thread.join();
+}
+
+void TcpReceiver::accept_loop()
+{
+    while (!stop_.raised()) {
+        Wait w = wait_fd(listener_, POLLIN, stop_, kAcceptWakeMs);
+        reap();
+        if (w == Wait::stopped)
+            break;
+        if (w == Wait::timeout)
+            continue;
+        Address from;
+        from.length = sizeof from.storage;
+        UniqueFd fd(::accept4(listener_, reinterpret_cast<sockaddr *>(&from.storage),
+                              &from.length, SOCK_NONBLOCK | SOCK_CLOEXEC));
+        if (!fd) {
+            if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM)
+                stop_.sleep_for(100); // the connection stays pending: do not spin on it
+            continue;
+        }
+        auto c = std::make_unique<Connection>();
+        c->fd = std::move(fd);
+        c->peer = address_text(from.get());
+        int one = 1;
+        ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        ::setsockopt(c->fd.get(), SOL_SOCKET, SO_KEEPALIVE, &one, sizeof one);
+        ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_KEEPIDLE, &kKeepIdle, sizeof kKeepIdle);
+        ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_KEEPINTVL, &kKeepInterval,
+                     sizeof kKeepInterval);
+        ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_KEEPCNT, &kKeepCount, sizeof kKeepCount);
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (connections_.size() >= kMaxTcpConnections) {
+            send_reply(c->fd.get(), wire::Kind::reject, wire::Reject::busy, 0, stop_);
+            continue;
+        }
+        Connection &ref = *c;
+        try {
+            c->thread = std::thread([this, &ref] { serve(ref); });
+        } catch (const std::system_error &) {
+            continue; // no thread: the connection is closed, the sender retries
+        }
+        connections_.push_back(std::move(c));
+    }
+}
+
+void TcpReceiver::serve(Connection &c)
+{
+    const int fd = c.fd.get();
+    std::string error;
+    uint8_t raw[wire::kHelloSize];
+    wire::Hello hello;
+    if (read_full(fd, raw, sizeof raw, stop_, kHelloTimeoutMs, error) != Io::ok) {
+        c.done.store(true);
+        return;
+    }
+    if (!wire::decode_hello(raw, hello)) {
+        StreamCounters::add(totals_.malformed);
+        c.done.store(true);
+        return;
+    }
+    c.token.store(hello.token); // before the lookup: see drop_stream
+    std::shared_ptr<RecvStream> s = table_.find(hello.token);
+    if (!s || s->spec.transport != Transport::tcp) {
+        StreamCounters::add(totals_.unknown_stream);
+        send_reply(fd, wire::Kind::reject, wire::Reject::unknown_stream, hello.token, stop_);
+        c.done.store(true);
+        return;
+    }
+    if (hello.message_size != s->spec.message_size ||
+        hello.layout_hash != s->spec.layout_hash) {
+        StreamCounters::add(s->counters.invalid);
+        s->counters.set_error(c.peer + " sends messages of " +
+                              std::to_string(hello.message_size) +
+                              " bytes with another layout hash or size");
+        send_reply(fd, wire::Kind::reject, wire::Reject::layout, hello.token, stop_);
+        c.done.store(true);
+        return;
+    }
+    std::unique_ptr<uint8_t[]> payload(new (std::nothrow) uint8_t[s->spec.message_size]);
+    if (!payload) {
+        s->counters.set_error("no memory for a frame from " + c.peer);
+        c.done.store(true);
+        return; // closing tells the sender, which tries again later
+    }
+    send_reply(fd, wire::Kind::accept, wire::Reject::none, hello.token, stop_);
+    s->attach(c.peer);
+    for (;;) {
+        uint8_t head[wire::kFrameHeaderSize];
+        Io io = read_full(fd, head, sizeof head, stop_, -1, error);
+        if (io == Io::ok) {
+            wire::FrameHeader f = wire::decode_frame_header(head);
+            if (f.size != s->spec.message_size) {
+                StreamCounters::add(s->counters.invalid);
+                s->counters.set_error("frame of " + std::to_string(f.size) + " bytes from " +
+                                      c.peer + ", the stream's messages have " +
+                                      std::to_string(s->spec.message_size));
+                break;
+            }
+            io = read_full(fd, payload.get(), f.size, stop_, -1, error);
+            if (io == Io::ok) {
+                if (s->closed())
+                    break;
+                s->write(payload.get(), f.seq, f.timestamp_ns);
+                continue;
+            }
+        }
+        if (io == Io::error && !s->closed())
+            s->counters.set_error("connection from " + c.peer + ": " + error);
+        break;
+    }
+    s->detach();
+    c.done.store(true);
+}
+
+} // namespace lnd::fwd

@@ -1,0 +1,60 @@
+// The TCP receive side: an accept thread on the data port's listener and one thread per
+// connection, which reads the hello, answers accept or reject, then reads frames and
+// writes them into the stream's ring.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "fd.hpp"
+#include "forward_net.hpp"
+#include "forward_recv_stream.hpp"
+
+namespace lnd::fwd {
+
+constexpr size_t kMaxTcpConnections = 256;
+
+class TcpReceiver {
+public:
+    // `listener` is the non-blocking listening socket (owned by the caller, alive until
+    // stop() returned).
+    TcpReceiver(int listener, RecvTable &table, TotalCounters &totals);
+    ~TcpReceiver();
+    TcpReceiver(const TcpReceiver &) = delete;
+    TcpReceiver &operator=(const TcpReceiver &) = delete;
+
+    void start();
+    // Stops accepting, closes every connection and joins all threads.
+    void stop() noexcept;
+    // Closes the connections that carry stream `token` and joins their threads (the stream
+    // was removed or replaced; a sender reconnects to the new one).
+    void drop_stream(uint64_t token) noexcept;
+
+private:
+    struct Connection {
+        UniqueFd fd;
+        std::string peer;
+        std::atomic<uint64_t> token{0}; // set once the hello was read
+        std::atomic<bool> done{false};
+        std::thread thread;
+    };
+
+    void accept_loop();
+    void serve(Connection &c);
+    void reap(); // joins connections whose thread ended
+
+    const int listener_;
+    RecvTable &table_;
+    TotalCounters &totals_;
+    StopSignal stop_;
+    std::thread acceptor_;
+    std::mutex mutex_;
+    std::list<std::unique_ptr<Connection>> connections_;
+};
+
+} // namespace lnd::fwd

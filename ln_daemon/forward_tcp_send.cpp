@@ -1,0 +1,341 @@
+// The TCP sending threads (forward_tcp_send.hpp).  Memory: at most capacity_ + 1 sample
+// buffers ever exist (the queue with the sample in flight, plus the reader's), recycled
+// between the two threads.  A sample is taken off the queue only once it was written
+// whole; after a broken connection it is sent again from its first byte, so the receiver
+// (which drops partial frames) sees it exactly once.  Samples that were in the kernel's
+// buffers when a connection broke are lost without being counted.
+#include "forward_tcp_send.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cerrno>
+#include <cstring>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+
+#include "forward_wire.hpp"
+
+namespace lnd::fwd {
+
+namespace {
+
+constexpr double kReadTimeout = 0.1;        // s: how soon the reader notices a stop
+constexpr auto kIdleCheck = std::chrono::milliseconds(100); // peer-close check when idle
+constexpr int kConnectTimeoutMs = 5000;
+constexpr int kReplyTimeoutMs = 5000;
+constexpr int kFirstBackoffMs = 50, kMaxBackoffMs = 2000;
+constexpr unsigned kUserTimeoutMs = 10000; // unacknowledged data this long: connection dead
+
+const char *reject_text(wire::Reject reason)
+{
+    switch (reason) {
+    case wire::Reject::unknown_stream:
+        return "the receiver has no TCP stream with this token";
+    case wire::Reject::layout:
+        return "the receiver's stream has another message size or layout";
+    case wire::Reject::busy:
+        return "the receiver has too many connections";
+    default:
+        return "the receiver refused the stream";
+    }
+}
+
+// True (with `why`) if the peer closed or broke the connection; it sends nothing after its
+// reply, so anything readable is the end.
+bool peer_gone(int fd, std::string &why)
+{
+    char byte;
+    ssize_t n = ::recv(fd, &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+    if (n == 0) {
+        why = "closed by the receiver";
+        return true;
+    }
+    if (n > 0) {
+        why = "the receiver sent unexpected data";
+        return true;
+    }
+    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)
+        return false;
+    why = std::strerror(errno);
+    return true;
+}
+
+} // namespace
+
+std::string TcpSender::create(const SendSpec &spec, const Options &options,
+                              std::unique_ptr<SendStream> &out)
+{
+    size_t size = spec.message_size ? spec.message_size : 1;
+    size_t capacity = std::min(options.tcp_queue_samples, options.tcp_queue_bytes / size);
+    if (capacity == 0)
+        return "a sample of " + std::to_string(spec.message_size) +
+               " bytes does not fit the TCP queue bounds (" +
+               std::to_string(options.tcp_queue_samples) + " samples, " +
+               std::to_string(options.tcp_queue_bytes) + " bytes)";
+    Tap tap;
+    std::string error =
+        open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_EVERY);
+    if (!error.empty())
+        return error;
+    out = std::make_unique<TcpSender>(spec, options, std::move(tap), capacity);
+    return "";
+}
+
+TcpSender::TcpSender(const SendSpec &spec, const Options &options, Tap tap, size_t capacity)
+    : SendStream(spec), tap_(std::move(tap)), capacity_(capacity),
+      socket_buffer_(options.socket_buffer)
+{
+    counters_.note_segment(ln_ring_tap_segment(tap_.get()));
+}
+
+TcpSender::~TcpSender()
+{
+    stop();
+    join();
+}
+
+void TcpSender::start()
+{
+    reader_ = std::thread([this] { read_loop(); });
+    try {
+        writer_ = std::thread([this] { write_loop(); });
+    } catch (...) {
+        stop();
+        join();
+        throw;
+    }
+}
+
+void TcpSender::stop() noexcept
+{
+    stop_.raise();
+    std::lock_guard<std::mutex> lock(mutex_);
+    ready_.notify_all();
+}
+
+void TcpSender::join() noexcept
+{
+    if (reader_.joinable())
+        reader_.join();
+    if (writer_.joinable())
+        writer_.join();
+}
+
+TcpSender::Buffer TcpSender::take_buffer()
+{
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!free_.empty()) {
+            Buffer b = std::move(free_.back());
+            free_.pop_back();
+            return b;
+        }
+        // Every buffer not free is queued, in flight or the reader's, so with none free
+        // fewer than capacity_ + 1 exist.
+        ++allocated_;
+        assert(allocated_ <= capacity_ + 1);
+    }
+    return Buffer(new uint8_t[spec_.message_size ? spec_.message_size : 1]);
+}
+
+void TcpSender::give_buffer(Buffer b)
+{
+    free_.push_back(std::move(b));
+}
+
+void TcpSender::read_loop()
+{
+    Buffer buf = take_buffer();
+    while (!stop_.raised()) {
+        ln_sample_info info;
+        int rc = ln_ring_tap_read(tap_.get(), buf.get(), &info, kReadTimeout);
+        if (rc == LN_ETIMEOUT)
+            continue;
+        if (rc != LN_OK) {
+            counters_.set_error(std::string("cannot read the ring: ") + ln_last_error());
+            if (stop_.sleep_for(100))
+                break;
+            continue;
+        }
+        counters_.note_segment(ln_ring_tap_segment(tap_.get()));
+        if (info.overruns)
+            StreamCounters::add(counters_.drops, info.overruns);
+        bool queued = false;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            if (queue_.size() + in_flight_ >= capacity_ && !queue_.empty()) {
+                give_buffer(std::move(queue_.front().data));
+                queue_.pop_front();
+                StreamCounters::add(counters_.drops);
+            }
+            if (queue_.size() + in_flight_ < capacity_) {
+                queue_.push_back(Sample{info.seq, info.timestamp_ns, std::move(buf)});
+                queued = true;
+            } else {
+                StreamCounters::add(counters_.drops); // the sample in flight fills the queue
+            }
+        }
+        if (queued) {
+            ready_.notify_one();
+            buf = take_buffer();
+        }
+    }
+}
+
+std::string TcpSender::try_connect()
+{
+    std::vector<Address> addresses;
+    std::string error = resolve(spec_.host, spec_.port, SOCK_STREAM, addresses);
+    if (!error.empty())
+        return error;
+    UniqueFd fd;
+    for (const Address &a : addresses) {
+        std::string where = "connecting to " + address_text(a.get()) + ": ";
+        fd.reset(::socket(a.family(), SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+        if (!fd) {
+            error = where + std::strerror(errno);
+            continue;
+        }
+        int one = 1;
+        ::setsockopt(fd.get(), IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        ::setsockopt(fd.get(), IPPROTO_TCP, TCP_USER_TIMEOUT, &kUserTimeoutMs,
+                     sizeof kUserTimeoutMs);
+        set_buffer_sizes(fd.get(), socket_buffer_);
+        if (::connect(fd.get(), a.get(), a.length) != 0 && errno != EINPROGRESS) {
+            error = where + std::strerror(errno);
+            fd.reset();
+            continue;
+        }
+        Wait w = wait_fd(fd.get(), POLLOUT, stop_, kConnectTimeoutMs);
+        if (w == Wait::stopped)
+            return "stopped";
+        int soerr = 0;
+        socklen_t len = sizeof soerr;
+        if (w == Wait::timeout)
+            soerr = ETIMEDOUT;
+        else if (::getsockopt(fd.get(), SOL_SOCKET, SO_ERROR, &soerr, &len) != 0)
+            soerr = errno;
+        if (soerr != 0) {
+            error = where + std::strerror(soerr);
+            fd.reset();
+            continue;
+        }
+        break;
+    }
+    if (!fd)
+        return error;
+
+    uint8_t hello[wire::kHelloSize];
+    wire::encode_hello(hello, {spec_.token, spec_.message_size, spec_.layout_hash});
+    iovec iov = {hello, sizeof hello};
+    std::string io_error;
+    Io io = write_full(fd.get(), &iov, 1, stop_, io_error);
+    if (io == Io::ok) {
+        uint8_t raw[wire::kReplySize];
+        io = read_full(fd.get(), raw, sizeof raw, stop_, kReplyTimeoutMs, io_error);
+        if (io == Io::ok) {
+            wire::Reply reply;
+            if (!wire::decode_reply(raw, reply))
+                return "the receiver's reply is not one of this protocol version";
+            if (reply.kind == wire::Kind::reject) // a busy receiver rejects before the hello
+                return reject_text(reply.reason);
+            if (reply.token != spec_.token)
+                return "the receiver accepted another stream";
+            sock_ = std::move(fd);
+            return "";
+        }
+    }
+    switch (io) {
+    case Io::closed:
+        return "the receiver closed the connection during the hello";
+    case Io::timeout:
+        return "no reply from the receiver";
+    case Io::stopped:
+        return "stopped";
+    default:
+        return "hello: " + io_error;
+    }
+}
+
+bool TcpSender::connect_with_backoff()
+{
+    int backoff_ms = kFirstBackoffMs;
+    while (!stop_.raised()) {
+        std::string error = try_connect();
+        if (error.empty()) {
+            counters_.set_connected(true);
+            return true;
+        }
+        if (stop_.raised())
+            break;
+        counters_.set_error(spec_.host + ":" + std::to_string(spec_.port) + ": " + error);
+        if (stop_.sleep_for(backoff_ms))
+            break;
+        backoff_ms = std::min(backoff_ms * 2, kMaxBackoffMs);
+    }
+    return false;
+}
+
+void TcpSender::lost(const std::string &why)
+{
+    sock_.reset();
+    counters_.set_connected(false);
+    counters_.set_error("connection to " + spec_.host + ":" + std::to_string(spec_.port) +
+                        " lost: " + why);
+}
+
+void TcpSender::write_loop()
+{
+    Sample current;
+    bool have = false;
+    while (!stop_.raised()) {
+        if (!sock_ && !connect_with_backoff())
+            break;
+        if (!have) {
+            std::unique_lock<std::mutex> lock(mutex_);
+            ready_.wait_for(lock, kIdleCheck,
+                            [this] { return stop_.raised() || !queue_.empty(); });
+            if (stop_.raised())
+                break;
+            if (queue_.empty()) {
+                lock.unlock();
+                std::string why;
+                if (peer_gone(sock_.get(), why))
+                    lost(why);
+                continue;
+            }
+            current = std::move(queue_.front());
+            queue_.pop_front();
+            in_flight_ = true;
+            have = true;
+        }
+        uint8_t header[wire::kFrameHeaderSize];
+        wire::encode_frame_header(header,
+                                  {current.seq, current.timestamp_ns, spec_.message_size});
+        iovec iov[2] = {{header, sizeof header}, {current.data.get(), spec_.message_size}};
+        std::string error;
+        switch (write_full(sock_.get(), iov, 2, stop_, error)) {
+        case Io::ok: {
+            StreamCounters::add(counters_.samples);
+            StreamCounters::add(counters_.bytes, spec_.message_size);
+            std::lock_guard<std::mutex> lock(mutex_);
+            give_buffer(std::move(current.data));
+            in_flight_ = false;
+            have = false;
+            break;
+        }
+        case Io::stopped:
+            return;
+        case Io::closed:
+            lost("closed by the receiver");
+            break;
+        default:
+            lost(error);
+            break;
+        }
+    }
+}
+
+} // namespace lnd::fwd

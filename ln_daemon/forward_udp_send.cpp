@@ -1,0 +1,198 @@
+// The UDP sending thread (forward_udp_send.hpp).  The data path is tap read -> sendmmsg on
+// a connected socket, no copies besides the tap's: each datagram is two iovecs, its header
+// and its slice of the sample buffer.
+#include "forward_udp_send.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <netinet/in.h>
+#include <poll.h>
+
+#include "forward_wire.hpp"
+
+namespace lnd::fwd {
+
+namespace {
+
+constexpr unsigned kBatch = 64;            // datagrams per sendmmsg
+constexpr double kReadTimeout = 0.1;       // s: how soon a stop is noticed
+constexpr auto kResolveInterval = std::chrono::seconds(1);
+constexpr int kRefusedRetries = 3;         // per sample, see send_sample
+constexpr int64_t kMinBackoffUs = 50, kMaxBackoffUs = 5000; // after ENOBUFS
+
+} // namespace
+
+std::string UdpSender::create(const SendSpec &spec, const Options &options,
+                              std::unique_ptr<SendStream> &out)
+{
+    Tap tap;
+    std::string error =
+        open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_NEWEST);
+    if (!error.empty())
+        return error;
+    out = std::make_unique<UdpSender>(spec, options, std::move(tap));
+    return "";
+}
+
+UdpSender::UdpSender(const SendSpec &spec, const Options &options, Tap tap)
+    : SendStream(spec), tap_(std::move(tap)), chunk_(static_cast<uint16_t>(options.udp_payload)),
+      socket_buffer_(options.socket_buffer),
+      sample_(new uint8_t[spec.message_size ? spec.message_size : 1]),
+      headers_(kBatch * wire::kFragmentHeaderSize), msgs_(kBatch), iov_(2 * kBatch)
+{
+    counters_.note_segment(ln_ring_tap_segment(tap_.get()));
+}
+
+UdpSender::~UdpSender()
+{
+    stop();
+    join();
+}
+
+void UdpSender::start()
+{
+    thread_ = std::thread([this] { run(); });
+}
+
+void UdpSender::stop() noexcept
+{
+    stop_.raise();
+}
+
+void UdpSender::join() noexcept
+{
+    if (thread_.joinable())
+        thread_.join();
+}
+
+void UdpSender::open_socket()
+{
+    auto now = std::chrono::steady_clock::now();
+    if (now < next_open_)
+        return;
+    next_open_ = now + kResolveInterval;
+    std::vector<Address> addresses;
+    std::string error = resolve(spec_.host, spec_.port, SOCK_DGRAM, addresses);
+    if (error.empty()) {
+        for (const Address &a : addresses) {
+            UniqueFd fd(::socket(a.family(), SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+            if (fd && ::connect(fd.get(), a.get(), a.length) == 0) {
+                set_buffer_sizes(fd.get(), socket_buffer_);
+                sock_ = std::move(fd);
+                reopen_ = false;
+                return;
+            }
+            error = "cannot send to " + address_text(a.get()) + ": " + std::strerror(errno);
+        }
+    }
+    counters_.set_error(error);
+}
+
+UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
+{
+    if (reopen_)
+        open_socket();
+    if (!sock_)
+        return Sent::failed;
+    wire::Fragment f;
+    f.token = spec_.token;
+    f.seq = seq;
+    f.timestamp_ns = timestamp_ns;
+    f.sample_size = spec_.message_size;
+    f.chunk_size = chunk_;
+    f.count = static_cast<uint32_t>(wire::fragment_count(f.sample_size, chunk_));
+    uint8_t header[wire::kFragmentHeaderSize];
+    wire::encode_fragment_header(header, f);
+
+    int refused = 0;
+    int64_t backoff_us = kMinBackoffUs;
+    for (uint32_t first = 0; first < f.count; first += kBatch) {
+        unsigned n = std::min<uint32_t>(kBatch, f.count - first);
+        for (unsigned i = 0; i < n; ++i) {
+            uint32_t index = first + i;
+            uint8_t *h = headers_.data() + i * wire::kFragmentHeaderSize;
+            std::memcpy(h, header, sizeof header);
+            wire::set_fragment_index(h, index);
+            iov_[2 * i] = {h, wire::kFragmentHeaderSize};
+            iov_[2 * i + 1] = {sample_.get() + static_cast<uint64_t>(index) * chunk_,
+                               wire::fragment_length(f.sample_size, chunk_, index)};
+            msgs_[i] = {};
+            msgs_[i].msg_hdr.msg_iov = &iov_[2 * i];
+            msgs_[i].msg_hdr.msg_iovlen = 2;
+        }
+        for (unsigned done = 0; done < n;) {
+            int sent = ::sendmmsg(sock_.get(), msgs_.data() + done, n - done, 0);
+            if (sent > 0) {
+                done += static_cast<unsigned>(sent);
+                backoff_us = kMinBackoffUs;
+                continue;
+            }
+            int err = errno;
+            if (err == EINTR)
+                continue;
+            if (err == EAGAIN || err == EWOULDBLOCK) {
+                // The socket buffer is full: the link is the limit, wait until it drains.
+                if (wait_fd(sock_.get(), POLLOUT, stop_, -1) == Wait::stopped)
+                    return Sent::stopped;
+                continue;
+            }
+            if (err == ENOBUFS) {
+                // The device queue is full; poll() would report writable at once, so back
+                // off briefly instead.
+                if (stop_.sleep_us(backoff_us))
+                    return Sent::stopped;
+                backoff_us = std::min(backoff_us * 2, kMaxBackoffUs);
+                continue;
+            }
+            std::string text = "sending to " + spec_.host + ":" + std::to_string(spec_.port) +
+                               ": " + std::strerror(err);
+            if (err == ECONNREFUSED) {
+                // An ICMP "port unreachable" for an earlier datagram; reading it cleared it,
+                // and the receiver may be back (a daemon restart), so try again.
+                counters_.set_error(text + " (nobody receives there)");
+                if (++refused <= kRefusedRetries)
+                    continue;
+            } else {
+                counters_.set_error(text);
+            }
+            reopen_ = true; // the address may have changed
+            return Sent::failed;
+        }
+        if (stop_.raised())
+            return Sent::stopped;
+    }
+    return Sent::ok;
+}
+
+void UdpSender::run()
+{
+    while (!stop_.raised()) {
+        ln_sample_info info;
+        int rc = ln_ring_tap_read(tap_.get(), sample_.get(), &info, kReadTimeout);
+        if (rc == LN_ETIMEOUT)
+            continue;
+        if (rc != LN_OK) {
+            counters_.set_error(std::string("cannot read the ring: ") + ln_last_error());
+            if (stop_.sleep_for(100))
+                break;
+            continue;
+        }
+        counters_.note_segment(ln_ring_tap_segment(tap_.get()));
+        if (info.overruns)
+            StreamCounters::add(counters_.drops, info.overruns);
+        switch (send_sample(info.seq, info.timestamp_ns)) {
+        case Sent::ok:
+            StreamCounters::add(counters_.samples);
+            StreamCounters::add(counters_.bytes, spec_.message_size);
+            break;
+        case Sent::failed:
+            StreamCounters::add(counters_.drops);
+            break;
+        case Sent::stopped:
+            return;
+        }
+    }
+}
+
+} // namespace lnd::fwd

@@ -1,0 +1,57 @@
+// The sending end of a UDP stream: one thread reads the newest sample from the ring's tap
+// and sends it at once, cut into fragments, with sendmmsg in batches.  Nothing is queued:
+// a sample published while the previous one is still being sent is skipped if a newer one
+// follows before the send ends (counted in drops).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <sys/socket.h>
+#include <thread>
+#include <vector>
+
+#include "fd.hpp"
+#include "forward_net.hpp"
+#include "forward_send_stream.hpp"
+#include "forward_tap.hpp"
+
+namespace lnd::fwd {
+
+class UdpSender final : public SendStream {
+public:
+    // Opens the ring; "" and `out` set, or the reason.
+    static std::string create(const SendSpec &spec, const Options &options,
+                              std::unique_ptr<SendStream> &out);
+    UdpSender(const SendSpec &spec, const Options &options, Tap tap);
+    ~UdpSender() override;
+
+    void start() override;
+    void stop() noexcept override;
+    void join() noexcept override;
+
+private:
+    enum class Sent { ok, failed, stopped };
+
+    void run();
+    Sent send_sample(uint64_t seq, int64_t timestamp_ns);
+    // (Re)resolves the destination and makes a connected socket for it; a failure keeps the
+    // previous socket, if any.  Resolving happens at most once per kResolveInterval.
+    void open_socket();
+
+    Tap tap_;
+    const uint16_t chunk_;
+    const int socket_buffer_;
+    std::unique_ptr<uint8_t[]> sample_;
+    UniqueFd sock_;
+    bool reopen_ = true; // the next sample first resolves and opens again
+    std::chrono::steady_clock::time_point next_open_{};
+    std::vector<uint8_t> headers_;
+    std::vector<mmsghdr> msgs_;
+    std::vector<iovec> iov_;
+    StopSignal stop_;
+    std::thread thread_;
+};
+
+} // namespace lnd::fwd

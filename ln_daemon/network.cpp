@@ -1,0 +1,268 @@
+// NetCommands (network.hpp): decodes each ring and stream request, checks that the instance
+// may touch what it names, carries it out through the RingTable or the Forwarder and says
+// what to answer.  Streams are tagged with their instance, so one instance can neither see
+// nor stop another's.
+#include "network.hpp"
+
+#include <cinttypes>
+#include <cstdio>
+#include <utility>
+
+#include "log.hpp"
+#include "net_messages.hpp"
+
+namespace lnd {
+
+using proto::Err;
+using proto::Msg;
+
+namespace {
+
+NetOutcome ok() { return {}; }
+
+NetOutcome reply(Msg type, std::string payload)
+{
+    NetOutcome o;
+    o.type = type;
+    o.payload = std::move(payload);
+    return o;
+}
+
+NetOutcome error(Err code, std::string text)
+{
+    NetOutcome o;
+    o.kind = NetOutcome::Kind::error;
+    o.code = code;
+    o.text = std::move(text);
+    return o;
+}
+
+NetOutcome malformed()
+{
+    NetOutcome o;
+    o.kind = NetOutcome::Kind::malformed;
+    return o;
+}
+
+NetOutcome value(uint64_t v)
+{
+    proto::Writer w;
+    w.u64(v);
+    return reply(Msg::value, w.buffer());
+}
+
+std::string token_text(uint64_t token)
+{
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%016" PRIx64, token);
+    return buf;
+}
+
+} // namespace
+
+NetCommands::NetCommands(std::string host_id, uint16_t data_port, fwd::Forwarder &forwarder)
+    : host_id_(std::move(host_id)), data_port_(data_port), forwarder_(forwarder)
+{
+}
+
+bool NetCommands::handles(uint8_t type) noexcept { return net_msg_name(type) != nullptr; }
+
+NetOutcome NetCommands::handle(const std::string &instance, uint8_t type, proto::Reader &r)
+{
+    switch (static_cast<Msg>(type)) {
+    case Msg::net_info: {
+        if (!r.done())
+            return malformed();
+        proto::Writer w;
+        w.str(host_id_);
+        w.u16(data_port_);
+        return reply(Msg::net_details, w.buffer());
+    }
+    case Msg::ring_purge:
+        if (!r.done())
+            return malformed();
+        return purge(instance);
+    case Msg::stream_send:
+    case Msg::stream_recv:
+    case Msg::stream_remove:
+    case Msg::stream_stats:
+        return streams(instance, type, r);
+    default:
+        return rings(instance, type, r);
+    }
+}
+
+NetOutcome NetCommands::rings(const std::string &instance, uint8_t type, proto::Reader &r)
+{
+    std::string err;
+    switch (static_cast<Msg>(type)) {
+    case Msg::ring_create: {
+        RingCreateRequest req;
+        if (!decode_ring_create(r, req))
+            return malformed();
+        bool limit = false;
+        if (!rings_.create(instance, req, limit, err)) {
+            logf("instance %s: %s", instance.c_str(), err.c_str());
+            return error(limit ? Err::limit : Err::ring_failed, err);
+        }
+        logf("instance %s: ring %s %s (%u slots of %" PRIu64 " bytes, topic %s)",
+             instance.c_str(), req.name.c_str(), req.adopt ? "adopted" : "created", req.slots,
+             req.message_size, req.topic.c_str());
+        return ok();
+    }
+    case Msg::ring_retire: {
+        RingRetireRequest req;
+        if (!decode_ring_retire(r, req))
+            return malformed();
+        if (!rings_.retire(instance, req, err))
+            return error(Err::ring_failed, err);
+        logf("instance %s: ring %s retired into %s", instance.c_str(), req.old_name.c_str(),
+             req.successor.c_str());
+        return ok();
+    }
+    case Msg::ring_reader: {
+        RingReaderRequest req;
+        if (!decode_ring_reader(r, req))
+            return malformed();
+        return rings_.reader(instance, req, err) ? ok() : error(Err::ring_failed, err);
+    }
+    case Msg::ring_counts: {
+        RingCountsRequest req;
+        if (!decode_ring_counts(r, req))
+            return malformed();
+        return rings_.counts(instance, req, err) ? ok() : error(Err::ring_failed, err);
+    }
+    case Msg::ring_remove: {
+        std::string name;
+        if (!decode_ring_name(r, name))
+            return malformed();
+        if (!rings_.remove(instance, name, err))
+            return error(Err::ring_failed, err);
+        logf("instance %s: ring %s removed", instance.c_str(), name.c_str());
+        return ok();
+    }
+    case Msg::ring_seq: {
+        std::string name;
+        if (!decode_ring_name(r, name))
+            return malformed();
+        uint64_t seq = 0;
+        return rings_.write_seq(instance, name, seq, err) ? value(seq)
+                                                          : error(Err::ring_failed, err);
+    }
+    default:
+        return malformed(); // not reached: handles() admits only the types above
+    }
+}
+
+NetOutcome NetCommands::streams(const std::string &instance, uint8_t type, proto::Reader &r)
+{
+    NetOutcome refusal;
+    switch (static_cast<Msg>(type)) {
+    case Msg::stream_send: {
+        fwd::SendSpec spec;
+        if (!decode_stream_send(r, spec))
+            return malformed();
+        if (!admit(instance, spec.token, spec.ring, refusal))
+            return refusal;
+        std::string to = spec.host + ":" + std::to_string(spec.port);
+        return added(instance, spec.token, spec.ring, ("sending to " + to).c_str(),
+                     forwarder_.set_send(spec));
+    }
+    case Msg::stream_recv: {
+        fwd::RecvSpec spec;
+        if (!decode_stream_recv(r, spec))
+            return malformed();
+        if (!admit(instance, spec.token, spec.ring, refusal))
+            return refusal;
+        return added(instance, spec.token, spec.ring, "receiving", forwarder_.set_recv(spec));
+    }
+    case Msg::stream_remove: {
+        uint64_t token = 0;
+        if (!decode_stream_token(r, token))
+            return malformed();
+        auto it = streams_.find(token);
+        if (it == streams_.end() || it->second != instance)
+            return error(Err::unknown_stream,
+                         "no stream " + token_text(token) + " in instance " + instance);
+        streams_.erase(it);
+        forwarder_.remove(token);
+        logf("instance %s: stream %s removed", instance.c_str(), token_text(token).c_str());
+        return ok();
+    }
+    case Msg::stream_stats: {
+        if (!r.done())
+            return malformed();
+        std::vector<fwd::StreamStats> mine;
+        for (fwd::StreamStats &s : forwarder_.stats()) {
+            auto it = streams_.find(s.token);
+            if (it != streams_.end() && it->second == instance)
+                mine.push_back(std::move(s));
+        }
+        proto::Writer w;
+        encode_stream_list(w, forwarder_.totals(), mine);
+        return reply(Msg::stream_list, w.buffer());
+    }
+    default:
+        return malformed(); // not reached
+    }
+}
+
+bool NetCommands::admit(const std::string &instance, uint64_t token, const std::string &ring,
+                        NetOutcome &refusal) const
+{
+    std::string err;
+    if (!ring_in_namespace(instance, ring, err)) {
+        refusal = error(Err::stream_failed, err);
+        return false;
+    }
+    auto it = streams_.find(token);
+    if (it != streams_.end() && it->second != instance) {
+        refusal = error(Err::stream_failed,
+                        "stream token " + token_text(token) + " is in use by another instance");
+        return false;
+    }
+    if (it == streams_.end() && streams_.size() >= kMaxStreams) {
+        refusal = error(Err::limit,
+                        "too many streams (" + std::to_string(kMaxStreams) + ") on this daemon");
+        return false;
+    }
+    return true;
+}
+
+NetOutcome NetCommands::added(const std::string &instance, uint64_t token,
+                              const std::string &ring, const char *what,
+                              const std::string &verdict)
+{
+    if (!verdict.empty()) {
+        logf("instance %s: stream %s on %s not started: %s", instance.c_str(),
+             token_text(token).c_str(), ring.c_str(), verdict.c_str());
+        return error(Err::stream_failed, verdict);
+    }
+    streams_[token] = instance;
+    logf("instance %s: stream %s on %s %s", instance.c_str(), token_text(token).c_str(),
+         ring.c_str(), what);
+    return ok();
+}
+
+NetOutcome NetCommands::purge(const std::string &instance)
+{
+    size_t stopped = 0;
+    for (auto it = streams_.begin(); it != streams_.end();) {
+        if (it->second == instance) {
+            forwarder_.remove(it->first);
+            it = streams_.erase(it);
+            ++stopped;
+        } else {
+            ++it;
+        }
+    }
+    uint64_t count = 0;
+    std::string err;
+    if (!rings_.purge(instance, count, err))
+        return error(Err::ring_failed, err);
+    logf("instance %s: purged %" PRIu64 " segment(s), stopped %zu stream(s)", instance.c_str(),
+         count, stopped);
+    return value(count);
+}
+
+} // namespace lnd

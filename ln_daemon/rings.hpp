@@ -1,0 +1,72 @@
+// The topic rings this daemon administers for managers on other hosts, through libln's
+// ln_ring_admin_* functions (docs/daemon.md, "Rings and forwarding").  Each handle maps only
+// a segment's header.  A segment belongs to the instance whose namespace its name lies in,
+// "/ln.<sanitized instance>."; handles outlive the manager's connection and are closed when
+// the table goes (daemon exit), but segments are only unlinked on request, so a restarted
+// daemon can adopt them again.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "net_messages.hpp"
+
+struct ln_ring_admin;
+
+namespace lnd {
+
+constexpr size_t kMaxRings = 16384;     // handles per daemon, all instances
+constexpr double kMaxRetireTimeout = 10.0; // RING_RETIRE blocks the poll loop that long at most
+
+// The instance name as segment names carry it: every character other than A-Z a-z 0-9 _ -
+// becomes '_' (one '_' per UTF-8 character), as segments.sanitize_instance does.
+std::string sanitize_instance(const std::string &instance);
+// "/ln.<sanitized instance>."
+std::string ring_prefix(const std::string &instance);
+// True if `name` is a segment name in the instance's namespace: the prefix, then at least
+// one more byte and no further '/'; else false and a sentence in `error`.
+bool ring_in_namespace(const std::string &instance, const std::string &name,
+                       std::string &error);
+
+class RingTable {
+public:
+    RingTable();
+    ~RingTable(); // closes every handle; unlinks nothing
+    RingTable(const RingTable &) = delete;
+    RingTable &operator=(const RingTable &) = delete;
+
+    // Each returns false with a sentence in `error` if refused or if libln failed (then
+    // with ln_last_error()'s text); `limit` is set when the table is full.
+    bool create(const std::string &instance, const RingCreateRequest &req, bool &limit,
+                std::string &error);
+    bool retire(const std::string &instance, const RingRetireRequest &req, std::string &error);
+    bool reader(const std::string &instance, const RingReaderRequest &req, std::string &error);
+    bool counts(const std::string &instance, const RingCountsRequest &req, std::string &error);
+    bool write_seq(const std::string &instance, const std::string &name, uint64_t &seq,
+                   std::string &error);
+    // Closes the handle if there is one and unlinks the segment (gone already is fine).
+    bool remove(const std::string &instance, const std::string &name, std::string &error);
+    // Closes every handle of the instance's namespace and unlinks every segment in it,
+    // held or not; `count` is how many segments were unlinked.
+    bool purge(const std::string &instance, uint64_t &count, std::string &error);
+
+    size_t size() const noexcept { return rings_.size(); }
+
+private:
+    struct Closer {
+        void operator()(ln_ring_admin *admin) const noexcept;
+    };
+    using Handle = std::unique_ptr<ln_ring_admin, Closer>;
+
+    // The held handle of `name`, or nullptr with `error` (outside the namespace, not held).
+    ln_ring_admin *find(const std::string &instance, const std::string &name,
+                        std::string &error);
+    bool adopt(const RingCreateRequest &req, std::string &error);
+
+    std::map<std::string, Handle> rings_; // by segment name
+};
+
+} // namespace lnd

@@ -1,0 +1,328 @@
+// End-to-end tests of TCP forwarding on 127.0.0.1: every sample arrives in order; a
+// receiver that never answers or stops reading costs only queue drops, within the queue
+// bound; a receiving Forwarder that goes away and comes back on the same port gets the
+// stream again; hellos and frames that are wrong are refused and counted.
+#include <atomic>
+#include <cstdio>
+#include <memory>
+#include <netinet/tcp.h>
+#include <thread>
+#include <vector>
+
+#include "forward_test.hpp"
+#include "forward_wire.hpp"
+
+using namespace fwdtest;
+using lnd::fwd::Forwarder;
+using lnd::fwd::Options;
+using lnd::fwd::Transport;
+namespace wire = lnd::fwd::wire;
+
+namespace {
+
+constexpr uint64_t kToken = 0x5555666677778888ull;
+
+// A TCP listener on 127.0.0.1 with a tiny receive buffer; with `answer` a thread accepts one
+// connection, reads the hello and accepts the stream, then never reads again.
+class StuckReceiver {
+public:
+    explicit StuckReceiver(bool answer)
+        : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0))
+    {
+        int small = 4096;
+        ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+        sockaddr_in a = loopback(0);
+        LN_CHECK_EQ(::bind(fd_, reinterpret_cast<sockaddr *>(&a), sizeof a), 0);
+        LN_CHECK_EQ(::listen(fd_, 4), 0);
+        if (answer)
+            thread_ = std::thread([this] { serve(); });
+    }
+    ~StuckReceiver()
+    {
+        ::shutdown(fd_, SHUT_RDWR); // ends a pending accept
+        if (thread_.joinable())
+            thread_.join();
+        if (conn_ >= 0)
+            ::close(conn_);
+        ::close(fd_);
+    }
+    uint16_t port() const { return local_port(fd_); }
+
+private:
+    void serve()
+    {
+        conn_ = ::accept(fd_, nullptr, nullptr);
+        if (conn_ < 0)
+            return;
+        uint8_t hello[wire::kHelloSize];
+        if (::recv(conn_, hello, sizeof hello, MSG_WAITALL) != sizeof hello)
+            return;
+        wire::Hello h;
+        LN_CHECK(wire::decode_hello(hello, h));
+        uint8_t reply[wire::kReplySize];
+        wire::encode_reply(reply, {wire::Kind::accept, wire::Reject::none, h.token});
+        LN_CHECK_EQ(::send(conn_, reply, sizeof reply, MSG_NOSIGNAL), sizeof reply);
+    }
+
+    int fd_;
+    int conn_ = -1;
+    std::thread thread_;
+};
+
+// A plain TCP client of a receiving Forwarder, for hand-made hellos and frames.
+class Client {
+public:
+    explicit Client(uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0))
+    {
+        sockaddr_in a = loopback(port);
+        LN_CHECK_EQ(::connect(fd_, reinterpret_cast<sockaddr *>(&a), sizeof a), 0);
+    }
+    ~Client() { ::close(fd_); }
+    void send(const void *p, size_t n)
+    {
+        LN_CHECK_EQ(::send(fd_, p, n, MSG_NOSIGNAL), static_cast<ssize_t>(n));
+    }
+    // The reply, or kind hello (never sent by a receiver) if the connection ended.
+    wire::Reply reply()
+    {
+        uint8_t raw[wire::kReplySize];
+        wire::Reply r;
+        r.kind = wire::Kind::hello;
+        if (::recv(fd_, raw, sizeof raw, MSG_WAITALL) == sizeof raw)
+            LN_CHECK(wire::decode_reply(raw, r));
+        return r;
+    }
+    // True once the receiver closed the connection.
+    bool closed_by_peer()
+    {
+        char byte;
+        return ::recv(fd_, &byte, 1, 0) == 0;
+    }
+
+private:
+    int fd_;
+};
+
+void test_every_sample_in_order()
+{
+    constexpr uint64_t kSamples = 2000;
+    TestRing src(256, 512), dst(256, 1024);
+    Forwarder rx(local_options()), tx(local_options());
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())), "");
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
+    Reader reader(dst);
+    Publisher pub(src);
+    uint64_t published = 0, received = 0;
+    while (received < kSamples && !ln_test_failures) {
+        // Stay well within both rings, so that nothing is lost before the network.
+        while (published < kSamples && published - received < 256)
+            LN_CHECK_EQ(pub.publish(++published), LN_OK);
+        if (reader.read(30) != LN_OK) {
+            LN_CHECK(!"sample arrived");
+            break;
+        }
+        ++received;
+        LN_CHECK_EQ(reader.info.seq, received);
+        LN_CHECK_EQ(reader.info.overruns, 0);
+        LN_CHECK_EQ(reader.info.timestamp_ns, stamp(received));
+        LN_CHECK(matches(reader.buf.data(), reader.buf.size(), received));
+    }
+    LN_CHECK_EQ(received, kSamples);
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).samples == kSamples; }));
+    auto s = stats_of(tx, kToken, true);
+    LN_CHECK_EQ(s.drops, 0);
+    LN_CHECK_EQ(s.bytes, kSamples * 256);
+    LN_CHECK(s.connected);
+    CHECK_STR(s.last_error, "");
+    // Counted right after the write into the ring, which the reader may see first.
+    LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).samples == kSamples; }));
+    auto r = stats_of(rx, kToken, false);
+    LN_CHECK_EQ(r.samples, kSamples);
+    LN_CHECK_EQ(r.drops + r.stale + r.invalid, 0);
+    LN_CHECK(r.connected);
+    LN_CHECK(r.peer.rfind("127.0.0.1:", 0) == 0);
+}
+
+// Nobody answers the hello: the queue fills up to its bound and every further sample is a
+// counted drop.  The publisher is never held up (its writes just succeed).
+void test_receiver_never_answers()
+{
+    TestRing src(1024, 128);
+    StuckReceiver stuck(false);
+    Options o = local_options();
+    o.tcp_queue_samples = 8;
+    Forwarder tx(o);
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port())), "");
+    Publisher pub(src);
+    for (uint64_t seq = 1; seq <= 100; ++seq)
+        LN_CHECK_EQ(pub.publish(seq), LN_OK);
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).drops >= 92; }));
+    auto s = stats_of(tx, kToken, true);
+    LN_CHECK_EQ(s.drops, 92); // the newest 8 wait in the queue
+    LN_CHECK_EQ(s.samples, 0);
+    LN_CHECK(!s.connected);
+}
+
+// The receiver accepted the stream and then stopped reading: the socket buffers fill, the
+// writer waits, the queue stays within its bound and the rest is dropped and counted.
+void test_receiver_stops_reading()
+{
+    constexpr uint64_t kSamples = 300, kQueue = 16;
+    TestRing src(64 * 1024, 512);
+    StuckReceiver stuck(true);
+    Options o = local_options();
+    o.tcp_queue_samples = kQueue;
+    o.socket_buffer = 4096;
+    Forwarder tx(o);
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port())), "");
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
+    Publisher pub(src);
+    for (uint64_t seq = 1; seq <= kSamples; ++seq)
+        LN_CHECK_EQ(pub.publish(seq), LN_OK);
+    // Samples neither sent nor dropped are held by the stream: at most the queue bound.
+    LN_CHECK(wait_until([&] {
+        auto s = stats_of(tx, kToken, true);
+        return s.samples + s.drops >= kSamples - kQueue;
+    }));
+    auto s = stats_of(tx, kToken, true);
+    LN_CHECK(s.drops > 0);
+    LN_CHECK(s.samples + s.drops <= kSamples);
+    LN_CHECK(s.samples < kSamples / 2); // the stuck connection really took only a few
+    LN_CHECK(s.connected);
+    std::printf("    stuck receiver: %llu sent into socket buffers, %llu dropped\n",
+                static_cast<unsigned long long>(s.samples),
+                static_cast<unsigned long long>(s.drops));
+    // tx is destroyed while its writer waits on the full socket.
+}
+
+// The receiving Forwarder goes away and a new one comes up on the same port: the sender
+// notices, keeps what it could not send, reconnects and delivers everything in order.
+void test_reconnect()
+{
+    TestRing src(128, 256), dst(128, 256);
+    Options ro = local_options();
+    auto rx = std::make_unique<Forwarder>(ro);
+    uint16_t port = rx->data_port();
+    Forwarder tx(local_options());
+    CHECK_STR(rx->set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, port)), "");
+    Reader reader(dst);
+    Publisher pub(src);
+    for (uint64_t seq = 1; seq <= 10; ++seq)
+        LN_CHECK_EQ(pub.publish(seq), LN_OK);
+    LN_CHECK(wait_until([&] { return dst.newest() == 10; }));
+    LN_CHECK(stats_of(tx, kToken, true).connected);
+
+    rx.reset();
+    LN_CHECK(wait_until([&] { return !stats_of(tx, kToken, true).connected; }));
+    for (uint64_t seq = 11; seq <= 20; ++seq)
+        LN_CHECK_EQ(pub.publish(seq), LN_OK);
+    LN_CHECK(stats_of(tx, kToken, true).last_error != "");
+
+    ro.data_port = port;
+    rx = std::make_unique<Forwarder>(ro);
+    CHECK_STR(rx->set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
+    LN_CHECK_EQ(pub.publish(21), LN_OK);
+    LN_CHECK(wait_until([&] { return dst.newest() == 21; }));
+    for (uint64_t seq = 1; seq <= 21; ++seq) {
+        LN_CHECK_EQ(reader.read(0), LN_OK);
+        LN_CHECK_EQ(reader.info.seq, seq);
+        LN_CHECK(matches(reader.buf.data(), reader.buf.size(), seq));
+    }
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).samples == 21; }));
+    LN_CHECK_EQ(stats_of(tx, kToken, true).drops, 0);
+    LN_CHECK(stats_of(*rx, kToken, false).connected);
+}
+
+// A sender whose token the receiver does not know, or whose layout differs, is refused; the
+// sender says why and keeps trying.
+void test_refused_streams()
+{
+    TestRing src(128, 8), dst(128, 8), udp_dst(128, 8);
+    Forwarder rx(local_options()), tx(local_options());
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())), "");
+    LN_CHECK(wait_until([&] { return rx.totals().unknown_stream >= 1; }));
+    LN_CHECK(wait_until([&] {
+        return stats_of(tx, kToken, true).last_error.find("no TCP stream") != std::string::npos;
+    }));
+    CHECK_STR(rx.set_recv(recv_spec(kToken, udp_dst, Transport::udp)), ""); // wrong transport
+    uint64_t unknown = rx.totals().unknown_stream;
+    LN_CHECK(wait_until([&] { return rx.totals().unknown_stream > unknown; }));
+    LN_CHECK(!stats_of(tx, kToken, true).connected);
+
+    auto spec = recv_spec(kToken, dst, Transport::tcp);
+    CHECK_STR(rx.set_recv(spec), "");
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
+    // The receiver's ring has another layout than the sender's: refused, counted there.
+    TestRing other(128, 8, kHash + 1);
+    CHECK_STR(rx.set_recv(recv_spec(kToken, other, Transport::tcp)), "");
+    LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).invalid >= 1; }));
+    LN_CHECK(wait_until([&] {
+        return stats_of(tx, kToken, true).last_error.find("layout") != std::string::npos;
+    }));
+    LN_CHECK(!stats_of(tx, kToken, true).connected);
+    LN_CHECK_EQ(other.newest(), 0);
+}
+
+// Hellos and frames that are wrong end their connection and are counted; nothing of them
+// reaches the ring.
+void test_bad_hello_and_frames()
+{
+    TestRing dst(128, 8);
+    Forwarder rx(local_options());
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
+    {
+        Client c(rx.data_port());
+        uint8_t junk[wire::kHelloSize];
+        std::memset(junk, 0x5a, sizeof junk);
+        c.send(junk, sizeof junk);
+        LN_CHECK(c.closed_by_peer());
+        LN_CHECK_EQ(rx.totals().malformed, 1);
+    }
+    {
+        Client c(rx.data_port());
+        uint8_t hello[wire::kHelloSize];
+        wire::encode_hello(hello, {kToken, 128, kHash});
+        c.send(hello, sizeof hello);
+        LN_CHECK(c.reply().kind == wire::Kind::accept);
+        LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).connected; }));
+        uint8_t head[wire::kFrameHeaderSize];
+        wire::encode_frame_header(head, {1, stamp(1), 129});
+        c.send(head, sizeof head); // the size is refused before any payload is read
+        LN_CHECK(c.closed_by_peer());
+        LN_CHECK(wait_until([&] { return !stats_of(rx, kToken, false).connected; }));
+    }
+    auto r = stats_of(rx, kToken, false);
+    LN_CHECK_EQ(r.invalid, 1);
+    LN_CHECK_EQ(r.samples, 0);
+    LN_CHECK(r.last_error.find("129") != std::string::npos);
+    LN_CHECK_EQ(dst.newest(), 0);
+    {
+        Client c(rx.data_port()); // a good frame still goes in
+        uint8_t hello[wire::kHelloSize];
+        wire::encode_hello(hello, {kToken, 128, kHash});
+        c.send(hello, sizeof hello);
+        LN_CHECK(c.reply().kind == wire::Kind::accept);
+        uint8_t frame[wire::kFrameHeaderSize + 128];
+        wire::encode_frame_header(frame, {3, stamp(3), 128});
+        fill(frame + wire::kFrameHeaderSize, 128, 3);
+        c.send(frame, sizeof frame);
+        LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).samples == 1; }));
+    }
+    LN_CHECK_EQ(dst.newest(), 3);
+}
+
+} // namespace
+
+int main()
+{
+    LN_TEST_RUN(test_every_sample_in_order);
+    LN_TEST_RUN(test_receiver_never_answers);
+    LN_TEST_RUN(test_receiver_stops_reading);
+    LN_TEST_RUN(test_reconnect);
+    LN_TEST_RUN(test_refused_streams);
+    LN_TEST_RUN(test_bad_hello_and_frames);
+    LN_TEST_EXIT();
+}
