@@ -39,6 +39,8 @@ const Options &checked(const Options &o)
         invalid("the TCP queue bounds must be at least 1");
     if (!(o.udp_incomplete_timeout > 0))
         invalid("udp_incomplete_timeout must be positive");
+    if (!(o.udp_max_rate >= 0) || o.udp_max_rate > 1e15)
+        invalid("udp_max_rate must be 0 (no limit) or a rate in bytes per second");
     return o;
 }
 

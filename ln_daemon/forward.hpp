@@ -60,6 +60,8 @@ struct Options {
     size_t udp_reassembly_bytes = 256u << 20; // memory of all reassembly buffers, at most
     double udp_incomplete_timeout = 1.0;      // seconds without a fragment before an
                                               // incomplete sample is given up
+    double udp_max_rate = 0;                  // bytes/s per UDP sending stream (datagrams
+                                              // with headers), bursts of 64 KiB; 0: no limit
     int socket_buffer = 64 << 20;             // SO_RCVBUF(FORCE)/SO_SNDBUF wanted
     size_t tcp_queue_samples = 1024;          // per TCP sending stream, at most (with the
     size_t tcp_queue_bytes = 256u << 20;      // sample being sent; one read buffer on top)

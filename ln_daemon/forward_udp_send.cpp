@@ -20,6 +20,15 @@ constexpr double kReadTimeout = 0.1;       // s: how soon a stop is noticed
 constexpr auto kResolveInterval = std::chrono::seconds(1);
 constexpr int kRefusedRetries = 3;         // per sample, see send_sample
 constexpr int64_t kMinBackoffUs = 50, kMaxBackoffUs = 5000; // after ENOBUFS
+constexpr double kBurstBytes = 64 * 1024; // with a rate limit: sent at once, at most
+
+// Datagrams per sendmmsg: with a rate limit no more than fit one burst (at least one).
+unsigned batch_size(double rate, size_t datagram)
+{
+    if (rate <= 0)
+        return kBatch;
+    return static_cast<unsigned>(std::clamp<double>(kBurstBytes / datagram, 1, kBatch));
+}
 
 } // namespace
 
@@ -37,7 +46,8 @@ std::string UdpSender::create(const SendSpec &spec, const Options &options,
 
 UdpSender::UdpSender(const SendSpec &spec, const Options &options, Tap tap)
     : SendStream(spec), tap_(std::move(tap)), chunk_(static_cast<uint16_t>(options.udp_payload)),
-      socket_buffer_(options.socket_buffer),
+      socket_buffer_(options.socket_buffer), rate_(options.udp_max_rate),
+      batch_(batch_size(rate_, wire::kFragmentHeaderSize + chunk_)),
       sample_(new uint8_t[spec.message_size ? spec.message_size : 1]),
       headers_(kBatch * wire::kFragmentHeaderSize), msgs_(kBatch), iov_(2 * kBatch)
 {
@@ -89,6 +99,21 @@ void UdpSender::open_socket()
     counters_.set_error(error);
 }
 
+bool UdpSender::pace(size_t bytes)
+{
+    // A token bucket of kBurstBytes filled at rate_: a small sample finds it full and goes
+    // at once; a large one is spread out so no receiver or switch buffer has to take it in
+    // one burst.
+    auto now = std::chrono::steady_clock::now();
+    std::chrono::duration<double> elapsed = now - last_pace_;
+    last_pace_ = now;
+    credit_ = std::min(kBurstBytes, credit_ + elapsed.count() * rate_);
+    credit_ -= static_cast<double>(bytes);
+    if (credit_ >= 0)
+        return true;
+    return !stop_.sleep_us(static_cast<int64_t>(-credit_ / rate_ * 1e6));
+}
+
 UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
 {
     if (reopen_)
@@ -107,8 +132,14 @@ UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
 
     int refused = 0;
     int64_t backoff_us = kMinBackoffUs;
-    for (uint32_t first = 0; first < f.count; first += kBatch) {
-        unsigned n = std::min<uint32_t>(kBatch, f.count - first);
+    for (uint32_t first = 0; first < f.count; first += batch_) {
+        unsigned n = std::min<uint32_t>(batch_, f.count - first);
+        if (rate_ > 0) {
+            uint64_t offset = static_cast<uint64_t>(first) * chunk_;
+            uint64_t payload = std::min<uint64_t>(uint64_t(n) * chunk_, f.sample_size - offset);
+            if (!pace(n * wire::kFragmentHeaderSize + payload))
+                return Sent::stopped;
+        }
         for (unsigned i = 0; i < n; ++i) {
             uint32_t index = first + i;
             uint8_t *h = headers_.data() + i * wire::kFragmentHeaderSize;

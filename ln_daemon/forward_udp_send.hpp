@@ -1,7 +1,7 @@
 // The sending end of a UDP stream: one thread reads the newest sample from the ring's tap
-// and sends it at once, cut into fragments, with sendmmsg in batches.  Nothing is queued:
-// a sample published while the previous one is still being sent is skipped if a newer one
-// follows before the send ends (counted in drops).
+// and sends it at once, cut into fragments, with sendmmsg in batches (paced when the stream
+// has a rate limit).  Nothing is queued: a sample published while the previous one is still
+// being sent is skipped if a newer one follows before the send ends (counted in drops).
 #pragma once
 
 #include <chrono>
@@ -39,10 +39,16 @@ private:
     // (Re)resolves the destination and makes a connected socket for it; a failure keeps the
     // previous socket, if any.  Resolving happens at most once per kResolveInterval.
     void open_socket();
+    // With a rate limit: waits until `bytes` more may go; false if stopped meanwhile.
+    bool pace(size_t bytes);
 
     Tap tap_;
     const uint16_t chunk_;
     const int socket_buffer_;
+    const double rate_;    // bytes per second, 0: no limit
+    const unsigned batch_; // datagrams per sendmmsg
+    double credit_ = 0;    // bytes that may go now (token bucket)
+    std::chrono::steady_clock::time_point last_pace_{};
     std::unique_ptr<uint8_t[]> sample_;
     UniqueFd sock_;
     bool reopen_ = true; // the next sample first resolves and opens again
