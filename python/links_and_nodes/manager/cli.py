@@ -211,7 +211,20 @@ def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> A
         args.port = int(port)
     if host.strip("[]") and args.host == "127.0.0.1":
         args.host = host.strip("[]")
+    elif not host.strip("[]") and args.host == "127.0.0.1" and _spans_hosts(config):
+        # clients on the other hosts must reach the manager
+        args.host = "0.0.0.0"
     return config
+
+
+def _spans_hosts(config: Any) -> bool:
+    """True if a process or state of the configuration runs on another host."""
+    from .daemons import DaemonPool
+
+    pool = DaemonPool(config, config.instance.name, start_local=False)
+    nodes = [p.node for p in config.processes.values()]
+    nodes += [s.node for s in config.states.values() if s.node]
+    return any(not pool.is_local(node) for node in nodes)
 
 
 def main(argv: list[str] | None = None) -> int:

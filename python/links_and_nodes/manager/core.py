@@ -76,6 +76,11 @@ class HostRings(Protocol):
 
     def host_label(self, client: Client) -> str: ...
 
+    def service_host(self, caller: Client, provider: Client, tcp_host: str) -> str:
+        """The provider's TCP address as the caller reaches it: a loopback address (the
+        provider talks to the manager over loopback) becomes its host's network address."""
+        ...
+
     async def identify(self, client: Client) -> None:
         """Wait (boundedly) until the client's host is known, e.g. while the daemon that
         started it has not told its host id yet."""
@@ -267,8 +272,11 @@ class Core:
         if isinstance(msg, p.FindService):
             service = services.find(msg.name, msg.md_name, msg.layout_hash)
             o = service.offer
+            tcp_host = o.tcp_host
+            if self.hosts is not None:
+                tcp_host = self.hosts.service_host(client, service.provider, tcp_host)
             return p.ServiceInfo(msg.request_id, service.provider.name, o.host_id,
-                                 o.unix_path, o.tcp_host, o.tcp_port, o.signature)
+                                 o.unix_path, tcp_host, o.tcp_port, o.signature)
         service = services.called(client, msg.name, msg.calls, msg.errors)
         log.debug("%s: service %r: %d calls, %d errors", session.label, service.name,
                   service.calls, service.errors)

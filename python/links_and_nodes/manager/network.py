@@ -196,6 +196,15 @@ class Network:
                 return host.name
         return "localhost"
 
+    def service_host(self, caller: Client, provider: Client, tcp_host: str) -> str:
+        if tcp_host.strip("[]") not in ("127.0.0.1", "::1", "localhost", "0.0.0.0", "::") \
+                and not tcp_host.startswith("127."):
+            return tcp_host
+        src, dst = self._client_host(caller), self._client_host(provider)
+        if src is None or dst is None or src == dst:
+            return tcp_host
+        return routes.host_address(self.config, src, dst) or tcp_host
+
     def _known(self, host_id: str) -> bool:
         return (not host_id or host_id == self.local_id
                 or any(h.host_id == host_id for h in self.hosts.values()))
