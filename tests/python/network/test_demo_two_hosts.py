@@ -11,7 +11,7 @@ import re
 import sys
 from pathlib import Path
 
-from conftest import DAEMON_PORT, ROOT, System
+from .conftest import DAEMON_PORT, ROOT, System
 from polling import wait_for
 
 SINGLE = ROOT / "examples" / "robot" / "robot.lnc"

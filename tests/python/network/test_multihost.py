@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import sys
 
-from conftest import DAEMON_PORT, System
+from .conftest import DAEMON_PORT, System
 from polling import wait_for
 
 TIMEOUT = 60.0

@@ -1,0 +1,1 @@
+"""Topics and services across hosts, in network namespaces."""
