@@ -8,6 +8,7 @@
 #include <cstring>
 #include <ctime>
 #include <sys/socket.h>
+#include <thread>
 
 namespace lnd::fwd {
 
@@ -38,7 +39,8 @@ int64_t seconds_to_ns(double s) noexcept
 UdpReceiver::UdpReceiver(int fd, RecvTable &table, TotalCounters &totals,
                          const Options &options)
     : fd_(fd), table_(table), totals_(totals),
-      max_idle_ns_(seconds_to_ns(options.udp_incomplete_timeout))
+      max_idle_ns_(seconds_to_ns(options.udp_incomplete_timeout)),
+      spin_ns_(int64_t{options.spin_us} * 1000)
 {
 }
 
@@ -166,7 +168,16 @@ void UdpReceiver::run()
             msgs[i].msg_hdr.msg_iov = &iov[i];
             msgs[i].msg_hdr.msg_iovlen = 1;
         }
-        int n = ::recvmmsg(fd_, msgs, kBatch, MSG_WAITFORONE, nullptr);
+        int n = -1;
+        if (spin_ns_ > 0) { // a datagram that comes soon is taken without a wake-up
+            for (int64_t end = monotonic_ns() + spin_ns_;
+                 (n = ::recvmmsg(fd_, msgs, kBatch, MSG_DONTWAIT, nullptr)) < 0
+                 && errno == EAGAIN && monotonic_ns() < end
+                 && !stop_.load(std::memory_order_acquire);)
+                std::this_thread::yield();
+        }
+        if (n < 0)
+            n = ::recvmmsg(fd_, msgs, kBatch, MSG_WAITFORONE, nullptr);
         int err = errno;
         int64_t now = monotonic_ns();
         if (table_.generation() != cache_generation_) {

@@ -36,6 +36,7 @@ private:
     RecvTable &table_;
     TotalCounters &totals_;
     const int64_t max_idle_ns_;
+    const int64_t spin_ns_; // poll the socket this long before blocking
     std::atomic<bool> stop_{false};
     std::thread thread_;
     // Receive thread only: lookups since the table last changed.

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <netinet/in.h>
 #include <poll.h>
+#include <thread>
 
 #include "forward_wire.hpp"
 
@@ -21,6 +22,13 @@ constexpr auto kResolveInterval = std::chrono::seconds(1);
 constexpr int kRefusedRetries = 3;         // per sample, see send_sample
 constexpr int64_t kMinBackoffUs = 50, kMaxBackoffUs = 5000; // after ENOBUFS
 constexpr double kBurstBytes = 64 * 1024; // with a rate limit: sent at once, at most
+
+int64_t now_ns()
+{
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
 
 // Datagrams per sendmmsg: with a rate limit no more than fit one burst (at least one).
 unsigned batch_size(double rate, size_t datagram)
@@ -46,7 +54,8 @@ std::string UdpSender::create(const SendSpec &spec, const Options &options,
 
 UdpSender::UdpSender(const SendSpec &spec, const Options &options, Tap tap)
     : SendStream(spec), tap_(std::move(tap)), chunk_(static_cast<uint16_t>(options.udp_payload)),
-      socket_buffer_(options.socket_buffer), rate_(options.udp_max_rate),
+      socket_buffer_(options.socket_buffer), spin_ns_(int64_t{options.spin_us} * 1000),
+      rate_(options.udp_max_rate),
       batch_(batch_size(rate_, wire::kFragmentHeaderSize + chunk_)),
       sample_(new uint8_t[spec.message_size ? spec.message_size : 1]),
       headers_(kBatch * wire::kFragmentHeaderSize), msgs_(kBatch), iov_(2 * kBatch)
@@ -200,7 +209,15 @@ void UdpSender::run()
 {
     while (!stop_.raised()) {
         ln_sample_info info;
-        int rc = ln_ring_tap_read(tap_.get(), sample_.get(), &info, kReadTimeout);
+        int rc = LN_ETIMEOUT;
+        if (spin_ns_ > 0) { // a sample that comes soon is taken without a futex wake-up
+            for (int64_t end = now_ns() + spin_ns_;
+                 (rc = ln_ring_tap_read(tap_.get(), sample_.get(), &info, 0)) == LN_ETIMEOUT
+                 && now_ns() < end && !stop_.raised();)
+                std::this_thread::yield();
+        }
+        if (rc == LN_ETIMEOUT)
+            rc = ln_ring_tap_read(tap_.get(), sample_.get(), &info, kReadTimeout);
         if (rc == LN_ETIMEOUT)
             continue;
         if (rc != LN_OK) {

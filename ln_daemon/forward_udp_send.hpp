@@ -45,6 +45,7 @@ private:
     Tap tap_;
     const uint16_t chunk_;
     const int socket_buffer_;
+    const int64_t spin_ns_; // poll the tap this long before sleeping
     const double rate_;    // bytes per second, 0: no limit
     const unsigned batch_; // datagrams per sendmmsg
     double credit_ = 0;    // bytes that may go now (token bucket)

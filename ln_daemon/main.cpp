@@ -35,6 +35,7 @@ constexpr size_t kMinFragment = 256, kMaxFragment = 65000; // --udp-fragment-siz
 const char kUsage[] =
     "usage: ln_daemon [--port P] [--bind ADDR] --key-file FILE [--log FILE] [--foreground]\n"
     "                 [--data-port P] [--advertise-data-port P] [--udp-fragment-size N]\n"
+    "                 [--spin-us N]\n"
     "\n"
     "Supervises processes for ln_manager instances on this host and forwards topics\n"
     "between hosts (docs/daemon.md).\n"
@@ -49,7 +50,9 @@ const char kUsage[] =
     "  --advertise-data-port P\n"
     "                  the data port managers are told (default: the real one; for relays)\n"
     "  --udp-fragment-size N\n"
-    "                  payload bytes per forwarded UDP datagram, 256..65000 (default 1400)\n";
+    "                  payload bytes per forwarded UDP datagram, 256..65000 (default 1400)\n"
+    "  --spin-us N     UDP forwarding polls up to N microseconds for the next sample or\n"
+    "                  datagram before sleeping, 0..10000 (default 0: lower latency for CPU)\n";
 
 int fail(const std::string &text)
 {
@@ -169,6 +172,7 @@ int main(int argc, char **argv)
     bool foreground = false;
     long data_port = -1, advertised_port = -1; // -1: the default
     unsigned long fragment = lnd::fwd::Options().udp_payload;
+    unsigned long spin_us = 0;
     static const option options[] = {
         {"port", required_argument, nullptr, 'p'},
         {"bind", required_argument, nullptr, 'b'},
@@ -178,6 +182,7 @@ int main(int argc, char **argv)
         {"data-port", required_argument, nullptr, 'd'},
         {"advertise-data-port", required_argument, nullptr, 'a'},
         {"udp-fragment-size", required_argument, nullptr, 's'},
+        {"spin-us", required_argument, nullptr, 'w'},
         {"help", no_argument, nullptr, 'h'},
         {nullptr, 0, nullptr, 0},
     };
@@ -213,6 +218,10 @@ int main(int argc, char **argv)
         case 's':
             if (!parse_number(optarg, kMinFragment, kMaxFragment, fragment))
                 return usage_error("--udp-fragment-size needs a number 256..65000");
+            break;
+        case 'w':
+            if (!parse_number(optarg, 0, 10000, spin_us))
+                return usage_error("--spin-us needs a number 0..10000");
             break;
         case 'h':
             std::fputs(kUsage, stdout);
@@ -298,6 +307,7 @@ int main(int argc, char **argv)
     fwd_options.bind_address = bind;
     fwd_options.data_port = static_cast<uint16_t>(data_port);
     fwd_options.udp_payload = fragment;
+    fwd_options.spin_us = static_cast<unsigned>(spin_us);
     std::unique_ptr<lnd::fwd::Forwarder> forwarder;
     try {
         forwarder = std::make_unique<lnd::fwd::Forwarder>(fwd_options);

@@ -139,6 +139,8 @@ def main() -> int:
     parser.add_argument("--force-multihost", action="store_true",
                         help="run the ln a->b cases even where the multi-host system looks "
                              "missing (to try a partial implementation)")
+    parser.add_argument("--daemon-spin-us", type=int, default=0,
+                        help="ln_daemon --spin-us of both daemons (default 0: no polling)")
     parser.add_argument("--build-dir", type=Path, default=REPO / "build" / "release",
                         help="SCons variant directory with bench/network/ (build/release)")
     parser.add_argument("--json", type=Path, default=REPO / "bench" / "results" / "network.json",
@@ -160,7 +162,9 @@ def main() -> int:
 
     with tempfile.TemporaryDirectory(prefix="ln_bench_network_") as tmp, \
             NetLab(Path(tmp)) as netlab:
-        lab = Lab(netlab, bin_dir, args.force_multihost)
+        daemon_args = (("--spin-us", str(args.daemon_spin_us))
+                       if args.daemon_spin_us else ())
+        lab = Lab(netlab, bin_dir, args.force_multihost, daemon_args)
         bench = Bench(lab, args.quick)
         runs = run_all(bench, rounds)
         shm_left = lab.shm_left()
@@ -171,7 +175,7 @@ def main() -> int:
           f"transport + {report.GOAL_ADD_US:g} µs (UDP: raw UDP, TCP: raw TCP); 1 MiB "
           "throughput over UDP and TCP beside raw TCP")
     print(f"hosts: network namespaces a, b, mgr on one bridge (veth), on {os.cpu_count()} "
-          f"CPUs shared by all; load average at start {load_start[0]:.2f}, at end "
+          f"CPUs shared by all; ln_daemon --spin-us {args.daemon_spin_us}; load average at start {load_start[0]:.2f}, at end "
           f"{os.getloadavg()[0]:.2f}; python {platform.python_version()}, kernel "
           f"{platform.release()}"
           + ("; --quick: a smoke run, the numbers are not a measurement" if args.quick else ""))

@@ -72,7 +72,8 @@ class Lab:
     """The run's lab: hosts a, b and mgr, an ln_daemon on a and b (with a data port where
     the daemon has one), and the programs of bench/network."""
 
-    def __init__(self, lab: NetLab, bin_dir: Path, force_multihost: bool = False) -> None:
+    def __init__(self, lab: NetLab, bin_dir: Path, force_multihost: bool = False,
+                 daemon_args: tuple[str, ...] = ()) -> None:
         from links_and_nodes.manager.daemon_client import daemon_executable
 
         self.lab = lab
@@ -84,7 +85,8 @@ class Lab:
         self.multihost_missing = None if force_multihost else missing
         data_port = None if missing else DATA_PORT
         self.daemons: dict[str, DaemonProc] = {
-            h.name: h.start_daemon(lab.key_file, data_port=data_port) for h in (self.a, self.b)}
+            h.name: h.start_daemon(lab.key_file, data_port=data_port, extra_args=daemon_args)
+            for h in (self.a, self.b)}
 
     def path(self, stem: str) -> Path:
         self.serial += 1
