@@ -119,3 +119,40 @@ def test_unroutable_pair_is_a_problem_not_a_stream() -> None:
     assert net.desired() == {}
     (problem,) = net.problems.values()
     assert "'a'" in problem and "'z'" in problem
+
+
+async def test_console_shows_streams_and_pairs() -> None:
+    import io
+
+    from links_and_nodes.manager.console import Console
+
+    class _Control:
+        async def handle(self, command: dict[str, Any]) -> dict[str, Any]:
+            if command["op"] == "hosts":
+                return {"ok": True, "hosts": [
+                    {"name": "a", "state": "up", "error": "", "host_id": "id-a",
+                     "data_port": 54377, "local": True, "for_s": 3.0},
+                    {"name": "b", "state": "unreachable", "error": "no answer from its "
+                     "ln_daemon", "host_id": "", "data_port": 0, "local": False,
+                     "for_s": 1.0}]}
+            return {"ok": True, "streams": [
+                {"topic": "arm.state", "src": "a", "dst": "b", "transport": "udp",
+                 "msgs_per_s": 1000.0, "bytes_per_s": 180000, "sent": 5000,
+                 "received": 4990, "drops": 10, "stale": 2, "error": ""}],
+                "pairs": [{"src": "a", "dst": "b", "topics": 1, "msgs_per_s": 1000.0,
+                           "bytes_per_s": 180000, "drops": 10}],
+                "problems": [{"topic": "x", "src": "a", "dst": "z",
+                              "error": "no route"}]}
+
+    out = io.StringIO()
+    console = Console(_Control(), out)  # type: ignore[arg-type]
+    await console.execute("network")
+    await console.execute("hosts")
+    text = out.getvalue().splitlines()
+    assert any(line.split()[:4] == ["arm.state", "a", "b", "udp"] and "180.0 KB" in line
+               and "4990" in line for line in text), text
+    assert any(line.split()[:3] == ["a", "b", "1"] for line in text), text
+    assert any(line.startswith("x ") and line.endswith("no route") for line in text), text
+    assert any(line.startswith("a *") and "54377" in line for line in text), text
+    assert any(line.startswith("b ") and "unreachable" in line
+               and line.endswith("no answer from its ln_daemon") for line in text), text
