@@ -189,3 +189,35 @@ def test_unreachable_host_is_reported_and_others_go_on(system: System) -> None:
     system.lab["c"].reconnect()
     wait_for(lambda: {h["name"]: h for h in mgr.hosts()}["c"]["state"] == "up",
              "c back", timeout=TIMEOUT)
+
+
+def test_forwarding_through_a_gateway_host(system: System) -> None:
+    """a and b share no network (as the .lnc declares them), c is in both: samples go
+    a -> c -> b, c holding a ring of the topic only to pass them on."""
+    for host in "abc":
+        system.start_daemon(host)
+    networks = """network left
+member_interfaces: a/eth0, c/eth0
+
+network right
+member_interfaces: c/eth0, b/eth0
+"""
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.far nettest/sample --rate 100", "publishing")
+        + system.process("sub", "b", "sub net.far nettest/sample", "subscribed"),
+        extra=networks)
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    got = wait_for(lambda: len(r := system.received(system.output("sub"))) >= 50 and r,
+                   "b to receive through c")
+    assert all(seq == counter for seq, counter, _ in got)
+    hops = {(s["src"], s["dst"]) for s in mgr.network()["streams"] if s["topic"] == "net.far"}
+    assert hops == {("a", "c"), ("c", "b")}, hops
+    shm = system.lab["c"].path("/dev/shm")
+    assert [f for f in shm.iterdir() if system.instance in f.name], "no ring on the gateway"
+    mgr.stop("sub")
+    wait_for(lambda: not [s for s in mgr.network()["streams"] if s["topic"] == "net.far"],
+             "the streams to end with the last remote subscriber")
+    wait_for(lambda: not [f for f in shm.iterdir() if system.instance in f.name],
+             "the gateway's ring to go with its streams")
