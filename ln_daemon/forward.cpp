@@ -62,7 +62,7 @@ struct Forwarder::Impl {
         : options(checked(o)),
           sockets(bind_data_sockets(o.bind_address, o.data_port, o.socket_buffer)),
           budget(o.udp_reassembly_bytes), udp(sockets.udp.get(), receivers, totals, options),
-          tcp(sockets.tcp.get(), receivers, totals)
+          tcp(sockets.tcp.get(), receivers, totals, options.spin_us)
     {
         udp.start();
         try {

@@ -65,9 +65,9 @@ struct Options {
     int socket_buffer = 64 << 20;             // SO_RCVBUF(FORCE)/SO_SNDBUF wanted
     size_t tcp_queue_samples = 1024;          // per TCP sending stream, at most (with the
     size_t tcp_queue_bytes = 256u << 20;      // sample being sent; one read buffer on top)
-    // UDP sender and receiver: poll (yielding the CPU) for up to this many microseconds for
-    // the next sample / datagram before sleeping, which saves a wake-up per hop on hosts
-    // with CPUs to spare; 0 sleeps at once.
+    // Senders and receivers: poll (yielding the CPU) for up to this many microseconds for
+    // the next sample / datagram / frame before sleeping, which saves a wake-up per hop on
+    // hosts with CPUs to spare; 0 sleeps at once.
     unsigned spin_us = 0;
 };
 

@@ -10,6 +10,7 @@
 #include <netdb.h>
 #include <netinet/in.h>
 #include <poll.h>
+#include <thread>
 #include <sys/eventfd.h>
 #include <system_error>
 #include <unistd.h>
@@ -256,10 +257,11 @@ Wait wait_fd(int fd, short events, const StopSignal &stop, int timeout_ms) noexc
 }
 
 Io read_full(int fd, void *buf, size_t n, const StopSignal &stop, int timeout_ms,
-             std::string &error)
+             std::string &error, int64_t spin_ns)
 {
     auto *p = static_cast<uint8_t *>(buf);
     auto deadline = Clock::now() + std::chrono::milliseconds(timeout_ms < 0 ? 0 : timeout_ms);
+    auto spin_until = Clock::now() + std::chrono::nanoseconds(spin_ns);
     while (n > 0) {
         ssize_t got = ::recv(fd, p, n, MSG_DONTWAIT);
         if (got > 0) {
@@ -274,6 +276,10 @@ Io read_full(int fd, void *buf, size_t n, const StopSignal &stop, int timeout_ms
         if (errno != EAGAIN && errno != EWOULDBLOCK) {
             error = std::strerror(errno);
             return Io::error;
+        }
+        if (spin_ns > 0 && Clock::now() < spin_until && !stop.raised()) {
+            std::this_thread::yield(); // data that comes soon is taken without a wake-up
+            continue;
         }
         switch (wait_fd(fd, POLLIN, stop, timeout_ms < 0 ? -1 : ms_left(deadline))) {
         case Wait::stopped:

@@ -70,8 +70,9 @@ Wait wait_fd(int fd, short events, const StopSignal &stop, int timeout_ms) noexc
 // Result of a full read or write on a non-blocking stream socket.
 enum class Io { ok, closed, error, timeout, stopped };
 // Reads exactly n bytes (timeout_ms < 0: no deadline).  `error` gets errno's text.
+// spin_ns > 0: poll (yielding the CPU) that long before sleeping in poll().
 Io read_full(int fd, void *buf, size_t n, const StopSignal &stop, int timeout_ms,
-             std::string &error);
+             std::string &error, int64_t spin_ns = 0);
 // Writes the whole iovec array (it is advanced in place), watching fd for the peer's close
 // while it waits for room.  A peer sends nothing after its reply, so anything readable
 // while writing means it closed or broke the stream.

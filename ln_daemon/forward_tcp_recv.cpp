@@ -34,8 +34,9 @@ void send_reply(int fd, wire::Kind kind, wire::Reject reason, uint64_t token,
 
 } // namespace
 
-TcpReceiver::TcpReceiver(int listener, RecvTable &table, TotalCounters &totals)
-    : listener_(listener), table_(table), totals_(totals)
+TcpReceiver::TcpReceiver(int listener, RecvTable &table, TotalCounters &totals,
+                         unsigned spin_us)
+    : listener_(listener), table_(table), totals_(totals), spin_ns_(int64_t{spin_us} * 1000)
 {
 }
 
@@ -186,7 +187,7 @@ void TcpReceiver::serve(Connection &c)
     s->attach(c.peer);
     for (;;) {
         uint8_t head[wire::kFrameHeaderSize];
-        Io io = read_full(fd, head, sizeof head, stop_, -1, error);
+        Io io = read_full(fd, head, sizeof head, stop_, -1, error, spin_ns_);
         if (io == Io::ok) {
             wire::FrameHeader f = wire::decode_frame_header(head);
             if (f.size != s->spec.message_size) {

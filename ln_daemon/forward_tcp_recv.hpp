@@ -23,7 +23,8 @@ class TcpReceiver {
 public:
     // `listener` is the non-blocking listening socket (owned by the caller, alive until
     // stop() returned).
-    TcpReceiver(int listener, RecvTable &table, TotalCounters &totals);
+    // spin_us: a connection polls that long for the next frame before it sleeps.
+    TcpReceiver(int listener, RecvTable &table, TotalCounters &totals, unsigned spin_us = 0);
     ~TcpReceiver();
     TcpReceiver(const TcpReceiver &) = delete;
     TcpReceiver &operator=(const TcpReceiver &) = delete;
@@ -51,6 +52,7 @@ private:
     const int listener_;
     RecvTable &table_;
     TotalCounters &totals_;
+    const int64_t spin_ns_;
     StopSignal stop_;
     std::thread acceptor_;
     std::mutex mutex_;

@@ -14,6 +14,7 @@
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <thread>
 
 #include "forward_wire.hpp"
 
@@ -85,7 +86,7 @@ std::string TcpSender::create(const SendSpec &spec, const Options &options,
 
 TcpSender::TcpSender(const SendSpec &spec, const Options &options, Tap tap, size_t capacity)
     : SendStream(spec), tap_(std::move(tap)), capacity_(capacity),
-      socket_buffer_(options.socket_buffer)
+      socket_buffer_(options.socket_buffer), spin_ns_(int64_t{options.spin_us} * 1000)
 {
     counters_.note_segment(ln_ring_tap_segment(tap_.get()));
 }
@@ -150,7 +151,16 @@ void TcpSender::read_loop()
     Buffer buf = take_buffer();
     while (!stop_.raised()) {
         ln_sample_info info;
-        int rc = ln_ring_tap_read(tap_.get(), buf.get(), &info, kReadTimeout);
+        int rc = LN_ETIMEOUT;
+        for (auto end = std::chrono::steady_clock::now() + std::chrono::nanoseconds(spin_ns_);
+             spin_ns_ > 0 && !stop_.raised();) { // a sample that comes soon: no wake-up
+            rc = ln_ring_tap_read(tap_.get(), buf.get(), &info, 0);
+            if (rc != LN_ETIMEOUT || std::chrono::steady_clock::now() >= end)
+                break;
+            std::this_thread::yield();
+        }
+        if (rc == LN_ETIMEOUT)
+            rc = ln_ring_tap_read(tap_.get(), buf.get(), &info, kReadTimeout);
         if (rc == LN_ETIMEOUT)
             continue;
         if (rc != LN_OK) {
@@ -173,9 +183,10 @@ void TcpSender::read_loop()
             if (queue_.size() + in_flight_ < capacity_) {
                 queue_.push_back(Sample{info.seq, info.timestamp_ns, std::move(buf)});
                 queued = true;
-            } else {
-                StreamCounters::add(counters_.drops); // the sample in flight fills the queue
             }
+            queued_.store(queue_.size(), std::memory_order_release);
+            if (!queued)
+                StreamCounters::add(counters_.drops); // the sample in flight fills the queue
         }
         if (queued) {
             ready_.notify_one();
@@ -294,6 +305,10 @@ void TcpSender::write_loop()
         if (!sock_ && !connect_with_backoff())
             break;
         if (!have) {
+            for (auto end = std::chrono::steady_clock::now() + std::chrono::nanoseconds(spin_ns_);
+                 spin_ns_ > 0 && queued_.load(std::memory_order_acquire) == 0
+                 && !stop_.raised() && std::chrono::steady_clock::now() < end;)
+                std::this_thread::yield(); // a sample that comes soon: no wake-up
             std::unique_lock<std::mutex> lock(mutex_);
             ready_.wait_for(lock, kIdleCheck,
                             [this] { return stop_.raised() || !queue_.empty(); });
@@ -308,6 +323,7 @@ void TcpSender::write_loop()
             }
             current = std::move(queue_.front());
             queue_.pop_front();
+            queued_.store(queue_.size(), std::memory_order_release);
             in_flight_ = true;
             have = true;
         }

@@ -5,6 +5,7 @@
 // and the reader never waits for the writer.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -54,6 +55,8 @@ private:
     Tap tap_;
     const size_t capacity_; // samples queued plus the one being sent, at most
     const int socket_buffer_;
+    const int64_t spin_ns_;          // poll the tap / the queue this long before sleeping
+    std::atomic<size_t> queued_{0}; // queue_.size(), readable without the mutex
 
     std::mutex mutex_;
     std::condition_variable ready_;

@@ -51,8 +51,8 @@ const char kUsage[] =
     "                  the data port managers are told (default: the real one; for relays)\n"
     "  --udp-fragment-size N\n"
     "                  payload bytes per forwarded UDP datagram, 256..65000 (default 1400)\n"
-    "  --spin-us N     UDP forwarding polls up to N microseconds for the next sample or\n"
-    "                  datagram before sleeping, 0..10000 (default 0: lower latency for CPU)\n";
+    "  --spin-us N     forwarding polls up to N microseconds for the next sample, datagram\n"
+    "                  or frame before sleeping, 0..10000 (default 0; lower latency for CPU)\n";
 
 int fail(const std::string &text)
 {

@@ -103,11 +103,13 @@ private:
     int fd_;
 };
 
-void test_every_sample_in_order()
+void every_sample_in_order(unsigned spin_us)
 {
     constexpr uint64_t kSamples = 2000;
     TestRing src(256, 512), dst(256, 1024);
-    Forwarder rx(local_options()), tx(local_options());
+    Options o = local_options();
+    o.spin_us = spin_us;
+    Forwarder rx(o), tx(o);
     CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
     CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())), "");
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
@@ -142,6 +144,17 @@ void test_every_sample_in_order()
     LN_CHECK_EQ(r.drops + r.stale + r.invalid, 0);
     LN_CHECK(r.connected);
     LN_CHECK(r.peer.rfind("127.0.0.1:", 0) == 0);
+}
+
+void test_every_sample_in_order()
+{
+    every_sample_in_order(0);
+}
+
+// The same with the threads polling before they sleep (--spin-us).
+void test_every_sample_in_order_polling()
+{
+    every_sample_in_order(200);
 }
 
 // Nobody answers the hello: the queue fills up to its bound and every further sample is a
@@ -319,6 +332,7 @@ void test_bad_hello_and_frames()
 int main()
 {
     LN_TEST_RUN(test_every_sample_in_order);
+    LN_TEST_RUN(test_every_sample_in_order_polling);
     LN_TEST_RUN(test_receiver_never_answers);
     LN_TEST_RUN(test_receiver_stops_reading);
     LN_TEST_RUN(test_reconnect);

@@ -56,10 +56,12 @@ std::vector<uint64_t> drain(Reader &reader)
     return seqs;
 }
 
-void test_small_samples_keep_seq_and_timestamp()
+void small_samples_keep_seq_and_timestamp(unsigned spin_us)
 {
     TestRing src(64, 8), dst(64, 1024);
-    Forwarder rx(local_options()), tx(local_options());
+    Options o = local_options();
+    o.spin_us = spin_us;
+    Forwarder rx(o), tx(o);
     CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)), "");
     CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx.data_port())), "");
     Reader reader(dst);
@@ -141,6 +143,17 @@ void big_sample(uint64_t size, size_t payload)
                 static_cast<unsigned long long>(seq - 1));
     LN_CHECK(rx.totals().reassembly_peak <= ro.udp_reassembly_bytes);
     LN_CHECK(wait_until([&] { return rx.totals().reassembly_bytes == 0; }));
+}
+
+void test_small_samples_keep_seq_and_timestamp()
+{
+    small_samples_keep_seq_and_timestamp(0);
+}
+
+// The same with sender and receiver polling before they sleep (--spin-us).
+void test_small_samples_polling()
+{
+    small_samples_keep_seq_and_timestamp(200);
 }
 
 void test_8mib_sample()
@@ -345,6 +358,7 @@ void test_garbage_datagrams()
 int main()
 {
     LN_TEST_RUN(test_small_samples_keep_seq_and_timestamp);
+    LN_TEST_RUN(test_small_samples_polling);
     LN_TEST_RUN(test_8mib_sample);
     LN_TEST_RUN(test_64mib_sample);
     LN_TEST_RUN(test_lossy_link);
