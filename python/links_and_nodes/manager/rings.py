@@ -109,6 +109,10 @@ class RemoteRings:
         self.link: DaemonLink | None = None  # None while the daemon is unreachable
         self.down_reason = "not connected yet"
         self._rings: dict[int, _Remote] = {}
+        # Last generation used per topic, kept when a ring is removed: a ring made again
+        # while the topic lives gets a new name, never that of a segment a stream of the
+        # daemon may still map (or that an unreachable daemon could not remove).
+        self._generations: dict[int, int] = {}
 
     def has(self, topic_id: int) -> bool:
         return topic_id in self._rings
@@ -119,7 +123,9 @@ class RemoteRings:
     def topic_ids(self) -> list[int]:
         return list(self._rings)
 
-    def _name(self, topic_id: int, generation: int) -> str:
+    def _next_name(self, topic_id: int) -> str:
+        generation = self._generations.get(topic_id, 0) + 1
+        self._generations[topic_id] = generation
         return f"/ln.{self.prefix}.{topic_id}.{generation}.{self.tag}"
 
     def _need_link(self, what: str) -> DaemonLink:
@@ -137,8 +143,8 @@ class RemoteRings:
     async def create(self, topic_id: int, topic: str, md_name: str, layout_hash: int,
                      message_size: int, slots: int) -> str:
         assert topic_id not in self._rings
-        name = self._name(topic_id, 1)
         link = self._need_link(f"topic {topic!r}")
+        name = self._next_name(topic_id)
         await self._do(f"topic {topic!r}: creating segment {name}",
                        link.ring_create(name, topic, md_name, layout_hash, message_size,
                                         slots))
@@ -149,8 +155,8 @@ class RemoteRings:
     async def grow(self, topic_id: int, md_name: str, layout_hash: int, message_size: int,
                    slots: int) -> str:
         ring = self._rings[topic_id]
-        name = self._name(topic_id, len(ring.names) + 1)
         link = self._need_link(f"topic {ring.topic!r}")
+        name = self._next_name(topic_id)
         await self._do(f"topic {ring.topic!r}: creating segment {name}",
                        link.ring_create(name, ring.topic, md_name, layout_hash, message_size,
                                         slots))
