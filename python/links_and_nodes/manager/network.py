@@ -220,7 +220,11 @@ class Network:
                 await asyncio.wait_for(self._identified.wait(), min(left, POLL_INTERVAL))
 
     def transit_needed(self, topic: Topic, rings: Rings) -> bool:
-        return any(s.topic_id == topic.id and s.dst == rings.host and not s.final
+        """Whether the topic's ring on that host passes samples on to other hosts (a
+        gateway, which may have had subscribers of its own): it must stay as long as a
+        stream leaves from there, even when no port of the topic is left on the host."""
+        return any(s.topic_id == topic.id
+                   and (s.src == rings.host or (s.dst == rings.host and not s.final))
                    for s in self.streams.values())
 
     def published(self, topic: Topic) -> int:
@@ -409,7 +413,9 @@ class Network:
                      stream.dst)
         topics = {t.id: t for t in self.core.registry.topics.values()}
         for key, (transport, address, final) in want.items():
-            topic = topics[key[0]]
+            topic = topics.get(key[0])
+            if topic is None:
+                continue  # ended while streams were removed; that change runs us again
             stream = self.streams.get(key)
             if stream is None or stream.transport != transport:
                 if stream is not None:
@@ -445,6 +451,9 @@ class Network:
             stream.error = "no ring on the sending host yet"
             return
         async with self.core.transit():
+            if self.core.registry.topics.get(topic.name) is not topic \
+                    or not src_rings.has(topic.id):
+                return  # gone while we waited for the core; that change runs us again
             if not dst_rings.has(topic.id):  # a gateway: a ring that only passes samples on
                 try:
                     await dst_rings.create(topic.id, topic.name, topic.md_name,
@@ -460,6 +469,8 @@ class Network:
                 await dst.client.stream_recv(stream.token, want_dst[0], topic.layout_hash,
                                              topic.message_size, stream.transport)
                 stream.installed_dst = want_dst
+            if not src_rings.has(topic.id):
+                return  # gone while the daemon answered; that change runs us again
             want_src = (src_rings.current(topic.id), stream.transport, stream.address,
                         dst.data_port)
             if stream.installed_src != want_src:
@@ -483,18 +494,23 @@ class Network:
         stream.installed_src = stream.installed_dst = None
 
     async def _drop_transit_rings(self) -> None:
-        """Remove gateway rings no stream passes through any more."""
+        """Remove the rings that neither a port nor a stream needs any more, on every host
+        (the manager's own included): gateway rings no stream passes through, and rings of
+        topics that ended while the reconciler set up their streams."""
         async with self.core.transit():
-            for topic in list(self.core.registry.topics.values()):
-                for host in self.hosts.values():
-                    rings = host.rings
-                    if host.local or rings is None or not rings.has(topic.id):
+            topics = {t.id: t for t in self.core.registry.topics.values()}
+            for host in self.hosts.values():
+                rings = self._rings_of(host.name)
+                if rings is None:
+                    continue
+                for topic_id in rings.topic_ids():
+                    topic = topics.get(topic_id)
+                    if topic is not None and (
+                            any(self._client_host(p.client) == host.name
+                                for p in topic.ports.values())
+                            or self.transit_needed(topic, rings)):
                         continue
-                    if any(self._client_host(p.client) == host.name
-                           for p in topic.ports.values()):
-                        continue
-                    if not self.transit_needed(topic, rings):
-                        await rings.remove(topic.id)
+                    await rings.remove(topic_id)
 
     # ---- listings -------------------------------------------------------------------------
     def host_listing(self) -> list[dict[str, Any]]:

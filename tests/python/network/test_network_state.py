@@ -6,7 +6,9 @@ left in, never how long anything took."""
 
 from __future__ import annotations
 
-from .fakenet import World
+import asyncio
+
+from .fakenet import GATEWAY, World
 
 
 def _recv(w: World, host: str) -> list:
@@ -34,6 +36,66 @@ async def test_a_ring_made_again_on_a_host_gets_its_stream_back() -> None:
     await w.net.reconcile()
     (stream,) = _recv(w, "b")
     assert stream.seg is w.ring_seg("b", "t"), "b's stream writes into a removed segment"
+
+
+async def test_a_gateway_keeps_its_ring_when_its_own_subscribers_leave() -> None:
+    """c has a subscriber and passes the topic on to b: when c's subscriber leaves, c's
+    ring must stay, the streams through c go on (TCP would lose samples otherwise)."""
+    w = World(GATEWAY)
+    await w.up()
+    await w.publish(w.client("a"), "t")
+    sub_c = w.client("c")
+    port = await w.subscribe(sub_c, "t")
+    await w.subscribe(w.client("b"), "t")
+    await w.net.reconcile()
+    assert set(w.streams("t")) == {("a", "c"), ("c", "b")}
+    seg = w.ring_seg("c", "t")
+    await w.close_port(sub_c, port)
+    assert seg.linked, "the gateway's ring was removed under its streams"
+    await w.net.reconcile()
+    assert w.ring_seg("c", "t") is seg
+    assert all(w.daemons[h].live(s) for h in "abc" for s in w.daemons[h].streams.values())
+
+
+async def test_no_gateway_ring_outlives_its_topic() -> None:
+    """The topic ends while the reconciler waits for the core to set up its gateway ring:
+    the reconciler must not make the ring afterwards (nothing would remove it)."""
+    w = World(GATEWAY)
+    await w.up()
+    pub, sub = w.client("a"), w.client("b")
+    await w.publish(pub, "t")
+    await w.subscribe(sub, "t")
+    tid = w.topic_id("t")
+    entered, release = w.daemons["b"].gate("ring_release_reader")
+    leave_sub = asyncio.ensure_future(w.core.disconnect(sub))
+    await entered.wait()  # the core is busy with b's subscriber
+    leave_pub = asyncio.ensure_future(w.core.disconnect(pub))
+    reconcile = asyncio.ensure_future(w.net.reconcile())  # waits for the core: the gateway
+    for _ in range(10):
+        await asyncio.sleep(0)
+    release.set()
+    await asyncio.gather(leave_sub, leave_pub, reconcile)
+    assert "t" not in w.core.registry.topics
+    await w.net.reconcile()
+    for host in "abc":
+        assert w.daemons[host].segments(tid) == [], f"a ring of the ended topic is left on {host}"
+        assert w.daemons[host].streams == {}, f"a stream of the ended topic is left on {host}"
+
+
+async def test_a_gateway_ring_on_the_managers_host_goes_with_its_streams() -> None:
+    w = World(GATEWAY, local="c")
+    await w.up()
+    assert w.net.hosts["c"].local
+    await w.publish(w.client("a"), "t")
+    sub = w.client("b")
+    port = await w.subscribe(sub, "t")
+    await w.net.reconcile()
+    assert set(w.streams("t")) == {("a", "c"), ("c", "b")}
+    seg = w.ring_seg("c", "t")
+    await w.close_port(sub, port)
+    await w.net.reconcile()
+    assert not w.streams("t")
+    assert not seg.linked, "the gateway ring on the manager's host stays"
 
 
 def test_a_local_ring_made_again_gets_a_new_name() -> None:
