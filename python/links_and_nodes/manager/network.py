@@ -145,6 +145,9 @@ class Network:
             self.hosts[name] = host
         self.streams: dict[tuple[int, str, str], Stream] = {}
         self.problems: dict[tuple[int, str, str], str] = {}  # no route etc.
+        # topic id -> the host of its publishers, also after they left: its ring there
+        # holds the topic's sequence number (see transit_needed)
+        self.origins: dict[int, str] = {}
         self.totals: dict[str, tuple[int, int]] = {}  # host -> unknown, malformed
         self._dirty = asyncio.Event()
         self._identified = asyncio.Event()  # set (and replaced) whenever a host comes up
@@ -220,9 +223,14 @@ class Network:
                 await asyncio.wait_for(self._identified.wait(), min(left, POLL_INTERVAL))
 
     def transit_needed(self, topic: Topic, rings: Rings) -> bool:
-        """Whether the topic's ring on that host passes samples on to other hosts (a
-        gateway, which may have had subscribers of its own): it must stay as long as a
-        stream leaves from there, even when no port of the topic is left on the host."""
+        """Whether the topic's ring on that host must stay although no port of the topic is
+        left there: it passes samples on to other hosts (a gateway, which may have had
+        subscribers of its own), or its publishers ran there.  That ring counts the topic's
+        sequence numbers; made anew, it would count from 1 again, and every other host
+        would drop a returning publisher's samples as stale until it passed the old count.
+        It stays until the topic ends or a publisher runs on another host."""
+        if self.origins.get(topic.id) == rings.host:
+            return True
         return any(s.topic_id == topic.id
                    and (s.src == rings.host or (s.dst == rings.host and not s.final))
                    for s in self.streams.values())
@@ -382,10 +390,13 @@ class Network:
         """(topic id, src, dst) -> (transport, address, final) of every needed hop."""
         want: dict[tuple[int, str, str], tuple[str, str, bool]] = {}
         self.problems = {}
-        for topic in self.core.registry.topics.values():
+        topics = self.core.registry.topics.values()
+        self.origins = {t.id: self.origins[t.id] for t in topics if t.id in self.origins}
+        for topic in topics:
             src = self._publisher_host(topic)
             if src is None:
                 continue
+            self.origins[topic.id] = src
             sinks = {self._client_host(p.client) for p in topic.ports.values()
                      if p.kind is PortKind.SUBSCRIBER} - {src, None}
             for dst in sorted(h for h in sinks if h is not None):

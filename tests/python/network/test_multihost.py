@@ -221,3 +221,31 @@ member_interfaces: c/eth0, b/eth0
              "the streams to end with the last remote subscriber")
     wait_for(lambda: not [f for f in shm.iterdir() if system.instance in f.name],
              "the gateway's ring to go with its streams")
+
+
+def test_a_publisher_back_on_its_host_reaches_the_other_hosts(system: System) -> None:
+    """The publisher on a ends while b's subscriber keeps the topic, and a new one starts
+    on a: its samples continue the topic's sequence numbers, so b takes them (a ring on a
+    counting from 1 again would have b drop them all as stale)."""
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(system.process("sub", "b", "sub net.again nettest/sample", "subscribed"))
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+
+    def publishers() -> int:
+        return sum(t["publishers"] for t in mgr.topics() if t["name"] == "net.again")
+
+    first = system.client("a", "pub", "net.again", "nettest/sample", "--count", "200",
+                          "--rate", "400")
+    assert first.log_path is not None
+    wait_for(lambda: "published 200" in first.log_path.read_text(), "200 samples published")
+    wait_for(lambda: system.received(system.output("sub")), "b to receive")
+    first.kill()
+    first.wait()
+    wait_for(lambda: publishers() == 0, "the manager to see the publisher gone")
+    system.client("a", "pub", "net.again", "nettest/sample", "--count", "20", "--rate", "50")
+    got = wait_for(lambda: [r for r in system.received(system.output("sub")) if r[0] > 200],
+                   "b to receive the second publisher's samples")
+    assert all(1 <= counter <= 20 and seq == 200 + counter for seq, counter, _ in got), got

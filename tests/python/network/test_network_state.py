@@ -38,6 +38,26 @@ async def test_a_ring_made_again_on_a_host_gets_its_stream_back() -> None:
     assert stream.seg is w.ring_seg("b", "t"), "b's stream writes into a removed segment"
 
 
+async def test_a_publisher_back_on_its_host_continues_the_sequence() -> None:
+    """The publisher on a goes (b's subscriber keeps the topic) and comes back: its
+    samples must be newer than those b has, else b's daemon drops them all as stale."""
+    w = World()
+    await w.up()
+    pub = w.client("a")
+    port = await w.publish(pub, "t")
+    await w.subscribe(w.client("b"), "t")
+    await w.net.reconcile()
+    w.ring_seg("a", "t").seq = w.ring_seg("b", "t").seq = 500  # 500 samples went over
+    await w.close_port(pub, port)
+    await w.net.reconcile()
+    assert not w.streams("t"), "no publisher, no stream"
+    await w.publish(w.client("a", "pub2"), "t")
+    await w.net.reconcile()
+    assert w.ring_seg("a", "t").seq >= 500, "the new publisher counts from 1 again"
+    (stream,) = _send(w, "a")
+    assert stream.seg is w.ring_seg("a", "t")
+
+
 async def test_a_gateway_keeps_its_ring_when_its_own_subscribers_leave() -> None:
     """c has a subscriber and passes the topic on to b: when c's subscriber leaves, c's
     ring must stay, the streams through c go on (TCP would lose samples otherwise)."""
