@@ -53,7 +53,7 @@ class HostState:
     local: bool = False  # the manager's own host (its rings are core.local)
     rings: RemoteRings | None = None
     purged: bool = False  # stale segments of an earlier manager removed (once)
-    published: dict[int, int] = field(default_factory=dict)  # topic id -> write seq
+    published: dict[int, int] = field(default_factory=dict)  # topic id -> last write seq
 
     def info(self) -> dict[str, Any]:
         return {"name": self.name, "state": self.state, "error": self.error,
@@ -235,8 +235,23 @@ class Network:
                    and (s.src == rings.host or (s.dst == rings.host and not s.final))
                    for s in self.streams.values())
 
-    def published(self, topic: Topic) -> int:
-        return max((h.published.get(topic.id, 0) for h in self.hosts.values()), default=0)
+    async def published(self, topic: Topic) -> int | None:
+        """The newest sequence number of the topic's ring on its publishers' host, asked of
+        that host's daemon now (the last answer while it cannot be asked); None when the
+        manager's own host counts it, or no host does."""
+        name = self._publisher_host(topic) or self.origins.get(topic.id)
+        host = self.hosts.get(name) if name is not None else None
+        if host is None or host.local or host.rings is None or not host.rings.has(topic.id):
+            return None
+        client = host.client
+        if host.state == "up" and client is not None:
+            try:
+                host.published[topic.id] = await asyncio.wait_for(
+                    client.ring_write_seq(host.rings.current(topic.id)), PING_TIMEOUT)
+            except (dc.DaemonError, OSError, TimeoutError) as exc:
+                log.debug("host %r: sequence number of topic %r: %s", host.name, topic.name,
+                          _reason(exc))
+        return host.published.get(topic.id, 0)
 
     # ---- life -----------------------------------------------------------------------------
     def start(self) -> None:
@@ -277,12 +292,6 @@ class Network:
         await asyncio.wait_for(client.ping(), PING_TIMEOUT)
         stats, totals = await asyncio.wait_for(client.stream_stats(), PING_TIMEOUT)
         self._take_stats(host, stats, totals)
-        if host.rings is not None and not host.local:
-            for topic in list(self.core.registry.topics.values()):
-                if host.rings.has(topic.id) and self._publisher_host(topic) == host.name:
-                    seq = await asyncio.wait_for(
-                        client.ring_write_seq(host.rings.current(topic.id)), PING_TIMEOUT)
-                    host.published[topic.id] = seq
 
     async def _up(self, host: HostState, client: Any) -> None:
         info = await asyncio.wait_for(client.net_info(), PING_TIMEOUT)

@@ -46,7 +46,7 @@ class Registry(Protocol):
     listeners: list[Callable[[], None]]
 
     def topic_publishers(self, name: str) -> int: ...
-    def topic_published(self, name: str) -> int: ...
+    async def topic_published(self, name: str) -> int: ...
     def service_provided(self, name: str) -> bool: ...
 
 
@@ -842,10 +842,10 @@ class Scheduler:
 
     async def _watchdog(self, rt: Runtime, wd: model.Watchdog) -> None:
         window = max(1.0, 3.0 / wd.min_hz)
-        before = self.registry.topic_published(wd.topic)
+        before = await self.registry.topic_published(wd.topic)
         while rt.state == S.READY:
             await asyncio.sleep(window)
-            now = self.registry.topic_published(wd.topic)
+            now = await self.registry.topic_published(wd.topic)
             rate = (now - before) / window
             before = now
             if rate < wd.min_hz and rt.state == S.READY:

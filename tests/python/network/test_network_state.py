@@ -118,6 +118,19 @@ async def test_a_gateway_ring_on_the_managers_host_goes_with_its_streams() -> No
     assert not seg.linked, "the gateway ring on the manager's host stays"
 
 
+async def test_published_is_the_publishers_ring_when_asked() -> None:
+    """What the watchdog measures: the sequence number of the publisher's ring now, not
+    as some earlier poll saw it."""
+    w = World()
+    await w.up()
+    await w.publish(w.client("a"), "t")
+    await w.subscribe(w.client("b"), "t")
+    await w.net.reconcile()
+    before = await w.core.topic_published("t")
+    w.ring_seg("a", "t").seq += 25
+    assert await w.core.topic_published("t") == before + 25
+
+
 def test_a_local_ring_made_again_gets_a_new_name() -> None:
     """The manager's own host (segments.Segments, libln): the same rule as on the others."""
     import os
