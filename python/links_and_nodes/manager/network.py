@@ -298,16 +298,18 @@ class Network:
         configured = self.config.hosts.get(host.name)
         local = info.host_id == self.local_id
         if not local and host.rings is not None:
-            if not host.purged:
-                # segments and streams an earlier manager of this instance left there
-                removed = await client.ring_purge()
-                host.purged = True
-                if removed:
-                    log.info("host %r: removed %d stale segment%s of this instance",
-                             host.name, removed, "" if removed == 1 else "s")
-            host.rings.link = client
-            if host.state != "connecting":
-                await host.rings.resync()
+            async with self.core.transit():  # no ring of the host changes meanwhile
+                if not host.purged:
+                    # segments and streams an earlier manager of this instance left there
+                    removed = await client.ring_purge()
+                    host.purged = True
+                    if removed:
+                        log.info("host %r: removed %d stale segment%s of this instance",
+                                 host.name, removed, "" if removed == 1 else "s")
+                host.rings.link = client
+                if host.state != "connecting":
+                    await host.rings.resync()
+        await self._drop_unknown_streams(host, client)
         # known from here on: clients of this host get rings there (identify)
         host.client = client
         host.host_id = info.host_id
@@ -327,6 +329,19 @@ class Network:
             if stream.dst == host.name:
                 stream.installed_dst = None
         self._dirty.set()
+
+    async def _drop_unknown_streams(self, host: HostState, client: Any) -> None:
+        """Remove the streams of this instance on the host's daemon that this manager does
+        not have (any more): ended while the host was unreachable, or left by an earlier
+        manager of the instance on its own host (which is not purged)."""
+        stats, _ = await asyncio.wait_for(client.stream_stats(), PING_TIMEOUT)
+        known = {s.token for s in self.streams.values()}
+        for stat in stats:
+            if stat.token not in known:
+                with contextlib.suppress(dc.DaemonError):
+                    await asyncio.wait_for(client.stream_remove(stat.token), PING_TIMEOUT)
+                log.info("host %r: removed stream %016x that no topic needs", host.name,
+                         stat.token)
 
     async def _down(self, host: HostState, reason: str) -> None:
         if host.state != "unreachable" or host.error != reason:

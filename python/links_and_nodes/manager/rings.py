@@ -95,6 +95,7 @@ class _Remote:
     names: list[str] = field(default_factory=list)
     readers: dict[int, tuple[int, int]] = field(default_factory=dict)  # index -> pid, buffers
     counts: tuple[int, int] = (0, 0)
+    released: set[int] = field(default_factory=set)  # reader slots freed while unreachable
 
 
 class RemoteRings:
@@ -113,6 +114,7 @@ class RemoteRings:
         # while the topic lives gets a new name, never that of a segment a stream of the
         # daemon may still map (or that an unreachable daemon could not remove).
         self._generations: dict[int, int] = {}
+        self._unremoved: list[str] = []  # segments removed while the daemon was unreachable
 
     def has(self, topic_id: int) -> bool:
         return topic_id in self._rings
@@ -176,12 +178,15 @@ class RemoteRings:
         await self._do(f"topic {ring.topic!r}: reserving reader slot {index}",
                        link.ring_reserve_reader(ring.names[-1], index, pid, buffers))
         ring.readers[index] = (pid, buffers)
+        ring.released.discard(index)
 
     async def release_reader(self, topic_id: int, index: int) -> None:
         ring = self._rings[topic_id]
         ring.readers.pop(index, None)
         if self.link is not None:
             await self._quietly(self.link.ring_release_reader(ring.names[-1], index))
+        else:  # the slot would hold back the host's publishers: freed in resync()
+            ring.released.add(index)
 
     async def set_counts(self, topic_id: int, publishers: int, subscribers: int) -> None:
         ring = self._rings[topic_id]
@@ -198,21 +203,29 @@ class RemoteRings:
             for name in ring.names:
                 await self._quietly(self.link.ring_remove(name))
         else:
-            log.warning("host %r unreachable: its segments %s stay until its daemon is "
-                        "back and a manager of this instance purges them", self.host,
-                        ", ".join(ring.names))
+            log.warning("host %r unreachable: its segments %s are removed when its daemon "
+                        "is back", self.host, ", ".join(ring.names))
+            self._unremoved += ring.names
         return ring.names
 
     async def resync(self) -> None:
-        """After the daemon (re)connected: adopt every ring this manager has there (they
-        survive a daemon restart in /dev/shm) and set what changed meanwhile."""
+        """After the daemon (re)connected: remove the segments and free the reader slots
+        that could not be removed and freed while it was unreachable, adopt every ring this
+        manager has there (they survive a daemon restart in /dev/shm) and set the counts.
+        The caller keeps other ring operations out meanwhile."""
         link = self._need_link("resync")
+        while self._unremoved:
+            await self._quietly(link.ring_remove(self._unremoved[0]))
+            del self._unremoved[0]
         for ring in list(self._rings.values()):
             name = ring.names[-1]
             try:
                 await link.ring_create(name, ring.topic, ring.md_name, ring.layout_hash,
                                        ring.message_size, ring.slots, adopt=True)
                 await link.ring_set_counts(name, *ring.counts)
+                for index in sorted(ring.released):
+                    await link.ring_release_reader(name, index)
+                ring.released.clear()
             except Exception as exc:
                 log.warning("host %r: re-adopting %s of topic %r failed: %s", self.host, name,
                             ring.topic, exc)

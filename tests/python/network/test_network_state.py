@@ -118,6 +118,62 @@ async def test_a_gateway_ring_on_the_managers_host_goes_with_its_streams() -> No
     assert not seg.linked, "the gateway ring on the manager's host stays"
 
 
+async def test_changes_made_while_a_daemon_was_away_reach_it_when_it_is_back() -> None:
+    """b's daemon is unreachable (a network outage: it keeps running) while one of its
+    two queued subscribers leaves, then the other: its reader slot, ring and receiving
+    stream must go once b is back."""
+    w = World()
+    await w.up()
+    await w.publish(w.client("a"), "t")
+    one, two = w.client("b", "one"), w.client("b", "two")
+    port_one = await w.subscribe(one, "t", buffers=4)
+    port_two = await w.subscribe(two, "t", buffers=4)
+    await w.net.reconcile()
+    seg = w.ring_seg("b", "t")
+    assert len(seg.readers) == 2
+    w.daemons["b"].reachable = False
+    await w.up("b")
+    assert w.state("b") == "unreachable"
+    await w.close_port(one, port_one)
+    w.daemons["b"].reachable = True
+    await w.up("b")
+    assert w.state("b") == "up"
+    assert len(seg.readers) == 1, "a departed subscriber still holds its reader slot"
+    w.daemons["b"].reachable = False
+    await w.up("b")
+    await w.close_port(two, port_two)
+    await w.net.reconcile()  # the stream a -> b ends while b is away
+    assert not w.streams("t")
+    w.daemons["b"].reachable = True
+    await w.up("b")
+    assert w.state("b") == "up"
+    assert not seg.linked, "b's ring of the topic stays in b's /dev/shm"
+    assert w.daemons["b"].streams == {}, "b's end of the ended stream stays"
+
+
+async def test_a_ring_removed_while_its_daemon_is_adopted_again_stays_removed() -> None:
+    """b's daemon restarted; while the manager re-adopts b's rings one by one, a topic's
+    last port on b closes: that ring must not be made again by the re-adoption."""
+    w = World()
+    await w.up()
+    await w.publish(w.client("a"), "t1")
+    await w.publish(w.client("a", "a2"), "t2")
+    await w.subscribe(w.client("b"), "t1")
+    sub = w.client("b", "b2")
+    port = await w.subscribe(sub, "t2")
+    tid = w.topic_id("t2")
+    w.daemons["b"].restart()
+    entered, release = w.daemons["b"].gate("ring_create")
+    check = asyncio.ensure_future(w.up("b"))
+    await entered.wait()  # re-adopting t1's ring
+    close = asyncio.ensure_future(w.close_port(sub, port))
+    await asyncio.sleep(0)
+    release.set()
+    await asyncio.gather(check, close)
+    assert w.state("b") == "up"
+    assert w.daemons["b"].segments(tid) == [], "t2's ring on b was made again"
+
+
 async def test_published_is_the_publishers_ring_when_asked() -> None:
     """What the watchdog measures: the sequence number of the publisher's ring now, not
     as some earlier poll saw it."""
