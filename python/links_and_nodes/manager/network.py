@@ -263,20 +263,32 @@ class Network:
         self._tasks.append(loop.create_task(self._reconciler()))
 
     async def close(self) -> None:
-        """Stop monitoring and remove this manager's streams from the daemons."""
+        """Stop monitoring and reconciling, then remove every stream of this instance from
+        the reachable daemons (after core.shutdown, which removed the rings): also those the
+        reconciler was setting up when it was stopped, which it had not recorded yet."""
         self._closing = True
         for task in self._tasks:
             task.cancel()
-        for task in self._tasks:
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
-        for stream in list(self.streams.values()):
-            await self._uninstall(stream)
+        # Python 3.11's wait_for can swallow a cancellation that meets a call's answer: the
+        # loops also end on _closing, after their current wait.
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+        for host in self.hosts.values():
+            client = host.client
+            if host.state != "up" or client is None:
+                continue  # its streams are purged by the next manager of the instance
+            try:
+                stats, _ = await asyncio.wait_for(client.stream_stats(), PING_TIMEOUT)
+                for stat in stats:
+                    with contextlib.suppress(dc.DaemonError):
+                        await asyncio.wait_for(client.stream_remove(stat.token), PING_TIMEOUT)
+            except (dc.DaemonError, OSError, TimeoutError) as exc:
+                log.warning("host %r: cannot remove the streams of this instance: %s",
+                            host.name, _reason(exc))
         self.streams.clear()
 
     # ---- monitoring -----------------------------------------------------------------------
     async def _monitor(self, host: HostState) -> None:
-        while True:
+        while not self._closing:
             try:
                 await self._check(host)
             except asyncio.CancelledError:
@@ -375,7 +387,7 @@ class Network:
 
     # ---- streams --------------------------------------------------------------------------
     async def _reconciler(self) -> None:
-        while True:
+        while not self._closing:
             await self._dirty.wait()
             self._dirty.clear()
             try:

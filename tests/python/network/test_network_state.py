@@ -187,6 +187,25 @@ async def test_published_is_the_publishers_ring_when_asked() -> None:
     assert await w.core.topic_published("t") == before + 25
 
 
+async def test_shutdown_leaves_no_stream_or_ring_on_the_daemons() -> None:
+    """The manager shuts down while the reconciler waits for a daemon in the middle of
+    setting a stream up: core.shutdown, then Network.close (as ln_manager does) must leave
+    no stream and no segment of the instance on any host."""
+    w = World(GATEWAY)
+    await w.up()
+    entered, release = w.daemons["c"].gate("stream_recv")
+    w.net.start()
+    await w.publish(w.client("a"), "t")
+    await w.subscribe(w.client("b"), "t")
+    await entered.wait()
+    await w.core.shutdown()
+    release.set()
+    await w.net.close()
+    for host in "abc":
+        assert w.daemons[host].streams == {}, f"a stream is left on {host}"
+        assert w.daemons[host].shm == {}, f"segments are left on {host}"
+
+
 def test_a_local_ring_made_again_gets_a_new_name() -> None:
     """The manager's own host (segments.Segments, libln): the same rule as on the others."""
     import os
