@@ -677,7 +677,7 @@ class Scheduler:
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         self._waiters[name] = (future, link)
         env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
-        env["LN_MANAGER"] = self.manager_address
+        env["LN_MANAGER"] = self.manager_address_for(node)
         spec = self.backend.spawn_spec(name=name, command=command, shell=True, env=env,
                                        use_pty=False, max_output_lines=100)
         try:
