@@ -249,3 +249,20 @@ def test_a_publisher_back_on_its_host_reaches_the_other_hosts(system: System) ->
     got = wait_for(lambda: [r for r in system.received(system.output("sub")) if r[0] > 200],
                    "b to receive the second publisher's samples")
     assert all(1 <= counter <= 20 and seq == 200 + counter for seq, counter, _ in got), got
+
+
+def test_processes_reach_a_manager_whose_host_is_not_configured(system: System) -> None:
+    """`manager: :PORT` and the manager on a host the configuration does not name (mgr):
+    processes on a and b get an address of the manager's host that they reach."""
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.addr nettest/sample --rate 50", "publishing")
+        + system.process("sub", "b", "sub net.addr nettest/sample", "subscribed"))
+    text = lnc.read_text().replace(f"manager: {system.address}",
+                                   f"manager: :{system.address.rpartition(':')[2]}")
+    lnc.write_text(text)
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    wait_for(lambda: system.received(system.output("sub")), "b to receive from a")
