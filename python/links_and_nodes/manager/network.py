@@ -310,17 +310,19 @@ class Network:
         configured = self.config.hosts.get(host.name)
         local = info.host_id == self.local_id
         if not local and host.rings is not None:
-            async with self.core.transit():  # no ring of the host changes meanwhile
+            # No ring of the host changes meanwhile; every call is bounded, since client
+            # requests wait for the lock and this monitor is what gives up on a daemon.
+            async with self.core.transit():
                 if not host.purged:
                     # segments and streams an earlier manager of this instance left there
-                    removed = await client.ring_purge()
+                    removed = await asyncio.wait_for(client.ring_purge(), PING_TIMEOUT)
                     host.purged = True
                     if removed:
                         log.info("host %r: removed %d stale segment%s of this instance",
                                  host.name, removed, "" if removed == 1 else "s")
                 host.rings.link = client
                 if host.state != "connecting":
-                    await host.rings.resync()
+                    await host.rings.resync(PING_TIMEOUT)
         await self._drop_unknown_streams(host, client)
         # known from here on: clients of this host get rings there (identify)
         host.client = client

@@ -5,6 +5,7 @@ could not be done there is done when the daemon is back (resync)."""
 
 from __future__ import annotations
 
+import asyncio
 import logging
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -208,24 +209,34 @@ class RemoteRings:
             self._unremoved += ring.names
         return ring.names
 
-    async def resync(self) -> None:
+    async def resync(self, timeout: float) -> None:
         """After the daemon (re)connected: remove the segments and free the reader slots
         that could not be removed and freed while it was unreachable, adopt every ring this
         manager has there (they survive a daemon restart in /dev/shm) and set the counts.
-        The caller keeps other ring operations out meanwhile."""
+        The caller keeps other ring operations out meanwhile, so every call is bounded by
+        `timeout`: a daemon that does not answer (or goes) ends it with TimeoutError (or
+        ConnectionError); what is left is done on the next resync."""
         link = self._need_link("resync")
         while self._unremoved:
-            await self._quietly(link.ring_remove(self._unremoved[0]))
+            try:
+                await asyncio.wait_for(link.ring_remove(self._unremoved[0]), timeout)
+            except (TimeoutError, ConnectionError):
+                raise
+            except Exception as exc:
+                log.warning("host %r: %s", self.host, exc)
             del self._unremoved[0]
         for ring in list(self._rings.values()):
             name = ring.names[-1]
             try:
-                await link.ring_create(name, ring.topic, ring.md_name, ring.layout_hash,
-                                       ring.message_size, ring.slots, adopt=True)
-                await link.ring_set_counts(name, *ring.counts)
+                await asyncio.wait_for(
+                    link.ring_create(name, ring.topic, ring.md_name, ring.layout_hash,
+                                     ring.message_size, ring.slots, adopt=True), timeout)
+                await asyncio.wait_for(link.ring_set_counts(name, *ring.counts), timeout)
                 for index in sorted(ring.released):
-                    await link.ring_release_reader(name, index)
+                    await asyncio.wait_for(link.ring_release_reader(name, index), timeout)
                 ring.released.clear()
+            except (TimeoutError, ConnectionError):
+                raise
             except Exception as exc:
                 log.warning("host %r: re-adopting %s of topic %r failed: %s", self.host, name,
                             ring.topic, exc)

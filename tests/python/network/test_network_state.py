@@ -8,6 +8,10 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
+
+from links_and_nodes.manager import network
+
 from .fakenet import GATEWAY, World
 
 
@@ -221,3 +225,19 @@ def test_a_local_ring_made_again_gets_a_new_name() -> None:
         assert len({first, grown, again}) == 3, (first, grown, again)
     finally:
         segments.remove_all()
+
+
+async def test_a_daemon_silent_while_it_is_adopted_again_does_not_hold_up_clients(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """b's daemon restarted and stops answering while the manager re-adopts its rings
+    (which keeps client requests out): the monitor gives up on it, and requests go on."""
+    monkeypatch.setattr(network, "PING_TIMEOUT", 0.05)
+    w = World()
+    await w.up()
+    await w.publish(w.client("a"), "t")
+    await w.subscribe(w.client("b"), "t")
+    w.daemons["b"].restart()
+    w.daemons["b"].gate("ring_create")  # never answered
+    await asyncio.wait_for(w.up("b"), 60)  # an upper bound, not a measurement
+    assert w.state("b") == "unreachable"
+    await asyncio.wait_for(w.subscribe(w.client("a", "other"), "t"), 60)
