@@ -390,7 +390,11 @@ class Network:
     # ---- streams --------------------------------------------------------------------------
     async def _reconciler(self) -> None:
         while not self._closing:
-            await self._dirty.wait()
+            if all(s.installed_src and s.installed_dst for s in self.streams.values()):
+                await self._dirty.wait()
+            else:  # a stream waits for a host or was refused: try it again in a while
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(self._dirty.wait(), POLL_INTERVAL)
             self._dirty.clear()
             try:
                 await self.reconcile()
@@ -495,6 +499,8 @@ class Network:
             stream.error = f"waiting for host {down!r}: " + (
                 self.hosts[down].error if down in self.hosts else "not a configured host")
             return
+        # the links of now: one that goes while we wait fails our calls, not the round
+        src_client, dst_client = src.client, dst.client
         src_rings, dst_rings = self._rings_of(stream.src), self._rings_of(stream.dst)
         if src_rings is None or dst_rings is None or not src_rings.has(topic.id):
             stream.error = "no ring on the sending host yet"
@@ -515,7 +521,7 @@ class Network:
         try:
             want_dst = (dst_rings.current(topic.id), stream.transport)
             if stream.installed_dst != want_dst:
-                await dst.client.stream_recv(stream.token, want_dst[0], topic.layout_hash,
+                await dst_client.stream_recv(stream.token, want_dst[0], topic.layout_hash,
                                              topic.message_size, stream.transport)
                 stream.installed_dst = want_dst
             if not src_rings.has(topic.id):
@@ -523,15 +529,16 @@ class Network:
             want_src = (src_rings.current(topic.id), stream.transport, stream.address,
                         dst.data_port)
             if stream.installed_src != want_src:
-                await src.client.stream_send(stream.token, want_src[0], topic.layout_hash,
+                await src_client.stream_send(stream.token, want_src[0], topic.layout_hash,
                                              topic.message_size, stream.transport,
                                              stream.address, dst.data_port)
                 stream.installed_src = want_src
             stream.error = ""
         except (dc.DaemonError, OSError) as exc:
+            if stream.error != _reason(exc):  # tried again every POLL_INTERVAL: once
+                log.warning("forwarding topic %r from %r to %r: %s", topic.name, stream.src,
+                            stream.dst, _reason(exc))
             stream.error = _reason(exc)
-            log.warning("forwarding topic %r from %r to %r: %s", topic.name, stream.src,
-                        stream.dst, stream.error)
 
     async def _uninstall(self, stream: Stream) -> None:
         for name, installed in ((stream.src, stream.installed_src),

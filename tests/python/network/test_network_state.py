@@ -241,3 +241,56 @@ async def test_a_daemon_silent_while_it_is_adopted_again_does_not_hold_up_client
     await asyncio.wait_for(w.up("b"), 60)  # an upper bound, not a measurement
     assert w.state("b") == "unreachable"
     await asyncio.wait_for(w.subscribe(w.client("a", "other"), "t"), 60)
+
+
+async def test_a_host_lost_while_a_stream_is_set_up_holds_up_no_other_stream() -> None:
+    """a goes unreachable while b's daemon sets up the receiving end of a -> b: the
+    reconciler notes it for that stream and still sets up c -> b in the same round."""
+    w = World()
+    await w.up()
+    await w.publish(w.client("a"), "t1")
+    await w.subscribe(w.client("b"), "t1")
+    await w.publish(w.client("c"), "t2")
+    await w.subscribe(w.client("b", "b2"), "t2")
+    entered, release = w.daemons["b"].gate("stream_recv")
+    reconcile = asyncio.ensure_future(w.net.reconcile())
+    await entered.wait()  # t1's receiving end on b
+    w.daemons["a"].reachable = False
+    await w.up("a")
+    assert w.state("a") == "unreachable"
+    release.set()
+    await reconcile
+    assert w.streams("t1")[("a", "b")].error
+    assert [s.ring for s in _send(w, "c")] == [w.net._rings_of("c").current(w.topic_id("t2"))]
+
+
+async def test_a_stream_refused_by_a_daemon_is_tried_again(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A daemon refuses to set up a stream once (nothing else changes afterwards): the
+    reconciler tries it again by itself."""
+    monkeypatch.setattr(network, "POLL_INTERVAL", 0.01)
+    w = World()
+    await w.up()
+    refused = asyncio.Event()
+    real = w.daemons["b"].stream_recv
+
+    async def refuse_once(*args: object, **kwargs: object) -> None:
+        if not refused.is_set():
+            refused.set()
+            raise network.dc.DaemonError("cannot open the ring", 14)
+        await real(*args, **kwargs)
+
+    w.daemons["b"].stream_recv = refuse_once  # type: ignore[method-assign]
+    w.net.start()
+    try:
+        await w.publish(w.client("a"), "t")
+        await w.subscribe(w.client("b"), "t")
+        await refused.wait()
+
+        async def installed() -> None:
+            while not _recv(w, "b"):
+                await asyncio.sleep(0.01)
+
+        await asyncio.wait_for(installed(), 60)  # an upper bound, not a measurement
+    finally:
+        await w.net.close()
