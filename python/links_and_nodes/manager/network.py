@@ -113,21 +113,6 @@ class Stream:
                 "stale": r.stale if r else 0, "invalid": r.invalid if r else 0}
 
 
-def topic_hosts(config: model.Config) -> list[tuple[str, str]]:
-    """(host name, a node that maps to it) of every host the configuration names: the
-    `hosts` section, node_map targets and the nodes of processes and states."""
-    found: dict[str, str] = {}
-    for node, host in config.node_map.items():
-        found.setdefault(host, node)
-    for name in config.hosts:
-        found.setdefault(name, name)
-    nodes = [p.node for p in config.processes.values()]
-    nodes += [s.node for s in config.states.values() if s.node]
-    for node in nodes:
-        found.setdefault(config.node_map.get(node, node), node)
-    return sorted(found.items())
-
-
 class Network:
     """Implements core.HostRings; runs the host monitors and the stream reconciler."""
 
@@ -139,7 +124,7 @@ class Network:
         self.prefix = sanitize_instance(instance)
         self.local_id = _libln.host_id()
         self.hosts: dict[str, HostState] = {}
-        for index, (name, node) in enumerate(topic_hosts(config), start=1):
+        for index, (name, node) in enumerate(routes.config_hosts(config), start=1):
             host = HostState(name, node)
             host.rings = RemoteRings(name, self.prefix, f"h{index}")
             self.hosts[name] = host

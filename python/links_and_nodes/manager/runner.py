@@ -40,9 +40,7 @@ class Runner:
                                    extra_env={"LN_RUNTIME_DIR": str(runtime_dir)})
         self.control = Control(core, self.scheduler, reload=self.reload, shutdown=shutdown)
         self.network: Network | None = None
-        nodes = [p.node for p in config.processes.values()]
-        nodes += [s.node for s in config.states.values() if s.node]
-        if any(not self.pool.is_local(node) for node in nodes):
+        if routes.spans_hosts(config, self.pool.local_host):
             self.network = Network(config, core, self.pool, args.instance)
             self.control.network_view = self.network
             self.scheduler.manager_address_for = self._manager_address_for

@@ -266,3 +266,20 @@ def test_processes_reach_a_manager_whose_host_is_not_configured(system: System) 
     mgr.start("all")
     mgr.wait_ready("all", timeout=TIMEOUT)
     wait_for(lambda: system.received(system.output("sub")), "b to receive from a")
+
+
+def test_clients_started_by_hand_on_configured_hosts(system: System) -> None:
+    """No process of the configuration runs on another host, but its hosts are named: the
+    manager still connects to their daemons, so that programs started there by hand get
+    their rings there and their topics forwarded."""
+    for host in "abc":
+        system.start_daemon(host)
+    mgr = system.start_manager(system.lnc(""))
+    pub = system.client("a", "pub", "net.hand", "nettest/sample", "--rate", "50")
+    sub = system.client("b", "sub", "net.hand", "nettest/sample")
+    assert pub.log_path is not None and sub.log_path is not None
+    wait_for(lambda: system.client_received(sub) or pub.poll() is not None
+             or sub.poll() is not None, "b to receive from a")
+    assert system.client_received(sub), (pub.log_path.read_text()[-2000:],
+                                         sub.log_path.read_text()[-2000:])
+    assert {h["name"] for h in mgr.hosts()} == {"a", "b", "c"}
