@@ -191,7 +191,13 @@ class Network:
         src, dst = self._client_host(caller), self._client_host(provider)
         if src is None or dst is None or src == dst:
             return tcp_host
-        return routes.host_address(self.config, src, dst) or tcp_host
+        target = routes.host_address(self.config, src, dst)
+        if (target is None or target in routes.LOCAL_NAMES) and dst == self.local_name() \
+                and src in self.hosts:
+            # the manager's host, which the configuration gives no address: the one its
+            # connection to the caller's daemon comes from
+            target = self.pool.local_address(self.hosts[src].node)
+        return target or tcp_host
 
     def _known(self, host_id: str) -> bool:
         return (not host_id or host_id == self.local_id

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import sys
 
-from .conftest import DAEMON_PORT, System
+from .conftest import DAEMON_PORT, HERE, System
 from polling import wait_for
 
 TIMEOUT = 60.0
@@ -283,3 +283,26 @@ def test_clients_started_by_hand_on_configured_hosts(system: System) -> None:
     assert system.client_received(sub), (pub.log_path.read_text()[-2000:],
                                          sub.log_path.read_text()[-2000:])
     assert {h["name"] for h in mgr.hosts()} == {"a", "b", "c"}
+
+
+def test_a_service_on_the_managers_unconfigured_host_is_called_from_another(
+        system: System) -> None:
+    """A provider on the manager's host, which the configuration does not name, talks to
+    the manager over loopback: a caller on b gets an address of that host it reaches."""
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(system.process("caller", "b", "call net.mecho --count 3", "calls done"))
+    port = system.address.rpartition(":")[2]
+    lnc.write_text(lnc.read_text().replace(f"manager: {system.address}", f"manager: :{port}"))
+    mgr = system.start_manager(lnc)
+    mgr_host = system.lab["mgr"]
+    env = system.env(mgr_host)
+    env["LN_MANAGER"] = f"127.0.0.1:{port}"
+    provider = mgr_host.popen([sys.executable, str(HERE / "netclient.py"), "provide",
+                               "net.mecho"], env=env, log="provider.mgr.log")
+    system.clients.append(provider)
+    wait_for(lambda: "net.mecho" in {s["name"] for s in mgr.services()}, "the provider")
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    calls = [line for line in system.output("caller") if line.startswith("call ")]
+    assert len(calls) == 3 and all(" OK " in line for line in calls), calls
