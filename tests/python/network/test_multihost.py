@@ -306,3 +306,20 @@ def test_a_service_on_the_managers_unconfigured_host_is_called_from_another(
     mgr.wait_ready("all", timeout=TIMEOUT)
     calls = [line for line in system.output("caller") if line.startswith("call ")]
     assert len(calls) == 3 and all(" OK " in line for line in calls), calls
+
+
+def test_the_clients_of_a_host_cut_off_are_released(system: System) -> None:
+    """c is cut off while a program there publishes: the manager must notice that its
+    connection is dead (nothing comes back from a host that is gone) and release its
+    ports, as it does for a program that exits."""
+    for host in "abc":
+        system.start_daemon(host)
+    mgr = system.start_manager(system.lnc(""))
+    system.client("c", "pub", "net.cut", "nettest/sample", "--rate", "20")
+    wait_for(lambda: "net.cut" in {t["name"] for t in mgr.topics()}, "c's publisher")
+    system.lab["c"].disconnect()
+    try:
+        wait_for(lambda: "net.cut" not in {t["name"] for t in mgr.topics()},
+                 "the manager to release the ports of the program on c", timeout=TIMEOUT)
+    finally:
+        system.lab["c"].reconnect()
