@@ -487,8 +487,14 @@ class Network:
         src, dst = self._daemon(stream.src), self._daemon(stream.dst)
         if src is None or dst is None:
             down = stream.src if src is None else stream.dst
-            stream.error = f"waiting for host {down!r}: " + (
-                self.hosts[down].error if down in self.hosts else "not a configured host")
+            if down in self.hosts:
+                why = self.hosts[down].error or self.hosts[down].state
+            elif down == self.local_name():
+                why = ("the manager's own host is no host of the configuration: name it in "
+                       "'hosts' and run an ln_daemon there")
+            else:
+                why = "not a configured host"
+            stream.error = f"waiting for host {down!r}: {why}"
             return
         # the links of now: one that goes while we wait fails our calls, not the round
         src_client, dst_client = src.client, dst.client
