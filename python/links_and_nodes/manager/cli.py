@@ -218,13 +218,12 @@ def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> A
 
 
 def _spans_hosts(config: Any) -> bool:
-    """True if a process or state of the configuration runs on another host."""
-    from .daemons import DaemonPool
+    """True if the configuration names a host other than this one (see runner.py)."""
+    import socket
 
-    pool = DaemonPool(config, config.instance.name, start_local=False)
-    nodes = [p.node for p in config.processes.values()]
-    nodes += [s.node for s in config.states.values() if s.node]
-    return any(not pool.is_local(node) for node in nodes)
+    from .routes import spans_hosts
+
+    return spans_hosts(config, socket.gethostname())
 
 
 def main(argv: list[str] | None = None) -> int:

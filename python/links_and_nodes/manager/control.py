@@ -153,7 +153,7 @@ class Control:
         for name, topic in sorted(self.core.registry.topics.items()):
             topics.append({"name": name, "md_name": topic.md_name,
                            "publishers": topic.publishers, "subscribers": topic.subscribers,
-                           "published": self.core.topic_published(name)})
+                           "published": await self.core.topic_published(name)})
         return {"topics": topics}
 
     async def services(self, command: dict[str, Any]) -> dict[str, Any]:

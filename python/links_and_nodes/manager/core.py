@@ -118,15 +118,21 @@ class Core:
         topic = self.registry.topics.get(name)
         return topic.publishers if topic is not None else 0
 
-    def topic_published(self, name: str) -> int:
-        """Samples topic `name` has had (0 if there is no such topic)."""
+    async def topic_published(self, name: str) -> int:
+        """Samples topic `name` has had (0 if there is no such topic): the newest sequence
+        number of the ring on its publishers' host, read now (the watchdog measures rates
+        with it).  Another host's is asked of its daemon."""
         topic = self.registry.topics.get(name)
         if topic is None:
             return 0
+        published = getattr(self.hosts, "published", None)
+        if published is not None:
+            counted = await published(topic)
+            if counted is not None:  # counted on another host
+                return int(counted)
         if self.segments.has(topic.id):
             return self.segments.published(topic.id)
-        published = getattr(self.hosts, "published", None)  # counted on another host
-        return published(topic) if published is not None else 0
+        return 0
 
     def service_provided(self, name: str) -> bool:
         return name in self.service_registry.by_name

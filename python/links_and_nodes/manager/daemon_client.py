@@ -816,6 +816,13 @@ class DaemonClient:
     def closed(self) -> bool:
         return self._closed is not None
 
+    @property
+    def local_address(self) -> str:
+        """This end's address of the connection: one at which the daemon's host reaches
+        this host ("" if unknown)."""
+        sockname = self._writer.get_extra_info("sockname")
+        return str(sockname[0]) if sockname else ""
+
     async def close(self) -> None:
         """Close the connection; the daemon's processes keep running."""
         if self._closed is None:

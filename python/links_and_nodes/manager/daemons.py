@@ -83,6 +83,14 @@ class DaemonPool:
             self._clients[(host, port)] = client
             return client
 
+    def local_address(self, node: str) -> str | None:
+        """The manager host's address on its connection to the daemon of `node`, which that
+        node's host reaches it at; None while there is no such connection."""
+        client = self._clients.get(self.address(node))
+        if client is None or client.closed:
+            return None
+        return client.local_address or None
+
     async def close(self) -> None:
         for client in self._clients.values():
             await client.close()

@@ -53,7 +53,7 @@ class HostState:
     local: bool = False  # the manager's own host (its rings are core.local)
     rings: RemoteRings | None = None
     purged: bool = False  # stale segments of an earlier manager removed (once)
-    published: dict[int, int] = field(default_factory=dict)  # topic id -> write seq
+    published: dict[int, int] = field(default_factory=dict)  # topic id -> last write seq
 
     def info(self) -> dict[str, Any]:
         return {"name": self.name, "state": self.state, "error": self.error,
@@ -113,21 +113,6 @@ class Stream:
                 "stale": r.stale if r else 0, "invalid": r.invalid if r else 0}
 
 
-def topic_hosts(config: model.Config) -> list[tuple[str, str]]:
-    """(host name, a node that maps to it) of every host the configuration names: the
-    `hosts` section, node_map targets and the nodes of processes and states."""
-    found: dict[str, str] = {}
-    for node, host in config.node_map.items():
-        found.setdefault(host, node)
-    for name in config.hosts:
-        found.setdefault(name, name)
-    nodes = [p.node for p in config.processes.values()]
-    nodes += [s.node for s in config.states.values() if s.node]
-    for node in nodes:
-        found.setdefault(config.node_map.get(node, node), node)
-    return sorted(found.items())
-
-
 class Network:
     """Implements core.HostRings; runs the host monitors and the stream reconciler."""
 
@@ -139,12 +124,15 @@ class Network:
         self.prefix = sanitize_instance(instance)
         self.local_id = _libln.host_id()
         self.hosts: dict[str, HostState] = {}
-        for index, (name, node) in enumerate(topic_hosts(config), start=1):
+        for index, (name, node) in enumerate(routes.config_hosts(config), start=1):
             host = HostState(name, node)
             host.rings = RemoteRings(name, self.prefix, f"h{index}")
             self.hosts[name] = host
         self.streams: dict[tuple[int, str, str], Stream] = {}
         self.problems: dict[tuple[int, str, str], str] = {}  # no route etc.
+        # topic id -> the host of its publishers, also after they left: its ring there
+        # holds the topic's sequence number (see transit_needed)
+        self.origins: dict[int, str] = {}
         self.totals: dict[str, tuple[int, int]] = {}  # host -> unknown, malformed
         self._dirty = asyncio.Event()
         self._identified = asyncio.Event()  # set (and replaced) whenever a host comes up
@@ -203,7 +191,13 @@ class Network:
         src, dst = self._client_host(caller), self._client_host(provider)
         if src is None or dst is None or src == dst:
             return tcp_host
-        return routes.host_address(self.config, src, dst) or tcp_host
+        target = routes.host_address(self.config, src, dst)
+        if (target is None or target in routes.LOCAL_NAMES) and dst == self.local_name() \
+                and src in self.hosts:
+            # the manager's host, which the configuration gives no address: the one its
+            # connection to the caller's daemon comes from
+            target = self.pool.local_address(self.hosts[src].node)
+        return target or tcp_host
 
     def _known(self, host_id: str) -> bool:
         return (not host_id or host_id == self.local_id
@@ -220,11 +214,35 @@ class Network:
                 await asyncio.wait_for(self._identified.wait(), min(left, POLL_INTERVAL))
 
     def transit_needed(self, topic: Topic, rings: Rings) -> bool:
-        return any(s.topic_id == topic.id and s.dst == rings.host and not s.final
+        """Whether the topic's ring on that host must stay although no port of the topic is
+        left there: it passes samples on to other hosts (a gateway, which may have had
+        subscribers of its own), or its publishers ran there.  That ring counts the topic's
+        sequence numbers; made anew, it would count from 1 again, and every other host
+        would drop a returning publisher's samples as stale until it passed the old count.
+        It stays until the topic ends or a publisher runs on another host."""
+        if self.origins.get(topic.id) == rings.host:
+            return True
+        return any(s.topic_id == topic.id
+                   and (s.src == rings.host or (s.dst == rings.host and not s.final))
                    for s in self.streams.values())
 
-    def published(self, topic: Topic) -> int:
-        return max((h.published.get(topic.id, 0) for h in self.hosts.values()), default=0)
+    async def published(self, topic: Topic) -> int | None:
+        """The newest sequence number of the topic's ring on its publishers' host, asked of
+        that host's daemon now (the last answer while it cannot be asked); None when the
+        manager's own host counts it, or no host does."""
+        name = self._publisher_host(topic) or self.origins.get(topic.id)
+        host = self.hosts.get(name) if name is not None else None
+        if host is None or host.local or host.rings is None or not host.rings.has(topic.id):
+            return None
+        client = host.client
+        if host.state == "up" and client is not None:
+            try:
+                host.published[topic.id] = await asyncio.wait_for(
+                    client.ring_write_seq(host.rings.current(topic.id)), PING_TIMEOUT)
+            except (dc.DaemonError, OSError, TimeoutError) as exc:
+                log.debug("host %r: sequence number of topic %r: %s", host.name, topic.name,
+                          _reason(exc))
+        return host.published.get(topic.id, 0)
 
     # ---- life -----------------------------------------------------------------------------
     def start(self) -> None:
@@ -236,20 +254,32 @@ class Network:
         self._tasks.append(loop.create_task(self._reconciler()))
 
     async def close(self) -> None:
-        """Stop monitoring and remove this manager's streams from the daemons."""
+        """Stop monitoring and reconciling, then remove every stream of this instance from
+        the reachable daemons (after core.shutdown, which removed the rings): also those the
+        reconciler was setting up when it was stopped, which it had not recorded yet."""
         self._closing = True
         for task in self._tasks:
             task.cancel()
-        for task in self._tasks:
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
-        for stream in list(self.streams.values()):
-            await self._uninstall(stream)
+        # Python 3.11's wait_for can swallow a cancellation that meets a call's answer: the
+        # loops also end on _closing, after their current wait.
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+        for host in self.hosts.values():
+            client = host.client
+            if host.state != "up" or client is None:
+                continue  # its streams are purged by the next manager of the instance
+            try:
+                stats, _ = await asyncio.wait_for(client.stream_stats(), PING_TIMEOUT)
+                for stat in stats:
+                    with contextlib.suppress(dc.DaemonError):
+                        await asyncio.wait_for(client.stream_remove(stat.token), PING_TIMEOUT)
+            except (dc.DaemonError, OSError, TimeoutError) as exc:
+                log.warning("host %r: cannot remove the streams of this instance: %s",
+                            host.name, _reason(exc))
         self.streams.clear()
 
     # ---- monitoring -----------------------------------------------------------------------
     async def _monitor(self, host: HostState) -> None:
-        while True:
+        while not self._closing:
             try:
                 await self._check(host)
             except asyncio.CancelledError:
@@ -265,28 +295,26 @@ class Network:
         await asyncio.wait_for(client.ping(), PING_TIMEOUT)
         stats, totals = await asyncio.wait_for(client.stream_stats(), PING_TIMEOUT)
         self._take_stats(host, stats, totals)
-        if host.rings is not None and not host.local:
-            for topic in list(self.core.registry.topics.values()):
-                if host.rings.has(topic.id) and self._publisher_host(topic) == host.name:
-                    seq = await asyncio.wait_for(
-                        client.ring_write_seq(host.rings.current(topic.id)), PING_TIMEOUT)
-                    host.published[topic.id] = seq
 
     async def _up(self, host: HostState, client: Any) -> None:
         info = await asyncio.wait_for(client.net_info(), PING_TIMEOUT)
         configured = self.config.hosts.get(host.name)
         local = info.host_id == self.local_id
         if not local and host.rings is not None:
-            if not host.purged:
-                # segments and streams an earlier manager of this instance left there
-                removed = await client.ring_purge()
-                host.purged = True
-                if removed:
-                    log.info("host %r: removed %d stale segment%s of this instance",
-                             host.name, removed, "" if removed == 1 else "s")
-            host.rings.link = client
-            if host.state != "connecting":
-                await host.rings.resync()
+            # No ring of the host changes meanwhile; every call is bounded, since client
+            # requests wait for the lock and this monitor is what gives up on a daemon.
+            async with self.core.transit():
+                if not host.purged:
+                    # segments and streams an earlier manager of this instance left there
+                    removed = await asyncio.wait_for(client.ring_purge(), PING_TIMEOUT)
+                    host.purged = True
+                    if removed:
+                        log.info("host %r: removed %d stale segment%s of this instance",
+                                 host.name, removed, "" if removed == 1 else "s")
+                host.rings.link = client
+                if host.state != "connecting":
+                    await host.rings.resync(PING_TIMEOUT)
+        await self._drop_unknown_streams(host, client)
         # known from here on: clients of this host get rings there (identify)
         host.client = client
         host.host_id = info.host_id
@@ -306,6 +334,19 @@ class Network:
             if stream.dst == host.name:
                 stream.installed_dst = None
         self._dirty.set()
+
+    async def _drop_unknown_streams(self, host: HostState, client: Any) -> None:
+        """Remove the streams of this instance on the host's daemon that this manager does
+        not have (any more): ended while the host was unreachable, or left by an earlier
+        manager of the instance on its own host (which is not purged)."""
+        stats, _ = await asyncio.wait_for(client.stream_stats(), PING_TIMEOUT)
+        known = {s.token for s in self.streams.values()}
+        for stat in stats:
+            if stat.token not in known:
+                with contextlib.suppress(dc.DaemonError):
+                    await asyncio.wait_for(client.stream_remove(stat.token), PING_TIMEOUT)
+                log.info("host %r: removed stream %016x that no topic needs", host.name,
+                         stat.token)
 
     async def _down(self, host: HostState, reason: str) -> None:
         if host.state != "unreachable" or host.error != reason:
@@ -339,8 +380,12 @@ class Network:
 
     # ---- streams --------------------------------------------------------------------------
     async def _reconciler(self) -> None:
-        while True:
-            await self._dirty.wait()
+        while not self._closing:
+            if all(s.installed_src and s.installed_dst for s in self.streams.values()):
+                await self._dirty.wait()
+            else:  # a stream waits for a host or was refused: try it again in a while
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(self._dirty.wait(), POLL_INTERVAL)
             self._dirty.clear()
             try:
                 await self.reconcile()
@@ -378,10 +423,13 @@ class Network:
         """(topic id, src, dst) -> (transport, address, final) of every needed hop."""
         want: dict[tuple[int, str, str], tuple[str, str, bool]] = {}
         self.problems = {}
-        for topic in self.core.registry.topics.values():
+        topics = self.core.registry.topics.values()
+        self.origins = {t.id: self.origins[t.id] for t in topics if t.id in self.origins}
+        for topic in topics:
             src = self._publisher_host(topic)
             if src is None:
                 continue
+            self.origins[topic.id] = src
             sinks = {self._client_host(p.client) for p in topic.ports.values()
                      if p.kind is PortKind.SUBSCRIBER} - {src, None}
             for dst in sorted(h for h in sinks if h is not None):
@@ -409,7 +457,9 @@ class Network:
                      stream.dst)
         topics = {t.id: t for t in self.core.registry.topics.values()}
         for key, (transport, address, final) in want.items():
-            topic = topics[key[0]]
+            topic = topics.get(key[0])
+            if topic is None:
+                continue  # ended while streams were removed; that change runs us again
             stream = self.streams.get(key)
             if stream is None or stream.transport != transport:
                 if stream is not None:
@@ -437,14 +487,25 @@ class Network:
         src, dst = self._daemon(stream.src), self._daemon(stream.dst)
         if src is None or dst is None:
             down = stream.src if src is None else stream.dst
-            stream.error = f"waiting for host {down!r}: " + (
-                self.hosts[down].error if down in self.hosts else "not a configured host")
+            if down in self.hosts:
+                why = self.hosts[down].error or self.hosts[down].state
+            elif down == self.local_name():
+                why = ("the manager's own host is no host of the configuration: name it in "
+                       "'hosts' and run an ln_daemon there")
+            else:
+                why = "not a configured host"
+            stream.error = f"waiting for host {down!r}: {why}"
             return
+        # the links of now: one that goes while we wait fails our calls, not the round
+        src_client, dst_client = src.client, dst.client
         src_rings, dst_rings = self._rings_of(stream.src), self._rings_of(stream.dst)
         if src_rings is None or dst_rings is None or not src_rings.has(topic.id):
             stream.error = "no ring on the sending host yet"
             return
         async with self.core.transit():
+            if self.core.registry.topics.get(topic.name) is not topic \
+                    or not src_rings.has(topic.id):
+                return  # gone while we waited for the core; that change runs us again
             if not dst_rings.has(topic.id):  # a gateway: a ring that only passes samples on
                 try:
                     await dst_rings.create(topic.id, topic.name, topic.md_name,
@@ -457,21 +518,24 @@ class Network:
         try:
             want_dst = (dst_rings.current(topic.id), stream.transport)
             if stream.installed_dst != want_dst:
-                await dst.client.stream_recv(stream.token, want_dst[0], topic.layout_hash,
+                await dst_client.stream_recv(stream.token, want_dst[0], topic.layout_hash,
                                              topic.message_size, stream.transport)
                 stream.installed_dst = want_dst
+            if not src_rings.has(topic.id):
+                return  # gone while the daemon answered; that change runs us again
             want_src = (src_rings.current(topic.id), stream.transport, stream.address,
                         dst.data_port)
             if stream.installed_src != want_src:
-                await src.client.stream_send(stream.token, want_src[0], topic.layout_hash,
+                await src_client.stream_send(stream.token, want_src[0], topic.layout_hash,
                                              topic.message_size, stream.transport,
                                              stream.address, dst.data_port)
                 stream.installed_src = want_src
             stream.error = ""
         except (dc.DaemonError, OSError) as exc:
+            if stream.error != _reason(exc):  # tried again every POLL_INTERVAL: once
+                log.warning("forwarding topic %r from %r to %r: %s", topic.name, stream.src,
+                            stream.dst, _reason(exc))
             stream.error = _reason(exc)
-            log.warning("forwarding topic %r from %r to %r: %s", topic.name, stream.src,
-                        stream.dst, stream.error)
 
     async def _uninstall(self, stream: Stream) -> None:
         for name, installed in ((stream.src, stream.installed_src),
@@ -483,18 +547,23 @@ class Network:
         stream.installed_src = stream.installed_dst = None
 
     async def _drop_transit_rings(self) -> None:
-        """Remove gateway rings no stream passes through any more."""
+        """Remove the rings that neither a port nor a stream needs any more, on every host
+        (the manager's own included): gateway rings no stream passes through, and rings of
+        topics that ended while the reconciler set up their streams."""
         async with self.core.transit():
-            for topic in list(self.core.registry.topics.values()):
-                for host in self.hosts.values():
-                    rings = host.rings
-                    if host.local or rings is None or not rings.has(topic.id):
+            topics = {t.id: t for t in self.core.registry.topics.values()}
+            for host in self.hosts.values():
+                rings = self._rings_of(host.name)
+                if rings is None:
+                    continue
+                for topic_id in rings.topic_ids():
+                    topic = topics.get(topic_id)
+                    if topic is not None and (
+                            any(self._client_host(p.client) == host.name
+                                for p in topic.ports.values())
+                            or self.transit_needed(topic, rings)):
                         continue
-                    if any(self._client_host(p.client) == host.name
-                           for p in topic.ports.values()):
-                        continue
-                    if not self.transit_needed(topic, rings):
-                        await rings.remove(topic.id)
+                    await rings.remove(topic_id)
 
     # ---- listings -------------------------------------------------------------------------
     def host_listing(self) -> list[dict[str, Any]]:

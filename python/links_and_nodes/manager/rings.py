@@ -5,6 +5,7 @@ could not be done there is done when the daemon is back (resync)."""
 
 from __future__ import annotations
 
+import asyncio
 import logging
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -95,6 +96,7 @@ class _Remote:
     names: list[str] = field(default_factory=list)
     readers: dict[int, tuple[int, int]] = field(default_factory=dict)  # index -> pid, buffers
     counts: tuple[int, int] = (0, 0)
+    released: set[int] = field(default_factory=set)  # reader slots freed while unreachable
 
 
 class RemoteRings:
@@ -109,6 +111,11 @@ class RemoteRings:
         self.link: DaemonLink | None = None  # None while the daemon is unreachable
         self.down_reason = "not connected yet"
         self._rings: dict[int, _Remote] = {}
+        # Last generation used per topic, kept when a ring is removed: a ring made again
+        # while the topic lives gets a new name, never that of a segment a stream of the
+        # daemon may still map (or that an unreachable daemon could not remove).
+        self._generations: dict[int, int] = {}
+        self._unremoved: list[str] = []  # segments removed while the daemon was unreachable
 
     def has(self, topic_id: int) -> bool:
         return topic_id in self._rings
@@ -119,7 +126,9 @@ class RemoteRings:
     def topic_ids(self) -> list[int]:
         return list(self._rings)
 
-    def _name(self, topic_id: int, generation: int) -> str:
+    def _next_name(self, topic_id: int) -> str:
+        generation = self._generations.get(topic_id, 0) + 1
+        self._generations[topic_id] = generation
         return f"/ln.{self.prefix}.{topic_id}.{generation}.{self.tag}"
 
     def _need_link(self, what: str) -> DaemonLink:
@@ -137,8 +146,8 @@ class RemoteRings:
     async def create(self, topic_id: int, topic: str, md_name: str, layout_hash: int,
                      message_size: int, slots: int) -> str:
         assert topic_id not in self._rings
-        name = self._name(topic_id, 1)
         link = self._need_link(f"topic {topic!r}")
+        name = self._next_name(topic_id)
         await self._do(f"topic {topic!r}: creating segment {name}",
                        link.ring_create(name, topic, md_name, layout_hash, message_size,
                                         slots))
@@ -149,8 +158,8 @@ class RemoteRings:
     async def grow(self, topic_id: int, md_name: str, layout_hash: int, message_size: int,
                    slots: int) -> str:
         ring = self._rings[topic_id]
-        name = self._name(topic_id, len(ring.names) + 1)
         link = self._need_link(f"topic {ring.topic!r}")
+        name = self._next_name(topic_id)
         await self._do(f"topic {ring.topic!r}: creating segment {name}",
                        link.ring_create(name, ring.topic, md_name, layout_hash, message_size,
                                         slots))
@@ -170,12 +179,15 @@ class RemoteRings:
         await self._do(f"topic {ring.topic!r}: reserving reader slot {index}",
                        link.ring_reserve_reader(ring.names[-1], index, pid, buffers))
         ring.readers[index] = (pid, buffers)
+        ring.released.discard(index)
 
     async def release_reader(self, topic_id: int, index: int) -> None:
         ring = self._rings[topic_id]
         ring.readers.pop(index, None)
         if self.link is not None:
             await self._quietly(self.link.ring_release_reader(ring.names[-1], index))
+        else:  # the slot would hold back the host's publishers: freed in resync()
+            ring.released.add(index)
 
     async def set_counts(self, topic_id: int, publishers: int, subscribers: int) -> None:
         ring = self._rings[topic_id]
@@ -192,21 +204,39 @@ class RemoteRings:
             for name in ring.names:
                 await self._quietly(self.link.ring_remove(name))
         else:
-            log.warning("host %r unreachable: its segments %s stay until its daemon is "
-                        "back and a manager of this instance purges them", self.host,
-                        ", ".join(ring.names))
+            log.warning("host %r unreachable: its segments %s are removed when its daemon "
+                        "is back", self.host, ", ".join(ring.names))
+            self._unremoved += ring.names
         return ring.names
 
-    async def resync(self) -> None:
-        """After the daemon (re)connected: adopt every ring this manager has there (they
-        survive a daemon restart in /dev/shm) and set what changed meanwhile."""
+    async def resync(self, timeout: float) -> None:
+        """After the daemon (re)connected: remove the segments and free the reader slots
+        that could not be removed and freed while it was unreachable, adopt every ring this
+        manager has there (they survive a daemon restart in /dev/shm) and set the counts.
+        The caller keeps other ring operations out meanwhile, so every call is bounded by
+        `timeout`: a daemon that does not answer (or goes) ends it with TimeoutError (or
+        ConnectionError); what is left is done on the next resync."""
         link = self._need_link("resync")
+        while self._unremoved:
+            try:
+                await asyncio.wait_for(link.ring_remove(self._unremoved[0]), timeout)
+            except (TimeoutError, ConnectionError):
+                raise
+            except Exception as exc:
+                log.warning("host %r: %s", self.host, exc)
+            del self._unremoved[0]
         for ring in list(self._rings.values()):
             name = ring.names[-1]
             try:
-                await link.ring_create(name, ring.topic, ring.md_name, ring.layout_hash,
-                                       ring.message_size, ring.slots, adopt=True)
-                await link.ring_set_counts(name, *ring.counts)
+                await asyncio.wait_for(
+                    link.ring_create(name, ring.topic, ring.md_name, ring.layout_hash,
+                                     ring.message_size, ring.slots, adopt=True), timeout)
+                await asyncio.wait_for(link.ring_set_counts(name, *ring.counts), timeout)
+                for index in sorted(ring.released):
+                    await asyncio.wait_for(link.ring_release_reader(name, index), timeout)
+                ring.released.clear()
+            except (TimeoutError, ConnectionError):
+                raise
             except Exception as exc:
                 log.warning("host %r: re-adopting %s of topic %r failed: %s", self.host, name,
                             ring.topic, exc)

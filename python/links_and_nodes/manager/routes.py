@@ -38,6 +38,28 @@ def host_of(config: model.Config, node: str, local_host: str) -> str:
     return local_host if host in LOCAL_NAMES else host
 
 
+def config_hosts(config: model.Config) -> list[tuple[str, str]]:
+    """(host name, a node that maps to it) of every host the configuration names: the
+    `hosts` section, node_map targets and the nodes of processes and states."""
+    found: dict[str, str] = {}
+    for node, host in config.node_map.items():
+        found.setdefault(host, node)
+    for name in config.hosts:
+        found.setdefault(name, name)
+    nodes = [p.node for p in config.processes.values()]
+    nodes += [s.node for s in config.states.values() if s.node]
+    for node in nodes:
+        found.setdefault(config.node_map.get(node, node), node)
+    return sorted(found.items())
+
+
+def spans_hosts(config: model.Config, local_host: str) -> bool:
+    """Whether the configuration names a host other than the manager's (`local_host`):
+    one that runs a process or state, or one where clients started by hand may run."""
+    return any(host_of(config, node, local_host) != local_host
+               for _, node in config_hosts(config))
+
+
 def default_address(config: model.Config, host: str) -> str:
     """How `host` is reached without networks: its first interface address in `hosts`,
     else its name (resolved by the system)."""

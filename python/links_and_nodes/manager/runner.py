@@ -40,9 +40,7 @@ class Runner:
                                    extra_env={"LN_RUNTIME_DIR": str(runtime_dir)})
         self.control = Control(core, self.scheduler, reload=self.reload, shutdown=shutdown)
         self.network: Network | None = None
-        nodes = [p.node for p in config.processes.values()]
-        nodes += [s.node for s in config.states.values() if s.node]
-        if any(not self.pool.is_local(node) for node in nodes):
+        if routes.spans_hosts(config, self.pool.local_host):
             self.network = Network(config, core, self.pool, args.instance)
             self.control.network_view = self.network
             self.scheduler.manager_address_for = self._manager_address_for
@@ -60,16 +58,22 @@ class Runner:
     def _manager_address_for(self, node: str) -> str:
         """LN_MANAGER for a process on `node`: the manager's own address unless that is a
         loopback or wildcard one that another host cannot use; then the manager host's
-        address as the network sections say that host reaches it."""
+        address as the network sections say that host reaches it, or, where they give none
+        (the manager's host is not in the configuration), the address the manager's
+        connection to that node's daemon comes from."""
         host, _, port = self.address.rpartition(":")
         if self.pool.is_local(node) or host.strip("[]") not in ("127.0.0.1", "::1",
                                                                 "localhost"):
             return self.address
         assert self.network is not None
-        target = routes.host_address(self.network.config,
-                                     self.network.config.node_map.get(node, node),
-                                     self.network.local_name())
-        return f"{target}:{port}" if target else self.address
+        config = self.network.config
+        node_host, local = config.node_map.get(node, node), self.network.local_name()
+        target = routes.host_address(config, node_host, local)
+        if node_host != local and (target is None or target in routes.LOCAL_NAMES):
+            target = self.pool.local_address(node)
+        if not target:
+            return self.address
+        return f"[{target}]:{port}" if ":" in target else f"{target}:{port}"
 
     async def begin(self) -> int:
         """Start what was asked, open the console; non-zero if the manager must exit right

@@ -46,7 +46,7 @@ class Registry(Protocol):
     listeners: list[Callable[[], None]]
 
     def topic_publishers(self, name: str) -> int: ...
-    def topic_published(self, name: str) -> int: ...
+    async def topic_published(self, name: str) -> int: ...
     def service_provided(self, name: str) -> bool: ...
 
 
@@ -677,7 +677,7 @@ class Scheduler:
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         self._waiters[name] = (future, link)
         env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
-        env["LN_MANAGER"] = self.manager_address
+        env["LN_MANAGER"] = self.manager_address_for(node)
         spec = self.backend.spawn_spec(name=name, command=command, shell=True, env=env,
                                        use_pty=False, max_output_lines=100)
         try:
@@ -842,10 +842,10 @@ class Scheduler:
 
     async def _watchdog(self, rt: Runtime, wd: model.Watchdog) -> None:
         window = max(1.0, 3.0 / wd.min_hz)
-        before = self.registry.topic_published(wd.topic)
+        before = await self.registry.topic_published(wd.topic)
         while rt.state == S.READY:
             await asyncio.sleep(window)
-            now = self.registry.topic_published(wd.topic)
+            now = await self.registry.topic_published(wd.topic)
             rate = (now - before) / window
             before = now
             if rate < wd.min_hz and rt.state == S.READY:

@@ -60,6 +60,10 @@ class Segments:
     def __init__(self, instance: str) -> None:
         self.prefix = sanitize_instance(instance)
         self._rings: dict[int, _TopicRings] = {}
+        # Last generation used per topic, kept when a topic's ring is removed: a ring made
+        # again on this host while the topic lives gets a new name, so that nothing that
+        # still maps the removed segment (a daemon's stream) is taken for it.
+        self._generations: dict[int, int] = {}
 
     def purge(self) -> int:
         """Unlink every segment of this instance left by an earlier manager; how many."""
@@ -82,12 +86,15 @@ class Segments:
 
     def create(self, topic_id: int, topic: str, md_name: str, layout_hash: int,
                message_size: int, slots: int) -> str:
-        """Create generation 1 of a new topic's ring; returns its name."""
+        """Create the first generation of a topic's ring on this host (1, unless the topic
+        had a ring here before); returns its name."""
         assert topic_id not in self._rings
         rings = _TopicRings(topic)
-        rings.admin = self._create(rings, topic_id, 1, md_name, layout_hash, message_size,
-                                   slots)
-        rings.names.append(segment_name(self.prefix, topic_id, 1))
+        generation = self._generations.get(topic_id, 0) + 1
+        rings.admin = self._create(rings, topic_id, generation, md_name, layout_hash,
+                                   message_size, slots)
+        self._generations[topic_id] = generation
+        rings.names.append(segment_name(self.prefix, topic_id, generation))
         self._rings[topic_id] = rings
         return rings.current
 
@@ -96,9 +103,10 @@ class Segments:
         """Replace a topic's ring by a next generation of `slots` slots and retire the old
         one into it; the old segment stays linked until the topic is removed."""
         rings = self._rings[topic_id]
-        generation = len(rings.names) + 1
+        generation = self._generations[topic_id] + 1
         successor = self._create(rings, topic_id, generation, md_name, layout_hash,
                                  message_size, slots)
+        self._generations[topic_id] = generation
         name = segment_name(self.prefix, topic_id, generation)
         try:
             _libln.ln_ring_admin_retire(rings.admin, successor, name.encode(), RETIRE_TIMEOUT)

@@ -21,6 +21,30 @@ _REQUESTS = (p.MsgType.PUBLISH, p.MsgType.SUBSCRIBE, p.MsgType.CLOSE_PORT,
              p.MsgType.FIND_SERVICE, p.MsgType.SERVICE_CALLED, p.MsgType.LIST_SERVICES)
 
 
+# A client's host that dies or is cut off sends nothing, not even a reset: probe an idle
+# connection after KEEPALIVE_IDLE s, every KEEPALIVE_INTERVAL s, and give it up after
+# KEEPALIVE_COUNT unanswered probes (or data unacknowledged for USER_TIMEOUT_MS), so that
+# its ports are released after about 15 s, as when a client exits.
+KEEPALIVE_IDLE = 5
+KEEPALIVE_INTERVAL = 2
+KEEPALIVE_COUNT = 5
+USER_TIMEOUT_MS = 15000
+
+
+def _watch_peer(writer: asyncio.StreamWriter) -> None:
+    sock = writer.get_extra_info("socket")
+    if sock is None or sock.family not in (socket.AF_INET, socket.AF_INET6):
+        return
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_KEEPIDLE, KEEPALIVE_IDLE)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_KEEPINTVL, KEEPALIVE_INTERVAL)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_KEEPCNT, KEEPALIVE_COUNT)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_USER_TIMEOUT, USER_TIMEOUT_MS)
+    except (OSError, AttributeError) as exc:  # not Linux: the system's defaults
+        log.debug("keepalive on a client connection: %s", exc)
+
+
 class Closing(Exception):
     """The connection must be closed; the text is the reason that is logged."""
 
@@ -82,6 +106,7 @@ class Server:
         assert task is not None
         self._tasks.add(task)
         self._writers.add(writer)
+        _watch_peer(writer)
         session = Session(_peer(writer))
         log.debug("%s: connected", session.label)
         try:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import sys
 
-from .conftest import DAEMON_PORT, System
+from .conftest import DAEMON_PORT, HERE, System
 from polling import wait_for
 
 TIMEOUT = 60.0
@@ -221,3 +221,105 @@ member_interfaces: c/eth0, b/eth0
              "the streams to end with the last remote subscriber")
     wait_for(lambda: not [f for f in shm.iterdir() if system.instance in f.name],
              "the gateway's ring to go with its streams")
+
+
+def test_a_publisher_back_on_its_host_reaches_the_other_hosts(system: System) -> None:
+    """The publisher on a ends while b's subscriber keeps the topic, and a new one starts
+    on a: its samples continue the topic's sequence numbers, so b takes them (a ring on a
+    counting from 1 again would have b drop them all as stale)."""
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(system.process("sub", "b", "sub net.again nettest/sample", "subscribed"))
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+
+    def publishers() -> int:
+        return sum(t["publishers"] for t in mgr.topics() if t["name"] == "net.again")
+
+    first = system.client("a", "pub", "net.again", "nettest/sample", "--count", "200",
+                          "--rate", "400")
+    assert first.log_path is not None
+    wait_for(lambda: "published 200" in first.log_path.read_text(), "200 samples published")
+    wait_for(lambda: system.received(system.output("sub")), "b to receive")
+    first.kill()
+    first.wait()
+    wait_for(lambda: publishers() == 0, "the manager to see the publisher gone")
+    system.client("a", "pub", "net.again", "nettest/sample", "--count", "20", "--rate", "50")
+    got = wait_for(lambda: [r for r in system.received(system.output("sub")) if r[0] > 200],
+                   "b to receive the second publisher's samples")
+    assert all(1 <= counter <= 20 and seq == 200 + counter for seq, counter, _ in got), got
+
+
+def test_processes_reach_a_manager_whose_host_is_not_configured(system: System) -> None:
+    """`manager: :PORT` and the manager on a host the configuration does not name (mgr):
+    processes on a and b get an address of the manager's host that they reach."""
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.addr nettest/sample --rate 50", "publishing")
+        + system.process("sub", "b", "sub net.addr nettest/sample", "subscribed"))
+    text = lnc.read_text().replace(f"manager: {system.address}",
+                                   f"manager: :{system.address.rpartition(':')[2]}")
+    lnc.write_text(text)
+    mgr = system.start_manager(lnc)
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    wait_for(lambda: system.received(system.output("sub")), "b to receive from a")
+
+
+def test_clients_started_by_hand_on_configured_hosts(system: System) -> None:
+    """No process of the configuration runs on another host, but its hosts are named: the
+    manager still connects to their daemons, so that programs started there by hand get
+    their rings there and their topics forwarded."""
+    for host in "abc":
+        system.start_daemon(host)
+    mgr = system.start_manager(system.lnc(""))
+    pub = system.client("a", "pub", "net.hand", "nettest/sample", "--rate", "50")
+    sub = system.client("b", "sub", "net.hand", "nettest/sample")
+    assert pub.log_path is not None and sub.log_path is not None
+    wait_for(lambda: system.client_received(sub) or pub.poll() is not None
+             or sub.poll() is not None, "b to receive from a")
+    assert system.client_received(sub), (pub.log_path.read_text()[-2000:],
+                                         sub.log_path.read_text()[-2000:])
+    assert {h["name"] for h in mgr.hosts()} == {"a", "b", "c"}
+
+
+def test_a_service_on_the_managers_unconfigured_host_is_called_from_another(
+        system: System) -> None:
+    """A provider on the manager's host, which the configuration does not name, talks to
+    the manager over loopback: a caller on b gets an address of that host it reaches."""
+    for host in "abc":
+        system.start_daemon(host)
+    lnc = system.lnc(system.process("caller", "b", "call net.mecho --count 3", "calls done"))
+    port = system.address.rpartition(":")[2]
+    lnc.write_text(lnc.read_text().replace(f"manager: {system.address}", f"manager: :{port}"))
+    mgr = system.start_manager(lnc)
+    mgr_host = system.lab["mgr"]
+    env = system.env(mgr_host)
+    env["LN_MANAGER"] = f"127.0.0.1:{port}"
+    provider = mgr_host.popen([sys.executable, str(HERE / "netclient.py"), "provide",
+                               "net.mecho"], env=env, log="provider.mgr.log")
+    system.clients.append(provider)
+    wait_for(lambda: "net.mecho" in {s["name"] for s in mgr.services()}, "the provider")
+    mgr.start("all")
+    mgr.wait_ready("all", timeout=TIMEOUT)
+    calls = [line for line in system.output("caller") if line.startswith("call ")]
+    assert len(calls) == 3 and all(" OK " in line for line in calls), calls
+
+
+def test_the_clients_of_a_host_cut_off_are_released(system: System) -> None:
+    """c is cut off while a program there publishes: the manager must notice that its
+    connection is dead (nothing comes back from a host that is gone) and release its
+    ports, as it does for a program that exits."""
+    for host in "abc":
+        system.start_daemon(host)
+    mgr = system.start_manager(system.lnc(""))
+    system.client("c", "pub", "net.cut", "nettest/sample", "--rate", "20")
+    wait_for(lambda: "net.cut" in {t["name"] for t in mgr.topics()}, "c's publisher")
+    system.lab["c"].disconnect()
+    try:
+        wait_for(lambda: "net.cut" not in {t["name"] for t in mgr.topics()},
+                 "the manager to release the ports of the program on c", timeout=TIMEOUT)
+    finally:
+        system.lab["c"].reconnect()

@@ -140,7 +140,7 @@ class FakeRegistry:
     def topic_publishers(self, name: str) -> int:
         return self.publishers.get(name, 0)
 
-    def topic_published(self, name: str) -> int:
+    async def topic_published(self, name: str) -> int:
         return self.published.get(name, 0)
 
     def service_provided(self, name: str) -> bool:
