@@ -33,7 +33,9 @@ log = logging.getLogger("ln_manager")
 POLL_INTERVAL = 1.0  # seconds between pings / counter polls of one daemon
 PING_TIMEOUT = 3.0  # a daemon that does not answer within this is unreachable
 CONNECT_TIMEOUT = 3.0
-IDENTIFY_TIMEOUT = 10.0  # how long a port request waits for its client's host to be known
+# How long a port request waits for its client's host to be known: well below libln's
+# request timeout (10 s), so that the client gets the explanation, not a timeout.
+IDENTIFY_TIMEOUT = 5.0
 SUBSCRIBE_UDP = 0x100  # LN_SUBSCRIBE_UDP
 SUBSCRIBE_TCP = 0x200  # LN_SUBSCRIBE_TCP
 
@@ -450,6 +452,10 @@ class Network:
 
     async def reconcile(self) -> None:
         want = self.desired()
+        live = {t.id for t in self.core.registry.topics.values()}
+        for host in self.hosts.values():  # the last sequence numbers of ended topics
+            for topic_id in [t for t in host.published if t not in live]:
+                del host.published[topic_id]
         for key in [k for k in self.streams if k not in want]:
             stream = self.streams.pop(key)
             await self._uninstall(stream)
