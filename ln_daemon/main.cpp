@@ -16,6 +16,7 @@
 #include <sys/prctl.h>
 #include <sys/signalfd.h>
 #include <sys/socket.h>
+#include <system_error>
 #include <unistd.h>
 
 #include "auth.hpp"
@@ -235,6 +236,7 @@ int main(int argc, char **argv)
         return usage_error("--key-file is required");
     if (optind != argc)
         return usage_error("unexpected argument");
+    const bool default_data_port = data_port < 0;
     if (data_port < 0) {
         if (port == 65535)
             return usage_error("the default data port (--port + 1) would be 65536; give "
@@ -311,6 +313,20 @@ int main(int argc, char **argv)
     std::unique_ptr<lnd::fwd::Forwarder> forwarder;
     try {
         forwarder = std::make_unique<lnd::fwd::Forwarder>(fwd_options);
+    } catch (const std::system_error &e) {
+        // The default (port + 1) lies in the range the kernel takes source ports of outgoing
+        // connections from; one of them may hold it.  Managers ask for the real data port
+        // (NET_INFO), so another one does as well; a port given with --data-port does not.
+        if (!default_data_port || e.code().value() != EADDRINUSE)
+            return start_failed(e.what());
+        lnd::logf("default data port %ld is in use (%s): taking a free one", data_port,
+                  e.what());
+        fwd_options.data_port = 0;
+        try {
+            forwarder = std::make_unique<lnd::fwd::Forwarder>(fwd_options);
+        } catch (const std::exception &again) {
+            return start_failed(again.what());
+        }
     } catch (const std::exception &e) {
         return start_failed(e.what());
     }

@@ -123,6 +123,29 @@ def test_default_data_port(tmp_path: Path) -> None:
             proc.stdout.close()
 
 
+def test_default_data_port_in_use_takes_another(tmp_path: Path) -> None:
+    """Only the default data port (--port + 1) gives way: managers learn the real one."""
+    port = free_daemon_port()
+    path = key_file(tmp_path, HEX, 0o600)
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", port + 1))
+        taken.listen()
+        proc = subprocess.Popen([daemon_exe(), "--port", str(port), "--bind", "127.0.0.1",
+                                 "--key-file", str(path), "--foreground"],
+                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        try:
+            assert proc.stdout is not None
+            line = proc.stdout.readline()
+            prefix = f"ln_daemon: listening on 127.0.0.1:{port} (pid {proc.pid}), data port "
+            assert line.startswith(prefix), line
+            assert int(line[len(prefix):]) not in (0, port, port + 1)
+        finally:
+            proc.send_signal(signal.SIGTERM)
+            assert proc.wait(WAIT) == 0
+            if proc.stdout is not None:
+                proc.stdout.close()
+
+
 def _pids_with(text: str) -> list[int]:
     pids = []
     for entry in Path("/proc").iterdir():
