@@ -2,11 +2,15 @@
 // writing them in under their original sequence numbers); closes it in the destructor.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include <ln/ln.h>
+
+#include "forward_net.hpp"
 
 namespace lnd::fwd {
 
@@ -25,6 +29,24 @@ inline std::string open_tap(Tap &out, const std::string &ring, uint64_t layout_h
         return "cannot open ring '" + ring + "': " + ln_last_error();
     out.reset(tap);
     return "";
+}
+
+// The next sample into buf (libln's code, LN_ETIMEOUT if none came): polls the tap, yielding
+// the CPU, for up to spin_ns (a sample that comes that soon costs no futex wake-up; a stop
+// ends the polling), then sleeps up to `timeout` seconds.
+inline int read_tap(ln_ring_tap *tap, void *buf, ln_sample_info &info, int64_t spin_ns,
+                    double timeout, const StopSignal &stop)
+{
+    using Clock = std::chrono::steady_clock;
+    if (spin_ns > 0) {
+        for (auto end = Clock::now() + std::chrono::nanoseconds(spin_ns); !stop.raised();) {
+            int rc = ln_ring_tap_read(tap, buf, &info, 0);
+            if (rc != LN_ETIMEOUT || Clock::now() >= end)
+                return rc == LN_ETIMEOUT ? ln_ring_tap_read(tap, buf, &info, timeout) : rc;
+            std::this_thread::yield();
+        }
+    }
+    return ln_ring_tap_read(tap, buf, &info, timeout);
 }
 
 } // namespace lnd::fwd

@@ -151,16 +151,7 @@ void TcpSender::read_loop()
     Buffer buf = take_buffer();
     while (!stop_.raised()) {
         ln_sample_info info;
-        int rc = LN_ETIMEOUT;
-        for (auto end = std::chrono::steady_clock::now() + std::chrono::nanoseconds(spin_ns_);
-             spin_ns_ > 0 && !stop_.raised();) { // a sample that comes soon: no wake-up
-            rc = ln_ring_tap_read(tap_.get(), buf.get(), &info, 0);
-            if (rc != LN_ETIMEOUT || std::chrono::steady_clock::now() >= end)
-                break;
-            std::this_thread::yield();
-        }
-        if (rc == LN_ETIMEOUT)
-            rc = ln_ring_tap_read(tap_.get(), buf.get(), &info, kReadTimeout);
+        int rc = read_tap(tap_.get(), buf.get(), info, spin_ns_, kReadTimeout, stop_);
         if (rc == LN_ETIMEOUT)
             continue;
         if (rc != LN_OK) {

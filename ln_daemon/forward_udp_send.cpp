@@ -8,7 +8,6 @@
 #include <cstring>
 #include <netinet/in.h>
 #include <poll.h>
-#include <thread>
 
 #include "forward_wire.hpp"
 
@@ -22,13 +21,6 @@ constexpr auto kResolveInterval = std::chrono::seconds(1);
 constexpr int kRefusedRetries = 3;         // per sample, see send_sample
 constexpr int64_t kMinBackoffUs = 50, kMaxBackoffUs = 5000; // after ENOBUFS
 constexpr double kBurstBytes = 64 * 1024; // with a rate limit: sent at once, at most
-
-int64_t now_ns()
-{
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(
-               std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-}
 
 // Datagrams per sendmmsg: with a rate limit no more than fit one burst (at least one).
 unsigned batch_size(double rate, size_t datagram)
@@ -209,15 +201,7 @@ void UdpSender::run()
 {
     while (!stop_.raised()) {
         ln_sample_info info;
-        int rc = LN_ETIMEOUT;
-        if (spin_ns_ > 0) { // a sample that comes soon is taken without a futex wake-up
-            for (int64_t end = now_ns() + spin_ns_;
-                 (rc = ln_ring_tap_read(tap_.get(), sample_.get(), &info, 0)) == LN_ETIMEOUT
-                 && now_ns() < end && !stop_.raised();)
-                std::this_thread::yield();
-        }
-        if (rc == LN_ETIMEOUT)
-            rc = ln_ring_tap_read(tap_.get(), sample_.get(), &info, kReadTimeout);
+        int rc = read_tap(tap_.get(), sample_.get(), info, spin_ns_, kReadTimeout, stop_);
         if (rc == LN_ETIMEOUT)
             continue;
         if (rc != LN_OK) {
