@@ -6,18 +6,13 @@
 #include <unistd.h>
 
 #include "bench_common.h"
+#include "bench_io.h"
 
 #define MSG 64
 
 static const char usage[] =
     "usage: svc_echo_raw server PATH                     echo 64-byte messages until EOF\n"
     "       svc_echo_raw client PATH COUNT WARMUP OUT    COUNT round trips (ns) to OUT\n";
-
-static void die(const char* what)
-{
-    fprintf(stderr, "svc_echo_raw: %s: %s\n", what, strerror(errno));
-    exit(2);
-}
 
 static struct sockaddr_un address(const char* path)
 {
@@ -30,57 +25,23 @@ static struct sockaddr_un address(const char* path)
     return sa;
 }
 
-/* Read exactly `len` bytes; 0 on EOF before the first byte, 1 when done. */
-static int read_full(int fd, void* buf, size_t len)
-{
-    size_t got = 0;
-    while (got < len) {
-        ssize_t n = read(fd, (char*)buf + got, len - got);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0)
-            die("read");
-        if (n == 0) {
-            if (got == 0)
-                return 0;
-            fprintf(stderr, "svc_echo_raw: EOF inside a message\n");
-            exit(2);
-        }
-        got += (size_t)n;
-    }
-    return 1;
-}
-
-static void write_full(int fd, const void* buf, size_t len)
-{
-    size_t sent = 0;
-    while (sent < len) {
-        ssize_t n = write(fd, (const char*)buf + sent, len - sent);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0)
-            die("write");
-        sent += (size_t)n;
-    }
-}
-
 static int server(const char* path)
 {
     struct sockaddr_un sa = address(path);
     int lfd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
     if (lfd < 0)
-        die("socket");
+        bench_die("socket");
     if (bind(lfd, (struct sockaddr*)&sa, sizeof sa) != 0)
-        die("bind");
+        bench_die("bind");
     if (listen(lfd, 1) != 0)
-        die("listen");
+        bench_die("listen");
     bench_ready();
     int fd = accept(lfd, NULL, NULL);
     if (fd < 0)
-        die("accept");
+        bench_die("accept");
     uint8_t buf[MSG];
-    while (read_full(fd, buf, MSG))
-        write_full(fd, buf, MSG);
+    while (bench_read_full(fd, buf, MSG))
+        bench_write_full(fd, buf, MSG);
     close(fd);
     close(lfd);
     unlink(path);
@@ -92,19 +53,19 @@ static int client(const char* path, uint64_t count, uint64_t warmup, const char*
     struct sockaddr_un sa = address(path);
     int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
     if (fd < 0)
-        die("socket");
+        bench_die("socket");
     if (connect(fd, (struct sockaddr*)&sa, sizeof sa) != 0)
-        die("connect");
+        bench_die("connect");
     uint64_t* rtt = calloc(count ? count : 1, sizeof(*rtt));
     if (!rtt)
-        die("calloc");
+        bench_die("calloc");
     uint8_t req[MSG], resp[MSG];
     memset(req, 0x5a, sizeof req);
     for (uint64_t i = 0; i < warmup + count; i++) {
         uint64_t t0 = bench_now_ns(), got;
         memcpy(req, &i, sizeof i);
-        write_full(fd, req, MSG);
-        if (!read_full(fd, resp, MSG)) {
+        bench_write_full(fd, req, MSG);
+        if (!bench_read_full(fd, resp, MSG)) {
             fprintf(stderr, "svc_echo_raw: server closed the connection\n");
             return 1;
         }
