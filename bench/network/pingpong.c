@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "bench_common.h"
+#include "bench_io.h"
 
 #define UDP_MAX 65507         /* largest UDP payload over IPv4 */
 #define RETRY_MS 1000         /* UDP: resend a ping not answered within this */
@@ -30,12 +31,6 @@ static const char usage[] =
     "Servers print \"ready\" once they listen; the other modes print one JSON line.\n"
     "Every message starts with its number (uint64); round trips check it.\n";
 
-static void die(const char* what)
-{
-    fprintf(stderr, "pingpong: %s: %s\n", what, strerror(errno));
-    exit(2);
-}
-
 static uint64_t number(const char* text, uint64_t max, const char* what)
 {
     char* end;
@@ -49,6 +44,38 @@ static uint64_t number(const char* text, uint64_t max, const char* what)
     return v;
 }
 
+/* SIZE of a message: every message starts with its number (uint64). */
+static size_t message_size(const char* text, uint64_t max)
+{
+    size_t size = number(text, max, "SIZE");
+    if (size < 8) {
+        fprintf(stderr, "pingpong: SIZE must be at least 8\n");
+        exit(2);
+    }
+    return size;
+}
+
+/* What the pinging side takes (HOST PORT SIZE COUNT WARMUP OUT) and needs. */
+typedef struct ping_args {
+    size_t size;
+    uint64_t count, warmup;
+    uint8_t *out, *in; /* a message out, its echo in */
+    uint64_t* rtt;     /* COUNT round trips, ns */
+} ping_args;
+
+static ping_args ping_setup(char** argv, uint64_t max_size)
+{
+    ping_args a = {.size = message_size(argv[4], max_size),
+                   .count = number(argv[5], UINT32_MAX, "COUNT"),
+                   .warmup = number(argv[6], UINT32_MAX, "WARMUP")};
+    a.out = bench_alloc(a.size);
+    a.in = bench_alloc(a.size);
+    a.rtt = calloc(a.count ? a.count : 1, sizeof *a.rtt);
+    if (!a.rtt)
+        bench_die("calloc");
+    return a;
+}
+
 /* A socket bound to every IPv4 address at `port` (listening, for TCP). */
 static int server_socket(int type, const char* port_text)
 {
@@ -56,13 +83,13 @@ static int server_socket(int type, const char* port_text)
                              .sin_port = htons((uint16_t)number(port_text, 65535, "PORT"))};
     int fd = socket(AF_INET, type | SOCK_CLOEXEC, 0), one = 1;
     if (fd < 0)
-        die("socket");
+        bench_die("socket");
     if (setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0)
-        die("SO_REUSEADDR");
+        bench_die("SO_REUSEADDR");
     if (bind(fd, (struct sockaddr*)&sa, sizeof sa) != 0)
-        die("bind");
+        bench_die("bind");
     if (type == SOCK_STREAM && listen(fd, 1) != 0)
-        die("listen");
+        bench_die("listen");
     return fd;
 }
 
@@ -77,9 +104,9 @@ static int client_socket(int type, const char* host, const char* port)
     }
     int fd = socket(res->ai_family, res->ai_socktype | SOCK_CLOEXEC, res->ai_protocol);
     if (fd < 0)
-        die("socket");
+        bench_die("socket");
     if (connect(fd, res->ai_addr, res->ai_addrlen) != 0)
-        die("connect");
+        bench_die("connect");
     freeaddrinfo(res);
     return fd;
 }
@@ -88,51 +115,17 @@ static void no_delay(int fd)
 {
     int one = 1;
     if (setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0)
-        die("TCP_NODELAY");
+        bench_die("TCP_NODELAY");
 }
 
 static int accept_one(int lfd)
 {
     int fd = accept4(lfd, NULL, NULL, SOCK_CLOEXEC);
     if (fd < 0)
-        die("accept");
+        bench_die("accept");
     close(lfd);
     no_delay(fd);
     return fd;
-}
-
-/* Read exactly `len` bytes; 0 on EOF before the first byte, 1 when done. */
-static int read_full(int fd, void* buf, size_t len)
-{
-    size_t got = 0;
-    while (got < len) {
-        ssize_t n = read(fd, (char*)buf + got, len - got);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0)
-            die("read");
-        if (n == 0) {
-            if (got == 0)
-                return 0;
-            fprintf(stderr, "pingpong: EOF inside a message\n");
-            exit(2);
-        }
-        got += (size_t)n;
-    }
-    return 1;
-}
-
-static void write_full(int fd, const void* buf, size_t len)
-{
-    size_t sent = 0;
-    while (sent < len) {
-        ssize_t n = write(fd, (const char*)buf + sent, len - sent);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0)
-            die("write");
-        sent += (size_t)n;
-    }
 }
 
 static int udp_echo(const char* port)
@@ -147,11 +140,11 @@ static int udp_echo(const char* port)
         if (n < 0 && errno == EINTR)
             continue;
         if (n < 0)
-            die("recvfrom");
+            bench_die("recvfrom");
         if (n == 0)
             break;
         if (sendto(fd, buf, (size_t)n, 0, (struct sockaddr*)&from, len) < 0)
-            die("sendto");
+            bench_die("sendto");
     }
     close(fd);
     return 0;
@@ -167,14 +160,14 @@ static uint64_t udp_round_trip(int fd, uint8_t* out, uint8_t* in, size_t size, u
     uint64_t t0 = bench_now_ns(), last_answer = t0;
     int retried = 0;
     if (send(fd, out, size, 0) < 0 && errno != ECONNREFUSED)
-        die("send");
+        bench_die("send");
     for (;;) {
         struct pollfd p = {.fd = fd, .events = POLLIN};
         int rc = poll(&p, 1, RETRY_MS);
         if (rc < 0 && errno == EINTR)
             continue;
         if (rc < 0)
-            die("poll");
+            bench_die("poll");
         if (rc == 0) {
             if (bench_now_ns() - last_answer > GIVE_UP_NS) {
                 fprintf(stderr, "pingpong: no answer for %llu s\n", GIVE_UP_NS / 1000000000ull);
@@ -183,14 +176,14 @@ static uint64_t udp_round_trip(int fd, uint8_t* out, uint8_t* in, size_t size, u
             (*resent)++;
             retried = 1;
             if (send(fd, out, size, 0) < 0 && errno != ECONNREFUSED)
-                die("send");
+                bench_die("send");
             continue;
         }
         ssize_t n = recv(fd, in, size, 0);
         if (n < 0 && errno == ECONNREFUSED) /* the echo side is not there (yet) */
             continue;
         if (n < 0)
-            die("recv");
+            bench_die("recv");
         uint64_t got, t1 = bench_now_ns();
         last_answer = t1;
         memcpy(&got, in, sizeof got);
@@ -201,19 +194,12 @@ static uint64_t udp_round_trip(int fd, uint8_t* out, uint8_t* in, size_t size, u
 
 static int udp_ping(char** argv)
 {
-    size_t size = number(argv[4], UDP_MAX, "SIZE");
-    uint64_t count = number(argv[5], UINT32_MAX, "COUNT");
-    uint64_t warmup = number(argv[6], UINT32_MAX, "WARMUP");
-    if (size < 8) {
-        fprintf(stderr, "pingpong: SIZE must be at least 8\n");
-        return 2;
-    }
+    ping_args a = ping_setup(argv, UDP_MAX);
+    size_t size = a.size;
+    uint64_t count = a.count, warmup = a.warmup, *rtt = a.rtt;
+    uint8_t *out = a.out, *in = a.in;
     int fd = client_socket(SOCK_DGRAM, argv[2], argv[3]);
-    uint8_t *out = bench_alloc(size), *in = bench_alloc(size);
-    uint64_t* rtt = calloc(count ? count : 1, sizeof *rtt);
     uint64_t resent = 0, kept = 0;
-    if (!rtt)
-        die("calloc");
     for (uint64_t i = 0; i < warmup + count; i++) {
         uint64_t t = udp_round_trip(fd, out, in, size, i, &resent);
         if (i >= warmup && t != 0)
@@ -233,32 +219,25 @@ static int tcp_echo(const char* port, size_t size)
     bench_ready();
     int fd = accept_one(lfd);
     uint8_t* buf = bench_alloc(size);
-    while (read_full(fd, buf, size))
-        write_full(fd, buf, size);
+    while (bench_read_full(fd, buf, size))
+        bench_write_full(fd, buf, size);
     close(fd);
     return 0;
 }
 
 static int tcp_ping(char** argv)
 {
-    size_t size = number(argv[4], SIZE_MAX, "SIZE");
-    uint64_t count = number(argv[5], UINT32_MAX, "COUNT");
-    uint64_t warmup = number(argv[6], UINT32_MAX, "WARMUP");
-    if (size < 8) {
-        fprintf(stderr, "pingpong: SIZE must be at least 8\n");
-        return 2;
-    }
+    ping_args a = ping_setup(argv, SIZE_MAX);
+    size_t size = a.size;
+    uint64_t count = a.count, warmup = a.warmup, *rtt = a.rtt;
+    uint8_t *out = a.out, *in = a.in;
     int fd = client_socket(SOCK_STREAM, argv[2], argv[3]);
     no_delay(fd);
-    uint8_t *out = bench_alloc(size), *in = bench_alloc(size);
-    uint64_t* rtt = calloc(count ? count : 1, sizeof *rtt);
-    if (!rtt)
-        die("calloc");
     for (uint64_t i = 0; i < warmup + count; i++) {
         uint64_t t0 = bench_now_ns(), got;
         memcpy(out, &i, sizeof i);
-        write_full(fd, out, size);
-        if (!read_full(fd, in, size)) {
+        bench_write_full(fd, out, size);
+        if (!bench_read_full(fd, in, size)) {
             fprintf(stderr, "pingpong: the echo side closed the connection\n");
             return 1;
         }
@@ -280,16 +259,12 @@ static int tcp_ping(char** argv)
 /* Received rate is taken from the end of the first message to the end of the last one. */
 static int tcp_sink(const char* port, size_t size)
 {
-    if (size < 8) {
-        fprintf(stderr, "pingpong: SIZE must be at least 8\n");
-        return 2;
-    }
     int lfd = server_socket(SOCK_STREAM, port);
     bench_ready();
     int fd = accept_one(lfd);
     uint8_t* buf = bench_alloc(size);
     uint64_t received = 0, disorder = 0, last = 0, first_ns = 0, last_ns = 0;
-    while (read_full(fd, buf, size)) {
+    while (bench_read_full(fd, buf, size)) {
         uint64_t counter;
         last_ns = bench_now_ns();
         memcpy(&counter, buf, sizeof counter);
@@ -308,22 +283,18 @@ static int tcp_sink(const char* port, size_t size)
 
 static int tcp_source(char** argv)
 {
-    size_t size = number(argv[4], SIZE_MAX, "SIZE");
+    size_t size = message_size(argv[4], SIZE_MAX);
     uint64_t count = number(argv[5], UINT64_MAX, "COUNT");
-    if (size < 8) {
-        fprintf(stderr, "pingpong: SIZE must be at least 8\n");
-        return 2;
-    }
     int fd = client_socket(SOCK_STREAM, argv[2], argv[3]);
     uint8_t* buf = bench_alloc(size);
     uint64_t t0 = bench_now_ns();
     for (uint64_t i = 0; i < count; i++) {
         memcpy(buf, &i, sizeof i);
-        write_full(fd, buf, size);
+        bench_write_full(fd, buf, size);
     }
     uint64_t t1 = bench_now_ns();
     if (shutdown(fd, SHUT_WR) != 0) /* then wait until the sink has read everything */
-        die("shutdown");
+        bench_die("shutdown");
     while (read(fd, buf, size) > 0) {
     }
     close(fd);
@@ -343,7 +314,7 @@ int main(int argc, char** argv)
     if (argc == 8 && strcmp(mode, "tcp-ping") == 0)
         return tcp_ping(argv);
     if (argc == 4 && strcmp(mode, "tcp-sink") == 0)
-        return tcp_sink(argv[2], number(argv[3], SIZE_MAX, "SIZE"));
+        return tcp_sink(argv[2], message_size(argv[3], SIZE_MAX));
     if (argc == 6 && strcmp(mode, "tcp-source") == 0)
         return tcp_source(argv);
     fputs(usage, stderr);
