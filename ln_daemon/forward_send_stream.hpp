@@ -1,11 +1,13 @@
 // SendStream: what the stream table knows of a sending stream, whichever its transport:
-// start its threads, ask them to stop, join them, read its counters.
+// start its threads, ask them to stop, join them, read its counters; and the step both
+// transports start every sample with, taking it out of the ring.
 #pragma once
 
 #include <string>
 
 #include "forward.hpp"
 #include "forward_stats.hpp"
+#include "forward_tap.hpp"
 
 namespace lnd::fwd {
 
@@ -32,6 +34,27 @@ public:
     const SendSpec &spec() const noexcept { return spec_; }
 
 protected:
+    enum class Next { sample, none, stop };
+    // The next sample of `tap` into buf (read_tap, sleeping up to 0.1 s so that a stop is
+    // noticed soon): `sample` with info set, the tap's segment noted and the samples it
+    // skipped counted as drops; `none` if none came or the ring could not be read (the
+    // error recorded, after a pause); `stop` once the stream is to end.
+    Next next_sample(ln_ring_tap *tap, void *buf, ln_sample_info &info, int64_t spin_ns,
+                     const StopSignal &stop)
+    {
+        int rc = read_tap(tap, buf, info, spin_ns, 0.1, stop);
+        if (rc == LN_ETIMEOUT)
+            return Next::none;
+        if (rc != LN_OK) {
+            counters_.set_error(std::string("cannot read the ring: ") + ln_last_error());
+            return stop.sleep_for(100) ? Next::stop : Next::none;
+        }
+        counters_.note_segment(ln_ring_tap_segment(tap));
+        if (info.overruns)
+            StreamCounters::add(counters_.drops, info.overruns);
+        return Next::sample;
+    }
+
     const SendSpec spec_;
     StreamCounters counters_;
 };

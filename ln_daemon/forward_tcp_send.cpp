@@ -22,7 +22,6 @@ namespace lnd::fwd {
 
 namespace {
 
-constexpr double kReadTimeout = 0.1;        // s: how soon the reader notices a stop
 constexpr auto kIdleCheck = std::chrono::milliseconds(100); // peer-close check when idle
 constexpr int kConnectTimeoutMs = 5000;
 constexpr int kReplyTimeoutMs = 5000;
@@ -151,18 +150,11 @@ void TcpSender::read_loop()
     Buffer buf = take_buffer();
     while (!stop_.raised()) {
         ln_sample_info info;
-        int rc = read_tap(tap_.get(), buf.get(), info, spin_ns_, kReadTimeout, stop_);
-        if (rc == LN_ETIMEOUT)
+        Next next = next_sample(tap_.get(), buf.get(), info, spin_ns_, stop_);
+        if (next == Next::stop)
+            break;
+        if (next == Next::none)
             continue;
-        if (rc != LN_OK) {
-            counters_.set_error(std::string("cannot read the ring: ") + ln_last_error());
-            if (stop_.sleep_for(100))
-                break;
-            continue;
-        }
-        counters_.note_segment(ln_ring_tap_segment(tap_.get()));
-        if (info.overruns)
-            StreamCounters::add(counters_.drops, info.overruns);
         bool queued = false;
         {
             std::lock_guard<std::mutex> lock(mutex_);

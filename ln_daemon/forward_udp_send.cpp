@@ -16,7 +16,6 @@ namespace lnd::fwd {
 namespace {
 
 constexpr unsigned kBatch = 64;            // datagrams per sendmmsg
-constexpr double kReadTimeout = 0.1;       // s: how soon a stop is noticed
 constexpr auto kResolveInterval = std::chrono::seconds(1);
 constexpr int kRefusedRetries = 3;         // per sample, see send_sample
 constexpr int64_t kMinBackoffUs = 50, kMaxBackoffUs = 5000; // after ENOBUFS
@@ -201,18 +200,11 @@ void UdpSender::run()
 {
     while (!stop_.raised()) {
         ln_sample_info info;
-        int rc = read_tap(tap_.get(), sample_.get(), info, spin_ns_, kReadTimeout, stop_);
-        if (rc == LN_ETIMEOUT)
+        Next next = next_sample(tap_.get(), sample_.get(), info, spin_ns_, stop_);
+        if (next == Next::stop)
+            break;
+        if (next == Next::none)
             continue;
-        if (rc != LN_OK) {
-            counters_.set_error(std::string("cannot read the ring: ") + ln_last_error());
-            if (stop_.sleep_for(100))
-                break;
-            continue;
-        }
-        counters_.note_segment(ln_ring_tap_segment(tap_.get()));
-        if (info.overruns)
-            StreamCounters::add(counters_.drops, info.overruns);
         switch (send_sample(info.seq, info.timestamp_ns)) {
         case Sent::ok:
             StreamCounters::add(counters_.samples);
