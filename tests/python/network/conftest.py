@@ -23,6 +23,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[2]
 DAEMON_PORT = 54376
 MANAGER_PORT = 54414
+READY_TIMEOUT = 60.0  # an upper bound for processes to get ready, never a measurement
 _GOT = re.compile(r"got (\d+) (\d+) (OK|BAD)")
 
 
@@ -54,6 +55,18 @@ class System:
                                              extra_args=args)
         self.daemons[name] = daemon
         return daemon
+
+    def start_daemons(self, hosts: str = "abc") -> None:
+        """A daemon with the default options on each of these hosts."""
+        for host in hosts:
+            self.start_daemon(host)
+
+    def run(self, lnc: Path) -> Any:
+        """The manager of `lnc` with every process started and ready."""
+        mgr = self.start_manager(lnc)
+        mgr.start("all")
+        mgr.wait_ready("all", timeout=READY_TIMEOUT)
+        return mgr
 
     def lnc(self, processes: str, extra: str = "") -> Path:
         hosts = "\n".join(f"{h}: eth0: {self.lab[h].address}" for h in ("a", "b", "c"))

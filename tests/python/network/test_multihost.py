@@ -36,15 +36,12 @@ def _start_relay(system: System, host: str, loss: float) -> None:
 
 
 def test_big_samples_reach_two_hosts_over_udp(system: System) -> None:
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     lnc = system.lnc(
         system.process("pub", "a", "pub net.blob nettest/blob --rate 4", "publishing")
         + system.process("sub_b", "b", "sub net.blob nettest/blob", "subscribed")
         + system.process("sub_c", "c", "sub net.blob nettest/blob", "subscribed"))
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    system.run(lnc)
     for sub in ("sub_b", "sub_c"):
         got = wait_for(lambda sub=sub: len(r := system.received(system.output(sub))) >= 4
                        and r, f"{sub} to receive 8 MiB samples", timeout=TIMEOUT)
@@ -71,9 +68,7 @@ def test_tcp_topic_delivers_every_sample_through_loss(system: System) -> None:
         + system.process("sub", "b", "sub net.log nettest/sample --buffers 64",
                          "subscribed"),
         extra="topics\nnet.*: transport: tcp\n")
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    system.run(lnc)
     got = wait_for(lambda: len(r := system.received(system.output("sub"))) >= 150 and r,
                    "150 samples over TCP through 20 % loss", timeout=TIMEOUT * 2)
     counters = [counter for _, counter, _ in got]
@@ -95,9 +90,7 @@ def test_udp_topic_keeps_the_newest_samples_through_loss(system: System) -> None
         system.process("pub", "a", "pub net.ctl nettest/sample --rate 200", "publishing")
         + system.process("sub", "b", "sub net.ctl nettest/sample --transport udp",
                          "subscribed"))
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    system.run(lnc)
     got = wait_for(lambda: len(r := system.received(system.output("sub"))) >= 200 and r,
                    "200 samples over UDP through 20 % loss", timeout=TIMEOUT * 2)
     counters = [counter for _, counter, _ in got]
@@ -113,15 +106,12 @@ def test_udp_topic_keeps_the_newest_samples_through_loss(system: System) -> None
 
 
 def test_service_calls_across_hosts(system: System) -> None:
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     lnc = system.lnc(
         system.process("provider", "a", "provide net.echo", "providing")
         + system.process("caller", "b", "call net.echo --count 12", "calls done",
                          depends_on="provider"))
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    mgr = system.run(lnc)
     calls = [line for line in system.output("caller") if line.startswith("call ")]
     assert len(calls) == 12 and all(" OK " in line for line in calls), calls
     service = {s["name"]: s for s in mgr.services()}["net.echo"]
@@ -131,14 +121,11 @@ def test_service_calls_across_hosts(system: System) -> None:
 
 
 def test_daemon_restart_resumes_forwarding(system: System) -> None:
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     lnc = system.lnc(
         system.process("pub", "a", "pub net.state nettest/sample --rate 100", "publishing")
         + system.process("sub_c", "c", "sub net.state nettest/sample", "subscribed"))
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    mgr = system.run(lnc)
     sub_b = system.client("b", "sub", "net.state", "nettest/sample")
     wait_for(lambda: len(system.client_received(sub_b)) >= 20, "b to receive")
     before = {k: system.stream("net.state", "a", k) for k in "bc"}
@@ -167,15 +154,12 @@ def test_daemon_restart_resumes_forwarding(system: System) -> None:
 
 
 def test_unreachable_host_is_reported_and_others_go_on(system: System) -> None:
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     lnc = system.lnc(
         system.process("pub", "a", "pub net.state nettest/sample --rate 100", "publishing")
         + system.process("sub_b", "b", "sub net.state nettest/sample", "subscribed")
         + system.process("sub_c", "c", "sub net.state nettest/sample", "subscribed"))
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    mgr = system.run(lnc)
     wait_for(lambda: len(system.received(system.output("sub_b"))) >= 20, "b to receive")
     system.lab["c"].disconnect()
     host_c = wait_for(lambda: (h := {h["name"]: h for h in mgr.hosts()}["c"])["state"]
@@ -194,8 +178,7 @@ def test_unreachable_host_is_reported_and_others_go_on(system: System) -> None:
 def test_forwarding_through_a_gateway_host(system: System) -> None:
     """a and b share no network (as the .lnc declares them), c is in both: samples go
     a -> c -> b, c holding a ring of the topic only to pass them on."""
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     networks = """network left
 member_interfaces: a/eth0, c/eth0
 
@@ -206,9 +189,7 @@ member_interfaces: c/eth0, b/eth0
         system.process("pub", "a", "pub net.far nettest/sample --rate 100", "publishing")
         + system.process("sub", "b", "sub net.far nettest/sample", "subscribed"),
         extra=networks)
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    mgr = system.run(lnc)
     got = wait_for(lambda: len(r := system.received(system.output("sub"))) >= 50 and r,
                    "b to receive through c")
     assert all(seq == counter for seq, counter, _ in got)
@@ -227,12 +208,9 @@ def test_a_publisher_back_on_its_host_reaches_the_other_hosts(system: System) ->
     """The publisher on a ends while b's subscriber keeps the topic, and a new one starts
     on a: its samples continue the topic's sequence numbers, so b takes them (a ring on a
     counting from 1 again would have b drop them all as stale)."""
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     lnc = system.lnc(system.process("sub", "b", "sub net.again nettest/sample", "subscribed"))
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    mgr = system.run(lnc)
 
     def publishers() -> int:
         return sum(t["publishers"] for t in mgr.topics() if t["name"] == "net.again")
@@ -254,17 +232,14 @@ def test_a_publisher_back_on_its_host_reaches_the_other_hosts(system: System) ->
 def test_processes_reach_a_manager_whose_host_is_not_configured(system: System) -> None:
     """`manager: :PORT` and the manager on a host the configuration does not name (mgr):
     processes on a and b get an address of the manager's host that they reach."""
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     lnc = system.lnc(
         system.process("pub", "a", "pub net.addr nettest/sample --rate 50", "publishing")
         + system.process("sub", "b", "sub net.addr nettest/sample", "subscribed"))
     text = lnc.read_text().replace(f"manager: {system.address}",
                                    f"manager: :{system.address.rpartition(':')[2]}")
     lnc.write_text(text)
-    mgr = system.start_manager(lnc)
-    mgr.start("all")
-    mgr.wait_ready("all", timeout=TIMEOUT)
+    system.run(lnc)
     wait_for(lambda: system.received(system.output("sub")), "b to receive from a")
 
 
@@ -272,8 +247,7 @@ def test_clients_started_by_hand_on_configured_hosts(system: System) -> None:
     """No process of the configuration runs on another host, but its hosts are named: the
     manager still connects to their daemons, so that programs started there by hand get
     their rings there and their topics forwarded."""
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     mgr = system.start_manager(system.lnc(""))
     pub = system.client("a", "pub", "net.hand", "nettest/sample", "--rate", "50")
     sub = system.client("b", "sub", "net.hand", "nettest/sample")
@@ -289,8 +263,7 @@ def test_a_service_on_the_managers_unconfigured_host_is_called_from_another(
         system: System) -> None:
     """A provider on the manager's host, which the configuration does not name, talks to
     the manager over loopback: a caller on b gets an address of that host it reaches."""
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     lnc = system.lnc(system.process("caller", "b", "call net.mecho --count 3", "calls done"))
     port = system.address.rpartition(":")[2]
     lnc.write_text(lnc.read_text().replace(f"manager: {system.address}", f"manager: :{port}"))
@@ -312,8 +285,7 @@ def test_the_clients_of_a_host_cut_off_are_released(system: System) -> None:
     """c is cut off while a program there publishes: the manager must notice that its
     connection is dead (nothing comes back from a host that is gone) and release its
     ports, as it does for a program that exits."""
-    for host in "abc":
-        system.start_daemon(host)
+    system.start_daemons()
     mgr = system.start_manager(system.lnc(""))
     system.client("c", "pub", "net.cut", "nettest/sample", "--rate", "20")
     wait_for(lambda: "net.cut" in {t["name"] for t in mgr.topics()}, "c's publisher")
