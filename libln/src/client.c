@@ -1,11 +1,13 @@
 /* client.c — the client handle: options and where the manager is, the name to register
- * under, create/destroy, the registry of ports that die with their client and the client's
- * copy of its last error.  The manager connection itself is in client_conn.c. */
+ * under, create/destroy, the registry of ports that die with their client (and are
+ * re-registered when it reconnects) and the client's copy of its last error.  The manager
+ * connection and its reconnect monitor are in client_conn.c. */
 #include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <unistd.h>
 #include <netdb.h>
 #include <sys/socket.h>
@@ -64,7 +66,7 @@ int ln_client_local_host(ln_client* clnt, char* out, size_t size)
     socklen_t len = sizeof addr;
     pthread_mutex_lock(&clnt->request_lock);
     int fd = clnt->fd;
-    int ok = fd >= 0 && getsockname(fd, (struct sockaddr*)&addr, &len) == 0
+    int ok = fd >= 0 && (clnt->usable || clnt->reclaiming) && getsockname(fd, (struct sockaddr*)&addr, &len) == 0
              && getnameinfo((struct sockaddr*)&addr, len, out, (socklen_t)size, NULL, 0,
                             NI_NUMERICHOST) == 0;
     pthread_mutex_unlock(&clnt->request_lock);
@@ -78,11 +80,22 @@ const char* ln_client_name(const ln_client* clnt)
     return ln_client_check(clnt) == LN_OK ? clnt->name : NULL;
 }
 
-int ln_client_add_port(ln_client* clnt, void* port, void (*close_fn)(void* port))
+/* Ports lock held: re-register `port` if its registration went out on a connection that is
+ * gone while a newer one is up (a port registered just before the manager went away, which
+ * the monitor did not see yet when it re-registered the others). */
+static void settle(ln_client* clnt, void* port, const ln_client_port_ops* ops, uint64_t gen)
 {
-    assert(clnt != NULL && port != NULL && close_fn != NULL);
+    pthread_mutex_lock(&clnt->request_lock);
+    if (clnt->usable && gen != clnt->conn_gen)
+        ops->reclaim(clnt, port);
+    pthread_mutex_unlock(&clnt->request_lock);
+}
+
+int ln_client_add_port(ln_client* clnt, void* port, const ln_client_port_ops* ops, uint64_t gen)
+{
+    assert(clnt != NULL && port != NULL && ops != NULL && ops->close != NULL);
     int rc = LN_OK;
-    pthread_mutex_lock(&clnt->state_lock);
+    pthread_mutex_lock(&clnt->ports_lock);
     if (clnt->nports == clnt->ports_cap) {
         size_t cap = clnt->ports_cap ? 2 * clnt->ports_cap : 8;
         struct ln_client_port* ports = realloc(clnt->ports, cap * sizeof *ports);
@@ -93,17 +106,36 @@ int ln_client_add_port(ln_client* clnt, void* port, void (*close_fn)(void* port)
         clnt->ports = ports;
         clnt->ports_cap = cap;
     }
-    clnt->ports[clnt->nports++] = (struct ln_client_port){port, close_fn};
+    clnt->ports[clnt->nports++] = (struct ln_client_port){port, ops};
+    settle(clnt, port, ops, gen);
 out:
-    pthread_mutex_unlock(&clnt->state_lock);
+    pthread_mutex_unlock(&clnt->ports_lock);
     return rc ? ln_set_error(clnt, rc, "cannot register a port on client \"%s\": out of memory",
                              clnt->name)
               : LN_OK;
 }
 
+void ln_client_lock_ports(ln_client* clnt)
+{
+    pthread_mutex_lock(&clnt->ports_lock);
+}
+
+void ln_client_unlock_ports(ln_client* clnt)
+{
+    pthread_mutex_unlock(&clnt->ports_lock);
+}
+
+void ln_client_settle_port(ln_client* clnt, void* port, uint64_t gen)
+{
+    for (size_t i = 0; i < clnt->nports; i++)
+        if (clnt->ports[i].port == port)
+            settle(clnt, port, clnt->ports[i].ops, gen);
+    pthread_mutex_unlock(&clnt->ports_lock);
+}
+
 void ln_client_remove_port(ln_client* clnt, void* port)
 {
-    pthread_mutex_lock(&clnt->state_lock);
+    pthread_mutex_lock(&clnt->ports_lock);
     for (size_t i = clnt->nports; i-- > 0;) {
         if (clnt->ports[i].port == port) {
             memmove(&clnt->ports[i], &clnt->ports[i + 1],
@@ -112,7 +144,7 @@ void ln_client_remove_port(ln_client* clnt, void* port)
             break;
         }
     }
-    pthread_mutex_unlock(&clnt->state_lock);
+    pthread_mutex_unlock(&clnt->ports_lock);
 }
 
 /* ---- where the manager is, who we are --------------------------------------------------- */
@@ -206,11 +238,24 @@ static const char* pick_name(const char* name, const ln_client_options* opts)
  * is a no-op returning LN_OK, like free(NULL); a destroyed handle is LN_EBADHANDLE as long
  * as its memory has not been reused. */
 
+/* LN_RECONNECT=0 (or no, off, false) turns reconnection off for every client of the process. */
+static int reconnect_wanted(const ln_client_options* opts)
+{
+    if (opts->flags & LN_CLIENT_NO_RECONNECT)
+        return 0;
+    const char* env = getenv("LN_RECONNECT");
+    if (env == NULL)
+        return 1;
+    return !(strcmp(env, "0") == 0 || strcasecmp(env, "no") == 0 || strcasecmp(env, "off") == 0
+             || strcasecmp(env, "false") == 0);
+}
+
 static void free_client(ln_client* c)
 {
     ln_svc_client_free(c);
     ln_conn_close(c);
     free(c->ports);
+    pthread_mutex_destroy(&c->ports_lock);
     pthread_mutex_destroy(&c->request_lock);
     pthread_mutex_destroy(&c->state_lock);
     c->magic = 0; /* a stale handle now fails ln_client_check (while the memory is not reused) */
@@ -246,6 +291,7 @@ int ln_client_create(ln_client** out, const char* name, const ln_client_options*
     if (c == NULL)
         return ln_set_error(NULL, LN_ENOMEM, "cannot create client \"%s\": out of memory", name);
     c->fd = -1;
+    c->cancel_fd = -1;
     c->pid = getpid();
     c->timeout = opts->timeout == 0 ? DEFAULT_TIMEOUT : opts->timeout;
     /* Fits: parse_address limits "host:port" to MAX_ADDRESS bytes, and address has room for
@@ -255,11 +301,16 @@ int ln_client_create(ln_client** out, const char* name, const ln_client_options*
                       : snprintf(c->address, sizeof c->address, "%s:%s", host, port);
     assert(written > 0 && (size_t)written < sizeof c->address);
     (void)written;
+    memcpy(c->host, host, sizeof c->host);
+    memcpy(c->port, port, sizeof c->port);
     ln_wbuf_init(&c->tx);
+    pthread_mutex_init(&c->ports_lock, NULL);
     pthread_mutex_init(&c->request_lock, NULL);
     pthread_mutex_init(&c->state_lock, NULL);
 
-    rc = ln_conn_open(c, host, port, from, name);
+    rc = ln_conn_open(c, from, name);
+    if (rc == LN_OK && reconnect_wanted(opts))
+        rc = ln_conn_start_monitor(c);
     if (rc != LN_OK) {
         free_client(c);
         return rc;
@@ -276,19 +327,22 @@ int ln_client_destroy(ln_client* clnt)
     int rc = ln_client_check(clnt);
     if (rc != LN_OK)
         return rc;
-    /* Pool threads first: they run handlers of the providers closed below. */
+    /* The monitor first: it re-registers ports, which are closed below.  Its connect or
+     * re-registration is cut short, so this never waits for a manager that is away. */
+    ln_conn_stop_monitor(clnt);
+    /* Pool threads next: they run handlers of the providers closed below. */
     ln_svc_client_stop_pools(clnt);
-    /* Newest first, and without holding a lock: close_fn talks to the manager and calls
+    /* Newest first, and without holding a lock: close talks to the manager and calls
      * ln_client_remove_port. */
     for (;;) {
-        pthread_mutex_lock(&clnt->state_lock);
+        pthread_mutex_lock(&clnt->ports_lock);
         struct ln_client_port last = {NULL, NULL};
         if (clnt->nports > 0)
             last = clnt->ports[clnt->nports - 1];
-        pthread_mutex_unlock(&clnt->state_lock);
+        pthread_mutex_unlock(&clnt->ports_lock);
         if (last.port == NULL)
             break;
-        last.close_fn(last.port);
+        last.ops->close(last.port);
         ln_client_remove_port(clnt, last.port); /* no-op unless close_fn forgot it */
     }
     free_client(clnt);

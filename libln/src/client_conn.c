@@ -1,12 +1,18 @@
-/* client_conn.c — the client's TCP connection to its manager: the HELLO/WELCOME handshake
- * and serialized request/answer round trips (docs/protocol.md).  Failures are recorded with
- * the manager's address and the request; a connection that can no longer be trusted to be
- * in step with the manager is closed for good. */
+/* client_conn.c — the client's TCP connection to its manager: the HELLO/WELCOME handshake,
+ * serialized request/answer round trips (docs/protocol.md) and the monitor thread that
+ * reconnects after the manager went away and re-registers the client's ports and providers.
+ * Failures are recorded with the manager's address and the request; a connection that can no
+ * longer be trusted to be in step with the manager is dropped (and, with a monitor, replaced). */
 #include <assert.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include "client_conn.h"
@@ -14,11 +20,18 @@
 
 #define MAX_ADDRESS LN_CLIENT_MAX_ADDRESS
 
+/* Drops the connection (request lock held).  With a monitor the socket is only shut down:
+ * the monitor, which polls it, sees the hang-up, closes it and reconnects. */
 static void disconnect(ln_client* c)
 {
-    if (c->fd >= 0)
+    if (c->fd >= 0 && c->monitored) {
+        shutdown(c->fd, SHUT_RDWR);
+    } else if (c->fd >= 0) {
         close(c->fd);
-    c->fd = -1;
+        c->fd = -1;
+    }
+    c->usable = 0;
+    c->broken = 1;
     c->stale_answers = 0;
 }
 
@@ -29,6 +42,8 @@ static int io_error(ln_client* c, int err, const char* what)
         return ln_set_error(c, LN_ECONNECTION, "%s: manager closed the connection", what);
     if (err == ETIMEDOUT && c->timeout >= 0)
         return ln_set_error(c, LN_ETIMEOUT, "%s: timed out after %g s", what, c->timeout);
+    if (err == ECANCELED)
+        return ln_set_error(c, LN_ECONNECTION, "%s: the client is being destroyed", what);
     return ln_set_errno_error(c, err, "%s", what);
 }
 
@@ -50,7 +65,7 @@ static int unexpected(ln_client* c, const char* request, uint16_t type)
 /* Sends the frames in c->tx; any failure leaves half a frame behind, so it disconnects. */
 static int send_tx(ln_client* c, const char* request, const struct timespec* deadline)
 {
-    int err = ln_net_write_all(c->fd, c->tx.data, c->tx.len, deadline);
+    int err = ln_net_write_all(c->fd, c->tx.data, c->tx.len, deadline, c->cancel_fd);
     if (err == 0)
         return LN_OK;
     char what[MAX_ADDRESS + 64];
@@ -66,13 +81,13 @@ static int read_frame(ln_client* c, const char* request, const struct timespec* 
 {
     char what[MAX_ADDRESS + 64];
     snprintf(what, sizeof what, "no answer from manager %s to %s", c->address, request);
-    int err = ln_net_wait_readable(c->fd, deadline);
+    int err = ln_net_wait_readable(c->fd, deadline, c->cancel_fd);
     if (err == ETIMEDOUT)
         return io_error(c, err, what);
     uint8_t header[LN_PROTO_HEADER_SIZE];
     uint32_t len = 0;
     if (err == 0)
-        err = ln_net_read_all(c->fd, header, sizeof header, deadline);
+        err = ln_net_read_all(c->fd, header, sizeof header, deadline, c->cancel_fd);
     if (err == 0 && ln_proto_parse_header(header, &len, type) != LN_OK) {
         ln_rbuf r;
         ln_rbuf_init(&r, header, sizeof header);
@@ -92,7 +107,7 @@ static int read_frame(ln_client* c, const char* request, const struct timespec* 
         }
     }
     if (err == 0)
-        err = ln_net_read_all(c->fd, c->rx, len, deadline);
+        err = ln_net_read_all(c->fd, c->rx, len, deadline, c->cancel_fd);
     if (err != 0) {
         disconnect(c);
         return io_error(c, err, what);
@@ -123,7 +138,11 @@ static int take_error(ln_client* c, const char* request, ln_rbuf* r, const char*
 
 /* ---- handshake ------------------------------------------------------------------------- */
 
-static int handshake(ln_client* c, const char* name, const struct timespec* deadline)
+/* HELLO as `name` with `flags`, then WELCOME.  A first handshake takes the manager's client
+ * id, name and instance; a reconnect keeps the client's name (the manager's may differ if it
+ * was taken meanwhile) and insists on the same instance. */
+static int handshake(ln_client* c, const char* name, uint32_t flags,
+                     const struct timespec* deadline)
 {
     ln_wbuf_reset(&c->tx);
     size_t start = ln_proto_frame_begin(&c->tx, LN_MSG_HELLO);
@@ -135,6 +154,7 @@ static int handshake(ln_client* c, const char* name, const struct timespec* dead
     char host_id[LN_HOST_ID_MAX];
     ln_host_id(host_id, sizeof host_id); /* the manager finds this host's ln_daemon by it */
     ln_wbuf_str(&c->tx, host_id);
+    ln_wbuf_u32(&c->tx, flags);
     int rc = ln_proto_frame_end(&c->tx, start);
     if (rc != LN_OK)
         return ln_set_error(c, rc, "cannot encode HELLO: %s", ln_strerror(rc));
@@ -159,11 +179,22 @@ static int handshake(ln_client* c, const char* name, const struct timespec* dead
         return ln_set_error(c, LN_EVERSION,
                             "manager %s: client speaks protocol %d, manager speaks %u",
                             c->address, LN_PROTO_VERSION, (unsigned)version);
-    c->client_id = ln_rbuf_u32(&r);
-    ln_rbuf_str(&r, c->name, sizeof c->name);
-    ln_rbuf_str(&r, c->instance, sizeof c->instance);
-    if (c->name[0] == '\0')
+    uint32_t id = ln_rbuf_u32(&r);
+    char given[LN_PROTO_MAX_STR + 1], instance[LN_PROTO_MAX_STR + 1];
+    ln_rbuf_str(&r, given, sizeof given);
+    ln_rbuf_str(&r, instance, sizeof instance);
+    if (given[0] == '\0')
         return malformed(c, "HELLO", "WELCOME with an empty client name");
+    if (flags & LN_HELLO_RECONNECT) {
+        if (strcmp(instance, c->instance) != 0)
+            return ln_set_error(c, LN_ECONNECTION,
+                                "manager %s now serves instance \"%s\", not \"%s\"",
+                                c->address, instance, c->instance);
+    } else {
+        memcpy(c->name, given, sizeof c->name);
+        memcpy(c->instance, instance, sizeof c->instance);
+    }
+    c->client_id = id;
     return LN_OK;
 }
 
@@ -192,9 +223,12 @@ static int round_trip(ln_client* c, uint16_t type, const ln_wbuf* body, uint16_t
                       ln_rbuf* reply)
 {
     const char* request = ln_proto_type_name(type);
-    if (c->fd < 0)
+    if (!c->usable && (!c->reclaiming || c->broken))
         return ln_set_error(c, LN_ECONNECTION,
-                            "cannot send %s: the connection to manager %s was lost earlier",
+                            c->monitored ? "cannot send %s: the connection to manager %s was "
+                                           "lost; reconnecting"
+                                         : "cannot send %s: the connection to manager %s was "
+                                           "lost earlier",
                             request, c->address);
     if (++c->last_request_id == 0)
         c->last_request_id = 1;
@@ -214,7 +248,7 @@ static int round_trip(ln_client* c, uint16_t type, const ln_wbuf* body, uint16_t
     uint16_t atype = 0;
     while (rc == LN_OK) {
         rc = read_frame(c, request, deadline, &atype, reply);
-        if (rc == LN_ETIMEOUT && c->fd >= 0)
+        if (rc == LN_ETIMEOUT && !c->broken)
             c->stale_answers++; /* the answer is still due: skip it when it comes */
         if (rc != LN_OK)
             return rc;
@@ -286,6 +320,34 @@ static int copy_reply(ln_client* c, ln_rbuf* reply)
     return LN_OK;
 }
 
+static _Thread_local uint64_t request_gen;
+
+uint64_t ln_client_request_gen(void)
+{
+    return request_gen;
+}
+
+static int check_body(ln_client* clnt, uint16_t type, const ln_wbuf* body)
+{
+    if (body != NULL && body->failed)
+        return ln_set_error(clnt, body->failed, "cannot encode %s: %s", ln_proto_type_name(type),
+                            body->failed == LN_EINVAL
+                                ? "a text field is NULL, over 1024 bytes or not UTF-8"
+                                : ln_strerror(body->failed));
+    return LN_OK;
+}
+
+int ln_client_request_locked(ln_client* clnt, uint16_t type, const ln_wbuf* body,
+                             uint16_t* reply_type, ln_rbuf* reply)
+{
+    int rc = check_body(clnt, type, body);
+    if (rc == LN_OK)
+        rc = round_trip(clnt, type, body, reply_type, reply);
+    if (rc == LN_OK)
+        rc = copy_reply(clnt, reply);
+    return rc;
+}
+
 int ln_client_request(ln_client* clnt, uint16_t type, const ln_wbuf* body, uint16_t* reply_type,
                       ln_rbuf* reply)
 {
@@ -293,50 +355,221 @@ int ln_client_request(ln_client* clnt, uint16_t type, const ln_wbuf* body, uint1
     int rc = ln_client_check(clnt);
     if (rc != LN_OK)
         return rc;
-    if (body != NULL && body->failed)
-        return ln_set_error(clnt, body->failed, "cannot encode %s: %s", ln_proto_type_name(type),
-                            body->failed == LN_EINVAL
-                                ? "a text field is NULL, over 1024 bytes or not UTF-8"
-                                : ln_strerror(body->failed));
     pthread_mutex_lock(&clnt->request_lock);
-    rc = round_trip(clnt, type, body, reply_type, reply);
+    rc = ln_client_request_locked(clnt, type, body, reply_type, reply);
     if (rc == LN_OK)
-        rc = copy_reply(clnt, reply);
+        request_gen = clnt->conn_gen;
     pthread_mutex_unlock(&clnt->request_lock);
     return rc;
 }
 
 /* ---- open / close ---------------------------------------------------------------------- */
 
-int ln_conn_open(ln_client* c, const char* host, const char* port, const char* from,
-                 const char* name)
+/* A lost manager host sends nothing: probe an idle connection (as the manager does its side),
+ * so that the monitor notices within about 15 s.  Best effort. */
+static void keepalive(int fd)
+{
+    int on = 1, idle = 5, interval = 2, count = 5;
+    unsigned user_timeout_ms = 15000;
+    setsockopt(fd, SOL_SOCKET, SO_KEEPALIVE, &on, sizeof on);
+    setsockopt(fd, IPPROTO_TCP, TCP_KEEPIDLE, &idle, sizeof idle);
+    setsockopt(fd, IPPROTO_TCP, TCP_KEEPINTVL, &interval, sizeof interval);
+    setsockopt(fd, IPPROTO_TCP, TCP_KEEPCNT, &count, sizeof count);
+    setsockopt(fd, IPPROTO_TCP, TCP_USER_TIMEOUT, &user_timeout_ms, sizeof user_timeout_ms);
+}
+
+/* Resolves and connects to the manager into *fd; LN_OK or a recorded error. */
+static int connect_manager(ln_client* c, const char* from, const struct timespec* deadline,
+                           int* fd)
 {
     char what[MAX_ADDRESS + 64];
     snprintf(what, sizeof what, "cannot connect to manager %s%s", c->address, from);
-    struct timespec ts;
-    const struct timespec* deadline = ln_net_deadline(&ts, c->timeout);
     struct addrinfo* ai = NULL;
-    int rc = LN_OK, gai = ln_net_resolve(host, port, &ai);
+    int rc = LN_OK, gai = ln_net_resolve(c->host, c->port, &ai);
     if (gai == EAI_SYSTEM)
         rc = ln_set_errno_error(c, errno, "%s", what);
     else if (gai != 0)
         rc = ln_set_error(c, gai == EAI_MEMORY ? LN_ENOMEM : LN_ECONNECTION, "%s: %s", what,
                           gai_strerror(gai));
-    int err = rc == LN_OK ? ln_net_connect(ai, deadline, &c->fd) : 0;
+    int err = rc == LN_OK ? ln_net_connect(ai, deadline, c->cancel_fd, fd) : 0;
     if (ai != NULL)
         freeaddrinfo(ai);
     if (err != 0)
         rc = io_error(c, err, what);
     if (rc == LN_OK)
-        rc = handshake(c, name, deadline);
-    if (rc != LN_OK)
-        disconnect(c);
+        keepalive(*fd);
     return rc;
+}
+
+int ln_conn_open(ln_client* c, const char* from, const char* name)
+{
+    struct timespec ts;
+    const struct timespec* deadline = ln_net_deadline(&ts, c->timeout);
+    int rc = connect_manager(c, from, deadline, &c->fd);
+    if (rc == LN_OK)
+        rc = handshake(c, name, 0, deadline);
+    if (rc != LN_OK) {
+        c->monitored = 0; /* no monitor yet: really close */
+        disconnect(c);
+        return rc;
+    }
+    c->usable = 1;
+    c->broken = 0;
+    c->conn_gen = 1;
+    return LN_OK;
+}
+
+/* ---- the reconnect monitor -------------------------------------------------------------
+ * One thread per client.  While the connection is up it sleeps in poll() on the socket for
+ * a hang-up only (POLLRDHUP: the manager never sends unasked, and answers are read by the
+ * requesting thread), so it costs nothing.  When the connection is gone it closes the socket
+ * and reconnects with back-off; on the new connection it re-registers every port and
+ * provider under the ports and request locks, and only then lets requests through again. */
+
+#define BACKOFF_FIRST 0.05 /* seconds before the second attempt */
+#define BACKOFF_MAX 1.0
+
+static int cancelled(ln_client* c)
+{
+    struct pollfd pfd = {.fd = c->cancel_fd, .events = POLLIN, .revents = 0};
+    return poll(&pfd, 1, 0) > 0;
+}
+
+/* Sleeps `seconds` unless cancelled first (then 1). */
+static int pause_or_cancel(ln_client* c, double seconds)
+{
+    struct pollfd pfd = {.fd = c->cancel_fd, .events = POLLIN, .revents = 0};
+    int n;
+    do
+        n = poll(&pfd, 1, (int)(seconds * 1000));
+    while (n < 0 && errno == EINTR);
+    return n > 0;
+}
+
+/* Waits until connection `fd` hangs up (0) or the client is destroyed (1). */
+static int watch(ln_client* c, int fd)
+{
+    struct pollfd pfd[2] = {{.fd = fd, .events = POLLRDHUP, .revents = 0},
+                            {.fd = c->cancel_fd, .events = POLLIN, .revents = 0}};
+    for (;;) {
+        int n = poll(pfd, 2, -1);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0 || pfd[1].revents)
+            return n < 0 ? 0 : 1;
+        if (pfd[0].revents)
+            return 0;
+    }
+}
+
+/* One attempt: connect, HELLO, re-register everything, make the connection usable. */
+static int reconnect_once(ln_client* c)
+{
+    struct timespec ts;
+    const struct timespec* deadline = ln_net_deadline(&ts, c->timeout);
+    int fd = -1;
+    int rc = connect_manager(c, "", deadline, &fd);
+    if (rc != LN_OK)
+        return rc;
+    pthread_mutex_lock(&c->ports_lock);
+    pthread_mutex_lock(&c->request_lock);
+    c->fd = fd;
+    c->broken = 0;
+    c->stale_answers = 0;
+    rc = handshake(c, c->name, LN_HELLO_RECONNECT, deadline);
+    c->reclaiming = 1;
+    /* Ports are re-registered one by one; a refusal is that port's (recorded, the others go
+     * on), a broken connection ends the attempt. */
+    for (size_t i = 0; rc == LN_OK && i < c->nports && !c->broken; i++)
+        c->ports[i].ops->reclaim(c, c->ports[i].port);
+    c->reclaiming = 0;
+    if (rc == LN_OK && c->broken)
+        rc = LN_ECONNECTION;
+    if (rc == LN_OK) {
+        c->usable = 1;
+        c->conn_gen++;
+    } else {
+        close(c->fd);
+        c->fd = -1;
+        c->usable = 0;
+    }
+    pthread_mutex_unlock(&c->request_lock);
+    pthread_mutex_unlock(&c->ports_lock);
+    return rc;
+}
+
+static void* monitor_main(void* arg)
+{
+    ln_client* c = arg;
+    for (;;) {
+        pthread_mutex_lock(&c->request_lock);
+        int fd = c->fd, up = c->usable;
+        pthread_mutex_unlock(&c->request_lock);
+        if (fd >= 0 && up && watch(c, fd))
+            return NULL;
+        pthread_mutex_lock(&c->request_lock);
+        if (c->fd >= 0)
+            close(c->fd);
+        c->fd = -1;
+        c->usable = 0;
+        c->stale_answers = 0;
+        pthread_mutex_unlock(&c->request_lock);
+        for (double delay = BACKOFF_FIRST; reconnect_once(c) != LN_OK;) {
+            if (pause_or_cancel(c, delay))
+                return NULL;
+            delay = delay * 2 < BACKOFF_MAX ? delay * 2 : BACKOFF_MAX;
+        }
+        if (cancelled(c))
+            return NULL;
+    }
+}
+
+int ln_conn_start_monitor(ln_client* c)
+{
+    c->cancel_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+    if (c->cancel_fd < 0)
+        return ln_set_errno_error(c, errno, "cannot create the reconnect monitor's eventfd");
+    pthread_mutex_lock(&c->request_lock);
+    c->monitored = 1;
+    pthread_mutex_unlock(&c->request_lock);
+    int err = pthread_create(&c->monitor, NULL, monitor_main, c);
+    if (err != 0) {
+        c->monitored = 0;
+        close(c->cancel_fd);
+        c->cancel_fd = -1;
+        return ln_set_errno_error(c, err, "cannot start the reconnect monitor thread");
+    }
+    return LN_OK;
+}
+
+void ln_conn_stop_monitor(ln_client* c)
+{
+    if (!c->monitored)
+        return;
+    uint64_t one = 1;
+    ssize_t n = write(c->cancel_fd, &one, sizeof one);
+    (void)n; /* an eventfd write of 1 cannot fail short of overflow */
+    pthread_join(c->monitor, NULL);
+    pthread_mutex_lock(&c->request_lock);
+    c->monitored = 0;
+    if (c->fd >= 0 && !c->usable) { /* shut down, never reclaimed */
+        close(c->fd);
+        c->fd = -1;
+    }
+    /* The requests that close the ports go out normally again. */
+    uint64_t count;
+    n = read(c->cancel_fd, &count, sizeof count);
+    (void)n;
+    pthread_mutex_unlock(&c->request_lock);
 }
 
 void ln_conn_close(ln_client* c)
 {
+    c->monitored = 0;
     disconnect(c);
+    if (c->cancel_fd >= 0)
+        close(c->cancel_fd);
+    c->cancel_fd = -1;
     ln_wbuf_free(&c->tx);
     free(c->rx);
     c->rx = NULL;

@@ -10,40 +10,60 @@
 
 struct ln_client_port {
     void* port;
-    void (*close_fn)(void* port);
+    const ln_client_port_ops* ops;
 };
 
 struct ln_client {
     uint32_t magic;
     pid_t pid;
     double timeout; /* seconds, < 0: wait forever */
-    uint32_t client_id;
     char address[LN_CLIENT_MAX_ADDRESS + 3]; /* "host:port" for texts, IPv6 hosts in [] */
-    char name[LN_PROTO_MAX_STR + 1];         /* as assigned by the manager */
+    char host[LN_CLIENT_MAX_ADDRESS + 1];    /* what to connect to again */
+    char port[6];
+    char name[LN_PROTO_MAX_STR + 1];         /* as assigned by the manager at creation */
     char instance[LN_PROTO_MAX_STR + 1];
 
+    /* Lock order: ports_lock, then request_lock, then state_lock; none is taken by
+     * ln_write/ln_read (state_lock only when they fail, to record the error). */
+    pthread_mutex_t ports_lock; /* the ports list and the ports' registration data */
+    struct ln_client_port* ports;
+    size_t nports, ports_cap;
+
     pthread_mutex_t request_lock; /* one round trip at a time; guards the fields up to rx_cap */
-    int fd;                       /* -1 once the connection is gone */
+    uint32_t client_id;
+    int fd;         /* the socket, -1 if none; with a monitor only the monitor closes it */
+    int usable;     /* connected and registered: requests may go out */
+    int reclaiming; /* the monitor re-registers on a connection not yet usable */
+    int broken;     /* the connection failed during reclaiming */
+    uint64_t conn_gen; /* counts connections that became usable */
     uint32_t last_request_id;
     uint32_t stale_answers; /* answers still due to requests that timed out */
     ln_wbuf tx;
     uint8_t* rx;
     size_t rx_cap;
 
-    pthread_mutex_t state_lock; /* guards ports and the last error */
-    struct ln_client_port* ports;
-    size_t nports, ports_cap;
+    pthread_mutex_t state_lock; /* guards the last error */
     int last_code;
     char last_error[LN_ERROR_TEXT_MAX];
+
+    /* The reconnect monitor (client_conn.c); cancel_fd is an eventfd that destroy signals
+     * to end it, also in the middle of a connect or a re-registration. */
+    int monitored;
+    int cancel_fd;
+    pthread_t monitor;
 
     struct ln_svc_state* svc; /* service groups and pools (svc_group.c), created on first use */
 };
 
-/* Connects to host:port, sends HELLO as `name` and takes the WELCOME (client_id, name,
+/* Connects to c->host:c->port, sends HELLO as `name` and takes the WELCOME (client_id, name,
  * instance).  `from` says where the address came from, for error texts (may be "").  On
  * failure the reason is recorded and the connection is closed. */
-int ln_conn_open(ln_client* c, const char* host, const char* port, const char* from,
-                 const char* name);
+int ln_conn_open(ln_client* c, const char* from, const char* name);
+/* Starts the monitor thread that reconnects after a lost connection (ln_client_create, unless
+ * reconnection is off).  LN_OK or LN_ESYS/LN_ENOMEM (recorded). */
+int ln_conn_start_monitor(ln_client* c);
+/* Stops and joins the monitor, wherever it is (ln_client_destroy, before closing ports). */
+void ln_conn_stop_monitor(ln_client* c);
 /* Closes the connection (if still open) and frees its buffers. */
 void ln_conn_close(ln_client* c);
 

@@ -42,8 +42,8 @@ int ln_client_check(const ln_client* clnt);
  * owned by the calling thread, valid until its next ln_client_request); its fields
  * were already checked against docs/protocol.md, so reading them cannot fail.  Serialized by
  * the client's mutex (thread-safe).
- * Connection loss -> LN_ECONNECTION (the client then stays disconnected: later calls fail
- * fast with LN_ECONNECTION); malformed answer -> LN_EPROTOCOL (connection closed); an ERROR
+ * Connection loss -> LN_ECONNECTION (later calls fail fast with LN_ECONNECTION until the
+ * reconnect monitor has a new connection, or for good without one); malformed answer -> LN_EPROTOCOL (connection closed); an ERROR
  * whose code is not in the table -> LN_EPROTOCOL (well-formed, so the connection stays); a
  * body that failed to encode -> its wbuf code (nothing sent).
  * No answer in time -> LN_ETIMEOUT: if no byte of the answer had arrived the connection is
@@ -52,11 +52,35 @@ int ln_client_check(const ln_client* clnt);
 int ln_client_request(ln_client* clnt, uint16_t type, const ln_wbuf* body, uint16_t* reply_type,
                       ln_rbuf* reply);
 
-/* Ports registered on the client so ln_client_destroy can close them: destroy calls
- * close_fn(port) for each remaining one (newest first) before disconnecting.  close_fn must
- * call ln_client_remove_port itself.  add returns LN_OK or LN_ENOMEM (recorded). */
-int ln_client_add_port(ln_client* clnt, void* port, void (*close_fn)(void* port));
+/* What the client does with a port (or service provider) it holds. */
+typedef struct ln_client_port_ops {
+    /* ln_client_destroy calls it for each remaining port (newest first) before
+     * disconnecting; it must call ln_client_remove_port itself. */
+    void (*close)(void* port);
+    /* Registers the port again on a new manager connection: called with the ports lock and
+     * the request lock held, by the reconnect monitor or ln_client_settle_port; sends with
+     * ln_client_request_locked.  A refusal is recorded for that port and returned. */
+    int (*reclaim)(ln_client* clnt, void* port);
+} ln_client_port_ops;
+
+/* Ports registered on the client, for ln_client_destroy and for re-registration after a
+ * reconnect.  add: LN_OK or LN_ENOMEM (recorded); `gen` is the connection its registration
+ * was made on (ln_client_request_gen): if the client reconnected since, the port is
+ * re-registered at once.  remove waits for a re-registration in progress, so that afterwards
+ * nothing but the caller touches the port. */
+int ln_client_add_port(ln_client* clnt, void* port, const ln_client_port_ops* ops, uint64_t gen);
 void ln_client_remove_port(ln_client* clnt, void* port);
+/* For registration data that changes after add (a provider that registers later): take the
+ * ports lock around the change, then settle with the connection the registration went out
+ * on (re-registering it if that connection is gone and a new one is up). */
+void ln_client_lock_ports(ln_client* clnt);
+void ln_client_unlock_ports(ln_client* clnt);
+void ln_client_settle_port(ln_client* clnt, void* port, uint64_t gen); /* unlocks */
+/* The connection the calling thread's last successful ln_client_request went out on. */
+uint64_t ln_client_request_gen(void);
+/* ln_client_request for reclaim callbacks, which already hold the request lock. */
+int ln_client_request_locked(ln_client* clnt, uint16_t type, const ln_wbuf* body,
+                             uint16_t* reply_type, ln_rbuf* reply);
 pid_t ln_client_pid(const ln_client* clnt);
 /* The instance name from the manager's WELCOME (owned by the client). */
 const char* ln_client_instance(const ln_client* clnt);

@@ -46,14 +46,18 @@ static int remaining_ms(const struct timespec* deadline)
 }
 
 /* 0 when fd is ready for `events` (or has an error or hang-up for the next call to report),
- * ETIMEDOUT at the deadline, else an errno value. */
-static int wait_fd(int fd, short events, const struct timespec* deadline)
+ * ETIMEDOUT at the deadline, ECANCELED once cancel_fd (if >= 0) is readable, else an errno
+ * value. */
+static int wait_fd(int fd, short events, const struct timespec* deadline, int cancel_fd)
 {
     for (;;) {
-        struct pollfd pfd = {.fd = fd, .events = events, .revents = 0};
-        int n = poll(&pfd, 1, remaining_ms(deadline));
+        struct pollfd pfd[2] = {{.fd = fd, .events = events, .revents = 0},
+                                {.fd = cancel_fd, .events = POLLIN, .revents = 0}};
+        int n = poll(pfd, cancel_fd >= 0 ? 2 : 1, remaining_ms(deadline));
+        if (n > 0 && pfd[1].revents)
+            return ECANCELED;
         if (n > 0)
-            return pfd.revents & POLLNVAL ? EBADF : 0;
+            return pfd[0].revents & POLLNVAL ? EBADF : 0;
         if (n == 0)
             return ETIMEDOUT;
         if (errno != EINTR)
@@ -72,7 +76,8 @@ int ln_net_resolve(const char* host, const char* port, struct addrinfo** out)
 }
 
 /* One connection attempt; 0 with *fd or an errno value. */
-static int connect_one(const struct addrinfo* ai, const struct timespec* deadline, int* fd)
+static int connect_one(const struct addrinfo* ai, const struct timespec* deadline, int cancel_fd,
+                       int* fd)
 {
     int s = socket(ai->ai_family, ai->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC,
                    ai->ai_protocol);
@@ -85,7 +90,7 @@ static int connect_one(const struct addrinfo* ai, const struct timespec* deadlin
             err = errno;
             goto fail;
         }
-        err = wait_fd(s, POLLOUT, deadline);
+        err = wait_fd(s, POLLOUT, deadline, cancel_fd);
         if (err != 0)
             goto fail;
         socklen_t len = sizeof err;
@@ -108,18 +113,20 @@ fail:
     return err;
 }
 
-int ln_net_connect(const struct addrinfo* ai, const struct timespec* deadline, int* fd)
+int ln_net_connect(const struct addrinfo* ai, const struct timespec* deadline, int cancel_fd,
+                   int* fd)
 {
     int err = EADDRNOTAVAIL; /* only if the list is empty, which getaddrinfo never returns */
     for (; ai != NULL; ai = ai->ai_next) {
-        err = connect_one(ai, deadline, fd);
-        if (err == 0 || err == ETIMEDOUT)
+        err = connect_one(ai, deadline, cancel_fd, fd);
+        if (err == 0 || err == ETIMEDOUT || err == ECANCELED)
             break;
     }
     return err;
 }
 
-int ln_net_write_all(int fd, const void* buf, size_t len, const struct timespec* deadline)
+int ln_net_write_all(int fd, const void* buf, size_t len, const struct timespec* deadline,
+                     int cancel_fd)
 {
     const char* p = buf;
     while (len > 0) {
@@ -128,7 +135,7 @@ int ln_net_write_all(int fd, const void* buf, size_t len, const struct timespec*
             p += n;
             len -= (size_t)n;
         } else if (errno == EAGAIN || errno == EWOULDBLOCK) {
-            int err = wait_fd(fd, POLLOUT, deadline);
+            int err = wait_fd(fd, POLLOUT, deadline, cancel_fd);
             if (err != 0)
                 return err;
         } else if (errno != EINTR) {
@@ -138,7 +145,8 @@ int ln_net_write_all(int fd, const void* buf, size_t len, const struct timespec*
     return 0;
 }
 
-int ln_net_read_all(int fd, void* buf, size_t len, const struct timespec* deadline)
+int ln_net_read_all(int fd, void* buf, size_t len, const struct timespec* deadline,
+                    int cancel_fd)
 {
     char* p = buf;
     while (len > 0) {
@@ -149,7 +157,7 @@ int ln_net_read_all(int fd, void* buf, size_t len, const struct timespec* deadli
         } else if (n == 0) {
             return LN_NET_EOF;
         } else if (errno == EAGAIN || errno == EWOULDBLOCK) {
-            int err = wait_fd(fd, POLLIN, deadline);
+            int err = wait_fd(fd, POLLIN, deadline, cancel_fd);
             if (err != 0)
                 return err;
         } else if (errno != EINTR) {
@@ -159,7 +167,7 @@ int ln_net_read_all(int fd, void* buf, size_t len, const struct timespec* deadli
     return 0;
 }
 
-int ln_net_wait_readable(int fd, const struct timespec* deadline)
+int ln_net_wait_readable(int fd, const struct timespec* deadline, int cancel_fd)
 {
-    return wait_fd(fd, POLLIN, deadline);
+    return wait_fd(fd, POLLIN, deadline, cancel_fd);
 }

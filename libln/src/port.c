@@ -1,6 +1,7 @@
-/* port.c — publishers (outports) and subscribers (inports): registration with the manager,
- * mapping the topic ring it names, and the copy and zero-copy write/read paths on it.
- * A port follows its topic to a bigger ring when the manager retires the old one. */
+/* port.c — publishers (outports) and subscribers (inports): registration with the manager
+ * (again after a reconnect: RECLAIM_PORT), mapping the topic ring it names, and the copy and
+ * zero-copy write/read paths on it.  A port follows its topic to a bigger ring when the
+ * manager retires the old one. */
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -17,11 +18,19 @@
 typedef struct ln_port_common {
     uint32_t magic;
     ln_client* clnt;
-    uint32_t port_id;
     uint64_t layout_hash;
     uint64_t size;
     ln_ring ring;
     char topic[LN_RING_NAME_MAX];
+    /* Registration, for RECLAIM_PORT; changed only under the client's ports lock once the
+     * port is on its client.  `segment` is the generation the manager last named (the port
+     * may have followed it to newer ones), `reader` the reader slot (subscribers). */
+    uint16_t kind; /* LN_RECLAIM_PUBLISHER or LN_RECLAIM_SUBSCRIBER */
+    uint32_t port_id;
+    int registered; /* the manager knows port_id (not after a refused re-registration) */
+    uint32_t buffers, flags, reader;
+    char md_name[LN_RING_NAME_MAX];
+    char segment[LN_RING_NAME_MAX];
 } ln_port_common;
 
 struct ln_outport {
@@ -85,6 +94,8 @@ static int check_timeout(ln_client* clnt, double timeout, const char* what)
 
 static int close_remote(ln_port_common* p)
 {
+    if (!p->registered)
+        return LN_OK; /* the manager does not know it */
     ln_wbuf body;
     ln_rbuf reply;
     uint16_t type = 0;
@@ -117,7 +128,7 @@ static int check_flags(ln_client* clnt, uint16_t msg, uint32_t flags)
 /* Register a port with the manager and map the ring it names. */
 static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const char* topic,
                      const char* md_name, uint64_t hash, size_t size, const ln_port_options* o,
-                     uint32_t* reader_index)
+                     uint32_t* reader_index, uint64_t* gen)
 {
     ln_port_options defaults;
     if (!o) {
@@ -130,8 +141,8 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
     if (!topic || !md_name || size == 0 || size > UINT32_MAX)
         return ln_set_error(clnt, LN_EINVAL, "%s: topic and md name are required, size must be "
                             "1..4 GiB", msg == LN_MSG_PUBLISH ? "ln_publish" : "ln_subscribe");
-    if (strlen(topic) >= sizeof(p->topic))
-        return ln_set_error(clnt, LN_EINVAL, "topic name longer than %zu bytes",
+    if (strlen(topic) >= sizeof(p->topic) || strlen(md_name) >= sizeof(p->md_name))
+        return ln_set_error(clnt, LN_EINVAL, "topic or md name longer than %zu bytes",
                             sizeof(p->topic) - 1);
     if ((rc = check_flags(clnt, msg, o->flags)) != LN_OK)
         return rc;
@@ -150,6 +161,7 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
     ln_wbuf_free(&body);
     if (rc != LN_OK)
         return rc;
+    *gen = ln_client_request_gen();
     p->port_id = ln_rbuf_u32(&reply);
     ln_rbuf_str(&reply, segment, sizeof(segment));
     *reader_index = ln_rbuf_u32(&reply);
@@ -158,7 +170,14 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
     p->clnt = clnt;
     p->layout_hash = hash;
     p->size = size;
+    p->registered = 1;
+    p->kind = msg == LN_MSG_PUBLISH ? LN_RECLAIM_PUBLISHER : LN_RECLAIM_SUBSCRIBER;
+    p->buffers = o->buffers;
+    p->flags = o->flags;
+    p->reader = *reader_index;
     snprintf(p->topic, sizeof(p->topic), "%s", topic);
+    snprintf(p->md_name, sizeof(p->md_name), "%s", md_name);
+    snprintf(p->segment, sizeof(p->segment), "%s", segment);
     rc = ln_ring_attach(&p->ring, segment, hash, size);
     if (rc == LN_OK)
         rc = follow(p);
@@ -184,18 +203,64 @@ static void close_inport(void* port)
     ln_unsubscribe(port);
 }
 
+/* After a reconnect (ports and request locks held): tell the new manager about the port and
+ * the ring and reader slot it uses, so that it adopts them instead of making new ones.  A
+ * refusal leaves the port on its ring, working with every port that shares it, but unknown
+ * to the manager: ports made later get another ring.  That is recorded as the client's last
+ * error; the next reconnect tries again. */
+static int reclaim_port(ln_client* clnt, void* port)
+{
+    ln_port_common* p = port;
+    ln_wbuf body;
+    ln_rbuf reply;
+    uint16_t type = 0;
+    ln_wbuf_init(&body);
+    ln_wbuf_u16(&body, p->kind);
+    ln_wbuf_str(&body, p->topic);
+    ln_wbuf_str(&body, p->md_name);
+    ln_wbuf_u64(&body, p->layout_hash);
+    ln_wbuf_u32(&body, (uint32_t)p->size);
+    ln_wbuf_u32(&body, p->buffers);
+    ln_wbuf_u32(&body, p->flags);
+    ln_wbuf_str(&body, p->segment);
+    ln_wbuf_u32(&body, p->reader);
+    int rc = ln_client_request_locked(clnt, LN_MSG_RECLAIM_PORT, &body, &type, &reply);
+    ln_wbuf_free(&body);
+    const char* what = p->kind == LN_RECLAIM_PUBLISHER ? "publisher" : "subscriber";
+    p->registered = 0;
+    if (rc != LN_OK)
+        return ln_set_error(clnt, rc, "topic '%s': the manager refused to take back this "
+                            "client's %s on %s (it keeps working on that ring, unknown to the "
+                            "manager): %s", p->topic, what, p->segment, ln_last_error());
+    char segment[LN_RING_NAME_MAX];
+    uint32_t port_id = ln_rbuf_u32(&reply);
+    ln_rbuf_str(&reply, segment, sizeof segment);
+    uint32_t reader = ln_rbuf_u32(&reply);
+    if (ln_rbuf_end(&reply) != LN_OK || reader != p->reader)
+        return ln_set_error(clnt, LN_EPROTOCOL, "topic '%s': the manager took back the %s with "
+                            "reader slot %u instead of %u", p->topic, what, reader, p->reader);
+    p->port_id = port_id;
+    p->registered = 1;
+    memcpy(p->segment, segment, sizeof p->segment);
+    return LN_OK;
+}
+
+static const ln_client_port_ops outport_ops = {close_outport, reclaim_port};
+static const ln_client_port_ops inport_ops = {close_inport, reclaim_port};
+
 /* Allocate a port of `size` bytes (an ln_port_common first) and register it with the
  * manager; NULL with *rc set on failure. */
 static ln_port_common* new_port(ln_client* clnt, size_t size, uint16_t msg, const char* topic,
                                 const char* md_name, uint64_t hash, size_t message_size,
-                                const ln_port_options* opts, uint32_t* reader, int* rc)
+                                const ln_port_options* opts, uint32_t* reader, uint64_t* gen,
+                                int* rc)
 {
     ln_port_common* p = calloc(1, size);
     if (!p) {
         *rc = ln_set_error(clnt, LN_ENOMEM, "out of memory");
         return NULL;
     }
-    *rc = open_port(p, clnt, msg, topic, md_name, hash, message_size, opts, reader);
+    *rc = open_port(p, clnt, msg, topic, md_name, hash, message_size, opts, reader, gen);
     if (*rc != LN_OK) {
         free(p);
         return NULL;
@@ -203,14 +268,19 @@ static ln_port_common* new_port(ln_client* clnt, size_t size, uint16_t msg, cons
     return p;
 }
 
-/* Make a set-up port usable and hand it to its client, which closes it on destroy. */
-static int adopt_port(ln_port_common* p, uint32_t magic, void (*close_fn)(void*))
+/* Make a set-up port usable and hand it to its client, which closes it on destroy and
+ * re-registers it after a reconnect. */
+static int adopt_port(ln_port_common* p, uint32_t magic, const ln_client_port_ops* ops,
+                      uint64_t gen)
 {
     ln_client* clnt = p->clnt;
     p->magic = magic;
-    int rc = ln_client_add_port(clnt, p, close_fn);
+    int rc = ln_client_add_port(clnt, p, ops, gen);
     if (rc != LN_OK) {
-        close_port(p);
+        close_remote(p);
+        ln_ring_detach(&p->ring);
+        p->magic = 0;
+        free(p);
         return ln_set_error(clnt, rc, "out of memory");
     }
     return LN_OK;
@@ -223,13 +293,15 @@ int ln_publish(ln_client* clnt, ln_outport** out, const char* topic, const char*
         return ln_set_error(clnt, LN_EINVAL, "ln_publish: out is NULL");
     *out = NULL;
     uint32_t reader = 0;
+    uint64_t gen = 0;
     int rc;
     ln_outport* p = (ln_outport*)new_port(clnt, sizeof(ln_outport), LN_MSG_PUBLISH, topic,
-                                          md_name, layout_hash, message_size, opts, &reader, &rc);
+                                          md_name, layout_hash, message_size, opts, &reader,
+                                          &gen, &rc);
     if (!p)
         return rc;
     p->flags = opts ? opts->flags : 0;
-    if ((rc = adopt_port(&p->c, LN_OUTPORT_MAGIC, close_outport)) == LN_OK)
+    if ((rc = adopt_port(&p->c, LN_OUTPORT_MAGIC, &outport_ops, gen)) == LN_OK)
         *out = p;
     return rc;
 }
@@ -241,9 +313,11 @@ int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char
         return ln_set_error(clnt, LN_EINVAL, "ln_subscribe: out is NULL");
     *out = NULL;
     uint32_t reader = 0;
+    uint64_t gen = 0;
     int rc;
     ln_inport* p = (ln_inport*)new_port(clnt, sizeof(ln_inport), LN_MSG_SUBSCRIBE, topic,
-                                        md_name, layout_hash, message_size, opts, &reader, &rc);
+                                        md_name, layout_hash, message_size, opts, &reader,
+                                        &gen, &rc);
     if (!p)
         return rc;
     p->cur.buffers = opts && opts->buffers > 1 ? opts->buffers : 1;
@@ -253,16 +327,18 @@ int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char
         p->cur.next = atomic_load(&p->c.ring.hdr->readers[p->cur.reader].next_seq);
     else
         p->cur.next = 1; /* latest: the first read returns the newest sample there is */
-    if ((rc = adopt_port(&p->c, LN_INPORT_MAGIC, close_inport)) == LN_OK)
+    if ((rc = adopt_port(&p->c, LN_INPORT_MAGIC, &inport_ops, gen)) == LN_OK)
         *out = p;
     return rc;
 }
 
 static int close_port(ln_port_common* p)
 {
+    /* Off the client first: that waits for a re-registration in progress, and from then on
+     * port_id is ours alone. */
+    ln_client_remove_port(p->clnt, p);
     int rc = close_remote(p); /* the manager also releases it when the connection is gone */
     ln_ring_detach(&p->ring);
-    ln_client_remove_port(p->clnt, p);
     p->magic = 0;
     free(p);
     return rc == LN_ECONNECTION ? LN_OK : rc;

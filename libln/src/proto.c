@@ -251,7 +251,7 @@ static const struct {
     const char* fields;
     const char* name;
 } msg_types[] = {
-    {LN_MSG_HELLO, 0, 0, "dwdsss", "HELLO"},
+    {LN_MSG_HELLO, 0, 0, "dwdsssd", "HELLO"},
     {LN_MSG_WELCOME, 0, 1, "wdss", "WELCOME"},
     {LN_MSG_ERROR, 0, 1, "dis", "ERROR"},
     {LN_MSG_PUBLISH, LN_MSG_PORT_OK, 0, "dssqddd", "PUBLISH"},
@@ -261,6 +261,7 @@ static const struct {
     {LN_MSG_OK, 0, 1, "d", "OK"},
     {LN_MSG_TOPIC_INFO, LN_MSG_TOPIC_INFO_OK, 0, "ds", "TOPIC_INFO"},
     {LN_MSG_TOPIC_INFO_OK, 0, 1, "dsqddd", "TOPIC_INFO_OK"},
+    {LN_MSG_RECLAIM_PORT, LN_MSG_PORT_OK, 0, "dwssqdddsd", "RECLAIM_PORT"},
     {LN_MSG_REGISTER_SERVICE, LN_MSG_OK, 0, "dssqsssssw", "REGISTER_SERVICE"},
     {LN_MSG_UNREGISTER_SERVICE, LN_MSG_OK, 0, "ds", "UNREGISTER_SERVICE"},
     {LN_MSG_FIND_SERVICE, LN_MSG_SERVICE_INFO, 0, "dssq", "FIND_SERVICE"},

@@ -9,11 +9,14 @@
 
 #include "ln_internal.h"
 
-#define LN_PROTO_VERSION 2
+#define LN_PROTO_VERSION 3
 #define LN_PROTO_MAGIC 0x504D4E4Cu     /* "LNMP" */
 #define LN_PROTO_MAX_FRAME (1u << 20)  /* max `length` (type + body) */
 #define LN_PROTO_MAX_STR 1024          /* max bytes of a str field */
 #define LN_PROTO_HEADER_SIZE 6         /* u32 length + u16 type */
+#define LN_HELLO_RECONNECT 0x1u        /* HELLO flags: the client had a connection before */
+#define LN_RECLAIM_PUBLISHER 0         /* RECLAIM_PORT kinds */
+#define LN_RECLAIM_SUBSCRIBER 1
 
 enum ln_msg_type {
     LN_MSG_HELLO = 1,
@@ -26,6 +29,7 @@ enum ln_msg_type {
     LN_MSG_OK = 14,
     LN_MSG_TOPIC_INFO = 15,
     LN_MSG_TOPIC_INFO_OK = 16,
+    LN_MSG_RECLAIM_PORT = 17,
     LN_MSG_REGISTER_SERVICE = 20,
     LN_MSG_UNREGISTER_SERVICE = 21,
     LN_MSG_FIND_SERVICE = 22,

@@ -1,6 +1,7 @@
 /* provider.c — the provider side of services: creating and registering a provider (its
- * listening sockets and its entry in the manager), reading requests from caller connections,
- * running the handler and sending its answer, and reporting call counts to the manager. */
+ * listening sockets and its entry in the manager, again after a reconnect), reading requests
+ * from caller connections, running the handler and sending its answer, and reporting call
+ * counts to the manager. */
 #include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -91,6 +92,45 @@ static void provider_close_fn(void* p)
     ln_unregister_service_provider(p);
 }
 
+/* Its REGISTER_SERVICE body: every field but the request id. */
+static void registration(const ln_service_provider* p, ln_wbuf* body)
+{
+    char host_id[LN_HOST_ID_MAX];
+    ln_host_id(host_id, sizeof host_id);
+    ln_wbuf_str(body, p->name);
+    ln_wbuf_str(body, p->md_name);
+    ln_wbuf_u64(body, p->layout_hash);
+    ln_wbuf_str(body, p->signature);
+    ln_wbuf_str(body, p->group_name);
+    ln_wbuf_str(body, host_id);
+    ln_wbuf_str(body, p->unix_path);
+    ln_wbuf_str(body, p->tcp_port ? p->tcp_host : "");
+    ln_wbuf_u16(body, p->tcp_port);
+}
+
+/* After a reconnect (ports and request locks held): register the same sockets again, which
+ * callers may still be connected to.  The new manager kept the socket files meanwhile. */
+static int reclaim_provider(ln_client* clnt, void* provider)
+{
+    ln_service_provider* p = provider;
+    if (p->group == NULL)
+        return LN_OK; /* not registered */
+    ln_wbuf body;
+    ln_wbuf_init(&body);
+    registration(p, &body);
+    uint16_t reply_type;
+    ln_rbuf reply;
+    int rc = ln_client_request_locked(clnt, LN_MSG_REGISTER_SERVICE, &body, &reply_type, &reply);
+    ln_wbuf_free(&body);
+    if (rc != LN_OK)
+        return ln_set_error(clnt, rc, "service \"%s\": the manager refused to take back its "
+                            "registration (callers that are connected keep being served): %s",
+                            p->name, ln_last_error());
+    return LN_OK;
+}
+
+static const ln_client_port_ops provider_ops = {provider_close_fn, reclaim_provider};
+
 int ln_get_service_provider(ln_client* clnt, ln_service_provider** out, const char* name,
                             const char* md_name, uint64_t layout_hash, const char* signature)
 {
@@ -119,7 +159,7 @@ int ln_get_service_provider(ln_client* clnt, ln_service_provider** out, const ch
         p->request_size = ln_sig_size(p->req_sig);
         p->response_size = ln_sig_size(p->resp_sig);
         p->magic = LN_PROVIDER_MAGIC;
-        rc = ln_client_add_port(clnt, p, provider_close_fn);
+        rc = ln_client_add_port(clnt, p, &provider_ops, 0);
     }
     if (rc != LN_OK) {
         provider_free(p);
@@ -218,40 +258,39 @@ int ln_service_provider_register(ln_service_provider* p, const char* group)
     if (rc != LN_OK)
         return rc;
     int ufd, tfd;
-    char host[256], host_id[LN_HOST_ID_MAX];
+    char host[256];
     rc = open_listeners(p, &ufd, &tfd, host, sizeof host);
     if (rc != LN_OK) {
         close_listeners(p, ufd, tfd);
         return rc;
     }
-    ln_host_id(host_id, sizeof host_id);
+    snprintf(p->group_name, sizeof p->group_name, "%s", group ? group : "");
+    snprintf(p->tcp_host, sizeof p->tcp_host, "%s", tfd >= 0 ? host : "");
 
     ln_wbuf body;
     ln_wbuf_init(&body);
-    ln_wbuf_str(&body, p->name);
-    ln_wbuf_str(&body, p->md_name);
-    ln_wbuf_u64(&body, p->layout_hash);
-    ln_wbuf_str(&body, p->signature);
-    ln_wbuf_str(&body, group ? group : "");
-    ln_wbuf_str(&body, host_id);
-    ln_wbuf_str(&body, p->unix_path);
-    ln_wbuf_str(&body, tfd >= 0 ? host : "");
-    ln_wbuf_u16(&body, p->tcp_port);
+    registration(p, &body);
     uint16_t reply_type;
     ln_rbuf reply;
     rc = ln_client_request(p->clnt, LN_MSG_REGISTER_SERVICE, &body, &reply_type, &reply);
+    uint64_t gen = ln_client_request_gen();
     ln_wbuf_free(&body);
     if (rc != LN_OK) {
         close_listeners(p, ufd, tfd);
         return ln_set_error(p->clnt, rc, "cannot register service \"%s\": %s", p->name,
                             ln_last_error());
     }
-    /* Listen only once the manager took it, so a refused registration leaves nothing. */
+    /* Listen only once the manager took it, so a refused registration leaves nothing.  From
+     * here on a reconnect re-registers it (at once, if one happened since the request). */
+    ln_client_lock_ports(p->clnt);
     p->group = g;
+    ln_client_settle_port(p->clnt, p, gen);
     if ((ufd >= 0 && (rc = ln_svc_group_add_listener(g, p, ufd)) != LN_OK)
         || (tfd >= 0 && (rc = ln_svc_group_add_listener(g, p, tfd)) != LN_OK)) {
         ln_svc_group_remove_provider(g, p); /* closes what was added */
+        ln_client_lock_ports(p->clnt);
         p->group = NULL;
+        ln_client_unlock_ports(p->clnt);
         return rc;
     }
     return LN_OK;
@@ -266,6 +305,9 @@ int ln_unregister_service_provider(ln_service_provider* p)
         rc = ln_svc_group_remove_provider(p->group, p);
         if (rc != LN_OK)
             return rc;
+        /* Off the client before unregistering: a re-registration in progress ends first,
+         * and none comes after the UNREGISTER. */
+        ln_client_remove_port(p->clnt, p);
         ln_wbuf body;
         ln_wbuf_init(&body);
         ln_wbuf_str(&body, p->name);
@@ -329,7 +371,7 @@ static int send_tx(ln_svc_endpoint* ep)
     if (ep->tx.failed)
         return -1;
     int err = ln_net_write_all(ep->fd, ep->tx.data, ep->tx.len,
-                               ln_net_deadline(&ts, LN_SVC_SEND_TIMEOUT));
+                               ln_net_deadline(&ts, LN_SVC_SEND_TIMEOUT), -1);
     ln_wbuf_reset(&ep->tx);
     if (err != 0)
         ep->broken = 1;

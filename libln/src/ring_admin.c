@@ -148,6 +148,40 @@ int ln_ring_admin_set_counts(ln_ring_admin* a, uint32_t publishers, uint32_t sub
     return LN_OK;
 }
 
+/* Copies a name field of the header, which another process may have left without a NUL. */
+static void copy_name(char* out, const char* field)
+{
+    memcpy(out, field, LN_RING_NAME_MAX);
+    out[LN_RING_NAME_MAX - 1] = '\0';
+}
+
+int ln_ring_admin_info(ln_ring_admin* a, ln_ring_info* out)
+{
+    int rc = check(a);
+    if (rc != LN_OK)
+        return rc;
+    if (out == NULL)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_admin_info: out is NULL");
+    _Static_assert(sizeof out->topic == LN_RING_NAME_MAX, "ln_ring_info name size");
+    const ln_ring_header* h = a->hdr;
+    memset(out, 0, sizeof *out);
+    copy_name(out->topic, h->topic);
+    copy_name(out->md_name, h->md_name);
+    out->layout_hash = h->layout_hash;
+    out->message_size = h->message_size;
+    out->slot_count = h->slot_count;
+    out->retired = atomic_load_explicit(&h->retired, memory_order_acquire);
+    if (out->retired)
+        copy_name(out->successor, h->successor);
+    out->write_seq = atomic_load_explicit(&h->write_seq, memory_order_acquire);
+    out->publishers = atomic_load_explicit(&h->publishers, memory_order_relaxed);
+    out->subscribers = atomic_load_explicit(&h->subscribers, memory_order_relaxed);
+    for (uint32_t i = 0; i < LN_RING_MAX_READERS; i++)
+        if (atomic_load_explicit(&h->readers[i].active, memory_order_acquire))
+            out->active_readers |= (uint64_t)1 << i;
+    return LN_OK;
+}
+
 int ln_ring_admin_write_seq(ln_ring_admin* a, uint64_t* seq)
 {
     int rc = check(a);

@@ -70,6 +70,17 @@ static void service_close_fn(void* s)
     ln_service_release(s);
 }
 
+/* A caller registers nothing: after a reconnect it simply looks the service up again on its
+ * next call that needs to. */
+static int service_reclaim(ln_client* clnt, void* s)
+{
+    (void)clnt;
+    (void)s;
+    return LN_OK;
+}
+
+static const ln_client_port_ops service_ops = {service_close_fn, service_reclaim};
+
 int ln_get_service(ln_client* clnt, ln_service** out, const char* name, const char* md_name,
                    uint64_t layout_hash, const char* signature)
 {
@@ -97,7 +108,7 @@ int ln_get_service(ln_client* clnt, ln_service** out, const char* name, const ch
     rc = ln_svc_parse_signature(clnt, md_name, signature, &s->req_sig, &s->resp_sig);
     if (rc == LN_OK) {
         s->magic = LN_SERVICE_MAGIC;
-        rc = ln_client_add_port(clnt, s, service_close_fn);
+        rc = ln_client_add_port(clnt, s, &service_ops, 0);
     }
     if (rc != LN_OK) {
         service_free(s);
@@ -138,7 +149,7 @@ int ln_service_release(ln_service* s)
 static int fill(ln_service* s, size_t need, const struct timespec* deadline)
 {
     while (s->rx_len < need) {
-        int err = ln_net_wait_readable(s->fd, deadline);
+        int err = ln_net_wait_readable(s->fd, deadline, -1);
         if (err != 0)
             return err;
         ssize_t n = recv(s->fd, s->rx + s->rx_len, s->rx_cap - s->rx_len, 0);
@@ -228,7 +239,7 @@ static int take_error(ln_service* s, ln_rbuf* body)
 
 static int send_buf(ln_service* s, const ln_wbuf* b, const struct timespec* deadline)
 {
-    int err = ln_net_write_all(s->fd, b->data, b->len, deadline);
+    int err = ln_net_write_all(s->fd, b->data, b->len, deadline, -1);
     s->send_errno = err;
     if (err == ETIMEDOUT)
         return ln_set_error(s->clnt, LN_ETIMEOUT,
@@ -269,7 +280,7 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
             return ln_set_error(s->clnt, LN_ECONNECTION,
                                 "service \"%s\": cannot resolve provider host \"%s\": %s",
                                 s->name, tcp_host, gai_strerror(gai));
-        err = ln_net_connect(ai, deadline, &s->fd);
+        err = ln_net_connect(ai, deadline, -1, &s->fd);
         freeaddrinfo(ai);
         if (err == 0)
             return LN_OK;

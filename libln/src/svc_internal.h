@@ -57,9 +57,11 @@ struct ln_service_provider {
     ln_service_handler handler;
     void* user_data;
 
-    ln_svc_group* group; /* NULL until registered */
+    ln_svc_group* group; /* NULL until registered (set under the client's ports lock) */
     char unix_path[108];
     uint16_t tcp_port;
+    char group_name[LN_SVC_MAX_NAME + 1]; /* as registered, for re-registering */
+    char tcp_host[256];
     atomic_uint_fast64_t calls, errors, reported_calls;
     atomic_int_fast64_t last_report_ns; /* CLOCK_MONOTONIC of the last SERVICE_CALLED */
     atomic_flag reporting;

@@ -34,13 +34,17 @@ def _timeout(timeout: float | None) -> float:
 
 class client:  # noqa: N801 - the LN name
     """A connection to the manager.  `ln_manager_or_args` is "HOST:PORT", an argv list
-    (searched for `-ln_manager HOST:PORT`), or None for $LN_MANAGER."""
+    (searched for `-ln_manager HOST:PORT`), or None for $LN_MANAGER.  With `reconnect` (the
+    default, unless LN_RECONNECT=0) libln reconnects to a restarted manager and registers
+    the client's ports and services again (docs/manager.md)."""
 
     def __init__(self, name: str, ln_manager_or_args: str | Sequence[str] | None = None,
-                 timeout: float = 10.0) -> None:
+                 timeout: float = 10.0, reconnect: bool = True) -> None:
         opts = C.ClientOptions()
         C.ln_client_options_init(ctypes.byref(opts))
         opts.timeout = timeout
+        if not reconnect:
+            opts.flags |= C.LN_CLIENT_NO_RECONNECT
         self._argv_keep: Any = None
         if isinstance(ln_manager_or_args, str):
             opts.manager = ln_manager_or_args.encode()

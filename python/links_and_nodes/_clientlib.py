@@ -19,7 +19,7 @@ c_char_p, c_void_p = ctypes.c_char_p, ctypes.c_void_p
 
 class ClientOptions(ctypes.Structure):
     _fields_ = [("manager", c_char_p), ("argc", c_int), ("argv", ctypes.POINTER(c_char_p)),
-                ("timeout", c_double)]
+                ("timeout", c_double), ("flags", c_uint32)]
 
 
 class PortOptions(ctypes.Structure):
@@ -48,6 +48,7 @@ LN_EAGAIN = -4
 LN_ETIMEOUT = -3
 LN_EOVERRUN = -15
 LN_PUBLISH_WAIT_FOR_SUBSCRIBERS = 0x1
+LN_CLIENT_NO_RECONNECT = 0x1
 LN_SUBSCRIBE_UDP = 0x100
 LN_SUBSCRIBE_TCP = 0x200
 

@@ -97,6 +97,21 @@ ln_ring_admin_purge_instance = _declare("ln_ring_admin_purge_instance", ctypes.c
                                         [ctypes.c_char_p], _check)
 ln_ring_admin_open = _declare("ln_ring_admin_open", ctypes.c_int, [
     ctypes.POINTER(RingAdminHandle), ctypes.c_char_p], _check)
+
+
+class RingInfo(ctypes.Structure):
+    """struct ln_ring_info: what a segment's header says (ln_ring_admin_info)."""
+
+    _fields_ = [("topic", ctypes.c_char * 256), ("md_name", ctypes.c_char * 256),
+                ("successor", ctypes.c_char * 256), ("layout_hash", ctypes.c_uint64),
+                ("message_size", ctypes.c_uint64), ("write_seq", ctypes.c_uint64),
+                ("active_readers", ctypes.c_uint64), ("slot_count", ctypes.c_uint32),
+                ("retired", ctypes.c_uint32), ("publishers", ctypes.c_uint32),
+                ("subscribers", ctypes.c_uint32)]
+
+
+ln_ring_admin_info = _declare("ln_ring_admin_info", ctypes.c_int, [
+    RingAdminHandle, ctypes.POINTER(RingInfo)], _check)
 ln_ring_segment_size = _declare("ln_ring_segment_size", ctypes.c_uint64,
                                 [ctypes.c_uint64, ctypes.c_uint32])
 ln_host_id = _declare("ln_host_id", None, [ctypes.c_char_p, ctypes.c_size_t])

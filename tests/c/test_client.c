@@ -239,6 +239,16 @@ static void close_port_forgetful(void* port)
     closed[nclosed++] = *(int*)port; /* breaks the contract: does not remove itself */
 }
 
+static int reclaim_nothing(ln_client* clnt, void* port)
+{
+    (void)clnt;
+    (void)port;
+    return LN_OK;
+}
+
+static const ln_client_port_ops port_ops = {close_port, reclaim_nothing};
+static const ln_client_port_ops forgetful_ops = {close_port_forgetful, reclaim_nothing};
+
 static void test_destroy_closes_ports(void)
 {
     struct fake f;
@@ -249,9 +259,9 @@ static void test_destroy_closes_ports(void)
         static int ids[] = {1, 2, 3, 4};
         port_owner = c;
         nclosed = 0;
-        LN_CHECK_EQ(ln_client_add_port(c, &ids[0], close_port_forgetful), LN_OK);
+        LN_CHECK_EQ(ln_client_add_port(c, &ids[0], &forgetful_ops, 1), LN_OK);
         for (int i = 1; i < 4; i++)
-            LN_CHECK_EQ(ln_client_add_port(c, &ids[i], close_port), LN_OK);
+            LN_CHECK_EQ(ln_client_add_port(c, &ids[i], &port_ops, 1), LN_OK);
         ln_client_remove_port(c, &ids[2]); /* closed by its owner already */
         ln_client_remove_port(c, &ids[2]); /* twice is harmless */
         LN_CHECK_EQ(ln_client_destroy(c), LN_OK);

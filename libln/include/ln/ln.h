@@ -103,11 +103,20 @@ typedef struct ln_client ln_client;
 typedef struct ln_outport ln_outport;
 typedef struct ln_inport ln_inport;
 
+/* Reconnection (docs/manager.md, "A manager restarted under running clients"): a client
+ * watches its manager connection from a background thread; when the manager goes away it
+ * reconnects with back-off (50 ms doubling to 1 s) and re-registers every port and service
+ * provider it holds.  Meanwhile manager requests fail with LN_ECONNECTION; ln_write/ln_read
+ * never notice.  LN_CLIENT_NO_RECONNECT in ln_client_options.flags, or LN_RECONNECT=0 in the
+ * environment, turns it off: then a lost connection stays lost, as for a client of 0.1. */
+#define LN_CLIENT_NO_RECONNECT 0x1u
+
 typedef struct ln_client_options {
     const char* manager; /* "HOST:PORT" or ":PORT"; NULL: -ln_manager in argv, then $LN_MANAGER */
     int argc;            /* argv to search for "-ln_manager HOST:PORT" (may be 0/NULL) */
     char** argv;
     double timeout;      /* seconds for connecting and for each manager request (default 10) */
+    uint32_t flags;      /* LN_CLIENT_* (default 0: reconnect) */
 } ln_client_options;
 
 LN_EXPORT void ln_client_options_init(ln_client_options* opts);
@@ -319,6 +328,22 @@ LN_EXPORT int ln_ring_admin_set_counts(ln_ring_admin* admin, uint32_t publishers
 /* Sequence number of the newest sample published into the ring (0: none yet); it carries
  * over to successors, so it counts the topic's samples.  The manager's rate watchdog. */
 LN_EXPORT int ln_ring_admin_write_seq(ln_ring_admin* admin, uint64_t* seq);
+/* What a segment's header says (ln_ring_admin_info): the manager adopts the rings a killed
+ * predecessor left by it.  Strings are NUL-terminated copies. */
+typedef struct ln_ring_info {
+    char topic[256];
+    char md_name[256];
+    char successor[256];   /* set once retired */
+    uint64_t layout_hash;
+    uint64_t message_size;
+    uint64_t write_seq;
+    uint64_t active_readers; /* bit i: reader slot i is held */
+    uint32_t slot_count;
+    uint32_t retired;
+    uint32_t publishers;
+    uint32_t subscribers;
+} ln_ring_info;
+LN_EXPORT int ln_ring_admin_info(ln_ring_admin* admin, ln_ring_info* out);
 /* Reserve reader slot `index` (0..63) for a subscriber process with `buffers`; release frees
  * it again (a dead subscriber stops holding back publishers that wait for subscribers). */
 LN_EXPORT int ln_ring_admin_reserve_reader(ln_ring_admin* admin, uint32_t index, int32_t pid,

@@ -1,5 +1,6 @@
-"""`ln_manager`: runs the manager of one instance.  Takes the instance lock, removes
-segments and service sockets a killed predecessor's clients left behind, serves clients
+"""`ln_manager`: runs the manager of one instance.  Takes the instance lock, adopts the
+segments and service sockets a killed predecessor left (for the clients that reconnect
+within the adoption window; the rest is removed after it), serves clients
 until SIGTERM/SIGINT (or `quit`), then closes every connection and unlinks every segment
 of the instance.  With `-c FILE` it also runs the configuration's processes through the
 ln_daemons (scheduler.py) with a console on stdin; `ln_manager status|start|stop|...`
@@ -24,6 +25,7 @@ from .runtime import (
     prepare,
     purge_service_sockets,
     runtime_dir,
+    service_sockets,
 )
 from .services import DEFAULT_LIMIT as SERVICE_LIMIT
 from .services import Services
@@ -31,6 +33,7 @@ from .services import Services
 log = logging.getLogger("ln_manager")
 
 MAX_INSTANCE = 200  # bytes; keeps segment names well below NAME_MAX
+ADOPT_WINDOW = 5.0  # seconds reconnecting clients have to take back what they held
 LOG_LEVELS = ("debug", "info", "warning", "error")
 
 
@@ -76,6 +79,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help=f"most bytes of one topic's ring (default {Limits.ring_memory})")
     parser.add_argument("--service-limit", type=int, default=SERVICE_LIMIT, metavar="N",
                         help=f"most services at a time (default {SERVICE_LIMIT})")
+    parser.add_argument("--adopt-window", type=float, default=ADOPT_WINDOW, metavar="SECONDS",
+                        help="after a restart, how long the rings and service sockets a "
+                             "killed predecessor left are kept for the clients that reconnect "
+                             f"(default {ADOPT_WINDOW:g}; 0 removes them at once)")
     parser.add_argument("--log-level", choices=LOG_LEVELS, default="info",
                         help="least severe log messages shown on stderr (default info)")
     return parser
@@ -95,6 +102,8 @@ def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         parser.error("--ring-memory-limit must be positive")
     if args.service_limit < 1:
         parser.error("--service-limit must be at least 1")
+    if not 0 <= args.adopt_window <= 3600:
+        parser.error("--adopt-window must be 0..3600 seconds")
 
 
 def _address(host: str, port: int) -> str:
@@ -109,26 +118,41 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
     from .server import Server, listen_socket
 
     segments = Segments(args.instance)
+    adopted: list[Any] = []
+    held_sockets: list[str] = []
     try:
-        purged = segments.purge()
+        if args.adopt_window > 0:
+            adopted, removed = segments.adopt()
+            for name, reason in removed:
+                log.warning("removed segment %s instead of adopting it: %s", name, reason)
+        else:
+            purged = segments.purge()
+            if purged:
+                log.info("removed %d stale segment%s of instance %r", purged,
+                         "" if purged == 1 else "s", args.instance)
     except RequestError as exc:
         print(f"ln_manager: error: {exc.text}", file=sys.stderr)
         return 1
-    if purged:
-        log.info("removed %d stale segment%s of instance %r", purged,
-                 "" if purged == 1 else "s", args.instance)
     try:
-        sockets = purge_service_sockets(directory)
+        if args.adopt_window > 0:
+            held_sockets = service_sockets(directory)
+        else:
+            sockets = purge_service_sockets(directory)
+            if sockets:
+                log.info("removed %d stale service socket%s in %s: %s", len(sockets),
+                         "" if len(sockets) == 1 else "s", directory, ", ".join(sockets))
     except OSError as exc:
         print(f"ln_manager: error: cannot list runtime directory {directory}: "
               f"{exc.strerror or exc}", file=sys.stderr)
         return 1
-    if sockets:
-        log.info("removed %d stale service socket%s in %s: %s", len(sockets),
-                 "" if len(sockets) == 1 else "s", directory, ", ".join(sockets))
     limits = Limits(topics=args.topic_limit, ring_memory=args.ring_memory_limit)
     core = Core(args.instance, Registry(ring_segment_size, limits), segments,
                 Services(args.service_limit))
+    if adopted or held_sockets:
+        core.adopt(adopted, directory, held_sockets)
+        log.info("adopting %d topic%s and %d service socket%s for %g s", len(adopted),
+                 "" if len(adopted) == 1 else "s", len(held_sockets),
+                 "" if len(held_sockets) == 1 else "s", args.adopt_window)
     try:
         sock = listen_socket(args.host, args.port)
     except OSError as exc:
@@ -138,6 +162,13 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
     port = sock.getsockname()[1]
     server = Server(core)
     await server.start(sock)
+    adoption: asyncio.Task[None] | None = None
+    if core.adopting:
+        async def end_adoption() -> None:
+            await asyncio.sleep(args.adopt_window)
+            await core.end_adoption()
+
+        adoption = asyncio.get_running_loop().create_task(end_adoption())
     stop = asyncio.Event()
     stop_processes = [True]  # False: leave them running (detach)
 
@@ -173,6 +204,8 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
         status = max(status, runner.exit_status)
     log.info("shutting down: closing %d client%s", len(core.registry.clients),
              "" if len(core.registry.clients) == 1 else "s")
+    if adoption is not None:
+        adoption.cancel()
     await server.close()
     removed = await core.shutdown()
     if runner is not None:

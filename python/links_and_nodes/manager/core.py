@@ -12,14 +12,15 @@ import logging
 import asyncio
 from dataclasses import dataclass
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, Protocol
 
 from .. import _libln
 from . import protocol as p
 from .registry import Client, Port, PortKind, PortRequest, Registry, RequestError, Topic
 from .rings import LocalRings, Rings
-from .runtime import remove_service_socket
-from .segments import Segments
+from .runtime import purge_service_sockets, remove_service_socket
+from .segments import AdoptedRing, Segments
 from .services import Service, ServiceOffer, Services
 
 log = logging.getLogger("ln_manager")
@@ -105,6 +106,9 @@ class Core:
         self.hosts: HostRings | None = None  # set when the manager knows other hosts
         self.service_registry = services if services is not None else Services()
         self._lock = asyncio.Lock()
+        # Provider sockets found at start-up, kept for their providers until the adoption
+        # window closes (end_adoption).
+        self._held_sockets: tuple[Path, list[str]] | None = None
         # Called after every change of clients, ports or services (the scheduler's readiness
         # and watchdog checks wait on them instead of polling).
         self.listeners: list[Callable[[], None]] = []
@@ -176,6 +180,8 @@ class Core:
         try:
             if isinstance(msg, p.Publish | p.Subscribe):
                 return await self._open_port(session, msg)
+            if isinstance(msg, p.ReclaimPort):
+                return await self._reclaim_port(session, msg)
             if isinstance(msg, p.ClosePort):
                 port = self.registry.find_port(session.client, msg.port_id)
                 log.info("%s: closing port %d of topic %r", session.label, msg.port_id,
@@ -195,11 +201,71 @@ class Core:
         except RequestError as exc:
             # an unknown topic or service asked for is an answer, not an event worth a line
             level = (logging.DEBUG if isinstance(msg, p.TopicInfo | p.FindService)
-                     and exc.code == "ENOTFOUND" else logging.INFO)
+                     and exc.code == "ENOTFOUND" else
+                     logging.WARNING if isinstance(msg, p.ReclaimPort) else logging.INFO)
             log.log(level, "%s: %s refused: %s: %s", session.label, msg.TYPE.name, exc.code,
                     exc.text)
             return p.Error(request_id, error_code(exc.code), exc.text)
         raise AssertionError(f"not a request: {msg.TYPE.name}")
+
+    # ---- adoption after a restart --------------------------------------------------------
+    def adopt(self, rings: list[AdoptedRing], socket_dir: Path | None,
+              sockets: list[str]) -> None:
+        """Before clients come: register the topics of rings a killed predecessor left (the
+        segments module adopted them) and keep the provider sockets it found in socket_dir,
+        until end_adoption."""
+        for ring in rings:
+            self.registry.adopt_topic(ring.topic_id, ring.topic, ring.md_name,
+                                      ring.layout_hash, ring.message_size, ring.slots,
+                                      set(ring.readers))
+            log.info("adopted topic %r: md %r (hash 0x%016x, %d bytes), %d slots, sample %d, "
+                     "%d reader slot%s held, in %s", ring.topic, ring.md_name,
+                     ring.layout_hash, ring.message_size, ring.slots, ring.write_seq,
+                     len(ring.readers), "" if len(ring.readers) == 1 else "s",
+                     ", ".join(ring.names))
+        if socket_dir is not None:
+            self._held_sockets = (socket_dir, sockets)
+
+    async def end_adoption(self) -> None:
+        """The adoption window is over: free the reader slots of subscribers that did not
+        come back, remove the adopted topics nobody took and the provider sockets nobody
+        registered again."""
+        async with self._lock:
+            for topic in [t for t in self.registry.topics.values() if t.held]:
+                unclaimed = self.registry.release_hold(topic)
+                for index in unclaimed:
+                    await self.local.release_reader(topic.id, index)
+                if self.registry.drop_topic_if_unused(topic):
+                    names = await self.local.remove(topic.id)
+                    log.info("adopted topic %r was not taken back: removed %s", topic.name,
+                             ", ".join(names))
+                    continue
+                if unclaimed:
+                    log.info("topic %r: released reader slot%s %s of subscribers that did not "
+                             "come back", topic.name, "" if len(unclaimed) == 1 else "s",
+                             ", ".join(map(str, unclaimed)))
+                try:
+                    await self._set_counts(topic)
+                except RequestError as exc:
+                    log.warning("%s", exc.text)
+            held, self._held_sockets = self._held_sockets, None
+            if held is not None:
+                directory, names = held
+                in_use = {Path(s.offer.unix_path).name for s in self.service_registry.sorted()
+                          if s.offer.unix_path
+                          and Path(s.offer.unix_path).parent == directory}
+                removed = purge_service_sockets(directory, [n for n in names
+                                                            if n not in in_use])
+                if removed:
+                    log.info("removed %d service socket%s nobody registered again: %s",
+                             len(removed), "" if len(removed) == 1 else "s",
+                             ", ".join(removed))
+        self._changed()
+
+    @property
+    def adopting(self) -> bool:
+        return any(t.held for t in self.registry.topics.values()) \
+            or self._held_sockets is not None
 
     async def disconnect(self, session: Session) -> int:
         """Release everything the session's client held; how many ports."""
@@ -226,6 +292,9 @@ class Core:
         """Release every client and unlink every segment; how many segments."""
         for client in list(self.registry.clients.values()):
             await self.disconnect(Session(client.address, client))
+        held, self._held_sockets = self._held_sockets, None
+        if held is not None:  # nobody registers them any more
+            purge_service_sockets(*held)
         removed = 0
         for rings in self._every_rings():
             for topic_id in rings.topic_ids():
@@ -349,6 +418,47 @@ class Core:
         reader = p.NO_READER if port.reader_index is None else port.reader_index
         return p.PortOk(msg.request_id, port.id, segment, reader)
 
+    async def _reclaim_port(self, session: Session, msg: p.ReclaimPort) -> p.PortOk:
+        """A reconnecting client's port on a ring it has mapped: take it back as it is."""
+        client = session.client
+        assert client is not None
+        if msg.kind not in (p.RECLAIM_PUBLISHER, p.RECLAIM_SUBSCRIBER):
+            raise RequestError("EINVAL", f"RECLAIM_PORT of kind {msg.kind}, expected "
+                               f"{p.RECLAIM_PUBLISHER} or {p.RECLAIM_SUBSCRIBER}")
+        kind = PortKind.PUBLISHER if msg.kind == p.RECLAIM_PUBLISHER else PortKind.SUBSCRIBER
+        request = PortRequest(kind, msg.topic, msg.md_name, msg.layout_hash, msg.message_size,
+                              msg.buffers, msg.flags)
+        rings = self._rings_for(client)
+        if rings is not self.local:
+            raise RequestError("ENOTFOUND", f"topic {msg.topic!r}: only rings on the "
+                               "manager's host are taken back after a restart")
+        topic_id = self.segments.topic_of(msg.segment)
+        if topic_id is None:
+            raise RequestError("EINVAL", f"topic {msg.topic!r}: {msg.segment!r} is not a ring "
+                               f"segment of instance {self.instance!r}")
+        reader = None if msg.reader_index == p.NO_READER else msg.reader_index
+        plan = self.registry.plan_reclaim(client, request, topic_id, reader)
+        topic = plan.topic
+        assert topic is not None
+        if not rings.has(topic.id) or msg.segment not in self.segments.names(topic.id):
+            raise RequestError("ENOTFOUND", f"topic {msg.topic!r}: segment {msg.segment!r} "
+                               "is not one of its rings here")
+        if plan.reader_index is not None and plan.reserve_reader:
+            await rings.reserve_reader(topic.id, plan.reader_index, client.pid,
+                                       request.buffers)
+        port = self.registry.add_port(plan, topic)
+        try:
+            await self._set_counts(topic)
+        except RequestError:
+            await self._close_port(port)
+            raise
+        segment = rings.current(topic.id)
+        log.info("%s: took back %s %r -> port %d, %s%s", session.label, kind.value,
+                 topic.name, port.id, segment,
+                 "" if port.reader_index is None else f" reader {port.reader_index}")
+        reader_index = p.NO_READER if port.reader_index is None else port.reader_index
+        return p.PortOk(msg.request_id, port.id, segment, reader_index)
+
     def _check_publisher_host(self, topic: Topic, client: Client, rings: Rings) -> None:
         """All publishers of a topic run on one host: the sequence numbers of its samples are
         counted in that host's ring, and every other host gets them from there."""
@@ -404,6 +514,8 @@ class Core:
         (the network decides about rings that only pass samples on: it adds them back)."""
         if self.registry.drop_topic_if_unused(topic):
             await self._remove_rings(topic)
+            return
+        if topic.held:  # adopted: its ring waits for the ports that come back
             return
         used = {id(self._rings_for_quietly(port.client)) for port in topic.ports.values()}
         for rings in self._topic_rings(topic):

@@ -11,12 +11,15 @@ from enum import IntEnum
 from typing import Any, ClassVar
 
 MAGIC = 0x504D4E4C  # "LNMP" read as a little-endian u32
-VERSION = 2
+VERSION = 3
 HEADER_SIZE = 4  # the u32 length field
 MIN_LENGTH = 2  # type only, empty body
 MAX_LENGTH = 1 << 20  # bytes after the length field: type + body
 MAX_STR = 1024  # bytes of UTF-8 in one str field
 NO_READER = 0xFFFFFFFF  # reader_index of a publisher's PORT_OK
+HELLO_RECONNECT = 0x1  # HELLO flags: the client was connected to a manager of the instance
+RECLAIM_PUBLISHER = 0  # RECLAIM_PORT kinds
+RECLAIM_SUBSCRIBER = 1
 # Bits of PUBLISH/SUBSCRIBE `flags` (ln.h): the manager stores them with the port.
 PUBLISH_WAIT_FOR_SUBSCRIBERS = 0x1
 SUBSCRIBE_UDP = 0x100
@@ -38,6 +41,7 @@ class MsgType(IntEnum):
     OK = 14
     TOPIC_INFO = 15
     TOPIC_INFO_OK = 16
+    RECLAIM_PORT = 17
     REGISTER_SERVICE = 20
     UNREGISTER_SERVICE = 21
     FIND_SERVICE = 22
@@ -80,9 +84,11 @@ class Hello(Message):
     client_name: str
     libln_version: str
     host_id: str  # ln_host_id() of the client's host; "" from tools without ports
+    flags: int = 0  # HELLO_RECONNECT
     TYPE = MsgType.HELLO
     FIELDS = (("magic", "u32"), ("version", "u16"), ("pid", "u32"),
-              ("client_name", "str"), ("libln_version", "str"), ("host_id", "str"))
+              ("client_name", "str"), ("libln_version", "str"), ("host_id", "str"),
+              ("flags", "u32"))
     FROM_CLIENT = True
 
 
@@ -133,6 +139,28 @@ class Publish(_PortRequest):
 @dataclass(frozen=True)
 class Subscribe(_PortRequest):
     TYPE = MsgType.SUBSCRIBE
+
+
+@dataclass(frozen=True)
+class ReclaimPort(Message):
+    """A port a reconnecting client holds, with the ring segment it has mapped and (for a
+    subscriber) its reader slot: the manager adopts them instead of making new ones."""
+
+    request_id: int
+    kind: int  # RECLAIM_PUBLISHER or RECLAIM_SUBSCRIBER
+    topic: str
+    md_name: str
+    layout_hash: int
+    message_size: int
+    buffers: int
+    flags: int
+    segment: str
+    reader_index: int
+    TYPE = MsgType.RECLAIM_PORT
+    FIELDS = (("request_id", "u32"), ("kind", "u16"), ("topic", "str"), ("md_name", "str"),
+              ("layout_hash", "u64"), ("message_size", "u32"), ("buffers", "u32"),
+              ("flags", "u32"), ("segment", "str"), ("reader_index", "u32"))
+    FROM_CLIENT = True
 
 
 @dataclass(frozen=True)
@@ -319,7 +347,8 @@ class ControlResult(Message):
 
 
 MESSAGES: dict[int, type[Message]] = {
-    cls.TYPE: cls for cls in (Hello, Welcome, Error, Publish, Subscribe, PortOk, ClosePort,
+    cls.TYPE: cls for cls in (Hello, Welcome, Error, Publish, Subscribe, ReclaimPort, PortOk,
+                              ClosePort,
                               Ok, TopicInfo, TopicInfoOk, RegisterService, UnregisterService,
                               FindService, ServiceInfo, ServiceCalled, ListServices,
                               ServiceList, Control, ControlResult)}

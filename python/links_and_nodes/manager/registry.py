@@ -70,6 +70,10 @@ class Topic:
     slots: int
     ports: dict[int, Port] = field(default_factory=dict)
     readers: dict[int, int] = field(default_factory=dict)  # reader index -> port id
+    # Adopted from a killed predecessor (docs/manager.md): kept without ports until the
+    # adoption window closes, its old subscribers' reader slots held for them meanwhile.
+    held: bool = False
+    reserved: set[int] = field(default_factory=set)
 
     @property
     def publishers(self) -> int:
@@ -118,6 +122,7 @@ class PortPlan:
     slots: int
     grow_to: int | None
     reader_index: int | None
+    reserve_reader: bool = True  # False: a returning subscriber's slot, still reserved
 
 
 def topic_name_problem(name: str, what: str = "topic") -> str | None:
@@ -193,8 +198,7 @@ class Registry:
         self.clients.pop(client.id, None)
 
     # ---- ports --------------------------------------------------------------------------
-    def plan_port(self, client: Client, request: PortRequest) -> PortPlan:
-        """Check a PUBLISH/SUBSCRIBE in the documented order; raises RequestError."""
+    def _check_request(self, request: PortRequest) -> None:
         limits = self.limits
         problem = topic_name_problem(request.topic) or md_name_problem(request.md_name)
         if problem:
@@ -205,6 +209,11 @@ class Registry:
         if not 1 <= request.buffers <= limits.buffers:
             raise RequestError("ELIMIT", f"topic {request.topic!r}: {request.buffers} buffers "
                                f"out of range 1..{limits.buffers}")
+
+    def plan_port(self, client: Client, request: PortRequest) -> PortPlan:
+        """Check a PUBLISH/SUBSCRIBE in the documented order; raises RequestError."""
+        limits = self.limits
+        self._check_request(request)
         topic = self.topics.get(request.topic)
         needed = max(request.buffers + 1, 2)
         if topic is not None:
@@ -217,11 +226,13 @@ class Registry:
         reader_index = None
         if request.kind is PortKind.SUBSCRIBER:
             readers = topic.readers if topic is not None else {}
-            if len(readers) >= limits.subscribers_per_topic:
+            # slots held for subscribers that are expected back count as taken
+            taken = set(readers) | (topic.reserved if topic is not None else set())
+            if len(taken) >= limits.subscribers_per_topic:
                 raise RequestError("ELIMIT", f"topic {request.topic!r} already has "
-                                   f"{len(readers)} subscribers, the limit is "
+                                   f"{len(taken)} subscribers, the limit is "
                                    f"{limits.subscribers_per_topic}")
-            reader_index = min(set(range(MAX_READERS)) - set(readers))
+            reader_index = min(set(range(MAX_READERS)) - taken)
         if topic is None:
             self._check_ring(request, needed)
             return PortPlan(client, request, None, self._next_topic_id, needed, None,
@@ -235,6 +246,66 @@ class Registry:
                 grow_to = needed
             self._check_ring(request, grow_to)
         return PortPlan(client, request, topic, topic.id, topic.slots, grow_to, reader_index)
+
+    def plan_reclaim(self, client: Client, request: PortRequest, topic_id: int,
+                     reader_index: int | None) -> PortPlan:
+        """Check a RECLAIM_PORT: a port a reconnecting client holds on a ring of topic
+        `topic_id` (the caller checked that the segment it names is one of that topic's),
+        with its reader slot for a subscriber.  RequestError if anything does not fit."""
+        self._check_request(request)
+        topic = self.topics.get(request.topic)
+        if topic is None or topic.id != topic_id:
+            raise RequestError("ENOTFOUND", f"topic {request.topic!r} has no ring {topic_id} "
+                               "here (it was removed, or its segment never held that topic)")
+        if (request.layout_hash, request.message_size) != (topic.layout_hash,
+                                                           topic.message_size):
+            raise RequestError("ELAYOUT", layout_mismatch(request, topic))
+        if request.buffers + 1 > topic.slots:
+            raise RequestError("EINVAL", f"topic {request.topic!r}: {request.buffers} buffers "
+                               f"do not fit its ring of {topic.slots} slots")
+        if request.kind is PortKind.PUBLISHER:
+            if reader_index is not None:
+                raise RequestError("EINVAL", f"topic {request.topic!r}: a publisher holds no "
+                                   f"reader slot, not {reader_index}")
+            return PortPlan(client, request, topic, topic.id, topic.slots, None, None, False)
+        if reader_index is None or not 0 <= reader_index < MAX_READERS:
+            raise RequestError("EINVAL", f"topic {request.topic!r}: reader slot "
+                               f"{reader_index} out of range 0..{MAX_READERS - 1}")
+        if reader_index in topic.readers:
+            raise RequestError("EBUSY", f"topic {request.topic!r}: reader slot {reader_index} "
+                               "belongs to another subscriber")
+        reserved = reader_index in topic.reserved
+        if not reserved and len(topic.readers) + len(topic.reserved) \
+                >= self.limits.subscribers_per_topic:
+            raise RequestError("ELIMIT", f"topic {request.topic!r} already has "
+                               f"{len(topic.readers) + len(topic.reserved)} subscribers, the "
+                               f"limit is {self.limits.subscribers_per_topic}")
+        return PortPlan(client, request, topic, topic.id, topic.slots, None, reader_index,
+                        not reserved)
+
+    def adopt_topic(self, topic_id: int, name: str, md_name: str, layout_hash: int,
+                    message_size: int, slots: int, readers: set[int]) -> Topic:
+        """Register a topic whose ring a killed predecessor left: held without ports until
+        release_hold, with `readers` (the slots in use in its ring) kept for their
+        subscribers.  Later topics get higher ids."""
+        problem = topic_name_problem(name) or md_name_problem(md_name)
+        if problem:
+            raise RequestError("EINVAL", problem)
+        if name in self.topics:
+            raise RequestError("EEXIST", f"topic {name!r} is already registered")
+        topic = Topic(topic_id, name, md_name, layout_hash, message_size, slots, held=True,
+                      reserved=set(readers))
+        self.topics[name] = topic
+        self._next_topic_id = max(self._next_topic_id, topic_id + 1)
+        return topic
+
+    def release_hold(self, topic: Topic) -> list[int]:
+        """End an adopted topic's hold: the reader slots nobody came back for (to be freed in
+        its ring).  The topic goes with drop_topic_if_unused if nobody took it."""
+        topic.held = False
+        unclaimed = sorted(topic.reserved)
+        topic.reserved.clear()
+        return unclaimed
 
     def add_topic(self, plan: PortPlan) -> Topic:
         """Register the new topic of `plan` (after its ring exists), still without ports."""
@@ -261,6 +332,7 @@ class Registry:
         if port.reader_index is not None:
             assert port.reader_index not in topic.readers
             topic.readers[port.reader_index] = port.id
+            topic.reserved.discard(port.reader_index)
         plan.client.ports[port.id] = port
         return port
 
@@ -281,7 +353,7 @@ class Registry:
 
     def drop_topic_if_unused(self, topic: Topic) -> bool:
         """Remove a topic without ports (also one whose first port failed); True if removed."""
-        if topic.ports or self.topics.get(topic.name) is not topic:
+        if topic.ports or topic.held or self.topics.get(topic.name) is not topic:
             return False
         del self.topics[topic.name]
         return True

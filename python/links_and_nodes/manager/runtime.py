@@ -135,12 +135,18 @@ def remove_service_socket(path: str | Path) -> str | None:
     return None
 
 
-def purge_service_sockets(directory: Path) -> list[str]:
-    """Unlink every provider socket (as remove_service_socket decides) in `directory`: what
-    killed providers left; the names unlinked."""
-    removed = []
+def service_sockets(directory: Path) -> list[str]:
+    """Names of the files in `directory` named like provider sockets, sorted."""
     with os.scandir(directory) as entries:
-        names = sorted(e.name for e in entries if SERVICE_SOCKET_NAME.match(e.name))
+        return sorted(e.name for e in entries if SERVICE_SOCKET_NAME.match(e.name))
+
+
+def purge_service_sockets(directory: Path, names: list[str] | None = None) -> list[str]:
+    """Unlink every provider socket (as remove_service_socket decides) in `directory`, or
+    only those of `names`: what killed providers left; the names unlinked."""
+    removed = []
+    if names is None:
+        names = service_sockets(directory)
     for name in names:
         if remove_service_socket(directory / name) is None:
             removed.append(name)

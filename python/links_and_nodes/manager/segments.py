@@ -1,24 +1,43 @@
 """Shared-memory segments of topics, through libln's ln_ring_admin_* functions: naming,
-creating, growing into a next generation, reader slots, counts and unlinking.  The manager
-maps only segment headers; clients map the data.  Which ring a topic needs is decided by
-registry.py; this module only carries it out."""
+creating, growing into a next generation, reader slots, counts and unlinking, and adopting
+the rings a killed predecessor left.  The manager maps only segment headers; clients map
+the data.  Which ring a topic needs is decided by registry.py; this module only carries it
+out."""
 
 from __future__ import annotations
 
 import ctypes
 import logging
+import os
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from .. import _libln
 from .._clientlib import last_error
 from ..errors import LnError
-from .registry import RequestError
+from .registry import RequestError, md_name_problem, topic_name_problem
 
 log = logging.getLogger("ln_manager")
 
 RETIRE_TIMEOUT = 1.0  # seconds ln_ring_admin_retire may wait for a publisher's loan
+SHM_DIR = Path("/dev/shm")
 _UNSAFE = re.compile(r"[^A-Za-z0-9_-]")
+
+
+@dataclass(frozen=True)
+class AdoptedRing:
+    """A topic's ring as a predecessor left it: every generation, the newest one's header."""
+
+    topic_id: int
+    topic: str
+    md_name: str
+    layout_hash: int
+    message_size: int
+    slots: int
+    names: tuple[str, ...]  # oldest first
+    readers: frozenset[int]  # reader slots in use
+    write_seq: int
 
 
 def sanitize_instance(instance: str) -> str:
@@ -71,6 +90,99 @@ class Segments:
             return int(_libln.ln_ring_admin_purge_instance(self.prefix.encode()))
         except LnError as exc:
             raise _failure(f"removing stale segments /ln.{self.prefix}.*", exc) from None
+
+    def adopt(self) -> tuple[list[AdoptedRing], list[tuple[str, str]]]:
+        """Take over the rings of this instance that a killed predecessor left in /dev/shm
+        (`/ln.<instance>.<topic id>.<generation>`): the adopted ones, and the segments that
+        were unlinked instead, each with the reason (not a ring of ours, an inconsistent
+        chain of generations, a second ring of one topic)."""
+        pattern = re.compile(rf"ln\.{re.escape(self.prefix)}\.([0-9]{{1,9}})\.([0-9]{{1,9}})\Z")
+        chains: dict[int, dict[int, str]] = {}
+        removed: list[tuple[str, str]] = []
+        try:
+            entries = sorted(os.listdir(SHM_DIR))
+        except OSError as exc:
+            raise RequestError("ESYS", f"cannot list {SHM_DIR}: {exc.strerror}") from None
+        for entry in entries:
+            if not entry.startswith(f"ln.{self.prefix}."):
+                continue
+            match = pattern.match(entry)
+            if match is None:
+                removed.append((self._drop(f"/{entry}"), "not named like a ring of this host"))
+                continue
+            chains.setdefault(int(match[1]), {})[int(match[2])] = f"/{entry}"
+        adopted: dict[str, AdoptedRing] = {}
+        for topic_id, generations in sorted(chains.items()):
+            names = [generations[g] for g in sorted(generations)]
+            try:
+                ring, admin = self._adopt_chain(topic_id, names)
+            except RequestError as exc:
+                removed += [(self._drop(name), exc.text) for name in names]
+                continue
+            older = adopted.get(ring.topic)
+            if older is not None:  # one topic, two ids: the newer id wins
+                removed += [(self._drop(name), f"topic {ring.topic!r} has a newer ring")
+                            for name in older.names]
+                old = self._rings.pop(older.topic_id)
+                _libln.ln_ring_admin_close(old.admin)
+            adopted[ring.topic] = ring
+            self._rings[topic_id] = _TopicRings(ring.topic, list(names), admin)
+            self._generations[topic_id] = max(generations)
+        return list(adopted.values()), removed
+
+    def _adopt_chain(self, topic_id: int, names: list[str]) -> tuple[AdoptedRing, object]:
+        """Open every generation of one topic and check that they form one chain: the same
+        topic and layout, every one but the newest retired.  The newest one's admin handle
+        stays open (the caller owns it)."""
+        infos: list[_libln.RingInfo] = []
+        admin: object | None = None
+        try:
+            for name in names:
+                handle = _libln.RingAdminHandle()
+                try:
+                    _libln.ln_ring_admin_open(ctypes.byref(handle), name.encode())
+                except LnError as exc:
+                    raise _failure(f"segment {name}", exc) from None
+                info = _libln.RingInfo()
+                _libln.ln_ring_admin_info(handle, ctypes.byref(info))
+                infos.append(info)
+                if admin is not None:
+                    _libln.ln_ring_admin_close(admin)
+                admin = handle
+            newest = infos[-1]
+            topic = newest.topic.decode("utf-8", "replace")
+            md_name = newest.md_name.decode("utf-8", "replace")
+            problem = topic_name_problem(topic) or md_name_problem(md_name)
+            if problem:
+                raise RequestError("EPROTOCOL", f"header of {names[-1]}: {problem}")
+            for name, info in zip(names, infos, strict=True):
+                if (info.topic, info.layout_hash, info.message_size) != \
+                        (newest.topic, newest.layout_hash, newest.message_size):
+                    raise RequestError("EPROTOCOL", f"{name} holds another topic or layout "
+                                       f"than {names[-1]}")
+                if bool(info.retired) != (info is not newest):
+                    raise RequestError("EPROTOCOL", f"{name} is {'' if info.retired else 'not '}"
+                                       "retired, unlike the newest generation of a topic")
+            readers = frozenset(i for i in range(64) if newest.active_readers >> i & 1)
+            ring = AdoptedRing(topic_id, topic, md_name, newest.layout_hash,
+                               newest.message_size, newest.slot_count, tuple(names), readers,
+                               newest.write_seq)
+        except RequestError:
+            if admin is not None:
+                _libln.ln_ring_admin_close(admin)
+            raise
+        return ring, admin
+
+    def _drop(self, name: str) -> str:
+        self._unlink(name)
+        return name
+
+    def topic_of(self, name: str) -> int | None:
+        """The topic id of a segment named by this manager's scheme (any generation), or
+        None if `name` is not one."""
+        match = re.fullmatch(rf"/ln\.{re.escape(self.prefix)}\.([0-9]{{1,9}})\.([0-9]{{1,9}})",
+                             name)
+        return int(match[1]) if match else None
 
     def has(self, topic_id: int) -> bool:
         return topic_id in self._rings

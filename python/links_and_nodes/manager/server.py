@@ -16,7 +16,8 @@ from .core import Core, HandshakeRefused, Session
 
 log = logging.getLogger("ln_manager")
 
-_REQUESTS = (p.MsgType.PUBLISH, p.MsgType.SUBSCRIBE, p.MsgType.CLOSE_PORT,
+_REQUESTS = (p.MsgType.PUBLISH, p.MsgType.SUBSCRIBE, p.MsgType.RECLAIM_PORT,
+             p.MsgType.CLOSE_PORT,
              p.MsgType.TOPIC_INFO, p.MsgType.REGISTER_SERVICE, p.MsgType.UNREGISTER_SERVICE,
              p.MsgType.FIND_SERVICE, p.MsgType.SERVICE_CALLED, p.MsgType.LIST_SERVICES)
 
@@ -148,7 +149,8 @@ class Server:
         await self._send(writer, welcome)
         client = session.client
         assert client is not None
-        log.info("%s: connected (pid %d, library %s, host %s)", session.label, client.pid,
+        log.info("%s: %s (pid %d, library %s, host %s)", session.label,
+                 "reconnected" if hello.flags & p.HELLO_RECONNECT else "connected", client.pid,
                  client.libln_version, client.host_id or "?")
         while True:
             frame = await self._read(reader)
