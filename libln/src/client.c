@@ -65,8 +65,8 @@ int ln_client_local_host(ln_client* clnt, char* out, size_t size)
     struct sockaddr_storage addr;
     socklen_t len = sizeof addr;
     pthread_mutex_lock(&clnt->request_lock);
-    int fd = clnt->fd;
-    int ok = fd >= 0 && (clnt->usable || clnt->reclaiming) && getsockname(fd, (struct sockaddr*)&addr, &len) == 0
+    int fd = clnt->conn.fd;
+    int ok = fd >= 0 && clnt->conn.usable && getsockname(fd, (struct sockaddr*)&addr, &len) == 0
              && getnameinfo((struct sockaddr*)&addr, len, out, (socklen_t)size, NULL, 0,
                             NI_NUMERICHOST) == 0;
     pthread_mutex_unlock(&clnt->request_lock);
@@ -86,7 +86,7 @@ const char* ln_client_name(const ln_client* clnt)
 static void settle(ln_client* clnt, void* port, const ln_client_port_ops* ops, uint64_t gen)
 {
     pthread_mutex_lock(&clnt->request_lock);
-    if (clnt->usable && gen != clnt->conn_gen)
+    if (clnt->conn.usable && gen != clnt->conn_gen)
         ops->reclaim(clnt, port);
     pthread_mutex_unlock(&clnt->request_lock);
 }
@@ -290,7 +290,6 @@ int ln_client_create(ln_client** out, const char* name, const ln_client_options*
     ln_client* c = calloc(1, sizeof *c);
     if (c == NULL)
         return ln_set_error(NULL, LN_ENOMEM, "cannot create client \"%s\": out of memory", name);
-    c->fd = -1;
     c->cancel_fd = -1;
     c->pid = getpid();
     c->timeout = opts->timeout == 0 ? DEFAULT_TIMEOUT : opts->timeout;
@@ -303,7 +302,6 @@ int ln_client_create(ln_client** out, const char* name, const ln_client_options*
     (void)written;
     memcpy(c->host, host, sizeof c->host);
     memcpy(c->port, port, sizeof c->port);
-    ln_wbuf_init(&c->tx);
     pthread_mutex_init(&c->ports_lock, NULL);
     pthread_mutex_init(&c->request_lock, NULL);
     pthread_mutex_init(&c->state_lock, NULL);

@@ -20,19 +20,20 @@
 
 #define MAX_ADDRESS LN_CLIENT_MAX_ADDRESS
 
-/* Drops the connection (request lock held).  With a monitor the socket is only shut down:
- * the monitor, which polls it, sees the hang-up, closes it and reconnects. */
-static void disconnect(ln_client* c)
+/* Drops connection k (the client's own under the request lock, or the one the monitor is
+ * setting up).  With a monitor the client's socket is only shut down: the monitor, which
+ * polls it, sees the hang-up, closes it and reconnects. */
+static void disconnect(ln_client* c, struct ln_conn* k)
 {
-    if (c->fd >= 0 && c->monitored) {
-        shutdown(c->fd, SHUT_RDWR);
-    } else if (c->fd >= 0) {
-        close(c->fd);
-        c->fd = -1;
+    if (k->fd >= 0 && c->monitored && k == &c->conn) {
+        shutdown(k->fd, SHUT_RDWR);
+    } else if (k->fd >= 0) {
+        close(k->fd);
+        k->fd = -1;
     }
-    c->usable = 0;
-    c->broken = 1;
-    c->stale_answers = 0;
+    k->usable = 0;
+    k->broken = 1;
+    k->stale_answers = 0;
 }
 
 /* Records a failed transfer (errno value, ETIMEDOUT or LN_NET_EOF) with context `what`. */
@@ -47,47 +48,48 @@ static int io_error(ln_client* c, int err, const char* what)
     return ln_set_errno_error(c, err, "%s", what);
 }
 
-static int malformed(ln_client* c, const char* request, const char* why)
+static int malformed(ln_client* c, struct ln_conn* k, const char* request, const char* why)
 {
-    disconnect(c);
+    disconnect(c, k);
     return ln_set_error(c, LN_EPROTOCOL,
                         "malformed answer from manager %s to %s (%s); connection closed",
                         c->address, request, why);
 }
 
-static int unexpected(ln_client* c, const char* request, uint16_t type)
+static int unexpected(ln_client* c, struct ln_conn* k, const char* request, uint16_t type)
 {
     char why[64];
     snprintf(why, sizeof why, "unexpected %s frame", ln_proto_type_name(type));
-    return malformed(c, request, why);
+    return malformed(c, k, request, why);
 }
 
-/* Sends the frames in c->tx; any failure leaves half a frame behind, so it disconnects. */
-static int send_tx(ln_client* c, const char* request, const struct timespec* deadline)
+/* Sends the frames in k->tx; any failure leaves half a frame behind, so it disconnects. */
+static int send_tx(ln_client* c, struct ln_conn* k, const char* request,
+                   const struct timespec* deadline)
 {
-    int err = ln_net_write_all(c->fd, c->tx.data, c->tx.len, deadline, c->cancel_fd);
+    int err = ln_net_write_all(k->fd, k->tx.data, k->tx.len, deadline, c->cancel_fd);
     if (err == 0)
         return LN_OK;
     char what[MAX_ADDRESS + 64];
     snprintf(what, sizeof what, "cannot send %s to manager %s", request, c->address);
-    disconnect(c);
+    disconnect(c, k);
     return io_error(c, err, what);
 }
 
-/* Reads one frame into c->rx.  A timeout before its first byte keeps the connection (the
+/* Reads one frame into k->rx.  A timeout before its first byte keeps the connection (the
  * answer may still come and is then skipped); every other failure closes it. */
-static int read_frame(ln_client* c, const char* request, const struct timespec* deadline,
-                      uint16_t* type, ln_rbuf* body)
+static int read_frame(ln_client* c, struct ln_conn* k, const char* request,
+                      const struct timespec* deadline, uint16_t* type, ln_rbuf* body)
 {
     char what[MAX_ADDRESS + 64];
     snprintf(what, sizeof what, "no answer from manager %s to %s", c->address, request);
-    int err = ln_net_wait_readable(c->fd, deadline, c->cancel_fd);
+    int err = ln_net_wait_readable(k->fd, deadline, c->cancel_fd);
     if (err == ETIMEDOUT)
         return io_error(c, err, what);
     uint8_t header[LN_PROTO_HEADER_SIZE];
     uint32_t len = 0;
     if (err == 0)
-        err = ln_net_read_all(c->fd, header, sizeof header, deadline, c->cancel_fd);
+        err = ln_net_read_all(k->fd, header, sizeof header, deadline, c->cancel_fd);
     if (err == 0 && ln_proto_parse_header(header, &len, type) != LN_OK) {
         ln_rbuf r;
         ln_rbuf_init(&r, header, sizeof header);
@@ -95,31 +97,31 @@ static int read_frame(ln_client* c, const char* request, const struct timespec* 
         uint32_t length = ln_rbuf_u32(&r);
         snprintf(why, sizeof why, "frame length %u, type %u", (unsigned)length,
                  (unsigned)ln_rbuf_u16(&r));
-        return malformed(c, request, why);
+        return malformed(c, k, request, why);
     }
-    if (err == 0 && len > c->rx_cap) {
-        uint8_t* rx = realloc(c->rx, len);
+    if (err == 0 && len > k->rx_cap) {
+        uint8_t* rx = realloc(k->rx, len);
         if (rx == NULL) {
             err = ENOMEM;
         } else {
-            c->rx = rx;
-            c->rx_cap = len;
+            k->rx = rx;
+            k->rx_cap = len;
         }
     }
     if (err == 0)
-        err = ln_net_read_all(c->fd, c->rx, len, deadline, c->cancel_fd);
+        err = ln_net_read_all(k->fd, k->rx, len, deadline, c->cancel_fd);
     if (err != 0) {
-        disconnect(c);
+        disconnect(c, k);
         return io_error(c, err, what);
     }
-    ln_rbuf_init(body, c->rx, len);
+    ln_rbuf_init(body, k->rx, len);
     if (!ln_proto_to_client(*type))
-        return unexpected(c, request, *type);
+        return unexpected(c, k, request, *type);
     /* A WELCOME of another protocol version may have other fields: handshake() says so. */
     ln_rbuf peek = *body;
     if ((*type != LN_MSG_WELCOME || ln_rbuf_u16(&peek) == LN_PROTO_VERSION)
         && ln_proto_check_fields(*type, body) != LN_OK)
-        return malformed(c, request, "fields do not match the frame type");
+        return malformed(c, k, request, "fields do not match the frame type");
     return LN_OK;
 }
 
@@ -141,39 +143,39 @@ static int take_error(ln_client* c, const char* request, ln_rbuf* r, const char*
 /* HELLO as `name` with `flags`, then WELCOME.  A first handshake takes the manager's client
  * id, name and instance; a reconnect keeps the client's name (the manager's may differ if it
  * was taken meanwhile) and insists on the same instance. */
-static int handshake(ln_client* c, const char* name, uint32_t flags,
+static int handshake(ln_client* c, struct ln_conn* k, const char* name, uint32_t flags,
                      const struct timespec* deadline)
 {
-    ln_wbuf_reset(&c->tx);
-    size_t start = ln_proto_frame_begin(&c->tx, LN_MSG_HELLO);
-    ln_wbuf_u32(&c->tx, LN_PROTO_MAGIC);
-    ln_wbuf_u16(&c->tx, LN_PROTO_VERSION);
-    ln_wbuf_u32(&c->tx, (uint32_t)c->pid);
-    ln_wbuf_str(&c->tx, name);
-    ln_wbuf_str(&c->tx, ln_version());
+    ln_wbuf_reset(&k->tx);
+    size_t start = ln_proto_frame_begin(&k->tx, LN_MSG_HELLO);
+    ln_wbuf_u32(&k->tx, LN_PROTO_MAGIC);
+    ln_wbuf_u16(&k->tx, LN_PROTO_VERSION);
+    ln_wbuf_u32(&k->tx, (uint32_t)c->pid);
+    ln_wbuf_str(&k->tx, name);
+    ln_wbuf_str(&k->tx, ln_version());
     char host_id[LN_HOST_ID_MAX];
     ln_host_id(host_id, sizeof host_id); /* the manager finds this host's ln_daemon by it */
-    ln_wbuf_str(&c->tx, host_id);
-    ln_wbuf_u32(&c->tx, flags);
-    int rc = ln_proto_frame_end(&c->tx, start);
+    ln_wbuf_str(&k->tx, host_id);
+    ln_wbuf_u32(&k->tx, flags);
+    int rc = ln_proto_frame_end(&k->tx, start);
     if (rc != LN_OK)
         return ln_set_error(c, rc, "cannot encode HELLO: %s", ln_strerror(rc));
-    rc = send_tx(c, "HELLO", deadline);
+    rc = send_tx(c, k, "HELLO", deadline);
     uint16_t type = 0;
     ln_rbuf r;
     if (rc == LN_OK)
-        rc = read_frame(c, "HELLO", deadline, &type, &r);
+        rc = read_frame(c, k, "HELLO", deadline, &type, &r);
     if (rc != LN_OK)
         return rc;
     if (type == LN_MSG_ERROR) {
         char prefix[MAX_ADDRESS + LN_PROTO_MAX_STR + 64];
         snprintf(prefix, sizeof prefix, "manager %s refused client \"%s\": ", c->address, name);
         if (ln_rbuf_u32(&r) != 0)
-            return malformed(c, "HELLO", "ERROR with a request id");
+            return malformed(c, k, "HELLO", "ERROR with a request id");
         return take_error(c, "HELLO", &r, prefix);
     }
     if (type != LN_MSG_WELCOME)
-        return unexpected(c, "HELLO", type);
+        return unexpected(c, k, "HELLO", type);
     uint16_t version = ln_rbuf_u16(&r);
     if (version != LN_PROTO_VERSION)
         return ln_set_error(c, LN_EVERSION,
@@ -184,7 +186,7 @@ static int handshake(ln_client* c, const char* name, uint32_t flags,
     ln_rbuf_str(&r, given, sizeof given);
     ln_rbuf_str(&r, instance, sizeof instance);
     if (given[0] == '\0')
-        return malformed(c, "HELLO", "WELCOME with an empty client name");
+        return malformed(c, k, "HELLO", "WELCOME with an empty client name");
     if (flags & LN_HELLO_RECONNECT) {
         if (strcmp(instance, c->instance) != 0)
             return ln_set_error(c, LN_ECONNECTION,
@@ -202,73 +204,74 @@ static int handshake(ln_client* c, const char* name, uint32_t flags,
 
 /* A PORT_OK for a request that timed out: the manager holds a port nobody knows of, so give
  * it back.  Its OK answer is skipped like any other stale answer. */
-static int release_stale_port(ln_client* c, ln_rbuf* r, const struct timespec* deadline)
+static int release_stale_port(ln_client* c, struct ln_conn* k, ln_rbuf* r,
+                              const struct timespec* deadline)
 {
     uint32_t port_id = ln_rbuf_u32(r); /* right after the request id */
-    if (++c->last_request_id == 0)
-        c->last_request_id = 1;
-    ln_wbuf_reset(&c->tx);
-    size_t start = ln_proto_frame_begin(&c->tx, LN_MSG_CLOSE_PORT);
-    ln_wbuf_u32(&c->tx, c->last_request_id);
-    ln_wbuf_u32(&c->tx, port_id);
-    int rc = ln_proto_frame_end(&c->tx, start);
+    if (++k->last_request_id == 0)
+        k->last_request_id = 1;
+    ln_wbuf_reset(&k->tx);
+    size_t start = ln_proto_frame_begin(&k->tx, LN_MSG_CLOSE_PORT);
+    ln_wbuf_u32(&k->tx, k->last_request_id);
+    ln_wbuf_u32(&k->tx, port_id);
+    int rc = ln_proto_frame_end(&k->tx, start);
     if (rc == LN_OK)
-        rc = send_tx(c, "CLOSE_PORT", deadline);
+        rc = send_tx(c, k, "CLOSE_PORT", deadline);
     if (rc == LN_OK)
-        c->stale_answers++;
+        k->stale_answers++;
     return rc;
 }
 
-static int round_trip(ln_client* c, uint16_t type, const ln_wbuf* body, uint16_t* reply_type,
-                      ln_rbuf* reply)
+static int round_trip(ln_client* c, struct ln_conn* k, uint16_t type, const ln_wbuf* body,
+                      uint16_t* reply_type, ln_rbuf* reply)
 {
     const char* request = ln_proto_type_name(type);
-    if (!c->usable && (!c->reclaiming || c->broken))
+    if (!k->usable)
         return ln_set_error(c, LN_ECONNECTION,
                             c->monitored ? "cannot send %s: the connection to manager %s was "
                                            "lost; reconnecting"
                                          : "cannot send %s: the connection to manager %s was "
                                            "lost earlier",
                             request, c->address);
-    if (++c->last_request_id == 0)
-        c->last_request_id = 1;
-    uint32_t id = c->last_request_id;
-    ln_wbuf_reset(&c->tx);
-    size_t start = ln_proto_frame_begin(&c->tx, type);
-    ln_wbuf_u32(&c->tx, id);
+    if (++k->last_request_id == 0)
+        k->last_request_id = 1;
+    uint32_t id = k->last_request_id;
+    ln_wbuf_reset(&k->tx);
+    size_t start = ln_proto_frame_begin(&k->tx, type);
+    ln_wbuf_u32(&k->tx, id);
     if (body != NULL)
-        ln_wbuf_bytes(&c->tx, body->data, body->len);
-    int rc = ln_proto_frame_end(&c->tx, start);
+        ln_wbuf_bytes(&k->tx, body->data, body->len);
+    int rc = ln_proto_frame_end(&k->tx, start);
     if (rc != LN_OK)
         return ln_set_error(c, rc, "cannot encode %s: %s", request, ln_strerror(rc));
 
     struct timespec ts;
     const struct timespec* deadline = ln_net_deadline(&ts, c->timeout);
-    rc = send_tx(c, request, deadline);
+    rc = send_tx(c, k, request, deadline);
     uint16_t atype = 0;
     while (rc == LN_OK) {
-        rc = read_frame(c, request, deadline, &atype, reply);
-        if (rc == LN_ETIMEOUT && !c->broken)
-            c->stale_answers++; /* the answer is still due: skip it when it comes */
+        rc = read_frame(c, k, request, deadline, &atype, reply);
+        if (rc == LN_ETIMEOUT && !k->broken)
+            k->stale_answers++; /* the answer is still due: skip it when it comes */
         if (rc != LN_OK)
             return rc;
         uint32_t answer_id = ln_rbuf_u32(reply); /* every checked answer but WELCOME has one */
         if (atype == LN_MSG_WELCOME)
-            return unexpected(c, request, atype);
+            return unexpected(c, k, request, atype);
         if (answer_id == id)
             break;
-        if (answer_id == 0 || c->stale_answers == 0)
-            return malformed(c, request, "answer to a request that was never sent");
-        c->stale_answers--;
+        if (answer_id == 0 || k->stale_answers == 0)
+            return malformed(c, k, request, "answer to a request that was never sent");
+        k->stale_answers--;
         if (atype == LN_MSG_PORT_OK)
-            rc = release_stale_port(c, reply, deadline);
+            rc = release_stale_port(c, k, reply, deadline);
     }
     if (rc != LN_OK)
         return rc;
     if (atype == LN_MSG_ERROR)
         return take_error(c, request, reply, "");
     if (atype != ln_proto_answer_type(type))
-        return unexpected(c, request, atype);
+        return unexpected(c, k, request, atype);
     *reply_type = atype;
     return LN_OK;
 }
@@ -340,9 +343,10 @@ static int check_body(ln_client* clnt, uint16_t type, const ln_wbuf* body)
 int ln_client_request_locked(ln_client* clnt, uint16_t type, const ln_wbuf* body,
                              uint16_t* reply_type, ln_rbuf* reply)
 {
+    struct ln_conn* k = clnt->reclaim_conn != NULL ? clnt->reclaim_conn : &clnt->conn;
     int rc = check_body(clnt, type, body);
     if (rc == LN_OK)
-        rc = round_trip(clnt, type, body, reply_type, reply);
+        rc = round_trip(clnt, k, type, body, reply_type, reply);
     if (rc == LN_OK)
         rc = copy_reply(clnt, reply);
     return rc;
@@ -356,7 +360,11 @@ int ln_client_request(ln_client* clnt, uint16_t type, const ln_wbuf* body, uint1
     if (rc != LN_OK)
         return rc;
     pthread_mutex_lock(&clnt->request_lock);
-    rc = ln_client_request_locked(clnt, type, body, reply_type, reply);
+    rc = check_body(clnt, type, body);
+    if (rc == LN_OK)
+        rc = round_trip(clnt, &clnt->conn, type, body, reply_type, reply);
+    if (rc == LN_OK)
+        rc = copy_reply(clnt, reply);
     if (rc == LN_OK)
         request_gen = clnt->conn_gen;
     pthread_mutex_unlock(&clnt->request_lock);
@@ -401,20 +409,38 @@ static int connect_manager(ln_client* c, const char* from, const struct timespec
     return rc;
 }
 
+static void conn_init(struct ln_conn* k)
+{
+    memset(k, 0, sizeof *k);
+    k->fd = -1;
+    ln_wbuf_init(&k->tx);
+}
+
+static void conn_free(struct ln_conn* k)
+{
+    if (k->fd >= 0)
+        close(k->fd);
+    k->fd = -1;
+    k->usable = 0;
+    ln_wbuf_free(&k->tx);
+    free(k->rx);
+    k->rx = NULL;
+    k->rx_cap = 0;
+}
+
 int ln_conn_open(ln_client* c, const char* from, const char* name)
 {
+    conn_init(&c->conn);
     struct timespec ts;
     const struct timespec* deadline = ln_net_deadline(&ts, c->timeout);
-    int rc = connect_manager(c, from, deadline, &c->fd);
+    int rc = connect_manager(c, from, deadline, &c->conn.fd);
     if (rc == LN_OK)
-        rc = handshake(c, name, 0, deadline);
+        rc = handshake(c, &c->conn, name, 0, deadline);
     if (rc != LN_OK) {
-        c->monitored = 0; /* no monitor yet: really close */
-        disconnect(c);
+        disconnect(c, &c->conn); /* no monitor yet: really closes */
         return rc;
     }
-    c->usable = 1;
-    c->broken = 0;
+    c->conn.usable = 1;
     c->conn_gen = 1;
     return LN_OK;
 }
@@ -423,8 +449,10 @@ int ln_conn_open(ln_client* c, const char* from, const char* name)
  * One thread per client.  While the connection is up it sleeps in poll() on the socket for
  * a hang-up only (POLLRDHUP: the manager never sends unasked, and answers are read by the
  * requesting thread), so it costs nothing.  When the connection is gone it closes the socket
- * and reconnects with back-off; on the new connection it re-registers every port and
- * provider under the ports and request locks, and only then lets requests through again. */
+ * and reconnects with back-off.  It says HELLO and re-registers every port and provider on
+ * a connection of its own, holding the ports lock (so no port comes or goes meanwhile) but
+ * not the request lock: requests of other threads fail fast with LN_ECONNECTION until the
+ * new connection is complete and installed. */
 
 #define BACKOFF_FIRST 0.05 /* seconds before the second attempt */
 #define BACKOFF_MAX 1.0
@@ -462,40 +490,41 @@ static int watch(ln_client* c, int fd)
     }
 }
 
-/* One attempt: connect, HELLO, re-register everything, make the connection usable. */
+/* One attempt: connect, HELLO, re-register everything, make the connection the client's. */
 static int reconnect_once(ln_client* c)
 {
     struct timespec ts;
     const struct timespec* deadline = ln_net_deadline(&ts, c->timeout);
-    int fd = -1;
-    int rc = connect_manager(c, "", deadline, &fd);
-    if (rc != LN_OK)
+    struct ln_conn fresh;
+    conn_init(&fresh);
+    int rc = connect_manager(c, "", deadline, &fresh.fd);
+    if (rc == LN_OK)
+        rc = handshake(c, &fresh, c->name, LN_HELLO_RECONNECT, deadline);
+    if (rc != LN_OK) {
+        conn_free(&fresh);
         return rc;
+    }
+    fresh.usable = 1;
     pthread_mutex_lock(&c->ports_lock);
-    pthread_mutex_lock(&c->request_lock);
-    c->fd = fd;
-    c->broken = 0;
-    c->stale_answers = 0;
-    rc = handshake(c, c->name, LN_HELLO_RECONNECT, deadline);
-    c->reclaiming = 1;
+    c->reclaim_conn = &fresh;
     /* Ports are re-registered one by one; a refusal is that port's (recorded, the others go
      * on), a broken connection ends the attempt. */
-    for (size_t i = 0; rc == LN_OK && i < c->nports && !c->broken; i++)
+    for (size_t i = 0; i < c->nports && !fresh.broken; i++)
         c->ports[i].ops->reclaim(c, c->ports[i].port);
-    c->reclaiming = 0;
-    if (rc == LN_OK && c->broken)
-        rc = LN_ECONNECTION;
-    if (rc == LN_OK) {
-        c->usable = 1;
-        c->conn_gen++;
-    } else {
-        close(c->fd);
-        c->fd = -1;
-        c->usable = 0;
+    c->reclaim_conn = NULL;
+    if (fresh.broken) {
+        pthread_mutex_unlock(&c->ports_lock);
+        conn_free(&fresh);
+        return LN_ECONNECTION;
     }
+    pthread_mutex_lock(&c->request_lock);
+    struct ln_conn old = c->conn;
+    c->conn = fresh;
+    c->conn_gen++;
     pthread_mutex_unlock(&c->request_lock);
     pthread_mutex_unlock(&c->ports_lock);
-    return rc;
+    conn_free(&old);
+    return LN_OK;
 }
 
 static void* monitor_main(void* arg)
@@ -503,16 +532,16 @@ static void* monitor_main(void* arg)
     ln_client* c = arg;
     for (;;) {
         pthread_mutex_lock(&c->request_lock);
-        int fd = c->fd, up = c->usable;
+        int fd = c->conn.fd, up = c->conn.usable;
         pthread_mutex_unlock(&c->request_lock);
         if (fd >= 0 && up && watch(c, fd))
             return NULL;
         pthread_mutex_lock(&c->request_lock);
-        if (c->fd >= 0)
-            close(c->fd);
-        c->fd = -1;
-        c->usable = 0;
-        c->stale_answers = 0;
+        if (c->conn.fd >= 0)
+            close(c->conn.fd);
+        c->conn.fd = -1;
+        c->conn.usable = 0;
+        c->conn.stale_answers = 0;
         pthread_mutex_unlock(&c->request_lock);
         for (double delay = BACKOFF_FIRST; reconnect_once(c) != LN_OK;) {
             if (pause_or_cancel(c, delay))
@@ -552,9 +581,9 @@ void ln_conn_stop_monitor(ln_client* c)
     pthread_join(c->monitor, NULL);
     pthread_mutex_lock(&c->request_lock);
     c->monitored = 0;
-    if (c->fd >= 0 && !c->usable) { /* shut down, never reclaimed */
-        close(c->fd);
-        c->fd = -1;
+    if (c->conn.fd >= 0 && !c->conn.usable) { /* shut down, never replaced */
+        close(c->conn.fd);
+        c->conn.fd = -1;
     }
     /* The requests that close the ports go out normally again. */
     uint64_t count;
@@ -566,12 +595,8 @@ void ln_conn_stop_monitor(ln_client* c)
 void ln_conn_close(ln_client* c)
 {
     c->monitored = 0;
-    disconnect(c);
+    conn_free(&c->conn);
     if (c->cancel_fd >= 0)
         close(c->cancel_fd);
     c->cancel_fd = -1;
-    ln_wbuf_free(&c->tx);
-    free(c->rx);
-    c->rx = NULL;
-    c->rx_cap = 0;
 }

@@ -8,6 +8,18 @@
 
 #define LN_CLIENT_MAX_ADDRESS 255 /* bytes of "HOST:PORT" */
 
+/* One TCP connection to a manager and its request state. */
+struct ln_conn {
+    int fd;     /* -1 if none; with a monitor only the monitor closes the client's */
+    int usable; /* connected and registered: requests may go out */
+    int broken; /* it failed: nothing more goes out on it */
+    uint32_t last_request_id;
+    uint32_t stale_answers; /* answers still due to requests that timed out */
+    ln_wbuf tx;
+    uint8_t* rx;
+    size_t rx_cap;
+};
+
 struct ln_client_port {
     void* port;
     const ln_client_port_ops* ops;
@@ -29,18 +41,13 @@ struct ln_client {
     struct ln_client_port* ports;
     size_t nports, ports_cap;
 
-    pthread_mutex_t request_lock; /* one round trip at a time; guards the fields up to rx_cap */
+    pthread_mutex_t request_lock; /* one round trip at a time; guards client_id to conn_gen */
     uint32_t client_id;
-    int fd;         /* the socket, -1 if none; with a monitor only the monitor closes it */
-    int usable;     /* connected and registered: requests may go out */
-    int reclaiming; /* the monitor re-registers on a connection not yet usable */
-    int broken;     /* the connection failed during reclaiming */
-    uint64_t conn_gen; /* counts connections that became usable */
-    uint32_t last_request_id;
-    uint32_t stale_answers; /* answers still due to requests that timed out */
-    ln_wbuf tx;
-    uint8_t* rx;
-    size_t rx_cap;
+    struct ln_conn conn; /* the connection requests use */
+    uint64_t conn_gen;   /* counts connections that became usable */
+    /* While the monitor re-registers ports (under the ports lock) on a connection that is not
+     * yet `conn`, the reclaim callbacks' requests go there. */
+    struct ln_conn* reclaim_conn;
 
     pthread_mutex_t state_lock; /* guards the last error */
     int last_code;

@@ -1,6 +1,7 @@
 /* fake_manager.h — a scripted stand-in for ln_manager for the client tests: one thread that
- * accepts one TCP connection on 127.0.0.1 (ephemeral port) and runs a script against it, so
- * each test decides byte by byte what the client sees.  Also compiles the client code in, as
+ * accepts one TCP connection (or `sessions` of them, one after the other: a restarted
+ * manager) on 127.0.0.1 (ephemeral port) and runs a script against each, so each test
+ * decides byte by byte what the client sees.  Also compiles the client code in, as
  * its internals (ln_client_request, the handle's fields) are hidden in libln.so. */
 #ifndef LN_FAKE_MANAGER_H
 #define LN_FAKE_MANAGER_H
@@ -45,10 +46,13 @@ struct fake {
     pthread_t thread;
     void (*script)(struct fake* f, int fd);
     int variant;          /* for scripts that come in several flavours */
+    int sessions;         /* connections to accept (fake_start: 1) */
+    int session;          /* the one the script runs for, from 0 */
     sem_t go;             /* posted by the test to let a stalled script continue */
+    sem_t reached;        /* posted by a script to tell the test where it is */
     int errors;           /* checks that failed inside the fake (read after fake_stop) */
     int connected, saw_eof;
-    uint32_t hello_magic, hello_pid;
+    uint32_t hello_magic, hello_pid, hello_flags;
     uint16_t hello_version;
     char hello_name[LN_PROTO_MAX_STR + 1], hello_lib[LN_PROTO_MAX_STR + 1];
     char hello_host[LN_PROTO_MAX_STR + 1];
@@ -175,6 +179,7 @@ FAKE_FN int fake_hello(struct fake* f, int fd)
     ln_rbuf_str(&r, f->hello_name, sizeof f->hello_name);
     ln_rbuf_str(&r, f->hello_lib, sizeof f->hello_lib);
     ln_rbuf_str(&r, f->hello_host, sizeof f->hello_host);
+    f->hello_flags = ln_rbuf_u32(&r);
     FAKE_CHECK(f, ln_rbuf_end(&r) == LN_OK);
     return type == LN_MSG_HELLO;
 }
@@ -235,10 +240,12 @@ FAKE_FN void script_welcome(struct fake* f, int fd)
 FAKE_FN void* fake_main(void* arg)
 {
     struct fake* f = arg;
-    struct pollfd pfd = {.fd = f->listen_fd, .events = POLLIN, .revents = 0};
-    int fd = poll(&pfd, 1, FAKE_WAIT_MS) == 1 ? accept(f->listen_fd, NULL, NULL) : -1;
-    FAKE_CHECK(f, fd >= 0);
-    if (fd >= 0) {
+    for (f->session = 0; f->session < f->sessions; f->session++) {
+        struct pollfd pfd = {.fd = f->listen_fd, .events = POLLIN, .revents = 0};
+        int fd = poll(&pfd, 1, FAKE_WAIT_MS) == 1 ? accept(f->listen_fd, NULL, NULL) : -1;
+        FAKE_CHECK(f, fd >= 0);
+        if (fd < 0)
+            break;
         f->connected = 1;
         f->script(f, fd);
         close(fd);
@@ -246,12 +253,24 @@ FAKE_FN void* fake_main(void* arg)
     return NULL;
 }
 
+/* Starts the fake's thread; `sessions` > 1 accepts that many connections in turn. */
+FAKE_FN void fake_start_sessions(struct fake* f, void (*script)(struct fake*, int), int variant,
+                                 int sessions);
+
 FAKE_FN void fake_start(struct fake* f, void (*script)(struct fake*, int), int variant)
+{
+    fake_start_sessions(f, script, variant, 1);
+}
+
+FAKE_FN void fake_start_sessions(struct fake* f, void (*script)(struct fake*, int), int variant,
+                                 int sessions)
 {
     memset(f, 0, sizeof *f);
     f->script = script;
     f->variant = variant;
+    f->sessions = 1;
     sem_init(&f->go, 0, 0);
+    sem_init(&f->reached, 0, 0);
     struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = 0};
     sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     socklen_t len = sizeof sa;
@@ -263,6 +282,7 @@ FAKE_FN void fake_start(struct fake* f, void (*script)(struct fake*, int), int v
     }
     f->port = ntohs(sa.sin_port);
     snprintf(f->address, sizeof f->address, "127.0.0.1:%d", f->port);
+    f->sessions = sessions;
     pthread_create(&f->thread, NULL, fake_main, f);
 }
 
@@ -272,6 +292,7 @@ FAKE_FN void fake_stop(struct fake* f)
     pthread_join(f->thread, NULL);
     close(f->listen_fd);
     sem_destroy(&f->go);
+    sem_destroy(&f->reached);
     ln_test_failures += f->errors;
 }
 

@@ -89,7 +89,7 @@ static void test_hello_carries_host_id(void)
 static void script_refuse_version(struct fake* f, int fd)
 {
     if (fake_hello(f, fd))
-        fake_error(f, fd, 0, LN_EVERSION, "client speaks protocol 2, manager speaks 3");
+        fake_error(f, fd, 0, LN_EVERSION, "client speaks protocol 3, manager speaks 4");
 }
 
 static void script_welcome_next(struct fake* f, int fd)
@@ -102,11 +102,11 @@ static void test_version_mismatch(void)
 {
     LN_CHECK_EQ(create_against(script_refuse_version, 0, 10), LN_EVERSION);
     LN_CHECK(error_has("refused client \"cam\""));
-    LN_CHECK(error_has("client speaks protocol 2, manager speaks 3"));
+    LN_CHECK(error_has("client speaks protocol 3, manager speaks 4"));
     /* The client notices a WELCOME it does not understand by itself. */
-    LN_CHECK_EQ(LN_PROTO_VERSION, 2);
+    LN_CHECK_EQ(LN_PROTO_VERSION, 3);
     LN_CHECK_EQ(create_against(script_welcome_next, 0, 10), LN_EVERSION);
-    LN_CHECK(error_has("client speaks protocol 2, manager speaks 3"));
+    LN_CHECK(error_has("client speaks protocol 3, manager speaks 4"));
 }
 
 static void script_refuse_other(struct fake* f, int fd)

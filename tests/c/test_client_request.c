@@ -1,6 +1,8 @@
 /* test_client_request.c — ln_client_request against a scripted fake manager: answers and
- * ERROR answers, a manager that hangs up mid-request, every kind of malformed answer, and
- * timeouts (the late answer is skipped, a late PORT_OK is given back). */
+ * ERROR answers, a manager that hangs up mid-request (without reconnection: the connection
+ * stays lost; with it: the client comes back by itself), every kind of malformed answer,
+ * timeouts (the late answer is skipped, a late PORT_OK is given back), and destroy while a
+ * reconnect is stuck. */
 #define _GNU_SOURCE 1 /* libln's own sources are built with it */
 
 #include "fake_manager.h"
@@ -12,6 +14,7 @@ static ln_client* start(struct fake* f, void (*script)(struct fake*, int), int v
     fake_start(f, script, variant);
     ln_client_options o = fake_options(f);
     o.timeout = timeout;
+    o.flags = LN_CLIENT_NO_RECONNECT;
     return connect_ok("req", &o);
 }
 
@@ -31,14 +34,14 @@ static void test_answers_and_errors(void)
     if (c != NULL) {
         LN_CHECK_EQ(topic_info(c, "a.b", md, sizeof md), LN_OK);
         LN_CHECK_STREQ(md, "a.b");
-        uint32_t first = c->last_request_id;
+        uint32_t first = c->conn.last_request_id;
         LN_CHECK_EQ(topic_info(c, "missing", md, sizeof md), LN_ENOTFOUND);
         LN_CHECK_STREQ(ln_last_error(), "topic 'missing' does not exist");
         LN_CHECK_EQ(c->last_code, LN_ENOTFOUND); /* the client keeps its own copy */
         LN_CHECK_STREQ(c->last_error, "topic 'missing' does not exist");
         LN_CHECK_EQ(topic_info(c, "c.d", md, sizeof md), LN_OK); /* still connected */
         LN_CHECK_STREQ(md, "c.d");
-        LN_CHECK(c->last_request_id == first + 2);
+        LN_CHECK(c->conn.last_request_id == first + 2);
         ln_client_destroy(c);
     }
     fake_stop(&f);
@@ -98,6 +101,81 @@ static void test_manager_hangs_up(void)
         LN_CHECK(error_has("was lost earlier"));
         LN_CHECK_EQ(ln_client_destroy(c), LN_OK);
     }
+}
+
+/* Session 0 hangs up after one answer; session 1 (the "restarted manager") expects a
+ * reconnecting HELLO and serves. */
+static void script_restart(struct fake* f, int fd)
+{
+    if (!fake_hello(f, fd))
+        return;
+    FAKE_CHECK(f, f->hello_flags == (f->session ? LN_HELLO_RECONNECT : 0u));
+    fake_welcome(f, fd, LN_PROTO_VERSION, "req");
+    char topic[64];
+    uint32_t id = fake_topic_info(f, fd, topic, sizeof topic);
+    if (id != 0)
+        fake_topic_info_ok(f, fd, id, topic);
+    if (f->session == 1)
+        fake_serve(f, fd);
+}
+
+static void test_reconnects_after_hang_up(void)
+{
+    struct fake f;
+    fake_start_sessions(&f, script_restart, 0, 2);
+    ln_client_options o = fake_options(&f);
+    ln_client* c = connect_ok("req", &o);
+    char md[64];
+    if (c != NULL) {
+        LN_CHECK_EQ(topic_info(c, "a.b", md, sizeof md), LN_OK);
+        /* The fake hangs up now; requests fail until the monitor is back, then work. */
+        int rc;
+        int lost = 0;
+        while ((rc = topic_info(c, "c.d", md, sizeof md)) == LN_ECONNECTION) {
+            lost = 1;
+            LN_CHECK(error_has("manager 127.0.0.1:"));
+            struct timespec pause = {0, 10000000};
+            nanosleep(&pause, NULL);
+        }
+        LN_CHECK_EQ(rc, LN_OK);
+        LN_CHECK_STREQ(md, "c.d");
+        LN_CHECK(lost || f.session == 1);
+        LN_CHECK_STREQ(ln_client_name(c), "req");
+        LN_CHECK_EQ(ln_client_destroy(c), LN_OK);
+    }
+    fake_stop(&f);
+    LN_CHECK_EQ(f.session, 2); /* both sessions ran */
+}
+
+/* Accepts, reads HELLO and never answers: a reconnect hangs in its handshake. */
+static void script_mute(struct fake* f, int fd)
+{
+    if (f->session == 0) {
+        if (fake_hello(f, fd))
+            fake_welcome(f, fd, LN_PROTO_VERSION, "req");
+        return; /* hang up: the client reconnects */
+    }
+    fake_hello(f, fd);
+    sem_post(&f->reached);
+    sem_wait(&f->go);
+}
+
+static void test_destroy_during_reconnect(void)
+{
+    struct fake f;
+    fake_start_sessions(&f, script_mute, 0, 2);
+    ln_client_options o = fake_options(&f);
+    o.timeout = -1; /* the handshake would wait forever: only destroy can end it */
+    ln_client* c = connect_ok("req", &o);
+    if (c != NULL) {
+        sem_wait(&f.reached);
+        /* the client sent its reconnecting HELLO and waits for an answer that never comes */
+        char md[64];
+        LN_CHECK_EQ(topic_info(c, "a.b", md, sizeof md), LN_ECONNECTION);
+        LN_CHECK_EQ(ln_client_destroy(c), LN_OK); /* returns: the reconnect was cut short */
+    }
+    sem_post(&f.go);
+    fake_stop(&f);
 }
 
 /* Answers the first TOPIC_INFO with something malformed, chosen by f->variant. */
@@ -242,11 +320,11 @@ static void test_timeout_then_late_answer_skipped(void)
         LN_CHECK_EQ(topic_info(c, "first", md, sizeof md), LN_ETIMEOUT);
         LN_CHECK(error_has("no answer from manager 127.0.0.1:"));
         LN_CHECK(error_has("to TOPIC_INFO: timed out after 0.2 s"));
-        LN_CHECK_EQ(c->stale_answers, 1);
+        LN_CHECK_EQ(c->conn.stale_answers, 1);
         sem_post(&f.go);
         LN_CHECK_EQ(topic_info(c, "second", md, sizeof md), LN_OK);
         LN_CHECK_STREQ(md, "second");
-        LN_CHECK_EQ(c->stale_answers, 0);
+        LN_CHECK_EQ(c->conn.stale_answers, 0);
         ln_client_destroy(c);
     } else {
         sem_post(&f.go);
@@ -344,6 +422,8 @@ int main(void)
     LN_TEST_RUN(test_answers_and_errors);
     LN_TEST_RUN(test_body_that_failed_to_encode);
     LN_TEST_RUN(test_manager_hangs_up);
+    LN_TEST_RUN(test_reconnects_after_hang_up);
+    LN_TEST_RUN(test_destroy_during_reconnect);
     LN_TEST_RUN(test_malformed_answers);
     LN_TEST_RUN(test_unknown_error_codes);
     LN_TEST_RUN(test_timeout_then_late_answer_skipped);

@@ -298,7 +298,7 @@ static void test_header_bounds(void)
         {6, 0, LN_EPROTOCOL},
         {6, 4, LN_EPROTOCOL},
         {6, 9, LN_EPROTOCOL},
-        {6, 17, LN_EPROTOCOL},
+        {6, 18, LN_EPROTOCOL},
         {6, UINT16_MAX, LN_EPROTOCOL},
     };
     for (size_t i = 0; i < LN_ARRAY_SIZE(cases); i++) {
@@ -348,7 +348,9 @@ static void test_message_types(void)
     int known = 0;
     for (uint32_t t = 0; t <= UINT16_MAX; t++)
         known += ln_proto_type_known((uint16_t)t);
-    LN_CHECK_EQ(known, 15);
+    LN_CHECK_EQ(known, 16);
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_RECLAIM_PORT), LN_MSG_PORT_OK);
+    LN_CHECK_STREQ(ln_proto_type_name(LN_MSG_RECLAIM_PORT), "RECLAIM_PORT");
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_REGISTER_SERVICE), LN_MSG_OK);
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_UNREGISTER_SERVICE), LN_MSG_OK);
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_FIND_SERVICE), LN_MSG_SERVICE_INFO);
@@ -356,13 +358,15 @@ static void test_message_types(void)
     LN_CHECK(ln_proto_to_client(LN_MSG_SERVICE_INFO) && !ln_proto_to_client(LN_MSG_FIND_SERVICE));
 }
 
-/* A protocol-2 HELLO by hand: magic, version, pid, client name, libln version, host id. */
+/* A protocol-3 HELLO by hand: magic, version, pid, client name, libln version, host id,
+ * flags. */
 static const char hello_bytes[] =
-    "\x1d\x00\x00\x00" "\x01\x00"          /* length 29, type 1 */
-    "\x4c\x4e\x4d\x50" "\x02\x00"          /* "LNMP", version 2 */
+    "\x21\x00\x00\x00" "\x01\x00"          /* length 33, type 1 */
+    "\x4c\x4e\x4d\x50" "\x03\x00"          /* "LNMP", version 3 */
     "\x39\x30\x00\x00"                     /* pid 12345 */
     "\x03\x00" "cam" "\x05\x00" "0.1.0"    /* client name, libln version */
-    "\x03\x00" "h/1";                      /* host id */
+    "\x03\x00" "h/1"                       /* host id */
+    "\x01\x00\x00\x00";                    /* flags: LN_HELLO_RECONNECT */
 #define HELLO_LEN (sizeof hello_bytes - 1)
 
 static void test_hello_has_host_id(void)
@@ -376,6 +380,7 @@ static void test_hello_has_host_id(void)
     ln_wbuf_str(&b, "cam");
     ln_wbuf_str(&b, "0.1.0");
     ln_wbuf_str(&b, "h/1");
+    ln_wbuf_u32(&b, LN_HELLO_RECONNECT);
     LN_CHECK_EQ(ln_proto_frame_end(&b, start), LN_OK);
     LN_CHECK(bytes_equal(&b, hello_bytes, HELLO_LEN));
     uint16_t type = 0;
@@ -383,9 +388,9 @@ static void test_hello_has_host_id(void)
     LN_CHECK_EQ(ln_proto_decode_frame(b.data, b.len, &type, &body), LN_OK);
     LN_CHECK_EQ(type, LN_MSG_HELLO);
     LN_CHECK_EQ(ln_proto_check_fields(LN_MSG_HELLO, &body), LN_OK);
-    /* A protocol-1 HELLO (no host id) does not have HELLO's fields any more. */
+    /* A protocol-2 HELLO (no flags) does not have HELLO's fields any more. */
     ln_rbuf old = body;
-    old.left -= 5;
+    old.left -= 4;
     LN_CHECK_EQ(ln_proto_check_fields(LN_MSG_HELLO, &old), LN_EPROTOCOL);
     ln_wbuf_free(&b);
 }

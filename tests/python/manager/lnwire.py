@@ -11,10 +11,12 @@ from dataclasses import dataclass
 from typing import Any
 
 MAGIC = 0x504D4E4C
-VERSION = 2
+VERSION = 3
 NO_READER = 0xFFFFFFFF
 HELLO, WELCOME, ERROR = 1, 2, 3
-PUBLISH, SUBSCRIBE, PORT_OK, CLOSE_PORT, OK, TOPIC_INFO, TOPIC_INFO_OK = range(10, 17)
+PUBLISH, SUBSCRIBE, PORT_OK, CLOSE_PORT, OK, TOPIC_INFO, TOPIC_INFO_OK, RECLAIM_PORT = \
+    range(10, 18)
+HELLO_RECONNECT = 0x1
 (REGISTER_SERVICE, UNREGISTER_SERVICE, FIND_SERVICE, SERVICE_INFO, SERVICE_CALLED,
  LIST_SERVICES, SERVICE_LIST) = range(20, 27)
 TIMEOUT = 60.0  # seconds; only an upper bound for a reply that is expected to come
@@ -32,9 +34,18 @@ def frame(type_: int, body: bytes) -> bytes:
 
 def hello_body(name: str | bytes, version: int = VERSION, magic: int = MAGIC,
                pid: int | None = None, library: str = "0.1.0",
-               host_id: str | bytes = "test-host/1") -> bytes:
+               host_id: str | bytes = "test-host/1", flags: int = 0) -> bytes:
     return (struct.pack("<IHI", magic, version, os.getpid() if pid is None else pid)
-            + s(name) + s(library) + s(host_id))
+            + s(name) + s(library) + s(host_id) + struct.pack("<I", flags))
+
+
+def reclaim_body(request_id: int, kind: int, topic: str | bytes, md: str, layout_hash: int,
+                 size: int, segment: str | bytes, reader_index: int = NO_READER,
+                 buffers: int = 1, flags: int = 0) -> bytes:
+    """RECLAIM_PORT: kind 0 publisher, 1 subscriber."""
+    return (struct.pack("<IH", request_id, kind) + s(topic) + s(md)
+            + struct.pack("<QIII", layout_hash, size, buffers, flags) + s(segment)
+            + struct.pack("<I", reader_index))
 
 
 def port_body(request_id: int, topic: str | bytes, md: str, layout_hash: int, size: int,

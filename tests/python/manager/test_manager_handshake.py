@@ -29,7 +29,7 @@ def test_hello_welcome(manager: Manager) -> None:
     with manager.client() as client:
         welcome = client.hello("controller")
         assert welcome.type == lnwire.WELCOME
-        assert welcome.version == 2
+        assert welcome.version == 3
         assert welcome.client_id >= 1
         assert welcome.client_name == "controller"
         assert welcome.instance_name == manager.instance
@@ -65,14 +65,14 @@ def test_taken_names_get_suffixes(manager: Manager) -> None:
 
 def test_version_mismatch(manager: Manager) -> None:
     with manager.client() as client:
-        error = client.hello("future", version=3)
+        error = client.hello("future", version=4)
         assert error.type == lnwire.ERROR
         assert error.request_id == 0
         assert error.code == ln.LnVersionError.code
-        assert error.text == "client speaks protocol 3, manager speaks 2"
+        assert error.text == "client speaks protocol 4, manager speaks 3"
         assert client.closed_by_peer()
     manager.wait_log(rf"client \? {ADDR}: closing: handshake refused: client speaks "
-                     "protocol 3, manager speaks 2")
+                     "protocol 4, manager speaks 3")
 
 
 def test_protocol_1_client_is_told_the_versions(manager: Manager) -> None:
@@ -81,16 +81,26 @@ def test_protocol_1_client_is_told_the_versions(manager: Manager) -> None:
                     + lnwire.s("0.1.0"))
         error = client.recv()
         assert (error.type, error.code) == (lnwire.ERROR, ln.LnVersionError.code)
-        assert error.text == "client speaks protocol 1, manager speaks 2"
+        assert error.text == "client speaks protocol 1, manager speaks 3"
+        assert client.closed_by_peer()
+
+
+def test_protocol_2_client_is_told_the_versions(manager: Manager) -> None:
+    with manager.client() as client:  # a HELLO of protocol 2: no flags
+        client.send(lnwire.HELLO, struct.pack("<IHI", lnwire.MAGIC, 2, 77) + lnwire.s("old")
+                    + lnwire.s("0.1.0") + lnwire.s("h/1"))
+        error = client.recv()
+        assert (error.type, error.code) == (lnwire.ERROR, ln.LnVersionError.code)
+        assert error.text == "client speaks protocol 2, manager speaks 3"
         assert client.closed_by_peer()
 
 
 def test_other_version_may_have_another_hello_layout(manager: Manager) -> None:
     with manager.client() as client:
-        client.send(lnwire.HELLO, struct.pack("<IH", lnwire.MAGIC, 3) + b"\x01\x02\x03")
+        client.send(lnwire.HELLO, struct.pack("<IH", lnwire.MAGIC, 4) + b"\x01\x02\x03")
         error = client.recv()
         assert (error.type, error.code) == (lnwire.ERROR, ln.LnVersionError.code)
-        assert error.text == "client speaks protocol 3, manager speaks 2"
+        assert error.text == "client speaks protocol 4, manager speaks 3"
         assert client.closed_by_peer()
 
 

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import lnwire
+import pytest
 from mgrproc import WAIT, Manager, require_manager_library, segments, unique_instance, wait_for
 
 require_manager_library()
@@ -87,8 +88,11 @@ def test_sigint_is_a_clean_stop_too(manager: Manager) -> None:
     assert segments(manager.instance) == []
 
 
-def test_restart_after_sigkill_purges_only_its_instance(start_manager: Start,
-                                                        instance: str) -> None:
+@pytest.mark.parametrize("window", ["0", "0.5"])
+def test_restart_after_sigkill_purges_only_its_instance(start_manager: Start, instance: str,
+                                                        window: str) -> None:
+    """Nobody comes back: with --adopt-window 0 the stale segments go before the ready line,
+    with a window once it is over; other instances' segments stay either way."""
     first = start_manager(instance)
     # neighbours: another instance, and one whose name starts with ours
     others = [start_manager(unique_instance()), start_manager(f"{instance}_x")]
@@ -104,15 +108,23 @@ def test_restart_after_sigkill_purges_only_its_instance(start_manager: Start,
     first.kill()  # SIGKILL: no chance to clean up
     assert len(segments(instance)) == 3
 
-    second = start_manager(instance, runtime=first.runtime)
-    assert segments(instance) == []  # gone before the ready line
-    second.wait_log(rf"removed 3 stale segments of instance '{instance}'")
+    second = start_manager(instance, "--adopt-window", window, runtime=first.runtime)
+    if window == "0":
+        assert segments(instance) == []  # gone before the ready line
+        second.wait_log(rf"removed 3 stale segments of instance '{instance}'")
+    else:
+        second.wait_log(r"adopted topic 't1': md 'm/d' \(hash 0x0000000000000001, 8 bytes\), "
+                        r"5 slots, sample 0, 1 reader slot held")
+        second.wait_log(r"adopted topic 't2' was not taken back: removed ")
+        wait_for(lambda: segments(instance) == [], "the adopted segments removed")
     assert {m.instance: segments(m.instance) for m in others} == before
     for manager in others:
         info = kept[manager.instance].topic_info("t1")
         assert (info.publishers, info.subscribers) == (1, 1)
     with second.client("ctl") as client:  # and the new manager works
-        assert client.publish("t1", "m/d", 1, 8).segment == f"/ln.{instance}.1.1"
+        # topic ids go on after the adopted ones
+        topic_id = 1 if window == "0" else 3
+        assert client.publish("t1", "m/d", 1, 8).segment == f"/ln.{instance}.{topic_id}.1"
 
 
 def test_second_manager_of_an_instance_refuses(start_manager: Start, instance: str) -> None:

@@ -14,6 +14,7 @@ from lnwire import (
     frame,
     hello_body,
     port_body,
+    reclaim_body,
     register_service_body,
     s,
     service_called_body,
@@ -30,7 +31,9 @@ ENTRIES = st.builds(p.ServiceEntry, TEXT, TEXT, U64, TEXT, TEXT, TEXT, TEXT, TEX
                     U64)
 
 MESSAGES = st.one_of(
-    st.builds(p.Hello, U32, st.integers(0, 0xFFFF), U32, TEXT, TEXT, TEXT),
+    st.builds(p.Hello, U32, st.integers(0, 0xFFFF), U32, TEXT, TEXT, TEXT, U32),
+    st.builds(p.ReclaimPort, REQUEST_ID, st.integers(0, 0xFFFF), TEXT, TEXT,
+              st.integers(0, (1 << 64) - 1), U32, U32, U32, TEXT, U32),
     st.builds(p.Welcome, st.integers(0, 0xFFFF), U32, TEXT, TEXT),
     st.builds(p.Error, U32, st.integers(-(1 << 31), (1 << 31) - 1), TEXT),
     st.builds(p.Publish, REQUEST_ID, TEXT, TEXT, st.integers(0, (1 << 64) - 1), U32, U32, U32),
@@ -57,11 +60,20 @@ def body(msg: p.Message) -> bytes:
 
 
 def test_hello_bytes_match_the_document() -> None:
-    encoded = p.encode(p.Hello(p.MAGIC, 2, 4242, "ctl", "0.1.0", "rack/1"))
-    assert encoded == frame(1, hello_body("ctl", pid=4242, host_id="rack/1"))
-    assert encoded[:12] == struct.pack("<IHIH", len(encoded) - 4, 1, 0x504D4E4C, 2)
-    assert encoded.endswith(b"\x06\x00rack/1")  # host_id is the last field
+    encoded = p.encode(p.Hello(p.MAGIC, 3, 4242, "ctl", "0.1.0", "rack/1", 1))
+    assert encoded == frame(1, hello_body("ctl", pid=4242, host_id="rack/1", flags=1))
+    assert encoded[:12] == struct.pack("<IHIH", len(encoded) - 4, 1, 0x504D4E4C, 3)
+    assert encoded.endswith(b"\x06\x00rack/1\x01\x00\x00\x00")  # host_id, then flags
     assert encoded[6:10] == b"LNMP"
+
+
+def test_reclaim_port_bytes_match_the_document() -> None:
+    msg = p.ReclaimPort(9, p.RECLAIM_SUBSCRIBER, "robot.state", "robot/joint_state",
+                        0x0123456789ABCDEF, 184, 4, 0x200, "/ln.x.3.2", 5)
+    assert p.encode(msg) == frame(17, reclaim_body(9, 1, "robot.state", "robot/joint_state",
+                                                   0x0123456789ABCDEF, 184, "/ln.x.3.2", 5,
+                                                   buffers=4, flags=0x200))
+    assert p.decode_frame(p.encode(msg)) == msg
 
 
 def test_port_request_bytes_match_the_document() -> None:
@@ -206,7 +218,7 @@ def test_unknown_type() -> None:
 
 
 def test_every_truncation_of_every_message_is_refused() -> None:
-    samples = [p.Hello(p.MAGIC, 2, 1, "n", "v", "h"), p.Welcome(1, 1, "n", "i"),
+    samples = [p.Hello(p.MAGIC, 3, 1, "n", "v", "h", 0), p.Welcome(1, 1, "n", "i"),
                p.Error(1, -1, "t"), p.Publish(1, "t", "m/d", 1, 2, 3, 0),
                p.Subscribe(1, "t", "m/d", 1, 2, 3, 0), p.PortOk(1, 2, "/s", 3),
                p.ClosePort(1, 2), p.Ok(1), p.TopicInfo(1, "t"),
@@ -272,7 +284,7 @@ def test_decode_frame_checks_the_length_field() -> None:
 
 
 def test_hello_version_reads_only_magic_and_version() -> None:
-    assert p.hello_version(hello_body("n")) == 2
+    assert p.hello_version(hello_body("n")) == 3
     # another protocol version may have another HELLO layout after the version
     assert p.hello_version(struct.pack("<IH", p.MAGIC, 2) + b"anything") == 2
     with pytest.raises(p.ProtocolError, match="wrong magic 0x504d4e4d, expected 0x504d4e4c"):
@@ -283,7 +295,8 @@ def test_hello_version_reads_only_magic_and_version() -> None:
 
 def test_direction_is_recorded() -> None:
     from_client = {cls.TYPE.name for cls in p.MESSAGES.values() if cls.FROM_CLIENT}
-    assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "CLOSE_PORT", "TOPIC_INFO",
+    assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "RECLAIM_PORT", "CLOSE_PORT",
+                           "TOPIC_INFO",
                            "REGISTER_SERVICE", "UNREGISTER_SERVICE", "FIND_SERVICE",
                            "SERVICE_CALLED", "LIST_SERVICES", "CONTROL"}
 

@@ -200,9 +200,11 @@ def test_a_socket_of_another_uid_is_left(manager_in_runtime: Manager, runtime: P
     manager.wait_log(r"left service socket .*: owned by uid 65534, not by us \(0\)")
 
 
+@pytest.mark.parametrize("window", ["0", "0.5"])
 def test_startup_removes_stale_sockets_only(start_manager: Start, instance: str,
-                                            runtime: Path,
-                                            sockets: list[socket.socket]) -> None:
+                                            runtime: Path, sockets: list[socket.socket],
+                                            window: str) -> None:
+    """With --adopt-window 0 before the ready line, else once the window is over."""
     (runtime / "sub").mkdir()
     stale = [stale_socket(runtime / name) for name in ("svc.1.2.sock", "svc.33.44.sock")]
     live = listen_unix(runtime / "svc.900.5.sock", sockets)  # purged too: nobody knows it
@@ -213,9 +215,15 @@ def test_startup_removes_stale_sockets_only(start_manager: Start, instance: str,
     link.symlink_to(nested)
     kept = [regular, nested, stale_socket(runtime / "svc.a.1.sock"),
             stale_socket(runtime / "other.sock"), stale_socket(runtime / "svc.1.2.sock.bak")]
-    manager = start_manager(instance, runtime=runtime)
-    assert not any(path.exists() for path in [*stale, live])
+    manager = start_manager(instance, "--adopt-window", window, runtime=runtime)
+    if window == "0":
+        assert not any(path.exists() for path in [*stale, live])
+        manager.wait_log(rf"removed 3 stale service sockets in {re.escape(str(runtime))}: "
+                         r"svc\.1\.2\.sock, svc\.33\.44\.sock, svc\.900\.5\.sock$")
+    else:
+        manager.wait_log(r"adopting 0 topics and [0-9]+ service sockets for 0.5 s")
+        manager.wait_log(r"removed 3 service sockets nobody registered again: "
+                         r"svc\.1\.2\.sock, svc\.33\.44\.sock, svc\.900\.5\.sock$")
+        assert not any(path.exists() for path in [*stale, live])
     assert all(path.exists() for path in kept)
     assert link.is_symlink()
-    manager.wait_log(rf"removed 3 stale service sockets in {re.escape(str(runtime))}: "
-                     r"svc\.1\.2\.sock, svc\.33\.44\.sock, svc\.900\.5\.sock$")
