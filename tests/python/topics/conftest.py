@@ -61,8 +61,11 @@ class Manager:
         return ln.client(name, self.address)
 
 
-def start_manager(instance: str, runtime: Path) -> Manager:
-    return Manager(launch.start_manager(instance, runtime, runtime.parent / f"{instance}.log"))
+def start_manager(instance: str, runtime: Path, *args: str) -> Manager:
+    log = runtime.parent / f"{instance}.log"
+    if log.exists():  # a restarted manager: keep its predecessor's log
+        log = runtime.parent / f"{instance}.{len(list(runtime.parent.glob('*.log')))}.log"
+    return Manager(launch.start_manager(instance, runtime, log, *args))
 
 
 def wait_ready(proc: subprocess.Popen[str], limit: float = 60.0) -> None:

@@ -78,8 +78,12 @@ def test_killed_manager_is_cleaned_up_by_the_next_start(manager: Manager,
     proc.kill()
     proc.wait()
     assert len(segments(manager.instance)) == 2  # nobody was left to remove them
-    again = start_manager(manager.instance, tmp_path / "runtime")
+    # adopted for returning clients, removed once the adoption window passed without one
+    again = start_manager(manager.instance, tmp_path / "runtime", "--adopt-window", "0.2")
     try:
+        deadline = time.monotonic() + 30
+        while segments(manager.instance) and time.monotonic() < deadline:
+            time.sleep(0.02)
         assert segments(manager.instance) == []
     finally:
         again.proc.terminate()
