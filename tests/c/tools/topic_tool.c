@@ -5,9 +5,15 @@
  *   topic_tool pub-pattern TOPIC COUNT|0 [wait|nowait [FIRST]]   pattern samples with values
  *                                   FIRST, FIRST+1, ... (0: forever, for kill tests)
  *   topic_tool sub-pattern TOPIC COUNT BUFFERS TIMEOUT [STOP]   count, check order and tearing;
- *                                   stops early at a sample whose value is STOP */
+ *                                   stops early at a sample whose value is STOP
+ *   topic_tool pub-loop TOPIC PERIOD_US   robot/joint_state with cycle 1, 2, ... every PERIOD_US
+ *                                   forever, never calling the manager after publishing (the
+ *                                   manager restart tests); "ready" after the first sample */
+#define _POSIX_C_SOURCE 200809L /* nanosleep */
+
 #include <inttypes.h>
 #include <stdio.h>
+#include <time.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -99,6 +105,26 @@ static int pub_pattern(ln_client* c, const char* topic, uint64_t count, int wait
     return 0;
 }
 
+static int pub_loop(ln_client* c, const char* topic, uint64_t period_us)
+{
+    ln_outport* p;
+    int rc = ln_publish(c, &p, topic, ROBOT_JOINT_STATE_MD, NULL);
+    if (rc < 0)
+        return fail("publish", rc);
+    robot_joint_state_t js;
+    struct timespec pause = {(time_t)(period_us / 1000000), (long)(period_us % 1000000) * 1000};
+    for (uint64_t i = 1;; i++) {
+        fill_joint(&js, i);
+        if ((rc = ln_write(p, &js, sizeof js, -1)) < 0)
+            return fail("write", rc);
+        if (i == 1) {
+            printf("ready\n");
+            fflush(stdout);
+        }
+        nanosleep(&pause, NULL);
+    }
+}
+
 static int sub_pattern(ln_client* c, const char* topic, uint64_t count, uint32_t buffers,
                        double timeout, uint64_t stop)
 {
@@ -161,6 +187,8 @@ int main(int argc, char** argv)
     else if (!strcmp(mode, "pub-pattern"))
         rc = pub_pattern(c, topic, count, argc > 4 && !strcmp(argv[4], "wait"),
                          argc > 5 ? strtoull(argv[5], NULL, 10) : 1);
+    else if (!strcmp(mode, "pub-loop"))
+        rc = pub_loop(c, topic, count);
     else if (!strcmp(mode, "sub-pattern") && argc > 5)
         rc = sub_pattern(c, topic, count, (uint32_t)atoi(argv[4]), atof(argv[5]),
                          argc > 6 ? strtoull(argv[6], NULL, 10) : 0);
