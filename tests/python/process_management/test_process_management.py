@@ -14,7 +14,7 @@ from pathlib import Path
 from links_and_nodes.manager import daemon_client as dc
 from links_and_nodes.manager.scripting import Manager
 
-from .conftest import LIMIT, Lab, free_daemon_port, parent, pids_with, wait_for
+from .conftest import REPO, LIMIT, Lab, free_daemon_port, parent, pids_with, wait_for
 
 CHILD = Path(__file__).with_name("child.py")
 
@@ -154,9 +154,17 @@ def test_term_timeout_then_sigkill(lab: Lab) -> None:
 
 
 def test_manager_killed_processes_survive_and_new_manager_reattaches(lab: Lab) -> None:
+    """The processes keep running under the daemon; the new manager re-attaches to them,
+    and `c`, ready by its topic, is ready again once its publisher re-registered with the
+    new manager by itself (docs/manager.md, "A manager restarted under running clients")."""
     m = lab.instance
+    topic = f"pm.{m}".replace("-", "_")
     body = (process("a", "ready", "up", marker=m, extra="ready_regex: ^up$")
-            + process("b", "ready", "up", marker=m, extra="depends_on: a\nready_regex: up"))
+            + process("b", "ready", "up", marker=m, extra="depends_on: a\nready_regex: up")
+            + process("c", "publish", topic, "3", marker=m,
+                      # this checkout's package, whatever is installed
+                      extra=f"ready_on_topic: {topic}\n"
+                            f"environment: PYTHONPATH={REPO / 'python'}"))
     config = lab.write(body)
     first = lab.manager(config, "--no-console", "--start-all")
     lab.wait_listening(first)
@@ -170,9 +178,14 @@ def test_manager_killed_processes_survive_and_new_manager_reattaches(lab: Lab) -
     second = lab.manager(config, "--no-console")
     lab.wait_listening(second)
     with lab.connect() as mgr:
+        wait_for(lambda: mgr.state("c") == "ready", "c ready by its re-registered topic")
         status = {p["name"]: p for p in mgr.status()}
         assert {n: (p["state"], p["pid"]) for n, p in status.items()} == \
-            {"a": ("ready", pids["a"]), "b": ("ready", pids["b"])}
+            {"a": ("ready", pids["a"]), "b": ("ready", pids["b"]),
+             "c": ("ready", pids["c"])}
+        assert f"topic {topic} has a publisher" in mgr.history("c")[-1]["reason"]
+        topics = {t["name"]: t for t in mgr.topics()}
+        assert topics[topic]["publishers"] == 1 and topics[topic]["published"] == 3
         assert "up" in mgr.output("a")  # recent output came back from the daemon
         mgr.quit()
     wait_for(lambda: pids_with(m) == [], "the processes stopped by quit")

@@ -16,14 +16,18 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from polling import wait_for
-from topics.conftest import TOOLS, wait_ready
-
-import links_and_nodes as ln
-from links_and_nodes.manager import launch, scripting
-from links_and_nodes.manager.launch import ManagerProcess, segments
 
 REPO = Path(__file__).resolve().parents[3]
+# the manager tests' wire client, for the tests that send frames by hand
+sys.path.insert(0, str(REPO / "tests" / "python" / "manager"))
+
+from polling import wait_for  # noqa: E402
+from topics.conftest import TOOLS, wait_ready  # noqa: E402
+
+import links_and_nodes as ln  # noqa: E402
+from links_and_nodes.manager import launch, scripting  # noqa: E402
+from links_and_nodes.manager.launch import ManagerProcess, segments  # noqa: E402
+
 LIMIT = 60.0  # seconds: an upper bound against hangs, never a pass criterion
 
 ln.add_message_definition_dir(REPO / "tests" / "md" / "topics")
