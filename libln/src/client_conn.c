@@ -575,6 +575,10 @@ void ln_conn_stop_monitor(ln_client* c)
 {
     if (!c->monitored)
         return;
+    if (getpid() != c->pid) { /* a forked child: the monitor thread is its parent's */
+        c->monitored = 0;
+        return;
+    }
     uint64_t one = 1;
     ssize_t n = write(c->cancel_fd, &one, sizeof one);
     (void)n; /* an eventfd write of 1 cannot fail short of overflow */
