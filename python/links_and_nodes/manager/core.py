@@ -167,7 +167,7 @@ class Core:
         """The reply to one request of a registered client; refusals become ERROR."""
         try:
             if self.hosts is not None and session.client is not None \
-                    and isinstance(msg, p.Publish | p.Subscribe):
+                    and isinstance(msg, p.Publish | p.Subscribe | p.ReclaimPort):
                 await self.hosts.identify(session.client)  # not under the lock: it waits
             async with self._lock:
                 return await self._request(session, msg)
@@ -215,9 +215,15 @@ class Core:
         segments module adopted them) and keep the provider sockets it found in socket_dir,
         until end_adoption."""
         for ring in rings:
-            self.registry.adopt_topic(ring.topic_id, ring.topic, ring.md_name,
-                                      ring.layout_hash, ring.message_size, ring.slots,
-                                      set(ring.readers))
+            try:
+                self.registry.adopt_topic(ring.topic_id, ring.topic, ring.md_name,
+                                          ring.layout_hash, ring.message_size, ring.slots,
+                                          set(ring.readers))
+            except RequestError as exc:  # segments.adopt() checked it; never a crash here
+                names = self.segments.remove(ring.topic_id)
+                log.warning("removed %s instead of adopting it: %s", ", ".join(names),
+                            exc.text)
+                continue
             log.info("adopted topic %r: md %r (hash 0x%016x, %d bytes), %d slots, sample %d, "
                      "%d reader slot%s held, in %s", ring.topic, ring.md_name,
                      ring.layout_hash, ring.message_size, ring.slots, ring.write_seq,
