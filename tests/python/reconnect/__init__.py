@@ -1,0 +1,1 @@
+"""End-to-end tests of clients that outlive their manager (tests/python/reconnect)."""
