@@ -272,10 +272,11 @@ void Server::parse_frames(Connection &c)
         uint32_t len = le32(c.in.data() + pos);
         bool tagged = c.phase == Connection::Phase::ready;
         size_t min = proto::kHeaderBytes + (tagged ? proto::kTagBytes : 0);
-        if (len > proto::kMaxFrame) {
+        size_t max = tagged ? proto::kMaxFrame : proto::kMaxHelloFrame;
+        if (len > max) {
             refuse(c, 0, Err::bad_request,
                    "frame of " + std::to_string(len) + " bytes exceeds the limit of " +
-                       std::to_string(proto::kMaxFrame));
+                       std::to_string(max) + (tagged ? "" : " before the handshake"));
             return;
         }
         if (len < min) {
