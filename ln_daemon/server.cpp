@@ -568,11 +568,10 @@ int Server::run()
     std::vector<Supervisor::FdRef> proc_refs;
     std::vector<uint64_t> conn_ids;
     for (;;) {
-        if (shutdown_signals_) {
-            supervisor_.stop_all(); // also those that were still starting
-            if (supervisor_.alive() == 0 && supervisor_.stray_keepers() == 0)
-                break;
-        }
+        // Processes still starting when the shutdown began are stopped (or killed) by the
+        // supervisor's tick() once they run.
+        if (shutdown_signals_ && supervisor_.alive() == 0 && supervisor_.stray_keepers() == 0)
+            break;
         fds.clear();
         proc_refs.clear();
         conn_ids.clear();
