@@ -130,7 +130,7 @@ void Server::accept_all()
             return;
         }
         std::string peer = peer_name(sa);
-        if (conns_.size() >= kMaxConnections) {
+        if (conns_.size() >= kMaxConnections && !evict_unauthenticated()) {
             logf("connection from %s refused: %zu connections open", peer.c_str(), conns_.size());
             continue;
         }
@@ -153,6 +153,34 @@ void Server::accept_all()
         send(*c, Msg::daemon_hello, 0, w.buffer());
         conns_.emplace(c->id, std::move(c));
     }
+}
+
+bool Server::evict_unauthenticated()
+{
+    // Authenticated connections are never pushed out by newcomers; of the others, one that
+    // is closing anyway goes first, else the oldest still in its handshake: a manager's
+    // handshake takes one round trip, so the oldest are the ones that do not finish theirs.
+    auto victim = conns_.end();
+    for (auto it = conns_.begin(); it != conns_.end(); ++it) {
+        Connection &c = *it->second;
+        if (c.dead || c.phase == Connection::Phase::closing) {
+            victim = it;
+            break;
+        }
+        if (c.phase == Connection::Phase::handshake && victim == conns_.end())
+            victim = it;
+    }
+    if (victim == conns_.end())
+        return false;
+    Connection &c = *victim->second;
+    if (!c.dead && c.phase == Connection::Phase::handshake) {
+        logf("connection %s closed: its slot is needed, %zu connections open", c.peer.c_str(),
+             conns_.size());
+        send_error(c, 0, Err::not_authenticated, "connection slot needed by a newer connection");
+        flush(c); // best effort: the frame is small
+    }
+    conns_.erase(victim);
+    return true;
 }
 
 void Server::send(Connection &c, Msg type, uint32_t req, const std::string &payload)

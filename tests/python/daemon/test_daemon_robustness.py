@@ -140,3 +140,31 @@ def test_client_refuses_oversized_requests(daemon: Daemon) -> None:
             await client.ping()  # nothing was sent, the connection is fine
 
     asyncio.run(main())
+
+
+def test_unauthenticated_connections_cannot_lock_out_a_manager(daemon: Daemon) -> None:
+    # Peers that never authenticate hold every connection slot (a slow-loris): a manager with
+    # the key still gets in, taking the slot of the oldest of them, and so does the next one.
+    idle = []
+    try:
+        for _ in range(256):
+            conn = RawConnection(daemon.port)
+            nonce = conn.hello()  # accepted: the daemon greeted it
+            idle.append(conn)
+
+        async def main() -> None:
+            async with await daemon.connect() as first, await daemon.connect() as second:
+                await first.ping()
+                await second.ping()
+
+        asyncio.run(main())
+        # The oldest unauthenticated ones made room; the newest are still served.
+        code, text = idle[0].expect_error_and_close()
+        assert (code, text) == (dc.ErrorCode.NOT_AUTHENTICATED,
+                                "connection slot needed by a newer connection")
+        newest = idle[-1]
+        newest.send(newest.client_hello(daemon.key, daemon.instance, nonce))
+        assert newest.read_frame()[0] == dc.Msg.AUTH_OK
+    finally:
+        for conn in idle:
+            conn.close()
