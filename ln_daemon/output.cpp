@@ -59,9 +59,13 @@ void LineBuffer::add(const Line &line)
     ++total_;
     if (capacity_ == 0)
         return;
-    if (lines_.size() >= capacity_)
+    while (!lines_.empty() &&
+           (lines_.size() >= capacity_ || bytes_ + line.text.size() > kMaxKeptBytes)) {
+        bytes_ -= lines_.front().text.size();
         lines_.pop_front();
+    }
     lines_.push_back(line);
+    bytes_ += line.text.size();
 }
 
 namespace {
