@@ -249,7 +249,7 @@ class _Port:
         self.topic_name = topic_name
         self.message_definition_name = md_name
         self.message_class: type[LnStruct] = message_class(md_name)
-        self.packet: LnStruct = self.message_class()
+        self._packet: LnStruct = self.message_class()
         self._handle: int | None = None
         # Held during every libln call on the port, so that close() (also the client's, from
         # another thread) never frees the port under a running call, and calls on one port
@@ -262,6 +262,31 @@ class _Port:
         if self._handle is None:
             raise ValueError(f"port of topic '{self.topic_name}' is closed")
         return self._handle
+
+    @property
+    def packet(self) -> LnStruct:
+        """The message write() sends and read() fills; may be replaced by another message
+        of the port's md."""
+        return self._packet
+
+    @packet.setter
+    def packet(self, packet: LnStruct) -> None:
+        self._check_message(packet)
+        with self._lock:
+            self._packet = packet
+            a = self._args
+            if a is not None:
+                a.data = ctypes.c_void_p(ctypes.addressof(packet))
+
+    def _check_message(self, packet: object) -> None:
+        """TypeError unless `packet` is a message of the port's md (also one of a class
+        message_class() made again for the same md)."""
+        cls, other = self.message_class, type(packet)
+        if other is cls or (isinstance(packet, LnStruct) and other.MD_NAME == cls.MD_NAME
+                            and getattr(other, "LAYOUT_HASH", None) == cls.LAYOUT_HASH):
+            return
+        raise TypeError(f"topic '{self.topic_name}' carries {cls.MD_NAME} messages, not "
+                        f"{getattr(other, 'MD_NAME', '') or other.__name__}")
 
     def _live_args(self) -> _CallArgs:
         """The call arguments of the open port; ValueError once it is closed (call with
@@ -284,7 +309,7 @@ class _Port:
            ctypes.byref(opts))
         self._handle = handle.value
         # ctypes arguments of the hot path, converted once (halves the cost of a call)
-        self._args = _CallArgs(self._handle, self.packet)
+        self._args = _CallArgs(self._handle, self._packet)
 
     def _forget(self) -> None:
         self._args = None  # no new call starts; a running one ends within a slice
@@ -324,10 +349,12 @@ class publisher(_Port):  # noqa: N801
 
         timeout: how long to wait for the write lock or, with wait_for_subscribers, for a
         free buffer (None: forever); LnTimeoutError after it."""
+        if packet is not None and packet is not self._packet:
+            self._check_message(packet)
         with self._lock:
             a = self._live_args()
             try:
-                if packet is None or packet is self.packet:
+                if packet is None or packet is self._packet:
                     _ln_write(a.handle, a.data, a.size, a.timeout(timeout))
                 else:
                     _ln_write(a.handle, ctypes.addressof(packet), ctypes.sizeof(packet),
@@ -337,7 +364,7 @@ class publisher(_Port):  # noqa: N801
                 if not W.waits_longer(timeout):
                     raise
                 first = exc
-        message = self.packet if packet is None else packet
+        message = self._packet if packet is None else packet
         self._wait_on(lambda a, t: _ln_write(a.handle, ctypes.addressof(message),
                                              ctypes.sizeof(message), t), timeout, first)
 
@@ -419,24 +446,27 @@ class subscriber(_Port):  # noqa: N801
         nothing is lost, the next read goes on where this one would have)."""
         with self._lock:
             a = self._live_args()
+            packet = self._packet  # the one a.data points to
             rc = _ln_read(a.handle, a.data, a.size, a.timeout(timeout), self._info_ref)
         if rc == 0:
-            return self.packet
+            return packet
         if rc == C.LN_ETIMEOUT and W.waits_longer(timeout):
-            rc = self._read_on(W.deadline(timeout))
-        return self.packet if self._result(rc) else None
+            rc, packet = self._read_on(W.deadline(timeout))
+        return packet if self._result(rc) else None
 
-    def _read_on(self, deadline: float) -> int:
-        """Further waits of a read that used up its first slice: libln's result."""
+    def _read_on(self, deadline: float) -> tuple[int, LnStruct]:
+        """Further waits of a read that used up its first slice: libln's result and the
+        packet it filled."""
         while True:
             t = W.next_slice(deadline)
             if t <= 0:
-                return C.LN_ETIMEOUT
+                return C.LN_ETIMEOUT, self._packet
             with self._lock:
                 a = self._live_args()
+                packet = self._packet
                 rc = _ln_read(a.handle, a.data, a.size, t, self._info_ref)
             if rc != C.LN_ETIMEOUT:
-                return rc
+                return rc, packet
 
     @contextmanager
     def borrow(self, timeout: float | None = None) -> Iterator[LnStruct | None]:

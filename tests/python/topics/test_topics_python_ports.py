@@ -4,6 +4,7 @@ checks of subscribe/publish arguments."""
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import subprocess
@@ -13,6 +14,8 @@ from pathlib import Path
 
 import pytest
 from polling import wait_for
+
+import links_and_nodes as ln
 
 
 from .conftest import REPO, Manager, wait_ready
@@ -117,3 +120,32 @@ def test_ctrl_c_ends_a_blocking_read(manager: Manager, timeout: str) -> None:
         pytest.fail("Ctrl-C did not end a blocking read")
     assert out.strip() == "interrupted, then read cycle 7"
     assert child.returncode == 0
+
+
+def test_a_replaced_packet_is_the_one_written_and_read(manager: Manager) -> None:
+    with manager.client() as clnt:
+        pub = clnt.publish("t.packet", "robot/joint_state")
+        sub = clnt.subscribe("t.packet", "robot/joint_state", buffers=4)
+        sent = pub.message_class()
+        sent.cycle = 42
+        pub.packet = sent
+        pub.write()
+        mine = sub.message_class()
+        sub.packet = mine
+        got = sub.read(timeout=LIMIT)
+        assert got is mine and mine.cycle == 42
+        with pytest.raises(TypeError, match="robot/joint_state"):
+            pub.packet = object()
+
+
+def test_a_message_of_another_md_is_refused(manager: Manager) -> None:
+    with manager.client() as clnt:
+        pub = clnt.publish("t.other_md", "ln/time")
+        sub = clnt.subscribe("t.other_md", "ln/time", buffers=4)
+        other = ln.message_class("ln/string")()
+        assert ctypes.sizeof(other) == ctypes.sizeof(pub.message_class)  # libln cannot tell
+        with pytest.raises(TypeError, match="ln/time"):
+            pub.write(other)
+        with pytest.raises(TypeError, match="ln/time"):
+            sub.packet = other
+        assert sub.read(timeout=0) is None
