@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import atexit
 import ctypes
+import operator
 import threading
 import weakref
 from collections.abc import Callable, Iterator, Sequence
@@ -221,6 +222,24 @@ _ln_write_loan = C.ln_write_loan
 _TimeoutError = ERRORS_BY_CODE[C.LN_ETIMEOUT]
 # subscribe(transport=...): the LN_SUBSCRIBE_* flag of each name
 _TRANSPORTS = {"udp": C.LN_SUBSCRIBE_UDP, "tcp": C.LN_SUBSCRIBE_TCP}
+def _uint32(what: str, value: Any, low: int) -> int:
+    """`value` as a whole number from `low` to 2**32 - 1, else TypeError / ValueError."""
+    if isinstance(value, bool):
+        raise TypeError(f"{what} must be an integer, not bool")
+    number = operator.index(value)  # TypeError for 2.5, "4", None
+    if not low <= number <= 0xFFFFFFFF:
+        raise ValueError(f"{what} must be at least {low} (and below 2**32), not {number}")
+    return number
+
+
+def _name(what: str, name: str) -> bytes:
+    """A topic or md name for libln; a NUL would silently cut it short there."""
+    data = name.encode()
+    if b"\0" in data:
+        raise ValueError(f"{what} {name!r} contains a NUL character")
+    return data
+
+
 class _CallArgs:
     """A port's handle, packet address and size as ctypes objects, and the last timeout."""
 
@@ -299,13 +318,15 @@ class _Port:
     def _open(self, fn: Any, buffers: int, flags: int, spin_us: int | None = None) -> None:
         opts = C.PortOptions()
         C.ln_port_options_init(ctypes.byref(opts))
-        opts.buffers, opts.flags = buffers, flags
+        # ctypes would silently keep the low 32 bits of a bigger or negative number
+        opts.buffers = _uint32("buffers", buffers, 1)
+        opts.flags = flags
         if spin_us is not None:
-            opts.spin_us = spin_us
+            opts.spin_us = _uint32("spin_us", spin_us, 0)
         handle = ctypes.c_void_p()
         cls = self.message_class
-        fn(self.client.handle, ctypes.byref(handle), self.topic_name.encode(),
-           self.message_definition_name.encode(), cls.LAYOUT_HASH, ctypes.sizeof(cls),
+        fn(self.client.handle, ctypes.byref(handle), _name("topic name", self.topic_name),
+           _name("md name", self.message_definition_name), cls.LAYOUT_HASH, ctypes.sizeof(cls),
            ctypes.byref(opts))
         self._handle = handle.value
         # ctypes arguments of the hot path, converted once (halves the cost of a call)

@@ -149,3 +149,30 @@ def test_a_message_of_another_md_is_refused(manager: Manager) -> None:
         with pytest.raises(TypeError, match="ln/time"):
             sub.packet = other
         assert sub.read(timeout=0) is None
+
+
+@pytest.mark.parametrize(("kwargs", "error"), [
+    ({"buffers": 2**32 + 4}, ValueError),   # ctypes kept 4 of it
+    ({"buffers": -1}, ValueError),
+    ({"buffers": 0}, ValueError),
+    ({"buffers": 2.5}, TypeError),
+    ({"buffers": True}, TypeError),
+    ({"spin_us": -1}, ValueError),          # ctypes made it 4294967295 µs
+    ({"spin_us": 2**32}, ValueError),
+])
+def test_subscribe_checks_its_numbers(manager: Manager, kwargs: dict[str, object],
+                                      error: type[Exception]) -> None:
+    with manager.client() as clnt:
+        with pytest.raises(error):
+            clnt.subscribe("t.args", "robot/joint_state", **kwargs)  # type: ignore[arg-type]
+        assert clnt.subscribe("t.args", "robot/joint_state", buffers=4, spin_us=0).buffers == 4
+
+
+def test_names_with_nul_are_refused(manager: Manager) -> None:
+    with manager.client() as clnt:
+        with pytest.raises(ValueError, match="NUL"):
+            clnt.publish("t.nul\0tail", "robot/joint_state")  # libln would see "t.nul"
+        with pytest.raises(ValueError, match="NUL"):
+            clnt.subscribe("t.nul\0tail", "robot/joint_state")
+        with pytest.raises(ValueError, match="buffers"):
+            clnt.publish("t.nul", "robot/joint_state", buffers=-3)
