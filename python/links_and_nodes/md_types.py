@@ -29,7 +29,12 @@ def _decode(raw: bytes) -> str:
 
 
 def _encode(value: str | bytes) -> bytes:
-    return value.encode("utf-8", "surrogateescape") if isinstance(value, str) else bytes(value)
+    if isinstance(value, str):
+        return value.encode("utf-8", "surrogateescape")
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return bytes(value)
+    # bytes(5) would be five NULs, bytes([104, 105]) a guess at what was meant
+    raise TypeError(f"a char field takes str or bytes, not {type(value).__name__}")
 
 
 def _root(obj: ctypes.Structure) -> Any:

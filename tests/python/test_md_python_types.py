@@ -211,3 +211,18 @@ def test_nested_structs_hand_over_a_copy_of_their_dynamic_data(tmp_path: Path, h
     del one, two, leaf
     gc.collect()
     assert tree.to_dict() == {"one": {"text": "one"}, "two": [{"text": "two0"}, {"text": "two1"}]}
+
+
+def test_char_fields_refuse_what_is_not_text(m: ModuleType) -> None:
+    gains = m.robot_set_gains_request_t()
+    chars = m.t_chars_t()
+    for value in (5, [104, 105], None, 2.5):
+        with pytest.raises(TypeError, match="str or bytes"):
+            gains.profile_name = value  # char*: bytes(5) used to make five NULs
+        with pytest.raises(TypeError, match="str or bytes"):
+            chars.label = value  # char[8]
+    gains.profile_name = bytearray(b"soft")
+    chars.label = memoryview(b"arm")
+    assert (gains.profile_name, chars.label) == ("soft", "arm")
+    chars.initial = 65  # a single char still takes its code
+    assert chars.initial == "A"
