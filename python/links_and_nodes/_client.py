@@ -17,10 +17,12 @@ import atexit
 import ctypes
 import operator
 import threading
+import time
 import weakref
+from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, NoReturn
 
 from . import _clientlib as C
 from . import _services
@@ -270,10 +272,12 @@ class _Port:
         self.message_class: type[LnStruct] = message_class(md_name)
         self._packet: LnStruct = self.message_class()
         self._handle: int | None = None
-        # Held during every libln call on the port, so that close() (also the client's, from
-        # another thread) never frees the port under a running call, and calls on one port
-        # from several threads take turns (libln's port state is not for concurrent use).
-        self._lock = threading.Lock()
+        # One entry per libln call of the port running now: a call appends before it looks
+        # at _args and pops after, and close() clears _args before it waits for the deque to
+        # be empty, so a port is never freed under a running call (each deque operation is
+        # atomic in CPython, and much cheaper than a lock on this hot path).  A second entry
+        # means another thread uses the port: refused, as libln allows one thread per port.
+        self._calls: deque[None] = deque()
         self._args: _CallArgs | None = None
 
     @property
@@ -291,11 +295,17 @@ class _Port:
     @packet.setter
     def packet(self, packet: LnStruct) -> None:
         self._check_message(packet)
-        with self._lock:
+        calls = self._calls
+        calls.append(None)
+        try:
+            if len(calls) != 1:
+                self._unusable(self)
             self._packet = packet
             a = self._args
             if a is not None:
                 a.data = ctypes.c_void_p(ctypes.addressof(packet))
+        finally:
+            calls.pop()
 
     def _check_message(self, packet: object) -> None:
         """TypeError unless `packet` is a message of the port's md (also one of a class
@@ -307,13 +317,34 @@ class _Port:
         raise TypeError(f"topic '{self.topic_name}' carries {cls.MD_NAME} messages, not "
                         f"{getattr(other, 'MD_NAME', '') or other.__name__}")
 
-    def _live_args(self) -> _CallArgs:
-        """The call arguments of the open port; ValueError once it is closed (call with
-        self._lock held)."""
-        a = self._args
-        if a is None:
+    def _unusable(self, args: object) -> NoReturn:
+        """Why a call cannot run: ValueError if the port is closed (`args` None), else
+        LnBusyError (another thread is in a call of it)."""
+        if args is None:
             raise ValueError(f"port of topic '{self.topic_name}' is closed")
-        return a
+        raise ERROR_CLASSES["LnBusyError"](
+            f"port of topic '{self.topic_name}' is in use by another thread (libln allows "
+            "one thread per port at a time)")
+
+    @contextmanager
+    def _call(self) -> Iterator[_CallArgs]:
+        """The call arguments for one libln call of the port, which is running while the
+        block runs (see _calls); ValueError / LnBusyError as _unusable."""
+        calls = self._calls
+        calls.append(None)
+        try:
+            a = self._args
+            if a is None or len(calls) != 1:
+                self._unusable(a)
+            yield a
+        finally:
+            calls.pop()
+
+    def _wait_idle(self) -> None:
+        """Until no call of the port runs in another thread (they end within a slice once
+        _args is None)."""
+        while self._calls:
+            time.sleep(0.001)
 
     def _open(self, fn: Any, buffers: int, flags: int, spin_us: int | None = None) -> None:
         opts = C.PortOptions()
@@ -334,17 +365,17 @@ class _Port:
 
     def _forget(self) -> None:
         self._args = None  # no new call starts; a running one ends within a slice
-        with self._lock:
-            self._handle = None
+        self._wait_idle()
+        self._handle = None
 
     def close(self) -> None:
         """Close the port (idempotent).  A call of it waiting in another thread returns
         within 0.1 s and raises ValueError."""
         self._args = None  # no new call starts; a running one ends within a slice
-        with self._lock:
-            if self._handle is None:
-                return
-            handle, self._handle = self._handle, None
+        self._wait_idle()
+        handle, self._handle = self._handle, None
+        if handle is None:
+            return
         if self in self.client._ports:
             self.client._ports.remove(self)
         type(self)._close_fn(handle)
@@ -372,19 +403,24 @@ class publisher(_Port):  # noqa: N801
         free buffer (None: forever); LnTimeoutError after it."""
         if packet is not None and packet is not self._packet:
             self._check_message(packet)
-        with self._lock:
-            a = self._live_args()
-            try:
-                if packet is None or packet is self._packet:
-                    _ln_write(a.handle, a.data, a.size, a.timeout(timeout))
-                else:
-                    _ln_write(a.handle, ctypes.addressof(packet), ctypes.sizeof(packet),
-                              W.first_slice(timeout))
-                return
-            except _TimeoutError as exc:
-                if not W.waits_longer(timeout):
-                    raise
-                first = exc
+        calls = self._calls
+        calls.append(None)
+        try:
+            a = self._args
+            if a is None or len(calls) != 1:
+                self._unusable(a)
+            if packet is None or packet is self._packet:
+                _ln_write(a.handle, a.data, a.size, a.timeout(timeout))
+            else:
+                _ln_write(a.handle, ctypes.addressof(packet), ctypes.sizeof(packet),
+                          W.first_slice(timeout))
+            return
+        except _TimeoutError as exc:
+            if not W.waits_longer(timeout):
+                raise
+            first = exc
+        finally:
+            calls.pop()
         message = self._packet if packet is None else packet
         self._wait_on(lambda a, t: _ln_write(a.handle, ctypes.addressof(message),
                                              ctypes.sizeof(message), t), timeout, first)
@@ -398,8 +434,7 @@ class publisher(_Port):  # noqa: N801
             t = W.next_slice(deadline)
             if t <= 0:
                 raise error
-            with self._lock:
-                a = self._live_args()
+            with self._call() as a:
                 try:
                     return once(a, t)
                 except _TimeoutError as exc:
@@ -411,8 +446,7 @@ class publisher(_Port):  # noqa: N801
         block ends normally and dropped if it raises.  The message lives in the topic's
         ring: do not use it after the block."""
         ptr = ctypes.c_void_p()
-        with self._lock:
-            a = self._live_args()
+        with self._call() as a:
             try:
                 _ln_write_loan(a.handle, ctypes.byref(ptr), W.first_slice(timeout))
                 first = None
@@ -426,11 +460,11 @@ class publisher(_Port):  # noqa: N801
         try:
             yield self.message_class.from_address(ptr.value)
         except BaseException:
-            with self._lock:
-                C.ln_write_abort(self._live_args().handle)
+            with self._call() as a:
+                C.ln_write_abort(a.handle)
             raise
-        with self._lock:
-            C.ln_write_commit(self._live_args().handle)
+        with self._call() as a:
+            C.ln_write_commit(a.handle)
 
     @property
     def subscriber_count(self) -> int:
@@ -465,10 +499,16 @@ class subscriber(_Port):  # noqa: N801
         timeout None blocks, 0 returns at once.  self.info has seq, timestamp_ns and the
         overruns since the previous read.  Ctrl-C ends a blocking read (KeyboardInterrupt;
         nothing is lost, the next read goes on where this one would have)."""
-        with self._lock:
-            a = self._live_args()
+        calls = self._calls
+        calls.append(None)
+        try:
+            a = self._args
+            if a is None or len(calls) != 1:
+                self._unusable(a)
             packet = self._packet  # the one a.data points to
             rc = _ln_read(a.handle, a.data, a.size, a.timeout(timeout), self._info_ref)
+        finally:
+            calls.pop()
         if rc == 0:
             return packet
         if rc == C.LN_ETIMEOUT and W.waits_longer(timeout):
@@ -482,8 +522,7 @@ class subscriber(_Port):  # noqa: N801
             t = W.next_slice(deadline)
             if t <= 0:
                 return C.LN_ETIMEOUT, self._packet
-            with self._lock:
-                a = self._live_args()
+            with self._call() as a:
                 packet = self._packet
                 rc = _ln_read(a.handle, a.data, a.size, t, self._info_ref)
             if rc != C.LN_ETIMEOUT:
@@ -499,8 +538,7 @@ class subscriber(_Port):  # noqa: N801
         t = W.first_slice(timeout)
         end: float | None = None
         while True:
-            with self._lock:
-                a = self._live_args()
+            with self._call() as a:
                 rc = _ln_read_borrow(a.handle, ctypes.byref(ptr), t, self._info_ref)
             if rc != C.LN_ETIMEOUT or not W.waits_longer(timeout):
                 break
@@ -514,8 +552,8 @@ class subscriber(_Port):  # noqa: N801
         try:
             yield self.message_class.from_address(ptr.value)
         finally:
-            with self._lock:
-                rc = C.ln_read_release(self._live_args().handle)
+            with self._call() as a:
+                rc = C.ln_read_release(a.handle)
         if rc < 0:
             raise error_from_code(rc, C.last_error())
 

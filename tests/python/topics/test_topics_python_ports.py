@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -82,6 +83,42 @@ def test_close_ends_a_blocking_read_in_another_thread(manager: Manager, close: s
     with manager.client("other") as other:
         other.publish("t.blocked", "robot/joint_state").write()
     clnt.close()
+
+
+def test_a_port_in_use_by_another_thread_is_refused(manager: Manager) -> None:
+    """libln allows one thread per port at a time; Python refuses a second one with
+    LnBusyError instead of letting them race on the port's state."""
+    with manager.client() as clnt:
+        sub = clnt.subscribe("t.two_threads", "robot/joint_state")
+        tid: list[int] = []
+        outcome: list[object] = []
+
+        def read() -> None:
+            tid.append(threading.get_native_id())
+            try:
+                outcome.append(sub.read(timeout=None))
+            except BaseException as exc:  # noqa: BLE001 - checked below
+                outcome.append(exc)
+
+        reader = threading.Thread(target=read, daemon=True)
+        reader.start()
+        wait_for(lambda: tid and _sleeping(tid[0]), "the reader to block")
+        # The blocked read waits in 0.1 s slices; a call that falls between two of them
+        # would run: try again then (a few microseconds in 0.1 s).
+        def refused(call: Callable[[], object]) -> bool:
+            for _ in range(5):
+                try:
+                    call()
+                except ln.LnBusyError as exc:
+                    return "another thread" in str(exc)
+            return False
+
+        assert refused(lambda: sub.read(timeout=0))
+        assert refused(lambda: setattr(sub, "packet", sub.message_class()))
+        sub.close()  # ends the blocked read
+        reader.join(LIMIT)
+        assert not reader.is_alive()
+        assert len(outcome) == 1 and isinstance(outcome[0], ValueError), outcome
 
 
 _CHILD = """
