@@ -1,9 +1,11 @@
 // The TCP sending threads (forward_tcp_send.hpp).  Memory: at most capacity_ + 1 sample
 // buffers ever exist (the queue with the sample in flight, plus the reader's), recycled
-// between the two threads.  A sample is taken off the queue only once it was written
-// whole; after a broken connection it is sent again from its first byte, so the receiver
-// (which drops partial frames) sees it exactly once.  Samples that were in the kernel's
-// buffers when a connection broke are lost without being counted.
+// between the two threads (a direct send by the reader uses the reader's buffer).  A
+// sample counts as sent only once it was written whole; after a broken connection it is
+// sent again from its first byte, so the receiver (which drops partial frames) sees it
+// exactly once.  A frame the reader began stays first in the queue until the writer has
+// finished it.  Samples that were in the kernel's buffers when a connection broke are
+// lost without being counted.
 #include "forward_tcp_send.hpp"
 
 #include <algorithm>
@@ -155,13 +157,23 @@ void TcpSender::read_loop()
             break;
         if (next == Next::none)
             continue;
+        if (send_direct(buf, info)) {
+            if (!buf)
+                buf = take_buffer();
+            continue;
+        }
         bool queued = false;
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            if (queue_.size() + in_flight_ >= capacity_ && !queue_.empty()) {
-                give_buffer(std::move(queue_.front().data));
-                queue_.pop_front();
-                StreamCounters::add(counters_.drops);
+            if (queue_.size() + in_flight_ >= capacity_) {
+                auto victim = queue_.begin();
+                if (victim != queue_.end() && victim->sent > 0)
+                    ++victim; // its frame is partly on the wire: it must be finished
+                if (victim != queue_.end()) {
+                    give_buffer(std::move(victim->data));
+                    queue_.erase(victim);
+                    StreamCounters::add(counters_.drops);
+                }
             }
             if (queue_.size() + in_flight_ < capacity_) {
                 queue_.push_back(Sample{info.seq, info.timestamp_ns, std::move(buf)});
@@ -169,13 +181,82 @@ void TcpSender::read_loop()
             }
             queued_.store(queue_.size(), std::memory_order_release);
             if (!queued)
-                StreamCounters::add(counters_.drops); // the sample in flight fills the queue
+                StreamCounters::add(counters_.drops); // what is being sent fills the queue
         }
         if (queued) {
             ready_.notify_one();
             buf = take_buffer();
         }
     }
+}
+
+bool TcpSender::send_direct(Buffer &buf, const ln_sample_info &info)
+{
+    int fd;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!writer_idle_ || reader_sending_ || in_flight_ || !queue_.empty())
+            return false;
+        reader_sending_ = true;
+        in_flight_ = true;
+        fd = sock_.get();
+    }
+    Sample s{info.seq, info.timestamp_ns, std::move(buf)};
+    uint8_t header[wire::kFrameHeaderSize];
+    wire::encode_frame_header(header, {s.seq, s.timestamp_ns, spec_.message_size});
+    const size_t total = sizeof header + spec_.message_size;
+    while (s.sent < total) {
+        iovec iov[2];
+        msghdr msg = {};
+        msg.msg_iov = iov;
+        msg.msg_iovlen = frame_iov(header, s, iov);
+        ssize_t n = ::sendmsg(fd, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (n > 0)
+            s.sent += static_cast<size_t>(n);
+        else if (n < 0 && errno == EINTR)
+            continue;
+        else
+            break; // full, or an error the writer will meet and handle
+    }
+    const bool whole = s.sent == total;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        reader_sending_ = false;
+        in_flight_ = false;
+        if (whole) {
+            buf = std::move(s.data);
+        } else {
+            queue_.push_front(std::move(s)); // the queue was empty: nothing overtakes it
+            queued_.store(queue_.size(), std::memory_order_release);
+        }
+    }
+    if (whole) {
+        StreamCounters::add(counters_.samples);
+        StreamCounters::add(counters_.bytes, spec_.message_size);
+    } else {
+        ready_.notify_one();
+    }
+    return true;
+}
+
+size_t TcpSender::frame_iov(uint8_t *header, const Sample &s, iovec iov[2]) const
+{
+    const size_t h = wire::kFrameHeaderSize;
+    size_t count = 0;
+    if (s.sent < h)
+        iov[count++] = {header + s.sent, h - s.sent};
+    size_t skip = s.sent > h ? s.sent - h : 0;
+    iov[count++] = {s.data.get() + skip, spec_.message_size - skip};
+    return count;
+}
+
+Io TcpSender::write_sample(Sample &s, std::string &error)
+{
+    uint8_t header[wire::kFrameHeaderSize];
+    wire::encode_frame_header(header, {s.seq, s.timestamp_ns, spec_.message_size});
+    iovec iov[2];
+    size_t count = frame_iov(header, s, iov);
+    return write_full(sock_.get(), iov, static_cast<int>(count), stop_, error);
 }
 
 std::string TcpSender::try_connect()
@@ -293,11 +374,15 @@ void TcpSender::write_loop()
                  && !stop_.raised() && std::chrono::steady_clock::now() < end;)
                 std::this_thread::yield(); // a sample that comes soon: no wake-up
             std::unique_lock<std::mutex> lock(mutex_);
+            writer_idle_ = true; // from here the reader may send on sock_ itself
             ready_.wait_for(lock, kIdleCheck,
                             [this] { return stop_.raised() || !queue_.empty(); });
+            writer_idle_ = false;
             if (stop_.raised())
                 break;
             if (queue_.empty()) {
+                if (reader_sending_)
+                    continue; // the connection is busy, so not idle: check it later
                 lock.unlock();
                 std::string why;
                 if (peer_gone(sock_.get(), why))
@@ -310,12 +395,8 @@ void TcpSender::write_loop()
             in_flight_ = true;
             have = true;
         }
-        uint8_t header[wire::kFrameHeaderSize];
-        wire::encode_frame_header(header,
-                                  {current.seq, current.timestamp_ns, spec_.message_size});
-        iovec iov[2] = {{header, sizeof header}, {current.data.get(), spec_.message_size}};
         std::string error;
-        switch (write_full(sock_.get(), iov, 2, stop_, error)) {
+        switch (write_sample(current, error)) {
         case Io::ok: {
             StreamCounters::add(counters_.samples);
             StreamCounters::add(counters_.bytes, spec_.message_size);
@@ -329,9 +410,11 @@ void TcpSender::write_loop()
             return;
         case Io::closed:
             lost("closed by the receiver");
+            current.sent = 0; // the receiver drops a partial frame: send it whole again
             break;
         default:
             lost(error);
+            current.sent = 0;
             break;
         }
     }

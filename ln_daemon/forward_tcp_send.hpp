@@ -1,8 +1,11 @@
 // The sending end of a TCP stream: a reader thread takes every sample from the ring's tap
 // into a bounded queue (when it is full the oldest queued sample is dropped), a writer
 // thread keeps a connection to the receiving daemon and sends the queue in order,
-// reconnecting with back-off.  The publisher is never held up: the tap holds no reader slot
-// and the reader never waits for the writer.
+// reconnecting with back-off.  When the writer is idle on a healthy connection and nothing
+// is queued, the reader sends the sample itself without blocking (saving a thread
+// wake-up per sample) and queues only what the socket did not take at once.  The publisher
+// is never held up: the tap holds no reader slot and the reader never waits for the
+// writer or the network.
 #pragma once
 
 #include <atomic>
@@ -41,10 +44,18 @@ private:
         uint64_t seq = 0;
         int64_t timestamp_ns = 0;
         Buffer data;
+        size_t sent = 0; // bytes of its frame already written on the current connection
     };
 
     void read_loop();
     void write_loop();
+    // Reader: sends `buf` at once if the writer is idle with nothing queued; true if the
+    // sample was dealt with (sent whole, or queued with what part of it went out).
+    bool send_direct(Buffer &buf, const ln_sample_info &info);
+    // The frame of `s` (header, then payload) from byte s.sent on, as 1 or 2 iovecs.
+    size_t frame_iov(uint8_t *header, const Sample &s, iovec iov[2]) const;
+    // Writer: writes `s` from s.sent on; Io::ok once all of it went out.
+    Io write_sample(Sample &s, std::string &error);
     // Connects (and reconnects) until it succeeds or the stream stops (false).
     bool connect_with_backoff();
     std::string try_connect(); // "" with sock_ set, or what went wrong
@@ -61,11 +72,13 @@ private:
     std::mutex mutex_;
     std::condition_variable ready_;
     std::deque<Sample> queue_;
-    bool in_flight_ = false;     // the writer holds a sample taken from the queue
+    bool in_flight_ = false;     // a sample taken from the queue (or sent directly) is being sent
+    bool writer_idle_ = false;   // the writer waits for the queue with sock_ connected
+    bool reader_sending_ = false; // the reader writes to sock_ (the writer leaves it alone)
     std::vector<Buffer> free_;   // buffers to reuse
     size_t allocated_ = 0;       // buffers in existence: at most capacity_ + 1
 
-    UniqueFd sock_; // writer thread only
+    UniqueFd sock_; // the writer's; the reader uses it only while reader_sending_
     StopSignal stop_;
     std::thread reader_, writer_;
 };

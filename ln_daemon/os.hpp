@@ -29,6 +29,9 @@ struct LaunchSpec {
     int priority = 0; // real-time priority for FIFO/RR, nice value otherwise
     std::vector<int> affinity;
     bool use_pty = true;
+    // How the keeper ends the tree by itself when the daemon is gone (as STOP would).
+    int term_signal = 15;
+    double term_timeout = 5.0;
 };
 
 // A started keeper.  It reports on `report` (fixed-size KeeperReport records) and exits

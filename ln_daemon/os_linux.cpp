@@ -8,6 +8,7 @@
 #include <array>
 #include <cerrno>
 #include <climits>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -16,10 +17,12 @@
 #include <dirent.h>
 #include <fcntl.h>
 #include <memory>
+#include <poll.h>
 #include <sched.h>
 #include <sys/ioctl.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
+#include <sys/signalfd.h>
 #include <sys/wait.h>
 #include <termios.h>
 #include <unistd.h>
@@ -30,6 +33,8 @@ extern char **environ;
 namespace lnd {
 
 namespace {
+
+constexpr int kKeeperSweepMs = 100; // between the keeper's own SIGKILL sweeps
 
 double clock_seconds(clockid_t id) noexcept
 {
@@ -180,16 +185,94 @@ void write_report(int fd, KeeperReport r) noexcept
     while (rc < 0 && errno == EINTR);
 }
 
+// Parent and process group of `pid` from /proc/PID/stat, with nothing but system calls and
+// the stack (the keeper uses it too).  "PID (COMM) STATE PPID PGRP ...": COMM may hold
+// anything, so parsing starts after the last ')'.
+bool read_proc_stat(long pid, pid_t &ppid, pid_t &pgrp) noexcept
+{
+    char path[32] = "/proc/";
+    char digits[24];
+    int nd = 0;
+    for (long v = pid; v > 0 && nd < 20; v /= 10)
+        digits[nd++] = static_cast<char>('0' + v % 10);
+    size_t at = 6;
+    while (nd > 0)
+        path[at++] = digits[--nd];
+    std::memcpy(path + at, "/stat", 6);
+    int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return false;
+    char buf[1024];
+    ssize_t n = ::read(fd, buf, sizeof buf - 1);
+    ::close(fd);
+    if (n <= 0)
+        return false;
+    buf[n] = 0;
+    const char *q = std::strrchr(buf, ')');
+    if (!q || q[1] != ' ' || !q[2] || q[3] != ' ')
+        return false;
+    q += 4; // past ") S "
+    long fields[2];
+    for (long &f : fields) {
+        bool neg = *q == '-';
+        q += neg;
+        if (*q < '0' || *q > '9')
+            return false;
+        f = 0;
+        while (*q >= '0' && *q <= '9')
+            f = f * 10 + (*q++ - '0');
+        f = neg ? -f : f;
+        if (*q == ' ')
+            ++q;
+    }
+    ppid = static_cast<pid_t>(fields[0]);
+    pgrp = static_cast<pid_t>(fields[1]);
+    return true;
+}
+
+// The keeper's own sweep: sends `sig` to each of its children outside process group `skip`
+// (0: none).  Being a child subreaper, it inherits every orphan of the tree, so repeated
+// sweeps (each reaping in between) reach the whole tree.  System calls and the stack only.
+void signal_children(int sig, pid_t skip) noexcept
+{
+    int dir = ::open("/proc", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dir < 0)
+        return;
+    pid_t self = ::getpid();
+    alignas(8) char buf[4096];
+    ssize_t n;
+    while ((n = ::getdents64(dir, buf, sizeof buf)) > 0) {
+        for (ssize_t off = 0; off < n;) {
+            const auto *d = reinterpret_cast<const struct dirent64 *>(buf + off);
+            off += d->d_reclen;
+            long pid = 0;
+            const char *c = d->d_name;
+            for (; *c >= '0' && *c <= '9' && pid < INT_MAX / 10; ++c)
+                pid = pid * 10 + (*c - '0');
+            pid_t ppid, pgrp;
+            if (*c || pid <= 0 || !read_proc_stat(pid, ppid, pgrp))
+                continue;
+            if (ppid == self && (skip == 0 || pgrp != skip))
+                ::kill(static_cast<pid_t>(pid), sig);
+        }
+    }
+    ::close(dir);
+}
+
 // The keeper: a child subreaper between the daemon and the supervised process, so that
 // every orphan of the process tree is re-parented to it and nothing escapes.  It starts
 // the child, reports start (or setup failure) and the child's exit on `report_fd`, reaps
-// everything, and exits when it has no children left: the tree is empty.
+// everything, and exits when it has no children left: the tree is empty.  If the daemon
+// goes away without ending the tree (SIGKILL, a crash), the report pipe loses its reader;
+// nobody could stop or even see the tree any more, so the keeper ends it as STOP would:
+// the term signal, SIGKILL after the term timeout.
 [[noreturn]] void keeper_main(const Prepared &p, int report_fd) noexcept
 {
     ::setpgid(0, 0); // out of the daemon's group: a Ctrl-C there is not for us
-    sigset_t none;
-    sigemptyset(&none);
-    ::sigprocmask(SIG_SETMASK, &none, nullptr);
+    sigset_t chld;
+    sigemptyset(&chld);
+    sigaddset(&chld, SIGCHLD);
+    ::sigprocmask(SIG_SETMASK, &chld, nullptr); // SIGCHLD only through the signalfd
     for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, SIGUSR1, SIGUSR2})
         ::signal(sig, SIG_IGN);
     ::prctl(PR_SET_CHILD_SUBREAPER, 1);
@@ -204,7 +287,8 @@ void write_report(int fd, KeeperReport r) noexcept
     close_all_except({report_fd, p.stdin_fd, p.out_fd, p.err_fd});
 
     UniqueFd status_r, status_w;
-    if (!make_pipe(status_r, status_w)) {
+    UniqueFd sigfd(::signalfd(-1, &chld, SFD_NONBLOCK | SFD_CLOEXEC));
+    if (!sigfd || !make_pipe(status_r, status_w)) {
         write_report(report_fd, {KeeperReport::failed, static_cast<int32_t>(Stage::setup), 0, errno});
         ::_exit(1);
     }
@@ -233,16 +317,56 @@ void write_report(int fd, KeeperReport r) noexcept
         write_report(report_fd, {KeeperReport::failed, st.stage, st.index, st.err});
     else
         write_report(report_fd, {KeeperReport::started, child, 0, 0});
+
+    bool orphaned = false; // the daemon is gone: the keeper ends the tree itself
+    bool child_reaped = false; // then its pid may be reused: no more signals to its group
+    double kill_at = 0;    // monotonic: SIGKILL sweeps from then on
     for (;;) {
-        int status;
-        pid_t pid = ::waitpid(-1, &status, 0);
-        if (pid < 0) {
-            if (errno == EINTR)
+        for (;;) {
+            int status;
+            pid_t pid = ::waitpid(-1, &status, WNOHANG);
+            if (pid > 0) {
+                if (pid == child) {
+                    child_reaped = true;
+                    write_report(report_fd, {KeeperReport::main_exit, status, 0, 0});
+                }
                 continue;
-            ::_exit(0); // ECHILD: the tree is empty
+            }
+            if (pid < 0 && errno == EINTR)
+                continue;
+            if (pid < 0)
+                ::_exit(0); // ECHILD: the tree is empty
+            break;          // children left
         }
-        if (pid == child)
-            write_report(report_fd, {KeeperReport::main_exit, status, 0, 0});
+        int timeout = -1;
+        if (orphaned) {
+            double left = kill_at - clock_seconds(CLOCK_MONOTONIC);
+            if (left <= 0) {
+                if (!child_reaped)
+                    ::kill(-child, SIGKILL);
+                signal_children(SIGKILL, 0);
+                timeout = kKeeperSweepMs;
+            } else {
+                timeout = left > 60 ? 60000 : static_cast<int>(std::ceil(left * 1000));
+            }
+        }
+        struct pollfd fds[2] = {{sigfd.get(), POLLIN, 0}, {orphaned ? -1 : report_fd, 0, 0}};
+        if (::poll(fds, 2, timeout) < 0 && errno != EINTR)
+            ::_exit(1);
+        if (fds[0].revents) {
+            struct signalfd_siginfo si;
+            while (::read(sigfd.get(), &si, sizeof si) > 0) {
+            }
+        }
+        if (!orphaned && (fds[1].revents & (POLLERR | POLLHUP))) {
+            // Nobody reads the reports any more.
+            orphaned = true;
+            if (!child_reaped)
+                ::kill(-child, p.spec.term_signal);
+            // Members that left the group (all of them once the group is gone).
+            signal_children(p.spec.term_signal, child_reaped ? 0 : child);
+            kill_at = clock_seconds(CLOCK_MONOTONIC) + p.spec.term_timeout;
+        }
     }
 }
 
@@ -267,20 +391,8 @@ std::unordered_map<pid_t, ProcEntry> scan_proc()
         long pid = std::strtol(e->d_name, &end, 10);
         if (*end || pid <= 0)
             continue;
-        char path[64], buf[1024];
-        std::snprintf(path, sizeof path, "/proc/%ld/stat", pid);
-        UniqueFd fd(::open(path, O_RDONLY | O_CLOEXEC));
-        if (!fd)
-            continue;
-        ssize_t n = ::read(fd.get(), buf, sizeof buf - 1);
-        if (n <= 0)
-            continue;
-        buf[n] = 0;
-        // "PID (COMM) STATE PPID PGRP ...": COMM may hold anything, so parse after the last ')'.
-        char *close = std::strrchr(buf, ')');
-        char state;
-        int ppid, pgrp;
-        if (!close || std::sscanf(close + 1, " %c %d %d", &state, &ppid, &pgrp) != 3)
+        pid_t ppid, pgrp;
+        if (!read_proc_stat(pid, ppid, pgrp))
             continue;
         table[static_cast<pid_t>(pid)] = {ppid, pgrp};
     }

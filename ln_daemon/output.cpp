@@ -59,10 +59,43 @@ void LineBuffer::add(const Line &line)
     ++total_;
     if (capacity_ == 0)
         return;
-    if (lines_.size() >= capacity_)
+    while (!lines_.empty() &&
+           (lines_.size() >= capacity_ || bytes_ + line.text.size() > kMaxKeptBytes)) {
+        bytes_ -= lines_.front().text.size();
         lines_.pop_front();
+    }
     lines_.push_back(line);
+    bytes_ += line.text.size();
 }
+
+namespace {
+
+// Opens (creating) an output log for writing.  Only a regular file will do: the daemon's one
+// poll loop must not block in open() or write() of a FIFO or a terminal, and the rotation
+// renames the file, which must never happen to a device such as /dev/null.  O_NONBLOCK makes
+// the open of a FIFO return at once, to be refused like anything else that is not regular.
+UniqueFd open_regular(const std::string &path, int flags, uint64_t &size, std::string &error)
+{
+    UniqueFd fd(::open(path.c_str(),
+                       O_WRONLY | O_CREAT | O_CLOEXEC | O_NOCTTY | O_NONBLOCK | flags, 0644));
+    struct stat st;
+    if (!fd && errno == ENXIO) { // a FIFO without a reader, or a socket
+        error = "output log '" + path + "' is not a regular file";
+        return {};
+    }
+    if (!fd || ::fstat(fd.get(), &st) != 0) {
+        error = "cannot open output log '" + path + "': " + std::strerror(errno);
+        return {};
+    }
+    if (!S_ISREG(st.st_mode)) {
+        error = "output log '" + path + "' is not a regular file";
+        return {};
+    }
+    size = static_cast<uint64_t>(st.st_size);
+    return fd;
+}
+
+} // namespace
 
 bool RotatingLog::open(const std::string &path, uint64_t limit, uint32_t keep,
                        std::string &error)
@@ -70,14 +103,10 @@ bool RotatingLog::open(const std::string &path, uint64_t limit, uint32_t keep,
     path_ = path;
     limit_ = limit;
     keep_ = keep;
-    fd_.reset(::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NOCTTY, 0644));
-    if (!fd_) {
-        error = "cannot open output log '" + path + "': " + std::strerror(errno);
-        return false;
-    }
-    struct stat st;
-    size_ = ::fstat(fd_.get(), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0;
-    return true;
+    uint64_t size = 0;
+    fd_ = open_regular(path, O_APPEND, size, error);
+    size_ = size;
+    return static_cast<bool>(fd_);
 }
 
 bool RotatingLog::rotate() noexcept
@@ -92,11 +121,11 @@ bool RotatingLog::rotate() noexcept
             logf("output log %s: cannot rename to %s: %s", from.c_str(), to.c_str(),
                  std::strerror(errno));
     }
-    fd_.reset(::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC | O_NOCTTY,
-                     0644));
+    uint64_t size;
+    std::string error;
+    fd_ = open_regular(path_, O_TRUNC | O_APPEND, size, error);
     if (!fd_) {
-        logf("output log %s: cannot reopen after rotation, logging stops: %s", path_.c_str(),
-             std::strerror(errno));
+        logf("%s after rotation, logging stops", error.c_str());
         return false;
     }
     size_ = 0;

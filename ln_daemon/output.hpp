@@ -21,6 +21,7 @@ struct Line {
 
 constexpr size_t kMaxLineBytes = 16384;  // longer lines are cut into pieces
 constexpr double kPartialFlushDelay = 0.1; // seconds a partial line waits for its end
+constexpr size_t kMaxKeptBytes = 64u << 20; // text kept in memory per process, at most
 
 // Cuts one stream's bytes into lines.  A partial line is held back until its newline, until
 // it reaches kMaxLineBytes, or until flush() (after kPartialFlushDelay, or at the end).
@@ -38,7 +39,9 @@ private:
     double since_ = 0; // monotonic time the partial line began
 };
 
-// The last `capacity` lines of a process, and how many there were in all.
+// The last `capacity` lines of a process, at most kMaxKeptBytes of text (a process writing
+// long lines must not make the daemon hold up to capacity x kMaxLineBytes), and how many
+// lines there were in all.
 class LineBuffer {
 public:
     explicit LineBuffer(size_t capacity) : capacity_(capacity) {}
@@ -49,6 +52,7 @@ public:
 private:
     size_t capacity_;
     std::deque<Line> lines_;
+    size_t bytes_ = 0; // text of lines_
     uint64_t total_ = 0;
 };
 

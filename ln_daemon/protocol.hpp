@@ -20,6 +20,11 @@ constexpr size_t kTagBytes = 32;
 constexpr size_t kNonceBytes = 32;
 constexpr size_t kMaxFrame = 4u << 20; // most bytes after the length field
 constexpr size_t kMaxName = 255;       // instance and process names
+// The longest CLIENT_HELLO (type, request id, magic, version, nonce, instance, proof): before
+// the handshake no frame may be longer, so an unauthenticated peer costs a few hundred bytes.
+constexpr size_t kMaxHelloFrame = kHeaderBytes + sizeof kMagic + 2 + kNonceBytes + 4 + kMaxName +
+                                  32;
+static_assert(kMaxHelloFrame == 338);
 
 enum class Msg : uint8_t {
     daemon_hello = 0x01,

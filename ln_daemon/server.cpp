@@ -130,7 +130,7 @@ void Server::accept_all()
             return;
         }
         std::string peer = peer_name(sa);
-        if (conns_.size() >= kMaxConnections) {
+        if (conns_.size() >= kMaxConnections && !evict_unauthenticated()) {
             logf("connection from %s refused: %zu connections open", peer.c_str(), conns_.size());
             continue;
         }
@@ -153,6 +153,34 @@ void Server::accept_all()
         send(*c, Msg::daemon_hello, 0, w.buffer());
         conns_.emplace(c->id, std::move(c));
     }
+}
+
+bool Server::evict_unauthenticated()
+{
+    // Authenticated connections are never pushed out by newcomers; of the others, one that
+    // is closing anyway goes first, else the oldest still in its handshake: a manager's
+    // handshake takes one round trip, so the oldest are the ones that do not finish theirs.
+    auto victim = conns_.end();
+    for (auto it = conns_.begin(); it != conns_.end(); ++it) {
+        Connection &c = *it->second;
+        if (c.dead || c.phase == Connection::Phase::closing) {
+            victim = it;
+            break;
+        }
+        if (c.phase == Connection::Phase::handshake && victim == conns_.end())
+            victim = it;
+    }
+    if (victim == conns_.end())
+        return false;
+    Connection &c = *victim->second;
+    if (!c.dead && c.phase == Connection::Phase::handshake) {
+        logf("connection %s closed: its slot is needed, %zu connections open", c.peer.c_str(),
+             conns_.size());
+        send_error(c, 0, Err::not_authenticated, "connection slot needed by a newer connection");
+        flush(c); // best effort: the frame is small
+    }
+    conns_.erase(victim);
+    return true;
 }
 
 void Server::send(Connection &c, Msg type, uint32_t req, const std::string &payload)
@@ -272,10 +300,11 @@ void Server::parse_frames(Connection &c)
         uint32_t len = le32(c.in.data() + pos);
         bool tagged = c.phase == Connection::Phase::ready;
         size_t min = proto::kHeaderBytes + (tagged ? proto::kTagBytes : 0);
-        if (len > proto::kMaxFrame) {
+        size_t max = tagged ? proto::kMaxFrame : proto::kMaxHelloFrame;
+        if (len > max) {
             refuse(c, 0, Err::bad_request,
                    "frame of " + std::to_string(len) + " bytes exceeds the limit of " +
-                       std::to_string(proto::kMaxFrame));
+                       std::to_string(max) + (tagged ? "" : " before the handshake"));
             return;
         }
         if (len < min) {
@@ -567,11 +596,10 @@ int Server::run()
     std::vector<Supervisor::FdRef> proc_refs;
     std::vector<uint64_t> conn_ids;
     for (;;) {
-        if (shutdown_signals_) {
-            supervisor_.stop_all(); // also those that were still starting
-            if (supervisor_.alive() == 0 && supervisor_.stray_keepers() == 0)
-                break;
-        }
+        // Processes still starting when the shutdown began are stopped (or killed) by the
+        // supervisor's tick() once they run.
+        if (shutdown_signals_ && supervisor_.alive() == 0 && supervisor_.stray_keepers() == 0)
+            break;
         fds.clear();
         proc_refs.clear();
         conn_ids.clear();

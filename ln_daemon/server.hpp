@@ -48,6 +48,8 @@ public:
 
 private:
     void accept_all();
+    // Makes room for a new connection at the limit; false if every connection is authenticated.
+    bool evict_unauthenticated();
     void read_signals();
     void on_readable(Connection &c);
     void parse_frames(Connection &c);

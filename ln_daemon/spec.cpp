@@ -215,6 +215,8 @@ bool check_spawn(const SpawnRequest &req, LaunchSpec &launch, ProcessConfig &con
         return false;
     }
 
+    launch.term_signal = req.term_signal;
+    launch.term_timeout = req.term_timeout;
     config.name = req.name;
     config.max_output_lines = req.max_output_lines;
     config.log_path = req.log_path;

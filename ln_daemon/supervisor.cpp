@@ -141,6 +141,10 @@ void Supervisor::reap()
 
 void Supervisor::tick()
 {
+    if (shutdown_ == Shutdown::kill)
+        kill_all();
+    else if (shutdown_ == Shutdown::stop)
+        stop_all();
     for (auto &entry : procs_)
         entry.second->tick();
 }
@@ -179,6 +183,8 @@ void Supervisor::on_fd(const FdRef &ref)
 
 void Supervisor::stop_all()
 {
+    if (shutdown_ == Shutdown::none)
+        shutdown_ = Shutdown::stop;
     proto::Err code;
     std::string error;
     for (auto &entry : procs_)
@@ -188,6 +194,7 @@ void Supervisor::stop_all()
 
 void Supervisor::kill_all()
 {
+    shutdown_ = Shutdown::kill;
     for (auto &entry : procs_)
         entry.second->kill_now();
 }

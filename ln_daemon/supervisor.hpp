@@ -49,8 +49,11 @@ public:
     void collect_fds(std::vector<pollfd> &fds, std::vector<FdRef> &refs) const;
     void on_fd(const FdRef &ref);
 
-    void stop_all(); // daemon shutdown: STOP for every running process
-    void kill_all(); // second shutdown signal: SIGKILL now
+    // Daemon shutdown: STOP for every running process; after kill_all() (the second shutdown
+    // signal) SIGKILL instead.  Both hold from then on: tick() applies them to processes whose
+    // start is only reported later.
+    void stop_all();
+    void kill_all();
     size_t alive() const noexcept; // records that have not exited
     // Keepers of refused spawns that have not been reaped yet (they end on their own).
     size_t stray_keepers() const noexcept { return stray_.size(); }
@@ -68,6 +71,7 @@ private:
     std::unordered_map<uint64_t, Process *> by_id_;
     std::unordered_map<pid_t, Process *> by_keeper_;
     std::unordered_set<pid_t> stray_;
+    enum class Shutdown { none, stop, kill } shutdown_ = Shutdown::none;
 };
 
 } // namespace lnd

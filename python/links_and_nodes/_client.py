@@ -15,14 +15,19 @@ from __future__ import annotations
 
 import atexit
 import ctypes
+import operator
+import threading
+import time
 import weakref
-from collections.abc import Iterator, Sequence
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, NoReturn
 
 from . import _clientlib as C
 from . import _services
-from ._libln import error_from_code
+from . import _waits as W
+from ._libln import ERROR_CLASSES, ERRORS_BY_CODE, error_from_code
 from ._services import Handler, provided_service, service
 from .md_loader import message_class
 from .md_types import LnStruct
@@ -59,6 +64,11 @@ class client:  # noqa: N801 - the LN name
         self._ports: list[_Port] = []
         self._services: list[service] = []
         self._providers: list[provided_service] = []
+        # Threads inside wait_and_handle_service_group_requests (ident -> depth): close()
+        # waits for them, so libln never frees the client under a running wait.
+        self._waiting: dict[int, int] = {}
+        self._waiting_changed = threading.Condition()
+        self._closing = False
         self.name: str = C.ln_client_name(self._handle).decode()
 
     @property
@@ -142,8 +152,38 @@ class client:  # noqa: N801 - the LN name
         """Maximum number of threads of thread pool `pool` (1 .. 256)."""
         C.ln_set_max_threads(self.handle, pool.encode(), max_threads)
 
+    def _enter_wait(self) -> int:
+        """The handle, for a wait_and_handle_service_group_requests that starts now."""
+        with self._waiting_changed:
+            if self._closing:
+                raise ValueError("client is closed")
+            handle = self.handle
+            me = threading.get_ident()
+            self._waiting[me] = self._waiting.get(me, 0) + 1
+            return handle
+
+    def _leave_wait(self) -> None:
+        with self._waiting_changed:
+            me = threading.get_ident()
+            self._waiting[me] -= 1
+            if not self._waiting[me]:
+                del self._waiting[me]
+            self._waiting_changed.notify_all()
+
     def close(self) -> None:
-        """Close every port, service and provider and the connection (idempotent)."""
+        """Close every port, service and provider and the connection (idempotent).
+
+        Calls running in other threads end first: a blocking read, write or
+        wait_and_handle_service_group_requests within 0.1 s (then raising ValueError), a
+        service call when it returns.  From inside a service handler of this client it
+        raises LnBusyError."""
+        if _services.in_handler_of(self):
+            raise ERROR_CLASSES["LnBusyError"](
+                f"client '{self.name}' cannot be closed inside one of its service handlers")
+        with self._waiting_changed:
+            self._closing = True  # no new wait starts, running ones end after their slice
+            me = threading.get_ident()
+            self._waiting_changed.wait_for(lambda: all(t == me for t in self._waiting))
         for port in reversed(self._ports):
             port._forget()  # libln closes them with the client
         self._ports.clear()
@@ -182,28 +222,48 @@ def _close_pool_clients() -> None:
 
 
 _ln_read = C.ln_read
+_ln_read_borrow = C.ln_read_borrow
 _ln_write = C.ln_write
+_ln_write_loan = C.ln_write_loan
+_TimeoutError = ERRORS_BY_CODE[C.LN_ETIMEOUT]
 # subscribe(transport=...): the LN_SUBSCRIBE_* flag of each name
 _TRANSPORTS = {"udp": C.LN_SUBSCRIBE_UDP, "tcp": C.LN_SUBSCRIBE_TCP}
+def _uint32(what: str, value: Any, low: int) -> int:
+    """`value` as a whole number from `low` to 2**32 - 1, else TypeError / ValueError."""
+    if isinstance(value, bool):
+        raise TypeError(f"{what} must be an integer, not bool")
+    number = operator.index(value)  # TypeError for 2.5, "4", None
+    if not low <= number <= 0xFFFFFFFF:
+        raise ValueError(f"{what} must be at least {low} (and below 2**32), not {number}")
+    return number
+
+
+def _name(what: str, name: str) -> bytes:
+    """A topic or md name for libln; a NUL would silently cut it short there."""
+    data = name.encode()
+    if b"\0" in data:
+        raise ValueError(f"{what} {name!r} contains a NUL character")
+    return data
 
 
 class _CallArgs:
     """A port's handle, packet address and size as ctypes objects, and the last timeout."""
 
-    __slots__ = ("handle", "data", "size", "_timeout", "_timeout_c")
+    __slots__ = ("handle", "data", "size", "_timeout")
 
     def __init__(self, handle: int, packet: LnStruct) -> None:
         self.handle = ctypes.c_void_p(handle)
         self.data = ctypes.c_void_p(ctypes.addressof(packet))
         self.size = ctypes.c_size_t(ctypes.sizeof(packet))
-        self._timeout: float | None = None
-        self._timeout_c = ctypes.c_double(-1.0)
+        self._timeout: tuple[Any, ctypes.c_double] = (None, ctypes.c_double(W.SLICE))
 
     def timeout(self, timeout: float | None) -> ctypes.c_double:
-        if timeout != self._timeout:
-            self._timeout = timeout
-            self._timeout_c = ctypes.c_double(_timeout(timeout))
-        return self._timeout_c
+        """The ctypes value of one libln wait of `timeout` (see _slice)."""
+        last, value = self._timeout
+        if timeout != last:
+            value = ctypes.c_double(W.first_slice(timeout))
+            self._timeout = (timeout, value)
+        return value
 
 
 class _Port:
@@ -214,8 +274,15 @@ class _Port:
         self.topic_name = topic_name
         self.message_definition_name = md_name
         self.message_class: type[LnStruct] = message_class(md_name)
-        self.packet: LnStruct = self.message_class()
+        self._packet: LnStruct = self.message_class()
         self._handle: int | None = None
+        # One entry per libln call of the port running now: a call appends before it looks
+        # at _args and pops after, and close() clears _args before it waits for the deque to
+        # be empty, so a port is never freed under a running call (each deque operation is
+        # atomic in CPython, and much cheaper than a lock on this hot path).  A second entry
+        # means another thread uses the port: refused, as libln allows one thread per port.
+        self._calls: deque[None] = deque()
+        self._args: _CallArgs | None = None
 
     @property
     def handle(self) -> int:
@@ -223,28 +290,99 @@ class _Port:
             raise ValueError(f"port of topic '{self.topic_name}' is closed")
         return self._handle
 
+    @property
+    def packet(self) -> LnStruct:
+        """The message write() sends and read() fills; may be replaced by another message
+        of the port's md."""
+        return self._packet
+
+    @packet.setter
+    def packet(self, packet: LnStruct) -> None:
+        self._check_message(packet)
+        calls = self._calls
+        calls.append(None)
+        try:
+            if len(calls) != 1:
+                self._unusable(self)
+            self._packet = packet
+            a = self._args
+            if a is not None:
+                a.data = ctypes.c_void_p(ctypes.addressof(packet))
+        finally:
+            calls.pop()
+
+    def _check_message(self, packet: object) -> None:
+        """TypeError unless `packet` is a message of the port's md (also one of a class
+        message_class() made again for the same md)."""
+        cls, other = self.message_class, type(packet)
+        if other is cls or (isinstance(packet, LnStruct) and other.MD_NAME == cls.MD_NAME
+                            and getattr(other, "LAYOUT_HASH", None) == cls.LAYOUT_HASH):
+            return
+        raise TypeError(f"topic '{self.topic_name}' carries {cls.MD_NAME} messages, not "
+                        f"{getattr(other, 'MD_NAME', '') or other.__name__}")
+
+    def _unusable(self, args: object) -> NoReturn:
+        """Why a call cannot run: ValueError if the port is closed (`args` None), else
+        LnBusyError (another thread is in a call of it)."""
+        if args is None:
+            raise ValueError(f"port of topic '{self.topic_name}' is closed")
+        raise ERROR_CLASSES["LnBusyError"](
+            f"port of topic '{self.topic_name}' is in use by another thread (libln allows "
+            "one thread per port at a time)")
+
+    @contextmanager
+    def _call(self) -> Iterator[_CallArgs]:
+        """The call arguments for one libln call of the port, which is running while the
+        block runs (see _calls); ValueError / LnBusyError as _unusable."""
+        calls = self._calls
+        calls.append(None)
+        try:
+            a = self._args
+            if a is None or len(calls) != 1:
+                self._unusable(a)
+            yield a
+        finally:
+            calls.pop()
+
+    def _wait_idle(self) -> None:
+        """Until no call of the port runs in another thread (they end within a slice once
+        _args is None)."""
+        while self._calls:
+            time.sleep(0.001)
+
     def _open(self, fn: Any, buffers: int, flags: int, spin_us: int | None = None) -> None:
         opts = C.PortOptions()
         C.ln_port_options_init(ctypes.byref(opts))
-        opts.buffers, opts.flags = buffers, flags
+        # ctypes would silently keep the low 32 bits of a bigger or negative number
+        opts.buffers = _uint32("buffers", buffers, 1)
+        opts.flags = flags
         if spin_us is not None:
-            opts.spin_us = spin_us
+            opts.spin_us = _uint32("spin_us", spin_us, 0)
         handle = ctypes.c_void_p()
         cls = self.message_class
-        fn(self.client.handle, ctypes.byref(handle), self.topic_name.encode(),
-           self.message_definition_name.encode(), cls.LAYOUT_HASH, ctypes.sizeof(cls),
+        fn(self.client.handle, ctypes.byref(handle), _name("topic name", self.topic_name),
+           _name("md name", self.message_definition_name), cls.LAYOUT_HASH, ctypes.sizeof(cls),
            ctypes.byref(opts))
         self._handle = handle.value
+        # ctypes arguments of the hot path, converted once (halves the cost of a call)
+        self._args = _CallArgs(self._handle, self._packet)
 
     def _forget(self) -> None:
+        self._args = None  # no new call starts; a running one ends within a slice
+        self._wait_idle()
         self._handle = None
 
     def close(self) -> None:
-        if self._handle is not None:
-            handle, self._handle = self._handle, None
-            if self in self.client._ports:
-                self.client._ports.remove(self)
-            type(self)._close_fn(handle)
+        """Close the port (idempotent).  A call of it waiting in another thread returns
+        within 0.1 s and raises ValueError."""
+        self._args = None  # no new call starts; a running one ends within a slice
+        self._wait_idle()
+        handle, self._handle = self._handle, None
+        if handle is None:
+            return
+        if self in self.client._ports:
+            self.client._ports.remove(self)
+        type(self)._close_fn(handle)
 
     def __enter__(self) -> Any:
         return self
@@ -261,30 +399,76 @@ class publisher(_Port):  # noqa: N801
         super().__init__(clnt, topic_name, md_name)
         flags = C.LN_PUBLISH_WAIT_FOR_SUBSCRIBERS if wait_for_subscribers else 0
         self._open(C.ln_publish, buffers, flags)
-        # ctypes arguments of the hot path, converted once (halves the cost of a call)
-        self._args = _CallArgs(self.handle, self.packet)
 
     def write(self, packet: LnStruct | None = None, timeout: float | None = None) -> None:
-        """Publish `packet` (default: self.packet) by copying it into the topic."""
-        a = self._args
-        if packet is None or packet is self.packet:
-            _ln_write(a.handle, a.data, a.size, a.timeout(timeout))
-        else:
-            _ln_write(a.handle, ctypes.addressof(packet), ctypes.sizeof(packet),
-                      _timeout(timeout))
+        """Publish `packet` (default: self.packet) by copying it into the topic.
+
+        timeout: how long to wait for the write lock or, with wait_for_subscribers, for a
+        free buffer (None: forever); LnTimeoutError after it."""
+        if packet is not None and packet is not self._packet:
+            self._check_message(packet)
+        calls = self._calls
+        calls.append(None)
+        try:
+            a = self._args
+            if a is None or len(calls) != 1:
+                self._unusable(a)
+            if packet is None or packet is self._packet:
+                _ln_write(a.handle, a.data, a.size, a.timeout(timeout))
+            else:
+                _ln_write(a.handle, ctypes.addressof(packet), ctypes.sizeof(packet),
+                          W.first_slice(timeout))
+            return
+        except _TimeoutError as exc:
+            if not W.waits_longer(timeout):
+                raise
+            first = exc
+        finally:
+            calls.pop()
+        message = self._packet if packet is None else packet
+        self._wait_on(lambda a, t: _ln_write(a.handle, ctypes.addressof(message),
+                                             ctypes.sizeof(message), t), timeout, first)
+
+    def _wait_on(self, once: Callable[[_CallArgs, float], Any], timeout: float | None,
+                 error: BaseException) -> Any:
+        """The further waits of a call that used up its first slice with `error`: `once(args,
+        t)` is one libln call that raises LnTimeoutError when its wait `t` passes."""
+        deadline = W.deadline(timeout)
+        while True:
+            t = W.next_slice(deadline)
+            if t <= 0:
+                raise error
+            with self._call() as a:
+                try:
+                    return once(a, t)
+                except _TimeoutError as exc:
+                    error = exc
 
     @contextmanager
     def loan(self, timeout: float | None = None) -> Iterator[LnStruct]:
         """Zero-copy write: fill the yielded message in place; it is published when the
-        block ends normally and dropped if it raises."""
+        block ends normally and dropped if it raises.  The message lives in the topic's
+        ring: do not use it after the block."""
         ptr = ctypes.c_void_p()
-        C.ln_write_loan(self.handle, ctypes.byref(ptr), _timeout(timeout))
+        with self._call() as a:
+            try:
+                _ln_write_loan(a.handle, ctypes.byref(ptr), W.first_slice(timeout))
+                first = None
+            except _TimeoutError as exc:
+                if not W.waits_longer(timeout):
+                    raise
+                first = exc
+        if first is not None:
+            self._wait_on(lambda a, t: _ln_write_loan(a.handle, ctypes.byref(ptr), t),
+                          timeout, first)
         try:
             yield self.message_class.from_address(ptr.value)
         except BaseException:
-            C.ln_write_abort(self.handle)
+            with self._call() as a:
+                C.ln_write_abort(a.handle)
             raise
-        C.ln_write_commit(self.handle)
+        with self._call() as a:
+            C.ln_write_commit(a.handle)
 
     @property
     def subscriber_count(self) -> int:
@@ -304,7 +488,6 @@ class subscriber(_Port):  # noqa: N801
         self.info = C.SampleInfo()
         flags = 0 if transport is None else _TRANSPORTS[transport]
         self._open(C.ln_subscribe, buffers, flags, spin_us)
-        self._args = _CallArgs(self.handle, self.packet)
         self._info_ref = ctypes.byref(self.info)
 
     def _result(self, rc: int) -> bool:
@@ -318,28 +501,63 @@ class subscriber(_Port):  # noqa: N801
         """The next sample (copied into self.packet), or None if none came in time.
 
         timeout None blocks, 0 returns at once.  self.info has seq, timestamp_ns and the
-        overruns since the previous read."""
-        a = self._args
-        rc = _ln_read(a.handle, a.data, a.size, a.timeout(timeout), self._info_ref)
+        overruns since the previous read.  Ctrl-C ends a blocking read (KeyboardInterrupt;
+        nothing is lost, the next read goes on where this one would have)."""
+        calls = self._calls
+        calls.append(None)
+        try:
+            a = self._args
+            if a is None or len(calls) != 1:
+                self._unusable(a)
+            packet = self._packet  # the one a.data points to
+            rc = _ln_read(a.handle, a.data, a.size, a.timeout(timeout), self._info_ref)
+        finally:
+            calls.pop()
         if rc == 0:
-            return self.packet
-        return self.packet if self._result(rc) else None
+            return packet
+        if rc == C.LN_ETIMEOUT and W.waits_longer(timeout):
+            rc, packet = self._read_on(W.deadline(timeout))
+        return packet if self._result(rc) else None
+
+    def _read_on(self, deadline: float) -> tuple[int, LnStruct]:
+        """Further waits of a read that used up its first slice: libln's result and the
+        packet it filled."""
+        while True:
+            t = W.next_slice(deadline)
+            if t <= 0:
+                return C.LN_ETIMEOUT, self._packet
+            with self._call() as a:
+                packet = self._packet
+                rc = _ln_read(a.handle, a.data, a.size, t, self._info_ref)
+            if rc != C.LN_ETIMEOUT:
+                return rc, packet
 
     @contextmanager
     def borrow(self, timeout: float | None = None) -> Iterator[LnStruct | None]:
         """Zero-copy read: the yielded message lives in the topic's ring (None if nothing came
-        in time).  Raises LnOverrunError at the end of the block if a publisher overwrote it
-        meanwhile, so what was read from it must be discarded."""
+        in time); do not use it after the block.  Raises LnOverrunError at the end of the
+        block if a publisher overwrote it meanwhile, so what was read from it must be
+        discarded."""
         ptr = ctypes.c_void_p()
-        rc = C.ln_read_borrow(self.handle, ctypes.byref(ptr), _timeout(timeout),
-                              ctypes.byref(self.info))
+        t = W.first_slice(timeout)
+        end: float | None = None
+        while True:
+            with self._call() as a:
+                rc = _ln_read_borrow(a.handle, ctypes.byref(ptr), t, self._info_ref)
+            if rc != C.LN_ETIMEOUT or not W.waits_longer(timeout):
+                break
+            if end is None:
+                end = W.deadline(timeout)
+            if (t := W.next_slice(end)) <= 0:
+                break
         if not self._result(rc):
             yield None
             return
         try:
             yield self.message_class.from_address(ptr.value)
         finally:
-            rc = C.ln_read_release(self.handle)
+            with self._call() as a:
+                rc = C.ln_read_release(a.handle)
         if rc < 0:
             raise error_from_code(rc, C.last_error())
 

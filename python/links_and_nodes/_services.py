@@ -22,6 +22,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from . import _clientlib as C
+from . import _waits as W
 from ._libln import ERROR_CLASSES, error_from_code
 from .md_loader import message_class
 from .md_types import LnStruct, own_dynamic_data
@@ -246,6 +247,10 @@ class provided_service:  # noqa: N801
         except BaseException as exc:  # noqa: BLE001 - e.g. MemoryError
             _answer_failure(None, req, self.name, exc)
             return 0
+        handling = getattr(_local, "handling", None)
+        if handling is None:
+            handling = _local.handling = []
+        handling.append(self.client)
         try:  # the request's handle is valid only until this returns
             request._read()
             self.handler(request)
@@ -253,6 +258,7 @@ class provided_service:  # noqa: N801
             _answer_failure(request, req, self.name, exc)
         finally:
             request._handle = None
+            handling.pop()
         return 0
 
     def _forget(self) -> None:
@@ -296,16 +302,27 @@ def _answer_failure(request: service_request | None, req: int | None, name: str,
 
 
 def wait_and_handle(clnt: client, group: str | None, timeout: float | None) -> int:
-    """client.wait_and_handle_service_group_requests (handlers run in this thread)."""
+    """client.wait_and_handle_service_group_requests (handlers run in this thread).
+
+    A long wait is made of slices (see _waits), so that client.close() from another
+    thread need not wait longer than one of them."""
+    name = _name_arg(group)
+    handle = clnt._enter_wait()
     previous = getattr(_local, "waiting", False)
     _local.waiting = True
     _local.pending = None
     try:
-        rc = C.ln_wait_and_handle_service_group_requests(clnt.handle, _name_arg(group),
-                                                         _timeout(timeout))
+        rc = C.ln_wait_and_handle_service_group_requests(handle, name, W.first_slice(timeout))
+        if rc == 0 and W.waits_longer(timeout):
+            end = W.deadline(timeout)
+            while rc == 0 and (t := W.next_slice(end)) > 0:
+                if clnt._closing:
+                    raise ValueError("client is closed")
+                rc = C.ln_wait_and_handle_service_group_requests(handle, name, t)
     finally:
         _local.waiting = previous
         pending, _local.pending = _local.pending, None
+        clnt._leave_wait()
     if pending is not None:
         raise pending
     if rc == C.LN_EINTR:
@@ -313,6 +330,11 @@ def wait_and_handle(clnt: client, group: str | None, timeout: float | None) -> i
     if rc < 0:
         raise error_from_code(rc, C.last_error())
     return rc
+
+
+def in_handler_of(clnt: client) -> bool:
+    """Whether this thread runs a service handler of `clnt` (libln is below it)."""
+    return clnt in getattr(_local, "handling", ())
 
 
 # ---- the LN wrapper ------------------------------------------------------------------------

@@ -29,7 +29,12 @@ def _decode(raw: bytes) -> str:
 
 
 def _encode(value: str | bytes) -> bytes:
-    return value.encode("utf-8", "surrogateescape") if isinstance(value, str) else bytes(value)
+    if isinstance(value, str):
+        return value.encode("utf-8", "surrogateescape")
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return bytes(value)
+    # bytes(5) would be five NULs, bytes([104, 105]) a guess at what was meant
+    raise TypeError(f"a char field takes str or bytes, not {type(value).__name__}")
 
 
 def _root(obj: ctypes.Structure) -> Any:
@@ -114,18 +119,33 @@ def _plain(value: Any) -> Any:
 def _assign_nested(obj: LnStruct, name: str, kind: str, value: Any) -> None:
     target = getattr(obj, name)
     if kind == "scalar":
-        if isinstance(value, LnStruct):
-            setattr(obj, name, value)
-        else:
-            target.update(value)
+        _assign_struct(target, value)
         return
     if len(value) != len(target):
         raise ValueError(f"{obj.MD_NAME}.{name}: expected {len(target)} elements, got {len(value)}")
     for i, item in enumerate(value):
-        if isinstance(item, LnStruct):
-            target[i] = item
-        else:
-            target[i].update(item)
+        _assign_struct(target[i], item)
+
+
+def _assign_struct(target: LnStruct, value: Any) -> None:
+    """Set struct `target` (memory of its owner) to `value`: a struct of the same md or a
+    dict of fields.  Dynamic data is copied into buffers the owner keeps: a byte copy would
+    leave pointers into buffers that only `value` keeps alive.  A struct of the same md
+    from another class (each md's class has its own copies of the classes it uses) is
+    taken field by field."""
+    if not isinstance(value, LnStruct):
+        target.update(value)
+        return
+    cls = type(target)
+    if type(value) is cls:
+        ctypes.memmove(ctypes.addressof(target), ctypes.addressof(value), ctypes.sizeof(cls))
+        own_dynamic_data(target)
+        return
+    if type(value).MD_NAME != cls.MD_NAME:
+        raise TypeError(f"{cls.MD_NAME or cls.__name__}: cannot take a "
+                        f"{type(value).MD_NAME or type(value).__name__}")
+    ctypes.memset(ctypes.addressof(target), 0, ctypes.sizeof(cls))
+    target.update(value.to_dict())
 
 
 def _array_property(name: str, dtype: str, count: int, offset: int) -> property:
@@ -165,6 +185,16 @@ def _char_scalar_property(name: str, offset: int) -> property:
     return property(get, set_, doc="char as a one-character str")
 
 
+def _struct_property(name: str, cfield: Any) -> property:
+    def get(self: LnStruct) -> Any:
+        return cfield.__get__(self)
+
+    def set_(self: LnStruct, value: Any) -> None:
+        _assign_struct(cfield.__get__(self), value)
+
+    return property(get, set_, doc=f"nested struct {name} (takes a struct of its md or a dict)")
+
+
 def _dynamic_property(name: str, elem: Any, cfield: Any) -> property:
     len_name = f"{name}_len"
     is_struct = isinstance(elem, type) and issubclass(elem, LnStruct)
@@ -197,10 +227,7 @@ def _dynamic_property(name: str, elem: Any, cfield: Any) -> property:
             n = len(value)
             buf = (elem * n)()
             for i, item in enumerate(value):
-                if isinstance(item, LnStruct):
-                    buf[i] = item
-                else:
-                    buf[i].update(item)
+                _assign_struct(buf[i], item)
         else:
             arr = np.ascontiguousarray(value, dtype=_DTYPES[elem])
             if arr.ndim != 1:
@@ -271,6 +298,8 @@ def finalize(cls: type[LnStruct]) -> type[LnStruct]:
             cls._ln_raw_fields_[name] = cfield
             cls._ln_has_dynamic_ = True
             setattr(cls, name, _dynamic_property(name, elem, cfield))
+        elif kind == "scalar" and isinstance(elem, type) and issubclass(elem, LnStruct):
+            setattr(cls, name, _struct_property(name, cfield))
         elif kind == "scalar" and elem is ctypes.c_char:
             setattr(cls, name, _char_scalar_property(name, cfield.offset))
         elif kind == "array" and elem is ctypes.c_char:

@@ -430,6 +430,30 @@ void test_shutdown_kills()
     LN_CHECK_EQ(f.sup.alive(), 0);
 }
 
+void test_second_shutdown_signal_kills_a_process_still_starting()
+{
+    // The second SIGTERM means SIGKILL now, also for a process whose start is only reported
+    // after it: it must not get the term signal and a term timeout instead.
+    Fixture f;
+    proto::Err code;
+    std::string error;
+    pid_t keeper = f.os.next_keeper;
+    SpawnRequest req = request("late");
+    req.term_timeout = 1e6;
+    LN_CHECK(f.sup.spawn("inst", req, 7, code, error));
+    Process *p = f.sup.find_keeper(keeper);
+    LN_CHECK(p != nullptr);
+    if (!p)
+        return;
+    f.sup.stop_all();
+    f.sup.kill_all();
+    f.os.take_calls();
+    p->on_report({KeeperReport::started, 140, 0, 0});
+    f.sup.tick();
+    CHECK_STR(f.os.take_calls(), "kill -140 9; tree 1000 9 skip 0");
+    LN_CHECK(p->state() == State::stopping);
+}
+
 void test_launch_failure()
 {
     Fixture f;
@@ -538,6 +562,7 @@ int main()
     LN_TEST_RUN(test_output_lines);
     LN_TEST_RUN(test_output_before_start_waits_for_the_reply);
     LN_TEST_RUN(test_shutdown_kills);
+    LN_TEST_RUN(test_second_shutdown_signal_kills_a_process_still_starting);
     LN_TEST_RUN(test_launch_failure);
     LN_TEST_RUN(test_spawn_checks);
     LN_TEST_RUN(test_failure_texts);

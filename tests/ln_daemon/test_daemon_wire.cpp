@@ -228,6 +228,28 @@ void test_line_splitter()
     LN_CHECK(!s.pending());
 }
 
+void test_line_buffer_is_bounded_in_bytes()
+{
+    // A process writing long lines must not make the daemon hold max_output_lines of them
+    // (up to 1000000 x 16 KiB): the text kept is bounded in bytes as well, oldest dropped.
+    LineBuffer buf(kMaxOutputLines);
+    std::string text(kMaxLineBytes, 'z');
+    size_t n = kMaxKeptBytes / kMaxLineBytes + 10;
+    for (size_t i = 0; i < n; ++i)
+        buf.add({double(i), proto::Stream::out, text});
+    LN_CHECK_EQ(buf.total(), n);
+    LN_CHECK_EQ(buf.lines().size(), kMaxKeptBytes / kMaxLineBytes);
+    LN_CHECK(buf.lines().back().time == double(n - 1));
+    LN_CHECK(buf.lines().front().time == double(n - kMaxKeptBytes / kMaxLineBytes));
+    buf.add({0, proto::Stream::out, std::string()}); // empty lines count too, and fit
+    LN_CHECK_EQ(buf.lines().size(), kMaxKeptBytes / kMaxLineBytes + 1);
+
+    LineBuffer few(3); // the line count still applies
+    for (int i = 0; i < 5; ++i)
+        few.add({double(i), proto::Stream::out, "x"});
+    LN_CHECK_EQ(few.lines().size(), 3);
+}
+
 void test_rotating_log()
 {
     std::string path = g_dir + "/out.log";
@@ -274,6 +296,7 @@ int main()
     LN_TEST_RUN(test_key_file);
     LN_TEST_RUN(test_session_derivation);
     LN_TEST_RUN(test_line_splitter);
+    LN_TEST_RUN(test_line_buffer_is_bounded_in_bytes);
     LN_TEST_RUN(test_rotating_log);
     ::nftw(g_dir.c_str(), remove_entry, 16, FTW_DEPTH | FTW_PHYS);
     LN_TEST_EXIT();

@@ -103,12 +103,16 @@ private:
     int fd_;
 };
 
-void every_sample_in_order(unsigned spin_us)
+// kSamples samples of `size` bytes, at most `window` unread at a time, arrive whole, in
+// order and with their timestamps.
+void every_sample_in_order(unsigned spin_us, uint64_t size = 256, uint64_t kSamples = 2000,
+                           uint32_t window = 256, int socket_buffer = 0)
 {
-    constexpr uint64_t kSamples = 2000;
-    TestRing src(256, 512), dst(256, 1024);
+    TestRing src(size, window * 2), dst(size, window * 4);
     Options o = local_options();
     o.spin_us = spin_us;
+    if (socket_buffer)
+        o.socket_buffer = socket_buffer;
     Forwarder rx(o), tx(o);
     CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
     CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())), "");
@@ -118,7 +122,7 @@ void every_sample_in_order(unsigned spin_us)
     uint64_t published = 0, received = 0;
     while (received < kSamples && !ln_test_failures) {
         // Stay well within both rings, so that nothing is lost before the network.
-        while (published < kSamples && published - received < 256)
+        while (published < kSamples && published - received < window)
             LN_CHECK_EQ(pub.publish(++published), LN_OK);
         if (reader.read(30) != LN_OK) {
             LN_CHECK(!"sample arrived");
@@ -134,7 +138,7 @@ void every_sample_in_order(unsigned spin_us)
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).samples == kSamples; }));
     auto s = stats_of(tx, kToken, true);
     LN_CHECK_EQ(s.drops, 0);
-    LN_CHECK_EQ(s.bytes, kSamples * 256);
+    LN_CHECK_EQ(s.bytes, kSamples * size);
     LN_CHECK(s.connected);
     CHECK_STR(s.last_error, "");
     // Counted right after the write into the ring, which the reader may see first.
@@ -155,6 +159,15 @@ void test_every_sample_in_order()
 void test_every_sample_in_order_polling()
 {
     every_sample_in_order(200);
+}
+
+// Samples far larger than the socket buffers: the reader's direct send on an idle
+// connection writes only part of a frame, and the writer must finish exactly that frame
+// (from the byte where it stopped) before any other.
+void test_large_samples_partly_sent()
+{
+    every_sample_in_order(0, 300 * 1000 + 7, 60, 4, 8192);
+    every_sample_in_order(200, 300 * 1000 + 7, 60, 4, 8192);
 }
 
 // Nobody answers the hello: the queue fills up to its bound and every further sample is a
@@ -333,6 +346,7 @@ int main()
 {
     LN_TEST_RUN(test_every_sample_in_order);
     LN_TEST_RUN(test_every_sample_in_order_polling);
+    LN_TEST_RUN(test_large_samples_partly_sent);
     LN_TEST_RUN(test_receiver_never_answers);
     LN_TEST_RUN(test_receiver_stops_reading);
     LN_TEST_RUN(test_reconnect);

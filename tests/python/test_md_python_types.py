@@ -166,3 +166,63 @@ def test_dynamic_values_keep_their_buffer(tmp_path: Path) -> None:
     gc.collect()
     assert isinstance(old.base, ctypes.Array)  # the buffer itself, not the struct
     assert old.tolist() == [1.0, 2.0, 3.0] and obj.values.tolist() == [4.0]
+
+
+def _spoil(struct: object, field: str) -> None:
+    """Overwrite what dynamic char field `field` of `struct` points to, in place."""
+    ptr = type(struct)._ln_raw_fields_[field].__get__(struct)
+    ctypes.memset(ptr, ord("X"), getattr(struct, f"{field}_len"))
+
+
+def test_structs_given_to_fields_hand_over_a_copy_of_their_dynamic_data() -> None:
+    import links_and_nodes as ln
+
+    req_cls = dict((n, e) for n, _k, e, _c in ln.message_class("robot/plan_path")._ln_specs_)["req"]
+    nested = dict((n, e) for n, _k, e, _c in req_cls._ln_specs_)["constraints"]
+    # the nested class of plan_path, and the class ln.message_class gives for ln/string
+    items = [nested.from_dict({"data": "joint_limits"}),
+             ln.message_class("ln/string").from_dict({"data": "collision"})]
+    req = req_cls()
+    req.constraints = items
+    for item in items:
+        _spoil(item, "data")
+    assert [c.data for c in req.constraints] == ["joint_limits", "collision"]
+
+
+@pytest.mark.parametrize("how", ["attribute", "update"])
+def test_nested_structs_hand_over_a_copy_of_their_dynamic_data(tmp_path: Path, how: str) -> None:
+    (tmp_path / "t").mkdir()
+    (tmp_path / "t" / "leaf").write_text("char* text\n")
+    (tmp_path / "t" / "tree").write_text('define leaf as "t/leaf"\nleaf one\nleaf two[2]\n')
+    out = tmp_path / "gen_tree.py"
+    assert main(["-o", str(out), "--md-dir", str(tmp_path), "t/tree"]) == 0
+    mod = load_module(f"gen_tree_{how}", out)
+    tree = mod.t_tree_t()
+    leaf_cls = type(tree.one)
+    one = leaf_cls.from_dict({"text": "one"})
+    two = [leaf_cls.from_dict({"text": f"two{i}"}) for i in range(2)]
+    if how == "attribute":
+        tree.one = one
+        tree.update({"two": two})
+    else:
+        tree.update({"one": one, "two": two})
+    for leaf in (one, *two):
+        _spoil(leaf, "text")
+    del one, two, leaf
+    gc.collect()
+    assert tree.to_dict() == {"one": {"text": "one"}, "two": [{"text": "two0"}, {"text": "two1"}]}
+
+
+def test_char_fields_refuse_what_is_not_text(m: ModuleType) -> None:
+    gains = m.robot_set_gains_request_t()
+    chars = m.t_chars_t()
+    for value in (5, [104, 105], None, 2.5):
+        with pytest.raises(TypeError, match="str or bytes"):
+            gains.profile_name = value  # char*: bytes(5) used to make five NULs
+        with pytest.raises(TypeError, match="str or bytes"):
+            chars.label = value  # char[8]
+    gains.profile_name = bytearray(b"soft")
+    chars.label = memoryview(b"arm")
+    assert (gains.profile_name, chars.label) == ("soft", "arm")
+    chars.initial = 65  # a single char still takes its code
+    assert chars.initial == "A"

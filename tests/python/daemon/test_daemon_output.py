@@ -5,10 +5,12 @@ last max_output_lines, and the output log rotates at its size limit keeping N fi
 from __future__ import annotations
 
 import asyncio
+import os
 import sys
 from pathlib import Path
 
-from daemonproc import Daemon, exited, line, next_event, spec
+import pytest
+from daemonproc import WAIT, Daemon, exited, line, next_event, spec
 
 from links_and_nodes.manager import daemon_client as dc
 
@@ -155,3 +157,24 @@ def test_output_log_without_limit_appends(daemon: Daemon, tmp_path: Path) -> Non
     asyncio.run(main())
     assert log.read_text().splitlines()[0] == "old"
     assert sorted(log.read_text().splitlines()[1:]) == ["one", "two"]
+
+
+def test_output_log_must_be_a_regular_file(daemon: Daemon, tmp_path: Path) -> None:
+    # A FIFO nobody reads would block the daemon's one poll loop in open() (and one that is
+    # read, in write()); a device would be renamed by the rotation.  Both are refused.
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+
+    async def main() -> None:
+        async with await daemon.connect() as client:
+            for path in (str(fifo), "/dev/null"):
+                with pytest.raises(dc.DaemonError) as refused:
+                    await asyncio.wait_for(
+                        client.spawn(spec("f", "echo hi", output_log=(path, 10, 1))), WAIT)
+                assert refused.value.code == dc.ErrorCode.SPAWN_FAILED
+                assert str(refused.value) == f"output log '{path}' is not a regular file"
+            assert await client.list() == []
+            await client.ping()
+
+    asyncio.run(main())
+    assert Path("/dev/null").exists() and not Path("/dev/null").is_file()

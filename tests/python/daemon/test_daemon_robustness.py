@@ -85,12 +85,34 @@ def test_malformed_request_after_auth(daemon: Daemon) -> None:
     asyncio.run(main())
 
 
+def test_oversized_frame_before_authentication_is_refused_at_once(daemon: Daemon) -> None:
+    # Before the handshake only a CLIENT_HELLO is acceptable, so a longer frame is refused
+    # as soon as its length is read: an unauthenticated peer cannot make the daemon hold
+    # megabytes per connection while it waits for a body that never comes.
+    for length in (4 << 20, 339):
+        conn = RawConnection(daemon.port)
+        try:
+            conn.hello()
+            conn.send(struct.pack("<I", length))
+            code, text = conn.expect_error_and_close()
+            assert code == dc.ErrorCode.BAD_REQUEST, text
+            assert text == f"frame of {length} bytes exceeds the limit of 338 before the handshake"
+        finally:
+            conn.close()
+    # The largest CLIENT_HELLO (an instance name of 255 bytes) still fits.
+    conn = RawConnection(daemon.port)
+    try:
+        conn.authenticate(daemon.key, "i" * 255)
+    finally:
+        conn.close()
+
+
 def test_silent_and_half_open_connections(daemon: Daemon) -> None:
     # Connections that say nothing, or half a frame, do not block anybody else.
     idle = [socket.create_connection(("127.0.0.1", daemon.port)) for _ in range(5)]
     half = RawConnection(daemon.port)
     half.hello()
-    half.send(struct.pack("<I", 1000) + b"only part of it")
+    half.send(struct.pack("<I", 300) + b"only part of it")
     try:
         async def main() -> None:
             async with await daemon.connect() as client:
@@ -118,3 +140,31 @@ def test_client_refuses_oversized_requests(daemon: Daemon) -> None:
             await client.ping()  # nothing was sent, the connection is fine
 
     asyncio.run(main())
+
+
+def test_unauthenticated_connections_cannot_lock_out_a_manager(daemon: Daemon) -> None:
+    # Peers that never authenticate hold every connection slot (a slow-loris): a manager with
+    # the key still gets in, taking the slot of the oldest of them, and so does the next one.
+    idle = []
+    try:
+        for _ in range(256):
+            conn = RawConnection(daemon.port)
+            nonce = conn.hello()  # accepted: the daemon greeted it
+            idle.append(conn)
+
+        async def main() -> None:
+            async with await daemon.connect() as first, await daemon.connect() as second:
+                await first.ping()
+                await second.ping()
+
+        asyncio.run(main())
+        # The oldest unauthenticated ones made room; the newest are still served.
+        code, text = idle[0].expect_error_and_close()
+        assert (code, text) == (dc.ErrorCode.NOT_AUTHENTICATED,
+                                "connection slot needed by a newer connection")
+        newest = idle[-1]
+        newest.send(newest.client_hello(daemon.key, daemon.instance, nonce))
+        assert newest.read_frame()[0] == dc.Msg.AUTH_OK
+    finally:
+        for conn in idle:
+            conn.close()

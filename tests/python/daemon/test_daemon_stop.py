@@ -5,12 +5,15 @@ orphaned), exit codes and signals are reported, SIGNAL reaches the process."""
 from __future__ import annotations
 
 import asyncio
+import os
 import signal
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from daemonproc import Daemon, alive, exited, line, next_event, proc_stat, spec, wait_for
+from daemonproc import (Daemon, alive, descendants, exited, line, next_event, proc_stat, spec,
+                        wait_for)
 
 from links_and_nodes.manager import daemon_client as dc
 
@@ -228,3 +231,34 @@ def test_state_events(daemon: Daemon) -> None:
             assert states == ["running", "stopping", "exited"]
 
     asyncio.run(main())
+
+
+@pytest.mark.parametrize("use_pty", [False, True])
+def test_killed_daemon_leaves_no_process_behind(start: Callable[..., Daemon],
+                                                use_pty: bool) -> None:
+    # Without its daemon a tree has nobody to stop it, report it or re-adopt it, so each
+    # keeper ends its tree as a STOP would: the term signal, SIGKILL after the term timeout.
+    # This tree ignores SIGTERM and SIGHUP (a pty's hang-up does not end it either), with a
+    # member in a session of its own, and writes nothing more that could fail.
+    daemon = start()
+
+    async def main() -> list[tuple[int, int]]:
+        async with await daemon.connect() as client:
+            await client.spawn(spec("stubborn", "trap '' TERM HUP; setsid sleep 600 & "
+                                    "sleep 600 & echo ready; wait", use_pty=use_pty,
+                                    term_timeout=0.5))
+            await line(client, "stubborn", "ready")
+        return [(pid, st[4]) for pid in descendants(daemon.proc.pid)
+                if (st := proc_stat(pid)) is not None]
+
+    tree = asyncio.run(main())
+    assert len(tree) == 4  # keeper, shell, two sleeps
+    daemon.proc.kill()
+    daemon.proc.wait()
+    try:
+        wait_for(lambda: not any(alive(pid, start) for pid, start in tree),
+                 "the tree of the killed daemon to end")
+    finally:
+        for pid, start_time in tree:
+            if alive(pid, start_time):
+                os.kill(pid, signal.SIGKILL)

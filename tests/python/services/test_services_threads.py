@@ -4,6 +4,7 @@ run at the same time, never by timing."""
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
@@ -115,3 +116,41 @@ def test_keyboard_interrupt_in_a_handler_reaches_the_waiting_thread(manager: Man
         caller.join(LIMIT)
         assert len(errors) == 1 and isinstance(errors[0], ln.LnServiceError)
         assert "KeyboardInterrupt" in str(errors[0])
+
+
+def test_close_ends_a_wait_in_another_thread(manager: Manager) -> None:
+    clnt = manager.client("provider")
+    clnt.get_service_provider("math.scale", "lntest/scale", lambda r: r.respond())
+    outcome: list[object] = []
+    started = threading.Event()
+
+    def wait() -> None:
+        started.set()
+        try:
+            outcome.append(clnt.wait_and_handle_service_group_requests(timeout=None))
+        except BaseException as exc:  # noqa: BLE001 - checked below
+            outcome.append(exc)
+
+    waiter = threading.Thread(target=wait, daemon=True)
+    waiter.start()
+    started.wait(LIMIT)
+    clnt.close()  # before or during the wait: either way it must not run on a freed client
+    waiter.join(LIMIT)
+    assert not waiter.is_alive(), "wait_and_handle_service_group_requests still blocks"
+    assert len(outcome) == 1 and isinstance(outcome[0], ValueError), outcome
+
+
+@pytest.mark.parametrize("pool", [False, True])
+def test_close_inside_a_handler_is_refused(manager: Manager, pool: bool) -> None:
+    with manager.client("provider") as prov_c, manager.client("caller") as call_c:
+        def handler(request: ln.service_request) -> None:
+            prov_c.close()
+
+        prov_c.get_service_provider("math.scale", "lntest/scale", handler)
+        if pool:
+            prov_c.handle_service_group_in_thread_pool(None, "workers")
+        svc = call_c.get_service("math.scale", "lntest/scale")
+        with (contextlib.nullcontext() if pool else serving(prov_c)):
+            for _ in range(2):  # the provider, and the client, go on serving
+                with pytest.raises(ln.LnServiceError, match="LnBusyError"):
+                    svc.call(timeout=LIMIT)
