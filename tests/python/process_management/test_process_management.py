@@ -162,9 +162,9 @@ def test_manager_killed_processes_survive_and_new_manager_reattaches(lab: Lab) -
     body = (process("a", "ready", "up", marker=m, extra="ready_regex: ^up$")
             + process("b", "ready", "up", marker=m, extra="depends_on: a\nready_regex: up")
             + process("c", "publish", topic, "3", marker=m,
-                      # this checkout's package, whatever is installed
+                      # this checkout's package and ln_generate, whatever is installed
                       extra=f"ready_on_topic: {topic}\n"
-                            f"environment: PYTHONPATH={REPO / 'python'}"))
+                            f"environment: PYTHONPATH={REPO / 'python'}:{REPO}"))
     config = lab.write(body)
     first = lab.manager(config, "--no-console", "--start-all")
     lab.wait_listening(first)
