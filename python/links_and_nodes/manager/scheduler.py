@@ -19,6 +19,7 @@ from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from .changes import Changes
 from .config import model
 from .process_states import ALIVE, STARTABLE, ProcState, check_transition
 
@@ -157,14 +158,14 @@ class Scheduler:
                 rt.regex = re.compile(cfg.ready_regex)
             self.procs[name] = rt
         self.states = {name: StateRuntime(cfg) for name, cfg in config.states.items()}
-        self._changed = asyncio.Condition()
+        self._changed = Changes()
         self._limiters: dict[str, RateLimiter] = {}
         self._event_tasks: dict[int, asyncio.Task[None]] = {}
         self._links: dict[str, DaemonLink] = {}
         self._transient = 0
         # transient runs (state commands): their exit, and the daemon connection they use
         self._waiters: dict[str, tuple[asyncio.Future[Any], DaemonLink]] = {}
-        self._bg: set[asyncio.Task[Any]] = set()  # stops of dependents, notifications
+        self._bg: set[asyncio.Task[Any]] = set()  # stops of dependents
         self.output_listeners: list[Callable[[str, Any], None]] = []
         self.transition_listeners: list[Callable[[str, Transition], None]] = []
         registry.listeners.append(self._registry_changed)
@@ -244,9 +245,8 @@ class Scheduler:
                     raise StartError(f"{rt.cfg.name}: {rt.state.value}: {rt.reason}")
             return all(rt.state in states for rt in rts)
 
-        async with self._changed:
-            if not done():  # (a timeout of 0 only looks)
-                await asyncio.wait_for(self._changed.wait_for(done), timeout)
+        if not done():  # (a timeout of 0 only looks)
+            await asyncio.wait_for(self._changed.wait_for(done), timeout)
 
     async def wait_ready(self, target: str = "all", timeout: float | None = None, *,
                          final: bool = False) -> None:
@@ -385,7 +385,7 @@ class Scheduler:
             for task in tasks:
                 task.cancel()
             await asyncio.gather(*tasks, return_exceptions=True)
-            tasks = list(self._bg)  # notifications of what the cancellations changed
+            tasks = list(self._bg)  # stops the cancellations started meanwhile
         with contextlib.suppress(ValueError):
             self.registry.listeners.remove(self._registry_changed)
 
@@ -407,11 +407,7 @@ class Scheduler:
         self._notify()
 
     def _notify(self) -> None:
-        async def notify() -> None:
-            async with self._changed:
-                self._changed.notify_all()
-        task = asyncio.get_running_loop().create_task(notify())
-        self._background(task)
+        self._changed.notify()
 
     def _background(self, task: asyncio.Task[Any]) -> None:
         self._bg.add(task)
@@ -581,8 +577,8 @@ class Scheduler:
             return
         with contextlib.suppress(self.backend.error_type):  # it may have exited meanwhile
             await link.stop(rt.cfg.name)
-        async with self._changed:  # its exit (_on_exit) or the connection's loss clears it
-            await self._changed.wait_for(lambda: rt.pid != info.pid)
+        # its exit (_on_exit) or the connection's loss clears it
+        await self._changed.wait_for(lambda: rt.pid != info.pid)
 
     async def _ready_timer(self, rt: Runtime, delay: float) -> None:
         await asyncio.sleep(delay)
@@ -732,8 +728,7 @@ class Scheduler:
                 log.warning("process %s: stop failed: %s", rt.cfg.name, exc)
         if rt.state == S.STOPPING:
             # not "until stopped": a restored dependent may be starting again at once
-            async with self._changed:
-                await self._changed.wait_for(lambda: rt.state != S.STOPPING)
+            await self._changed.wait_for(lambda: rt.state != S.STOPPING)
 
     # ---- daemon events -------------------------------------------------------------------
     def _on_event(self, event: Any) -> None:
