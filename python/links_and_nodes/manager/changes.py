@@ -35,7 +35,6 @@ class Changes:
             try:
                 await fut
             finally:
-                if not fut.done() or fut.cancelled():  # a timeout: not kept until a notify
-                    fut.cancel()
+                if fut.cancelled():  # the wait was (a timeout): not kept until a notify
                     with contextlib.suppress(ValueError):  # unless a notify took it
                         self._waiters.remove(fut)

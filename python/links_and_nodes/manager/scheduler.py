@@ -404,9 +404,6 @@ class Scheduler:
             del self.procs[rt.cfg.name]  # removed by a reload while it ran
             log.info("process %s: removed (no longer configured)", rt.cfg.name)
         _tell(self.transition_listeners, rt.cfg.name, t)
-        self._notify()
-
-    def _notify(self) -> None:
         self._changed.notify()
 
     def _background(self, task: asyncio.Task[Any]) -> None:
@@ -417,7 +414,7 @@ class Scheduler:
         for rt in list(self.procs.values()):
             if rt.state == S.STARTED:
                 self._check_ready(rt)
-        self._notify()
+        self._changed.notify()
 
     # ---- starting ------------------------------------------------------------------------
     def _launch(self, rt: Runtime) -> asyncio.Task[None] | None:
@@ -820,7 +817,7 @@ class Scheduler:
             rt.transitions.append(t)
             log.warning("process %s: %s", rt.cfg.name, reason)
             _tell(self.transition_listeners, rt.cfg.name, t)
-            self._notify()
+            self._changed.notify()
             return
         # (2 ** restarts no longer fits a float after 1023 restarts)
         delay = min(MAX_RESTART_DELAY, rt.cfg.restart_delay * 2.0 ** min(rt.restarts, 1000))
@@ -828,7 +825,7 @@ class Scheduler:
         log.info("process %s: restart %d of %d in %.3g s", rt.cfg.name, rt.restarts,
                  rt.cfg.restart_limit, delay)
         rt.restart_task = self._side(rt, self._restart_later(rt, delay))
-        rt.restart_task.add_done_callback(lambda _: self._notify())  # final if cancelled
+        rt.restart_task.add_done_callback(lambda _: self._changed.notify())  # final if cancelled
 
     async def _restart_later(self, rt: Runtime, delay: float) -> None:
         await asyncio.sleep(delay)
@@ -882,7 +879,7 @@ class Scheduler:
         for rt in list(self.procs.values()):
             if rt.link is link and rt.pid is not None and rt.state == S.STARTING:
                 rt.pid = None  # being stopped while it was spawned (_stop_spawned)
-                self._notify()
+                self._changed.notify()
             if rt.state in ALIVE and rt.link is link:
                 rt.pid = None
                 self._cancel_side(rt)
