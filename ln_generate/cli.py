@@ -1,7 +1,8 @@
 """Command line of the generator: `ln_generate -o OUT [--md-dir DIR] [--lang L] NAME...`.
 
 Exit codes: 0 success, 1 an error in a message definition (every error printed
-as `file:line:col: message`; nothing written), 2 a usage error.
+as `file:line:col: message`; nothing written), 2 a usage error. Warnings
+(`file:line:col: warning: message`) go to stderr and do not change the exit code.
 """
 
 from __future__ import annotations
@@ -64,6 +65,8 @@ def main(argv: list[str] | None = None) -> int:
             mds.append(registry.load(name))
         except MdError as e:
             errors.extend(d for d in e.diagnostics if d not in errors)
+    for w in registry.warnings:
+        print(w, file=sys.stderr)
     try:
         if errors:
             raise MdError(errors)

@@ -1,12 +1,14 @@
 """Source locations and the error type of the generator.
 
-Every problem in a definition is reported as `file:line:col: message`; an MdError
-carries all problems found, so one run shows every mistake at once.
+Every problem in a definition is reported as `file:line:col: message` (warnings as
+`file:line:col: warning: message`); an MdError carries all errors found, so one run
+shows every mistake at once.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 
 @dataclass(frozen=True)
@@ -23,9 +25,11 @@ class Location:
 class Diagnostic:
     loc: Location
     message: str
+    severity: Literal["error", "warning"] = "error"
 
     def __str__(self) -> str:
-        return f"{self.loc}: {self.message}"
+        prefix = "warning: " if self.severity == "warning" else ""
+        return f"{self.loc}: {prefix}{self.message}"
 
 
 class MdError(Exception):

@@ -1,8 +1,9 @@
 """Finds md files by name in an ordered list of directories, safely.
 
 An md name such as `robot/joint_state` is not a path: it is looked up as
-`DIR/robot/joint_state` in each directory in turn and may never leave that
-directory (no `..`, no absolute names, no symlink pointing outside).
+`DIR/robot/joint_state` in each directory in turn (a `define` first next to the
+md that has it) and may never leave that directory (no `..`, no absolute names,
+no symlink pointing outside).
 """
 
 from __future__ import annotations
@@ -66,21 +67,43 @@ class LookupError_(Exception):
     """Name invalid, not found, or resolving outside its directory."""
 
 
-def find(name: str, dirs: list[Path]) -> Path:
-    """Path of the md file `name`; raises LookupError_ with a precise reason."""
+def _candidate(name: str, d: Path) -> Path | None:
+    """`d/name` if it is a file inside `d`; raises LookupError_ if it escapes `d`."""
+    candidate = d / name
+    if not candidate.is_file():
+        return None
+    root = d.resolve()
+    real = candidate.resolve()
+    if not real.is_relative_to(root):
+        raise LookupError_(
+            f"message definition '{name}' in '{d}' resolves to '{real}', outside its directory"
+        )
+    return candidate
+
+
+def find(name: str, dirs: list[Path], beside: tuple[Path, str] | None = None) -> tuple[str, Path, Path]:
+    """(md name, md dir, file) of `name`; raises LookupError_ with a precise reason.
+
+    `beside` is (md dir, md name) of the md whose `define` asks: as in the original
+    LN, `name` is first looked up in that md's own directory, where it is called
+    `<that md's folder>/name`; then in `dirs` as usual.
+    """
     problem = check_name(name)
     if problem:
         raise LookupError_(problem)
+    searched: list[Path] = []
+    if beside is not None:
+        root, asking = beside
+        folder = asking.rpartition("/")[0]
+        local = f"{folder}/{name}" if folder else name
+        found = _candidate(local, root)
+        if found is not None:
+            return local, root, found
+        searched.append(root / folder if folder else root)
     for d in dirs:
-        candidate = d / name
-        if not candidate.is_file():
-            continue
-        root = d.resolve()
-        real = candidate.resolve()
-        if not real.is_relative_to(root):
-            raise LookupError_(
-                f"message definition '{name}' in '{d}' resolves to '{real}', outside its directory"
-            )
-        return candidate
-    searched = ", ".join(str(d) for d in dirs) or "no directories"
-    raise LookupError_(f"message definition '{name}' not found (searched: {searched})")
+        found = _candidate(name, d)
+        if found is not None:
+            return name, d, found
+    searched += [d for d in dirs if d not in searched]
+    where = ", ".join(str(d) for d in searched) or "no directories"
+    raise LookupError_(f"message definition '{name}' not found (searched: {where})")

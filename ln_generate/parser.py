@@ -5,6 +5,8 @@ Grammar, one construct per line (`#` starts a comment):
     request | response | connect | call  section headers of services/events
     define LOCAL as "other/md"           import another md as a local type name
     TYPE NAME | TYPE NAME[EXPR] | TYPE* NAME
+A repeated section header continues that section (with a warning); a service given
+only one of its sections gets the other one empty.
 """
 
 from __future__ import annotations
@@ -53,6 +55,7 @@ class RawFile:
     defines: list[RawDefine] = field(default_factory=list)
     sections: list[RawSection] = field(default_factory=list)
     errors: list[Diagnostic] = field(default_factory=list)  # syntax errors; parsing goes on
+    warnings: list[Diagnostic] = field(default_factory=list)
     broken_aliases: set[str] = field(default_factory=set)  # defines that had syntax errors
 
 
@@ -149,7 +152,9 @@ class _Parser:
     def __init__(self, path: str) -> None:
         self.raw = RawFile(path)
         self.errors: list[Diagnostic] = []
+        self.warnings: list[Diagnostic] = []
         self.seen_significant = False
+        self.current: RawSection | None = None  # the section new fields go to
 
     def loc(self, line: int, col: int) -> Location:
         return Location(self.raw.path, line, col)
@@ -178,6 +183,7 @@ class _Parser:
         self.raw.doc = "\n".join(doc).strip()
         self.finish()
         self.raw.errors = self.errors
+        self.raw.warnings = self.warnings
         return self.raw
 
     def line(self, toks: list[Token], comment: str, lineno: int, end_col: int) -> None:
@@ -206,12 +212,19 @@ class _Parser:
         allowed = SECTIONS[kind]
         if word in allowed and word:
             for s in self.raw.sections:
-                if s.name == word:
-                    raise MdError.at(
-                        self.loc(lineno, tok.col),
-                        f"duplicate section '{word}' (first at line {s.loc.line})",
+                if s.name == word:  # the original LN merged these; so do we, but say so
+                    self.warnings.append(
+                        Diagnostic(
+                            self.loc(lineno, tok.col),
+                            f"section '{word}' appears again (first at line {s.loc.line}); "
+                            "its fields are appended to it",
+                            "warning",
+                        )
                     )
-            self.raw.sections.append(RawSection(word, self.loc(lineno, tok.col)))
+                    self.current = s
+                    return
+            self.current = RawSection(word, self.loc(lineno, tok.col))
+            self.raw.sections.append(self.current)
             return
         if kind == "message":
             if word in SECTION_KEYWORDS:
@@ -290,15 +303,16 @@ class _Parser:
                 self.loc(lineno, toks[i].col),
                 f"unexpected '{toks[i].text}' after field '{name_tok.text}'",
             )
-        if self.raw.kind != "message" and not self.raw.sections:
+        if self.raw.kind != "message" and self.current is None:
             first = SECTIONS[self.raw.kind][0]
             raise MdError.at(
                 self.loc(lineno, type_tok.col),
                 f"field outside a section (a {self.raw.kind} starts with '{first}')",
             )
-        if not self.raw.sections:
-            self.raw.sections.append(RawSection("", self.loc(lineno, type_tok.col)))
-        self.raw.sections[-1].fields.append(
+        if self.current is None:
+            self.current = RawSection("", self.loc(lineno, type_tok.col))
+            self.raw.sections.append(self.current)
+        self.current.fields.append(
             RawField(
                 type_tok.text,
                 self.loc(lineno, type_tok.col),
@@ -320,8 +334,14 @@ class _Parser:
         assert raw.kind_loc is not None
         if self.errors:
             return  # a missing section is most likely a consequence of those errors
-        present = {s.name for s in raw.sections}
-        for name in SECTIONS[raw.kind]:
+        present = {s.name: s for s in raw.sections}
+        names = SECTIONS[raw.kind]
+        if raw.kind == "service" and present:
+            # As in the original LN, a service without arguments or without a result may
+            # leave that section out: it is empty. Sections keep the canonical order.
+            raw.sections = [present.get(n) or RawSection(n, raw.kind_loc) for n in names]
+            return
+        for name in names:
             if name not in present:
                 self.errors.append(
                     Diagnostic(raw.kind_loc, f"{raw.kind} has no '{name}' section")

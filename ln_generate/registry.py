@@ -1,7 +1,8 @@
 """Loads mds by name, resolves imports and types, and computes their layout.
 
 The registry turns syntax trees into the typed model. It caches every md it has
-loaded, detects import cycles, and gathers all errors of a file before raising.
+loaded, detects import cycles, gathers all errors of a file before raising, and
+keeps the warnings of every file it read in `.warnings`.
 """
 
 from __future__ import annotations
@@ -27,30 +28,47 @@ class MdRegistry:
     def __init__(self, md_dirs: list[Path] | None = None) -> None:
         self.md_dirs = list(md_dirs) if md_dirs is not None else default_md_dirs()
         self._cache: dict[str, MessageDef] = {}
+        self._roots: dict[str, Path] = {}  # md name -> the md dir it was found in
+        self.warnings: list[Diagnostic] = []  # of every file read, in reading order
 
     def load(self, name: str, where: Location | None = None) -> MessageDef:
         """The md `name`; `where` is the place that asked for it (for error messages)."""
-        return self._load(name, where or Location(COMMAND_LINE, 1, 1), ())
+        return self._load(name, where or Location(COMMAND_LINE, 1, 1), (), None)
 
     def files(self) -> list[Path]:
         """Every md file loaded so far."""
         return [md.path for md in self._cache.values()]
 
-    def _load(self, name: str, where: Location, stack: tuple[str, ...]) -> MessageDef:
-        if name in self._cache:
+    def _load(
+        self, name: str, where: Location, stack: tuple[str, ...], asking: str | None
+    ) -> MessageDef:
+        """`asking` is the md whose define names `name`: its folder is searched first."""
+        beside = (self._roots[asking], asking) if asking is not None else None
+        if beside is None and name in self._cache:
             return self._cache[name]
+        try:
+            name, root, path = find(name, self.md_dirs, beside)
+        except LookupError_ as e:
+            raise MdError.at(where, str(e)) from None
+        if name in self._cache:
+            cached = self._cache[name]
+            if cached.path.resolve() != path.resolve():  # one name, two files
+                raise MdError.at(
+                    where,
+                    f"'{path}' would be the message definition '{name}', which is already "
+                    f"'{cached.path}'",
+                )
+            return cached
         if name in stack:
             cycle = " -> ".join([*stack[stack.index(name) :], name])
             raise MdError.at(where, f"import cycle: {cycle}")
-        try:
-            path = find(name, self.md_dirs)
-        except LookupError_ as e:
-            raise MdError.at(where, str(e)) from None
         try:
             data = path.read_bytes()
         except OSError as e:
             raise MdError.at(where, f"cannot read '{path}': {e.strerror}") from None
         raw = parse(data, str(path))
+        self.warnings += raw.warnings
+        self._roots[name] = root
         md = self._resolve(name, path, raw, (*stack, name))
         self._cache[name] = md
         return md
@@ -62,7 +80,7 @@ class MdRegistry:
         md = MessageDef(name, raw.kind, path, {}, doc=raw.doc)  # type: ignore[arg-type]
         for d in raw.defines:
             try:
-                imported = self._load(d.md_name, d.name_loc, stack)
+                imported = self._load(d.md_name, d.name_loc, stack, name)
             except MdError as e:
                 errors.extend(e.diagnostics)
                 continue
