@@ -4,7 +4,8 @@ within the adoption window; the rest is removed after it), serves clients
 until SIGTERM/SIGINT (or `quit`), then closes every connection and unlinks every segment
 of the instance.  With `-c FILE` it also runs the configuration's processes through the
 ln_daemons (scheduler.py) with a console on stdin; `ln_manager status|start|stop|...`
-talk to a running manager instead (remote_cli.py)."""
+talk to a running manager instead (remote_cli.py); `ln_manager check FILE` only
+validates a configuration (check.py)."""
 
 from __future__ import annotations
 
@@ -44,12 +45,16 @@ def build_parser() -> argparse.ArgumentParser:
                     "clients, topics and their shared-memory segments, and with -c the "
                     "processes of a configuration file.  `ln_manager COMMAND --help` for "
                     "the commands that talk to a running manager: "
-                    "status, start, stop, restart, output, wait-ready, quit, detach.")
+                    "status, start, stop, restart, output, wait-ready, quit, detach; "
+                    "`ln_manager check FILE.lnc` validates a configuration without "
+                    "starting anything.")
     parser.add_argument("-c", "--config", metavar="FILE",
                         help="configuration (.lnc) whose processes this manager runs; its "
                              "instance section gives --instance and --port")
     parser.add_argument("-D", "--define", action="append", default=[], metavar="NAME=VALUE",
                         help="a define for the configuration (repeatable)")
+    parser.add_argument("--strict", action="store_true",
+                        help="treat the configuration's warnings as errors")
     parser.add_argument("--start-all", action="store_true",
                         help="start every process of the configuration")
     parser.add_argument("--wait-ready", action="store_true",
@@ -217,16 +222,12 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
 def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
     """Read -c FILE (exit 2 with every error on failure) and fill --instance/--port/--host
     from its instance section where the command line did not give them."""
+    from .check import parse_defines
     from .config import ConfigError, load
 
-    defines = {}
-    for item in args.define:
-        name, eq, value = item.partition("=")
-        if not eq or not name:
-            parser.error(f"-D {item!r}: expected NAME=VALUE")
-        defines[name] = value
+    defines = parse_defines(parser, args.define)
     try:
-        config = load(args.config, defines=defines)
+        config = load(args.config, defines=defines, strict=args.strict)
     except ConfigError as exc:
         print(str(exc), file=sys.stderr)
         print(f"ln_manager: {args.config}: configuration has errors, nothing started",
@@ -234,6 +235,10 @@ def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> A
         sys.exit(2)
     except OSError as exc:
         parser.error(f"cannot read {args.config}: {exc.strerror or exc}")
+    except ValueError as exc:  # a bad -D name
+        parser.error(str(exc))
+    for w in config.warnings:
+        print(f"{w.location}: warning: {w.message}", file=sys.stderr)
     if args.instance is None:
         args.instance = config.instance.name
     host, _, port = config.instance.manager.rpartition(":")
@@ -261,6 +266,10 @@ def _spans_hosts(config: Any) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] == "check":
+        from . import check
+
+        return check.main(argv[1:])
     if argv and argv[0] in remote_cli.COMMANDS:
         return remote_cli.main(argv)
     parser = build_parser()

@@ -9,8 +9,8 @@ module: the states, which transitions are allowed, and which states count as run
        │                                        │
        └────────────── finished ◄── exit 0 ─────┘ (or a stop that was asked for: stopped)
 
-`finished`: it exited by itself with status 0 (or was stopped with `no_error_on_stop`
-semantics); `failed`: it could not start, exited with a non-zero status or a signal it was
+`finished`: it exited by itself with status 0 (with the flag `no_error_on_stop`: with
+any status); `failed`: it could not start, exited with a non-zero status or a signal it was
 not sent, or gave up restarting.  A restart goes failed/finished → starting.
 """
 

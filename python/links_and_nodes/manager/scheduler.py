@@ -29,6 +29,7 @@ S = ProcState
 MAX_RESTART_DELAY = 30.0  # seconds
 STABLE_AFTER = 10.0  # seconds ready after which a process's restart count starts again
 BASE_ENV = ("PATH", "HOME", "USER", "LOGNAME", "LANG", "LC_ALL", "TZ", "TERM")
+X11_ENV = ("DISPLAY", "XAUTHORITY")  # passed with the flag forward_x11
 
 
 # ---- what the scheduler needs of a daemon connection (daemon_client.DaemonClient) ---------
@@ -497,6 +498,8 @@ class Scheduler:
     def _environment(self, cfg: model.Process) -> dict[str, str]:
         env = {k: os.environ[k] for k in BASE_ENV if k in os.environ}
         env.update({k: os.environ[k] for k in cfg.pass_environment if k in os.environ})
+        if "forward_x11" in cfg.flags:  # the manager's X display
+            env.update({k: os.environ[k] for k in X11_ENV if k in os.environ})
         env["LN_MANAGER"] = self.manager_address_for(cfg.node)
         env["LN_PROGRAM_NAME"] = cfg.name.replace("/", ".")
         dirs = cfg.message_definition_dirs + self.config.message_definition_dirs
@@ -688,6 +691,12 @@ class Scheduler:
     def _dependents(self, name: str) -> list[Runtime]:
         return [rt for rt in self.procs.values() if name in rt.cfg.depends_on]
 
+    def _stopped_with(self, rt: Runtime) -> list[Runtime]:
+        """The dependents that go down when rt does: none with `dont_stop_dependent_procs`."""
+        if "dont_stop_dependent_procs" in rt.cfg.flags:
+            return []
+        return self._dependents(rt.cfg.name)
+
     async def _stop(self, rt: Runtime, reason: str, *, force: bool = False,
                     restore: bool = False) -> None:
         """Stop rt, dependents first.  `restore`: it is stopped because a dependency went
@@ -700,8 +709,7 @@ class Scheduler:
             rt.start_requested = False
         rt.stop_requested = True  # before its dependents stop: they must not come back yet
         # dependents first (again if one was started meanwhile, on rt still up)
-        while dependents := [d for d in self._dependents(rt.cfg.name)
-                             if d.state not in STARTABLE]:
+        while dependents := [d for d in self._stopped_with(rt) if d.state not in STARTABLE]:
             if restore:
                 for d in dependents:
                     d.stopped_for = rt.cfg.name
@@ -771,7 +779,7 @@ class Scheduler:
             return
         if rt.state == S.STARTING:  # exited before the spawn answer was processed
             self._set(rt, S.STARTED, "")
-        if code == 0 and sig is None:
+        if (code == 0 and sig is None) or "no_error_on_stop" in rt.cfg.flags:
             self._set(rt, S.FINISHED, how)
             failed = False
         else:
@@ -801,7 +809,7 @@ class Scheduler:
 
     def _lost_dependency(self, rt: Runtime) -> None:
         """Dependents of a process that went down are stopped (and come back with it)."""
-        for d in self._dependents(rt.cfg.name):
+        for d in self._stopped_with(rt):
             if d.state not in STARTABLE:
                 d.stopped_for = rt.cfg.name
                 self._background(asyncio.get_running_loop().create_task(

@@ -1,6 +1,7 @@
 """Broken configurations: every file in tests/lnc/bad starts with `# expect:` lines, and
 load() must report exactly those problems, in that order (`[FILE:]LINE:COL: message`,
-FILE relative to tests/lnc/bad and only given for problems in included files)."""
+FILE relative to tests/lnc/bad and only given for problems in included files).  A
+`# options: strict` line after them loads the file as `--strict` does."""
 
 from __future__ import annotations
 
@@ -38,8 +39,9 @@ def test_there_are_enough_cases() -> None:
 
 @pytest.mark.parametrize("path", CASES, ids=[p.stem for p in CASES])
 def test_bad_file(path: Path) -> None:
+    strict = b"\n# options: strict\n" in path.read_bytes()
     with pytest.raises(ConfigError) as err:
-        load(path, env={})
+        load(path, env={}, strict=strict)
     assert str(err.value).split("\n") == expected(path)
     assert all(isinstance(p, Problem) for p in err.value.problems)
 

@@ -14,9 +14,10 @@ import socket
 from collections.abc import Mapping
 from pathlib import Path
 
-from ... import __version__
+from .commands import SHELL_TIMEOUT
 from .errors import ConfigError, LineError, Problem, sort_problems
 from .expand import BUILTINS, Evaluator
+from .language import LANGUAGE_VERSION
 from .model import Config, Location
 from .parser import Parser
 from .resolve import build
@@ -24,17 +25,22 @@ from .sections import DEFINE_NAME_RE
 from .text import Value
 from .values import parse_address
 
-__all__ = ["Config", "ConfigError", "Location", "Problem", "load", "parse_text"]
+__all__ = ["LANGUAGE_VERSION", "Config", "ConfigError", "Location", "Problem", "load",
+           "parse_text"]
 
 
 def load(path: str | Path, *, defines: dict[str, str] | None = None,
-         env: Mapping[str, str] | None = None, manager: str | None = None) -> Config:
+         env: Mapping[str, str] | None = None, manager: str | None = None,
+         strict: bool = False, shell_timeout: float = SHELL_TIMEOUT) -> Config:
     """Read the configuration in `path`.
 
     `defines` are set before the first line and win over the files' own `defines`
-    lines; `env` is what `%(env NAME)` reads (default: os.environ); `manager` replaces
-    the instance's `manager` address.  Raises ConfigError with every problem found, or
-    ValueError for a bad `defines` name or `manager` address."""
+    lines; `env` is what `%(env NAME)` reads and what `%(shell)` commands get (default:
+    os.environ); `manager` replaces the instance's `manager` address.  Problems the
+    original Links and Nodes let pass are warnings in `Config.warnings`; `strict` makes
+    them errors.  `shell_timeout` bounds each command the files run.  Raises
+    ConfigError with every problem found, or ValueError for a bad `defines` name or
+    `manager` address."""
     file = str(path)
     try:
         with open(file, "rb") as f:
@@ -42,11 +48,13 @@ def load(path: str | Path, *, defines: dict[str, str] | None = None,
     except OSError as exc:
         raise ConfigError([Problem(Location(file, 1, 1),
                                    f"cannot read configuration: {exc.strerror}")]) from None
-    return parse_text(data, file, defines=defines, env=env, manager=manager)
+    return parse_text(data, file, defines=defines, env=env, manager=manager, strict=strict,
+                      shell_timeout=shell_timeout)
 
 
 def parse_text(text: str | bytes, filename: str, *, defines: dict[str, str] | None = None,
-               env: Mapping[str, str] | None = None, manager: str | None = None) -> Config:
+               env: Mapping[str, str] | None = None, manager: str | None = None,
+               strict: bool = False, shell_timeout: float = SHELL_TIMEOUT) -> Config:
     """Like load(), for text that claims to come from `filename` (includes and relative
     paths are resolved against its directory)."""
     fixed = dict(defines or {})
@@ -59,13 +67,19 @@ def parse_text(text: str | bytes, filename: str, *, defines: dict[str, str] | No
         except LineError as exc:
             raise ValueError(exc.problems[0].message) from None
     evaluator = Evaluator(os.environ if env is None else env, fixed, socket.gethostname(),
-                          manager)
-    parser = Parser(evaluator, __version__)
+                          manager, shell_timeout)
+    parser = Parser(evaluator)
     data = text.encode("utf-8", "surrogatepass") if isinstance(text, str) else text
     parser.read_main(filename, data)
     config, problems = build(parser.drafts, evaluator.defines, manager, filename)
     problems = parser.problems + problems
+    warnings = sort_problems(parser.warnings + evaluator.warnings, parser.drafts.files)
+    if strict:
+        problems += [Problem(w.location, f"{w.message} [warning, an error with --strict]")
+                     for w in warnings]
+        warnings = []
     if problems or config is None:
-        raise ConfigError(sort_problems(problems, parser.drafts.files))
+        raise ConfigError(sort_problems(problems, parser.drafts.files), warnings)
+    config.warnings = warnings
     return config
 

@@ -24,10 +24,13 @@ class Problem:
 
 
 class ConfigError(Exception):
-    """One or more problems in a configuration; str() gives one line per problem."""
+    """One or more problems in a configuration; str() gives one line per problem.
+    `warnings` are the problems found that would not have stopped the load."""
 
-    def __init__(self, problems: Iterable[Problem]) -> None:
+    def __init__(self, problems: Iterable[Problem],
+                 warnings: Iterable[Problem] = ()) -> None:
         self.problems = list(problems)
+        self.warnings = list(warnings)
         super().__init__("\n".join(str(p) for p in self.problems))
 
 

@@ -220,6 +220,9 @@ class Config:
     states: dict[str, State] = field(default_factory=dict)
     groups: dict[str, Group] = field(default_factory=dict)
     message_definition_dirs: list[str] = field(default_factory=list)
+    # Problems that did not stop the load (config.errors.Problem; `--strict` makes them
+    # errors)
+    warnings: list = field(default_factory=list)
 
 
 def topic_transport(config: Config, topic: str) -> str | None:

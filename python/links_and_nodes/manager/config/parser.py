@@ -4,7 +4,8 @@ name prefixes, templates, conditionals) and `%()` expansion, filling the drafts.
 An included file starts in the section of its include line (so it can hold keys of the
 process that includes it); sections it opens end with it, and after the include line the
 including file's section goes on.  A problem skips its line and is recorded; reading goes
-on so that one run reports every problem of every file.
+on so that one run reports every problem of every file.  Where the original Links and
+Nodes was lenient (a missing message definition directory), a warning is recorded instead.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from .drafts import (
 )
 from .errors import Gather, LineError, Problem, describe, did_you_mean, relative, shift
 from .expand import Evaluator
+from .language import LANGUAGE_VERSION, parse_version
 from .lexer import SECTION_WORDS, RawLine, decode, lex
 from .model import Group, Location, Network, Process, State
 from .process_keys import KNOWN as PROCESS_KEYS
@@ -56,7 +58,7 @@ MAX_TEMPLATE_DEPTH = 32
 _WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _KEY_RE = re.compile(r"(add\s+)?([A-Za-z_][A-Za-z0-9_]*)\s*:")
 _BAD_NAME_RE = re.compile(r"[,*?\[\]!\"%#\x00-\x1f\x7f]|^/|/$|//")
-_VERSION_RE = re.compile(r"[0-9]+(\.[0-9]+)*\Z")
+_APPEND_RE = re.compile(r"append\s+environment\b\s*:?\s*([A-Za-z_][A-Za-z0-9_]*)\s*[:=]")
 # Directives that end a template's body instead of being recorded in it.
 _FILE_DIRECTIVE_RE = re.compile(r"(optional_)?include(_glob)?(\s|:|$)|(push|pop)_name_prefix"
                                 r"(\s|:|$)|requires_version(\s|:|$)")
@@ -64,11 +66,12 @@ _SIMPLE_SECTIONS = frozenset({"instance", "defines", "hosts", "node_map", "topic
 
 
 class Parser:
-    def __init__(self, evaluator: Evaluator, version: str) -> None:
+    def __init__(self, evaluator: Evaluator, version: str = LANGUAGE_VERSION) -> None:
         self.evaluator = evaluator
-        self.version = version
+        self.version = version  # of the configuration language, for requires_version
         self.drafts = Drafts()
         self.problems: list[Problem] = []
+        self.warnings: list[Problem] = []
         self.section: Section | None = None
         self.prefixes: list[tuple[str, int]] = []  # (prefix, token of the run that pushed it)
         self.templates: dict[str, Template] = {}
@@ -125,6 +128,9 @@ class Parser:
         note = ctx.note
         self.problems.extend(Problem(p.location, p.message + note) for p in problems)
 
+    def warn(self, loc: Location, message: str, ctx: Ctx) -> None:
+        self.warnings.append(Problem(loc, message + ctx.note))
+
     # ------------------------------------------------------------------ lines
 
     @staticmethod
@@ -157,11 +163,34 @@ class Parser:
         if word in ("ifdef", "ifndef") and after[:1] in (" ", "\t"):
             self.conditional(word, line, ctx)
             return
+        if word == "append" and _APPEND_RE.match(text):
+            self.append_environment(line, ctx)
+            return
         header = self._header_word(line)
         if header is not None:
             self.header(header, line, ctx)
             return
         self.key_line(line, ctx, word, after)
+
+    def append_environment(self, line: RawLine, ctx: Ctx) -> None:
+        """`append environment VAR: VALUE` (the original's old syntax): VALUE is added to
+        VAR's value in the process, after a ':' if VAR has one already."""
+        m = _APPEND_RE.match(line.text)
+        assert m is not None
+        section = self.section
+        if not isinstance(section, ProcessSection):
+            raise LineError.at(line.loc, "'append environment' outside of a process section")
+        name = m.group(1)
+        rest = line.text[m.end():]
+        piece = Piece(rest.strip(), shift(line.loc, m.end() + len(rest) - len(rest.lstrip())))
+        if line.block is not None:
+            raise LineError.at(line.block_loc or line.loc,
+                               "'append environment' does not take a '[' block")
+        value = self.value(piece, ctx).text
+        env = section.draft.process.environment
+        old = env.get(name)
+        env[name] = f"{old}:{value}" if old and value else (old or value)
+        section.draft.key_locs["environment"] = (piece.loc, ctx.note)
 
     def _skip_broken(self, line: RawLine) -> None:
         """A line whose problem the lexer reported: keep later checks quiet about it."""
@@ -209,7 +238,7 @@ class Parser:
             self.section.failed(word)
             return f"missing ':' after key '{word}'"
         if word and (not after or after[0].isspace()):
-            words = (*SECTION_WORDS, *DIRECTIVES, "ifdef", "ifndef")
+            words = (*SECTION_WORDS, *DIRECTIVES, "ifdef", "ifndef", "append")
             return f"unknown section or directive '{word}'{did_you_mean(word, words)}"
         return "expected 'KEY: VALUE', a section header or a directive"
 
@@ -391,9 +420,13 @@ class Parser:
             return
 
     def directive(self, word: str, piece: Piece, line: RawLine, ctx: Ctx) -> None:
-        if word in ("pipe_include", "add_process_default_template"):
+        if word == "add_process_default_template":
             raise LineError.at(line.loc, f"'{word}' of the original Links and Nodes is not "
-                                         "supported")
+                                         "supported by links_and_nodes (use 'use_template' "
+                                         "in each process)")
+        if word == "pipe_include":
+            self.pipe_include(piece, line, ctx)
+            return
         if word == "pop_name_prefix":
             self.pop_prefix(piece, line, ctx)
             return
@@ -438,6 +471,25 @@ class Parser:
             raise LineError.at(v.loc, f"cannot read '{v.text}': {exc.strerror}") from None
         self.read_file(path, data)
 
+    def pipe_include(self, piece: Piece, line: RawLine, ctx: Ctx) -> None:
+        """`pipe_include COMMAND`: the command's stdout is read as if it were a file in
+        the directory of the including one; its problems name the directive's place."""
+        v = self.value(piece, ctx)
+        command, _ = unquote(v.text.strip())
+        if not command:
+            raise LineError.at(line.loc, "'pipe_include' needs a command")
+        try:
+            text = self.evaluator.run(command, ctx.file)
+        except ValueError as exc:
+            raise LineError.at(v.loc, str(exc)) from None
+        where = f"{line.loc.file}:{line.loc.line}:{line.loc.col}"
+        if len(self.stack) >= MAX_INCLUDE_DEPTH:
+            raise LineError.at(v.loc, f"includes nested more than {MAX_INCLUDE_DEPTH} deep")
+        # A name without '/' after the including file's: CURDIR and relative paths in the
+        # output are those of the including file.
+        self.read_file(f"{where}: output of pipe_include",
+                       text.encode("utf-8", "surrogateescape"))
+
     def include_glob(self, word: str, piece: Piece, ctx: Ctx) -> None:
         patterns, excluded = [], set()
         gather = Gather()
@@ -456,6 +508,10 @@ class Parser:
             raise LineError.at(piece.loc, f"'{word}' needs a file pattern")
         reading = {r for r, _ in self.stack}
         for v in patterns:
+            if _searches_everything(v.text, ctx.file):
+                self.report([Problem(v.loc, f"'{v.text}' would search the whole file system "
+                                            "(is a define in it empty?)")], ctx)
+                continue
             found = [p for p in self._glob(v.text, ctx.file) if p not in excluded]
             if not found and word == "include_glob":
                 self.report([Problem(v.loc, f"no file matches '{v.text}'")], ctx)
@@ -486,7 +542,9 @@ class Parser:
     def add_md_dir(self, v: Value, ctx: Ctx) -> None:
         path = self.file_path(v.text, ctx.file, absolute=True)
         if not os.path.isdir(path):
-            raise LineError.at(v.loc, f"message definition directory '{v.text}' not found")
+            self.warn(v.loc, f"message definition directory '{v.text}' not found "
+                             "(ignored)", ctx)
+            return
         section = self.section
         dirs = (section.draft.process.message_definition_dirs
                 if isinstance(section, ProcessSection) else self.drafts.message_definition_dirs)
@@ -494,17 +552,21 @@ class Parser:
             dirs.append(path)
 
     def requires_version(self, v: Value) -> None:
-        if not _VERSION_RE.match(v.text):
+        want = parse_version(v.text)
+        if want is None:
             raise LineError.at(v.loc, f"bad version '{v.text}' (expected numbers like 0.2.43)")
-        want = tuple(int(x) for x in v.text.split("."))
-        have = tuple(int(x) for x in re.findall(r"[0-9]+", self.version))
+        have = parse_version(self.version)
+        assert have is not None
         if want > have:
-            raise LineError.at(v.loc, f"this configuration requires links_and_nodes "
-                                      f"{v.text}, this is {self.version}")
+            raise LineError.at(v.loc, f"this file requires version {v.text} of the Links and "
+                                      "Nodes configuration language; links_and_nodes reads "
+                                      f"version {self.version}")
 
     # ------------------------------------------------------------------ templates
 
     def use_template(self, piece: Piece, ctx: Ctx) -> None:
+        if "%(" in piece.text:  # `use_template: %(name)`: the name is computed
+            piece = Piece(self.value(piece, ctx).text.strip(), piece.loc)
         name, args = split_call(piece.text, piece.loc)
         template = self.find_template(name, piece.loc)
         if len(ctx.chain) >= MAX_TEMPLATE_DEPTH:
@@ -549,3 +611,14 @@ class Parser:
             if scope:
                 names += [n[len(scope) + 1:] for n in self.templates if n.startswith(scope + "/")]
         return names
+
+
+def _searches_everything(pattern: str, file: str) -> bool:
+    """A recursive pattern whose fixed part is the root directory, such as
+    `%(EMPTY)/**/*.lnc`: globbing it would walk every mounted file system."""
+    if "**" not in pattern:
+        return False
+    full = pattern if os.path.isabs(pattern) else os.path.join(os.path.dirname(file), pattern)
+    fixed = full[:len(full) - len(full.lstrip("/"))]
+    head = full.lstrip("/").split("/", 1)[0]
+    return bool(fixed) and re.search(r"[*?[]", head) is not None

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 from .drafts import KeyLine, ProcessDraft, Ref
 from .errors import LineError, Problem, closest, did_you_mean
+from .model import ResourceLimit
 from .text import Value, split_value
 from .values import (
     env_name,
@@ -38,19 +39,35 @@ FLAGS = frozenset("""forward_x11 forward_x11_to_gui no_error_on_stop no_error_on
     dont_translate_backspace_to_delete start_in_shell disable_stop remove_color_codes no_pty
     no_state_led no_warning_window no_ln_ld_library_path set_user_and_home""".split())
 
+# Flags of the original that only change its GTK GUI or how it shows output, and flags
+# that opt out of something links_and_nodes never does: accepted, no effect.
+FLAGS_WITHOUT_EFFECT = frozenset("""forward_x11_to_gui no_skip_display blocking_output
+    no_host_default_templates no_default_templates disable_gdb_run disable_gdb_rerun no_vte
+    use_vte dont_translate_backspace_to_delete remove_color_codes no_state_led
+    no_warning_window no_ln_ld_library_path""".split())
+
 # Keys of the original that only change its GTK GUI or output buffering: read and dropped.
 IGNORED = frozenset("""vte_color_style line_highlight_fg_color line_highlight_bg_color
     line_highlight_regexes bugtracker_url mantis_project_id notebook documentation
     warning_regex warning_msg max_output_frequency output_buffer_size
     max_queued_output_bytes gui""".split())
 
-# Keys of the original that change what runs, which this manager does not implement.
+# Keys of the original that change what runs, which this manager does not implement,
+# with the nearest thing that it does.
 UNSUPPORTED = {
     "auto_restart_interval": "use 'restart' and 'restart_delay'",
-    "stack_size": "use 'set_resource_limits: stack:SIZE'",
-    "derive_from": "use a template",
-    "depends_on_restart": "", "start_tool": "", "arch": "", "map_service": "",
-    "map_topic": "", "change_user_to": "", "provides": "", "undef": "",
+    "derive_from": "use a template and 'use_template'",
+    "depends_on_restart": "use 'depends_on': a dependent is stopped and started again "
+                          "with its dependency",
+    "start_tool": "put the tool in 'command'",
+    "arch": "choose the host with 'node'",
+    "map_service": "pass the service name to the program in 'command' or 'environment'",
+    "map_topic": "pass the topic name to the program in 'command' or 'environment'",
+    "change_user_to": "run the ln_daemon of that node as the user, or use sudo in "
+                      "'command'",
+    "provides": "use 'ready_on_topic' or 'ready_on_service'",
+    "undef": "'undef' works in a defines section",
+    "change_dictionary": "use 'change_directory'",
 }
 
 Scalar = Callable[[ProcessDraft, Value, "Parser", KeyLine], None]
@@ -126,7 +143,15 @@ SCALARS: dict[str, Scalar] = {
     "restart_limit": _set("restart_limit", lambda v, k: parse_int(v, k, 0)),
     "restart_delay": _set("restart_delay", parse_duration),
     "watchdog_topic": _set("watchdog", parse_watchdog),
+    "stack_size": lambda d, v, p, kl: _stack_size(d, v),
 }
+
+
+def _stack_size(d: ProcessDraft, v: Value) -> None:
+    """`stack_size: SIZE` is the stack resource limit (soft and hard)."""
+    size = _positive_size(v, "stack_size")
+    kept = [x for x in d.process.resource_limits if x.name != "stack"]
+    d.process.resource_limits = [*kept, ResourceLimit("stack", size, size)]
 
 
 def _positive_size(v: Value, key: str) -> int:
@@ -225,7 +250,7 @@ def process_key(d: ProcessDraft, kl: KeyLine, p: Parser) -> None:
     if key in UNSUPPORTED:
         hint = UNSUPPORTED[key]
         raise LineError.at(kl.loc, f"key '{key}' of the original Links and Nodes is not "
-                                   f"supported{f' ({hint})' if hint else ''}")
+                                   f"supported by links_and_nodes ({hint})")
     if key in LISTS:
         LISTS[key](d, p.values(kl), p, kl)
     elif key in SCALARS:

@@ -76,6 +76,8 @@ class InstanceSection(Section):
     KEYS = frozenset({"name", "manager", "documentation", "webui_auth_file"})
     IGNORED = frozenset({"enable_auto_groups", "groups_opened_default",
                          "groups_sorted_default"})
+    UNSUPPORTED = {"verbose2_base": "the manager's log verbosity is "
+                                    "'ln_manager --log-level'"}
 
     def __init__(self, draft: InstanceDraft, evaluator: Evaluator) -> None:
         self.draft = draft
@@ -84,6 +86,10 @@ class InstanceSection(Section):
     def key(self, p: Parser, kl: KeyLine) -> None:
         if kl.key in self.IGNORED:
             return
+        if kl.key in self.UNSUPPORTED:
+            raise LineError.at(kl.loc, f"key '{kl.key}' of the original Links and Nodes is "
+                                       "not supported by links_and_nodes "
+                                       f"({self.UNSUPPORTED[kl.key]})")
         if kl.key not in self.KEYS:
             raise self.unknown(kl, self.KEYS | self.IGNORED, "the instance section")
         _no_add(kl)
@@ -119,6 +125,9 @@ class DefinesSection(Section):
     def key(self, p: Parser, kl: KeyLine) -> None:
         _no_add(kl)
         name = p.expand_key(kl)
+        if name == "undef":
+            self.undef(p, kl)
+            return
         if not DEFINE_NAME_RE.match(name):
             raise LineError.at(kl.loc, f"bad define name '{name}' (letters, digits, _ . - /, "
                                        "not starting with a digit)")
@@ -128,6 +137,22 @@ class DefinesSection(Section):
         if name not in p.evaluator.fixed:  # given by the caller: it wins
             p.evaluator.defines[name] = value.text
             p.evaluator.broken.discard(name)
+
+
+    def undef(self, p: Parser, kl: KeyLine) -> None:
+        """`undef: NAME[, NAME...]` removes defines (one given by the caller stays: it wins
+        over the files)."""
+        items = [item for v in p.values(kl) for item in split_value(v, ", \t")]
+        if not items:
+            raise LineError.at(kl.loc, "'undef' needs the name of a define")
+        problems = [Problem(item.loc, f"bad define name '{item.text}' in 'undef'")
+                    for item in items if not DEFINE_NAME_RE.match(item.text)]
+        if problems:
+            raise LineError(problems)
+        for item in items:
+            if item.text not in p.evaluator.fixed:
+                p.evaluator.defines.pop(item.text, None)
+                p.evaluator.broken.discard(item.text)
 
 
 def setting_items(p: Parser, kl: KeyLine, what: str,
