@@ -10,11 +10,25 @@
 
 #include "client_internal.h"
 
-static int map_fd(int fd, const char* name, size_t len, ln_map* out)
+/* Segments of at least this size are offered transparent huge pages (2 MiB on x86-64). */
+#define LN_SHM_HUGE_MIN ((size_t)2 << 20)
+
+/* `data`: a publisher's or subscriber's mapping of a whole ring.  Its page tables are filled
+ * now (MAP_POPULATE), so that no sample ever pays a page fault on the first touch of a slot:
+ * the pages exist already (posix_fallocate at creation), only this process's mapping of them
+ * is made here instead of one fault per 4 KiB page in the data path.  Large ones are advised
+ * for huge pages, which tmpfs gives where /dev/shm is mounted with huge=advise (or
+ * within_size/always): 512 times fewer page-table entries and TLB misses. */
+static int map_fd(int fd, const char* name, size_t len, int data, ln_map* out)
 {
-    void* addr = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+    int flags = MAP_SHARED | (data ? MAP_POPULATE : 0);
+    void* addr = mmap(NULL, len, PROT_READ | PROT_WRITE, flags, fd, 0);
     if (addr == MAP_FAILED)
         return ln_set_errno_error(NULL, errno, "mmap of shared memory '%s' (%zu bytes)", name, len);
+#ifdef MADV_HUGEPAGE
+    if (data && len >= LN_SHM_HUGE_MIN)
+        (void)madvise(addr, len, MADV_HUGEPAGE); /* advice only: EINVAL where THP is off */
+#endif
     out->addr = addr;
     out->len = len;
     return LN_OK;
@@ -43,7 +57,7 @@ int ln_shm_create(const char* name, uint64_t size, size_t map_len, ln_map* out)
                                 (unsigned long long)size, name);
         goto fail;
     }
-    rc = map_fd(fd, name, map_len, out);
+    rc = map_fd(fd, name, map_len, 0, out);
     if (rc != LN_OK)
         goto fail;
     close(fd);
@@ -69,14 +83,15 @@ int ln_shm_open(const char* name, size_t map_len, ln_map* out, uint64_t* size_ou
     }
     if (size_out)
         *size_out = (uint64_t)st.st_size;
-    if (map_len == 0)
+    int data = map_len == 0;
+    if (data)
         map_len = (size_t)st.st_size;
     if (map_len == 0 || (uint64_t)st.st_size < map_len) {
         rc = ln_set_error(NULL, LN_EPROTOCOL, "shared memory '%s' is %lld bytes, expected %zu",
                           name, (long long)st.st_size, map_len);
         goto done;
     }
-    rc = map_fd(fd, name, map_len, out);
+    rc = map_fd(fd, name, map_len, data, out);
 done:
     close(fd);
     return rc;

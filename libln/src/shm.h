@@ -15,8 +15,9 @@ typedef struct ln_map {
 /* Create `name` (must not exist) with `size` bytes reserved up front (so a full /dev/shm is an
  * error now, not a SIGBUS later) and map its first `map_len` bytes.  Mode 0600. */
 int ln_shm_create(const char* name, uint64_t size, size_t map_len, ln_map* out);
-/* Map an existing segment: all of it (map_len 0) or its first map_len bytes.  *size_out (may be
- * NULL) receives the segment's size (also when it is too small to map, LN_EPROTOCOL).
+/* Map an existing segment: all of it (map_len 0: a ring's data, with its page tables filled at
+ * once and huge pages advised, see shm.c) or its first map_len bytes.  *size_out (may be NULL)
+ * receives the segment's size (also when it is too small to map, LN_EPROTOCOL).
  * LN_ENOTFOUND if there is no segment of that name. */
 int ln_shm_open(const char* name, size_t map_len, ln_map* out, uint64_t* size_out);
 void ln_shm_unmap(ln_map* map);
