@@ -1,6 +1,7 @@
 /* bench_common.h — code shared by the topic benchmark programs: the clock, the benchmark
- * md for a payload size, round-trip output for the driver and error exits.  Header-only, so
- * each program stays one translation unit. */
+ * md for a payload size, the first/last 8-byte touch of zero-copy samples, minor page
+ * faults, round-trip output for the driver and error exits.  Header-only, so each program
+ * stays one translation unit. */
 #ifndef LN_BENCH_COMMON_H
 #define LN_BENCH_COMMON_H
 
@@ -8,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <time.h>
 
 #include <ln/ln.h>
@@ -35,12 +37,44 @@ static inline bench_md bench_md_for(size_t size)
         {sizeof(lnbench_sample_4k_t), LNBENCH_SAMPLE_4K_MD_NAME, LNBENCH_SAMPLE_4K_LAYOUT_HASH},
         {sizeof(lnbench_sample_1m_t), LNBENCH_SAMPLE_1M_MD_NAME, LNBENCH_SAMPLE_1M_LAYOUT_HASH},
         {sizeof(lnbench_sample_4m_t), LNBENCH_SAMPLE_4M_MD_NAME, LNBENCH_SAMPLE_4M_LAYOUT_HASH},
+        {sizeof(lnbench_sample_16m_t), LNBENCH_SAMPLE_16M_MD_NAME, LNBENCH_SAMPLE_16M_LAYOUT_HASH},
+        {sizeof(lnbench_sample_64m_t), LNBENCH_SAMPLE_64M_MD_NAME, LNBENCH_SAMPLE_64M_LAYOUT_HASH},
     };
     for (size_t i = 0; i < sizeof(table) / sizeof(table[0]); i++)
         if (table[i].size == size)
             return table[i];
-    fprintf(stderr, "no benchmark md of %zu bytes (64, 4096, 1048576, 4194304)\n", size);
+    fprintf(stderr, "no benchmark md of %zu bytes (64, 4096, 1, 4, 16, 64 MiB)\n", size);
     exit(2);
+}
+
+/* Minor page faults of the whole process so far (every thread). */
+static inline uint64_t bench_minflt(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return (uint64_t)ru.ru_minflt;
+}
+
+/* What a zero-copy sample carries: `value` in its first and in its last 8 bytes, so a
+ * writer touches two pages of a large sample and a reader can tell a torn one. */
+static inline void bench_stamp(void* sample, size_t size, uint64_t value)
+{
+    memcpy(sample, &value, sizeof value);
+    memcpy((char*)sample + size - sizeof value, &value, sizeof value);
+}
+
+/* The first 8 bytes of a zero-copy sample; exits if the last 8 differ from them. */
+static inline uint64_t bench_check(const void* sample, size_t size, const char* who)
+{
+    uint64_t first, last;
+    memcpy(&first, sample, sizeof first);
+    memcpy(&last, (const char*)sample + size - sizeof last, sizeof last);
+    if (first != last) {
+        fprintf(stderr, "%s: torn sample: first 8 bytes %llu, last 8 bytes %llu\n", who,
+                (unsigned long long)first, (unsigned long long)last);
+        exit(1);
+    }
+    return first;
 }
 
 static inline void bench_fail(const char* what, int rc)

@@ -1,11 +1,14 @@
 /* lat_ln.c — ping-pong latency through two libln topics between two processes; ping times
  * every round trip.  copy: ln_write/ln_read of the whole sample; zc: loan/commit and
- * borrow/release touching only the counter.  Manager from $LN_MANAGER. */
+ * borrow/release touching only the first and last 8 bytes.  Manager from $LN_MANAGER. */
+#include <inttypes.h>
+
 #include "bench_common.h"
 
 static const char usage[] =
-    "usage: lat_ln pong PREFIX SIZE copy|zc TOTAL             echo TOTAL samples\n"
-    "       lat_ln ping PREFIX SIZE copy|zc COUNT WARMUP OUT  COUNT round trips (ns) to OUT\n";
+    "usage: lat_ln pong PREFIX SIZE copy|zc TOTAL [WARMUP]    echo TOTAL samples\n"
+    "       lat_ln ping PREFIX SIZE copy|zc COUNT WARMUP OUT  COUNT round trips (ns) to OUT\n"
+    "Both print {\"minflt\": faults, \"samples\": n} over the round trips after WARMUP.\n";
 
 typedef struct ends {
     ln_client* clnt;
@@ -46,7 +49,7 @@ static void send_one(const ends* e, uint64_t i, void* buf)
     void* slot;
     if ((rc = ln_write_loan(e->pub, &slot, -1)) < 0)
         bench_fail("ln_write_loan", rc);
-    memcpy(slot, &i, sizeof i);
+    bench_stamp(slot, e->size, i);
     if ((rc = ln_write_commit(e->pub)) < 0)
         bench_fail("ln_write_commit", rc);
 }
@@ -67,18 +70,26 @@ static uint64_t receive_one(const ends* e, void* buf, int echo)
     const void* sample;
     if ((rc = ln_read_borrow(e->sub, &sample, -1, NULL)) < 0)
         bench_fail("ln_read_borrow", rc);
-    memcpy(&counter, sample, sizeof counter);
+    counter = bench_check(sample, e->size, "lat_ln");
     void* slot = NULL;
     if (echo && (rc = ln_write_loan(e->pub, &slot, -1)) < 0)
         bench_fail("ln_write_loan", rc);
     if ((rc = ln_read_release(e->sub)) < 0)
         bench_fail("ln_read_release", rc);
     if (echo) {
-        memcpy(slot, &counter, sizeof counter);
+        bench_stamp(slot, e->size, counter);
         if ((rc = ln_write_commit(e->pub)) < 0)
             bench_fail("ln_write_commit", rc);
     }
     return counter;
+}
+
+/* Minor page faults since `since` (bench_minflt), for the driver. */
+static void print_faults(uint64_t since, uint64_t samples)
+{
+    printf("{\"minflt\": %" PRIu64 ", \"samples\": %" PRIu64 "}\n", bench_minflt() - since,
+           samples);
+    fflush(stdout);
 }
 
 int main(int argc, char** argv)
@@ -95,16 +106,23 @@ int main(int argc, char** argv)
     uint64_t count = strtoull(argv[5], NULL, 10);
     void* buf = bench_alloc(size);
     if (!ping) {
+        uint64_t warmup = argc > 6 ? strtoull(argv[6], NULL, 10) : 0, faults = 0;
         bench_ready();
-        for (uint64_t i = 0; i < count; i++)
+        for (uint64_t i = 0; i < count; i++) {
+            if (i == warmup)
+                faults = bench_minflt();
             receive_one(&e, buf, 1);
+        }
+        print_faults(faults, count > warmup ? count - warmup : 0);
         ln_client_destroy(e.clnt);
         return 0;
     }
-    uint64_t warmup = strtoull(argv[6], NULL, 10);
+    uint64_t warmup = strtoull(argv[6], NULL, 10), faults = 0;
     uint64_t* rtt = calloc(count ? count : 1, sizeof(*rtt));
     void* reply = bench_alloc(size);
     for (uint64_t i = 0; rtt && i < warmup + count; i++) {
+        if (i == warmup)
+            faults = bench_minflt();
         uint64_t t0 = bench_now_ns();
         send_one(&e, i, buf);
         uint64_t got = receive_one(&e, reply, 0);
@@ -119,6 +137,7 @@ int main(int argc, char** argv)
     }
     if (!rtt)
         return 2;
+    print_faults(faults, count);
     bench_write_samples(argv[7], rtt, count);
     ln_client_destroy(e.clnt);
     return 0;

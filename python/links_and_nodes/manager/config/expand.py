@@ -123,8 +123,7 @@ class Evaluator:
         Returns the text and the index after it, -1 when the call is not closed.
         Offsets in `text` are columns from `loc`."""
         out: list[str] = []
-        quoted = False
-        parens = 0
+        nesting = _Nesting()
         while i < len(text):
             if text.startswith("%(", i):
                 if depth + self._level >= MAX_DEPTH:
@@ -150,22 +149,15 @@ class Evaluator:
                     out.append(self._call(inner, shift(loc, i), file, args, problems))
                 i = end
                 continue
-            c = text[i]
-            if depth:
-                if quoted and c == "\\" and i + 1 < len(text):
-                    out.append(text[i:i + 2])
-                    i += 2
-                    continue
-                if c == '"':
-                    quoted = not quoted
-                elif not quoted and c == "(":
-                    parens += 1
-                elif not quoted and c == ")":
-                    if parens == 0:
-                        return "".join(out), i + 1
-                    parens -= 1
-            out.append(c)
-            i += 1
+            if not depth:
+                out.append(text[i])
+                i += 1
+                continue
+            nxt, closing = nesting.feed(text, i)
+            if closing:
+                return "".join(out), nxt
+            out.append(text[i:nxt])
+            i = nxt
         return "".join(out), -1 if depth else i
 
     def _conditional(self, name: str, text: str, start: int, stop: int, depth: int,
@@ -314,30 +306,48 @@ class Evaluator:
         return str(port_from_string(fargs[0]))
 
 
+class _Nesting:
+    """Where a `%( )` call's text stands: inside double quotes (with `\\` escapes) and how
+    many unquoted `(` are open, which decides the `)` that closes the call."""
+
+    def __init__(self) -> None:
+        self.quoted = False
+        self.parens = 0
+
+    @property
+    def top(self) -> bool:
+        return not self.quoted and self.parens == 0
+
+    def feed(self, text: str, i: int) -> tuple[int, bool]:
+        """Take the character at `i` (two for an escape in quotes): the index after it and
+        whether it is the `)` that closes the call."""
+        c = text[i]
+        if self.quoted and c == "\\" and i + 1 < len(text):
+            return i + 2, False
+        if c == '"':
+            self.quoted = not self.quoted
+        elif not self.quoted and c == "(":
+            self.parens += 1
+        elif not self.quoted and c == ")":
+            if self.parens == 0:
+                return i + 1, True
+            self.parens -= 1
+        return i + 1, False
+
+
 def call_end(text: str, i: int) -> int:
     """Index after the `)` that closes the call whose text starts at `i` (after its `%(`),
     or -1; the same rules as Evaluator._scan (quotes, nested calls, balanced parens)."""
-    quoted = False
-    parens = 0
+    nesting = _Nesting()
     while i < len(text):
         if text.startswith("%(", i):
             i = call_end(text, i + 2)
             if i < 0:
                 return -1
             continue
-        c = text[i]
-        if quoted and c == "\\" and i + 1 < len(text):
-            i += 2
-            continue
-        if c == '"':
-            quoted = not quoted
-        elif not quoted and c == "(":
-            parens += 1
-        elif not quoted and c == ")":
-            if parens == 0:
-                return i + 1
-            parens -= 1
-        i += 1
+        i, closing = nesting.feed(text, i)
+        if closing:
+            return i
     return -1
 
 
@@ -348,11 +358,11 @@ def arg_spans(text: str, start: int, stop: int) -> list[tuple[int, int, bool]]:
     if not text[start:stop].strip():
         return []
     spans = []
-    quoted = False
-    parens = 0
+    nesting = _Nesting()
+    bounded = text[:stop]
     first = i = start
     while True:
-        if i >= stop or (text[i] == "," and not quoted and parens == 0):
+        if i >= stop or (text[i] == "," and nesting.top):
             spans.append(_trim(text, first, min(i, stop)))
             if i >= stop:
                 return spans
@@ -362,17 +372,7 @@ def arg_spans(text: str, start: int, stop: int) -> list[tuple[int, int, bool]]:
             end = call_end(text, i + 2)
             i = stop if end < 0 or end > stop else end
             continue
-        c = text[i]
-        if quoted and c == "\\" and i + 1 < stop:
-            i += 2
-            continue
-        if c == '"':
-            quoted = not quoted
-        elif not quoted and c == "(":
-            parens += 1
-        elif not quoted and c == ")" and parens:
-            parens -= 1
-        i += 1
+        i, _ = nesting.feed(bounded, i)  # a stray `)` closes nothing here
 
 
 def _trim(text: str, first: int, last: int) -> tuple[int, int, bool]:
