@@ -28,6 +28,11 @@ WORDS = [
     "1ms", "check:", "\\", "a/b", "\t", "    ", "\r", "\ufeff", "\x00", "é",
     "topics", "member_interfaces:", "preferred_gateways:", "a/eth0", "!a/eth0", "10.0.0.0/8",
     "fd00::/64", "a:", "eth0:10.0.0.1,", "transport:tcp", "transport:", "robot.*:", "data_port:5",
+    # the original's conditional functions and old syntax (no shell: nothing may run here)
+    '%(ifdef "a", "b", "c")', '%(ifndef "a", "%(b)")', '%(ifeq "%(a)", "x", "y", "%(z)")',
+    '%(ifexists "/", "y")', '"%(ifdef "a", "%(ifeq "1", "1", "x")")"', "%(basename a/b)",
+    "undef:", "undef: a", "append environment", "append environment X:", "stack_size:", "8M",
+    "%(ifeq", '"a",',
 ]
 
 lines = st.lists(st.sampled_from(WORDS), max_size=8).map(" ".join)
