@@ -223,8 +223,11 @@ def _close_pool_clients() -> None:
 
 _ln_read = C.ln_read
 _ln_read_borrow = C.ln_read_borrow
+_ln_read_release = C.ln_read_release
 _ln_write = C.ln_write
 _ln_write_loan = C.ln_write_loan
+_ln_write_commit = C.ln_write_commit
+_ln_write_abort = C.ln_write_abort
 _TimeoutError = ERRORS_BY_CODE[C.LN_ETIMEOUT]
 # subscribe(transport=...): the LN_SUBSCRIBE_* flag of each name
 _TRANSPORTS = {"udp": C.LN_SUBSCRIBE_UDP, "tcp": C.LN_SUBSCRIBE_TCP}
@@ -283,6 +286,10 @@ class _Port:
         # means another thread uses the port: refused, as libln allows one thread per port.
         self._calls: deque[None] = deque()
         self._args: _CallArgs | None = None
+        # Where libln puts a loaned or borrowed slot's address (one at a time per port).
+        self._ptr = ctypes.c_void_p()
+        self._ptr_ref = ctypes.byref(self._ptr)
+        self._from_address = self.message_class.from_address
 
     @property
     def handle(self) -> int:
@@ -444,31 +451,11 @@ class publisher(_Port):  # noqa: N801
                 except _TimeoutError as exc:
                     error = exc
 
-    @contextmanager
-    def loan(self, timeout: float | None = None) -> Iterator[LnStruct]:
-        """Zero-copy write: fill the yielded message in place; it is published when the
-        block ends normally and dropped if it raises.  The message lives in the topic's
-        ring: do not use it after the block."""
-        ptr = ctypes.c_void_p()
-        with self._call() as a:
-            try:
-                _ln_write_loan(a.handle, ctypes.byref(ptr), W.first_slice(timeout))
-                first = None
-            except _TimeoutError as exc:
-                if not W.waits_longer(timeout):
-                    raise
-                first = exc
-        if first is not None:
-            self._wait_on(lambda a, t: _ln_write_loan(a.handle, ctypes.byref(ptr), t),
-                          timeout, first)
-        try:
-            yield self.message_class.from_address(ptr.value)
-        except BaseException:
-            with self._call() as a:
-                C.ln_write_abort(a.handle)
-            raise
-        with self._call() as a:
-            C.ln_write_commit(a.handle)
+    def loan(self, timeout: float | None = None) -> _Loan:
+        """Zero-copy write: `with pub.loan() as msg:` fill msg in place; it is published
+        when the block ends normally and dropped if it raises.  The message lives in the
+        topic's ring: do not use it after the block.  timeout as write()."""
+        return _Loan(self, timeout)
 
     @property
     def subscriber_count(self) -> int:
@@ -532,34 +519,25 @@ class subscriber(_Port):  # noqa: N801
             if rc != C.LN_ETIMEOUT:
                 return rc, packet
 
-    @contextmanager
-    def borrow(self, timeout: float | None = None) -> Iterator[LnStruct | None]:
-        """Zero-copy read: the yielded message lives in the topic's ring (None if nothing came
-        in time); do not use it after the block.  Raises LnOverrunError at the end of the
-        block if a publisher overwrote it meanwhile, so what was read from it must be
-        discarded."""
-        ptr = ctypes.c_void_p()
-        t = W.first_slice(timeout)
-        end: float | None = None
+    def borrow(self, timeout: float | None = None) -> _Borrow:
+        """Zero-copy read: `with sub.borrow() as msg:` msg lives in the topic's ring (None if
+        nothing came in time); do not use it after the block.  Raises LnOverrunError at the
+        end of the block if a publisher overwrote it meanwhile, so what was read from it
+        must be discarded.  timeout as read()."""
+        return _Borrow(self, timeout)
+
+    def _borrow_on(self, deadline: float) -> tuple[int, int | None]:
+        """Further waits of a borrow that used up its first slice: libln's result and the
+        borrowed slot's address."""
         while True:
+            t = W.next_slice(deadline)
+            if t <= 0:
+                return C.LN_ETIMEOUT, None
             with self._call() as a:
-                rc = _ln_read_borrow(a.handle, ctypes.byref(ptr), t, self._info_ref)
-            if rc != C.LN_ETIMEOUT or not W.waits_longer(timeout):
-                break
-            if end is None:
-                end = W.deadline(timeout)
-            if (t := W.next_slice(end)) <= 0:
-                break
-        if not self._result(rc):
-            yield None
-            return
-        try:
-            yield self.message_class.from_address(ptr.value)
-        finally:
-            with self._call() as a:
-                rc = C.ln_read_release(a.handle)
-        if rc < 0:
-            raise error_from_code(rc, C.last_error())
+                rc = _ln_read_borrow(a.handle, self._ptr_ref, t, self._info_ref)
+                address = self._ptr.value
+            if rc != C.LN_ETIMEOUT:
+                return rc, address
 
     @property
     def publisher_count(self) -> int:
@@ -569,3 +547,100 @@ class subscriber(_Port):  # noqa: N801
     def overruns(self) -> int:
         """Samples lost since subscribing (queued mode)."""
         return C.ln_inport_overruns(self.handle)
+
+
+# The zero-copy blocks are classes rather than generator context managers: a loan or borrow
+# then costs about what a copying write or read does for small messages, with the same
+# guard against closed ports and concurrent use as every other call (see _Port._calls).
+
+class _Loan:
+    """`with pub.loan(timeout) as msg`: loan on enter, commit (or abort on an exception) on
+    exit."""
+
+    __slots__ = ("port", "timeout")
+
+    def __init__(self, port: publisher, timeout: float | None) -> None:
+        self.port = port
+        self.timeout = timeout
+
+    def __enter__(self) -> LnStruct:
+        port, timeout = self.port, self.timeout
+        calls = port._calls
+        calls.append(None)
+        try:
+            a = port._args
+            if a is None or len(calls) != 1:
+                port._unusable(a)
+            _ln_write_loan(a.handle, port._ptr_ref, a.timeout(timeout))
+            return port._from_address(port._ptr.value)
+        except _TimeoutError as exc:
+            if not W.waits_longer(timeout):
+                raise
+            first = exc
+        finally:
+            calls.pop()
+
+        def once(a: _CallArgs, t: float) -> LnStruct:
+            _ln_write_loan(a.handle, port._ptr_ref, t)
+            return port._from_address(port._ptr.value)
+        return port._wait_on(once, timeout, first)
+
+    def __exit__(self, exc_type: object, exc: object, tb: object) -> None:
+        port = self.port
+        calls = port._calls
+        calls.append(None)
+        try:
+            a = port._args
+            if a is None or len(calls) != 1:
+                port._unusable(a)
+            (_ln_write_commit if exc_type is None else _ln_write_abort)(a.handle)
+        finally:
+            calls.pop()
+
+
+class _Borrow:
+    """`with sub.borrow(timeout) as msg`: borrow on enter (msg None if nothing came in
+    time), release on exit."""
+
+    __slots__ = ("port", "timeout", "held")
+
+    def __init__(self, port: subscriber, timeout: float | None) -> None:
+        self.port = port
+        self.timeout = timeout
+        self.held = False
+
+    def __enter__(self) -> LnStruct | None:
+        port, timeout = self.port, self.timeout
+        calls = port._calls
+        calls.append(None)
+        try:
+            a = port._args
+            if a is None or len(calls) != 1:
+                port._unusable(a)
+            rc = _ln_read_borrow(a.handle, port._ptr_ref, a.timeout(timeout), port._info_ref)
+            address = port._ptr.value
+        finally:
+            calls.pop()
+        if rc == C.LN_ETIMEOUT and W.waits_longer(timeout):
+            rc, address = port._borrow_on(W.deadline(timeout))
+        if not port._result(rc):
+            return None
+        self.held = True
+        return port._from_address(address)
+
+    def __exit__(self, exc_type: object, exc: object, tb: object) -> None:
+        if not self.held:
+            return
+        self.held = False
+        port = self.port
+        calls = port._calls
+        calls.append(None)
+        try:
+            a = port._args
+            if a is None or len(calls) != 1:
+                port._unusable(a)
+            rc = _ln_read_release(a.handle)
+        finally:
+            calls.pop()
+        if rc < 0 and exc_type is None:
+            raise error_from_code(rc, C.last_error())

@@ -3,6 +3,9 @@ mode, timeouts, zero-copy, layout mismatches, limits, and ring growth under a pu
 
 from __future__ import annotations
 
+import threading
+import time
+
 import pytest
 
 import links_and_nodes as ln
@@ -84,6 +87,32 @@ def test_zero_copy_write_and_read(manager: Manager) -> None:
         assert sub.read(timeout=0) is None
         with sub.borrow(timeout=0) as msg:
             assert msg is None
+
+
+def test_zero_copy_waits_longer_than_one_slice(manager: Manager) -> None:
+    """A borrow waits across libln's wait slices for a sample published later; a loan on a
+    publisher that waits for a full queue times out as asked."""
+    with manager.client() as clnt:
+        pub = clnt.publish("t.zcwait", "lntest/pattern", wait_for_subscribers=True)
+        sub = clnt.subscribe("t.zcwait", "lntest/pattern", buffers=2)
+        later = threading.Timer(0.35, pub.write)
+        later.start()
+        start = time.monotonic()
+        with sub.borrow(timeout=10) as msg:
+            assert msg is not None and sub.info.seq == 1
+        assert time.monotonic() - start >= 0.3
+        later.join()
+        pub.write()
+        pub.write()  # the subscriber's two buffers are full: a loan must wait
+        start = time.monotonic()
+        with pytest.raises(ln.LnTimeoutError):
+            with pub.loan(timeout=0.35):
+                pass
+        assert time.monotonic() - start >= 0.3
+        assert sub.read(timeout=0) is not None  # room again: the loan goes through
+        with pub.loan(timeout=1) as msg:
+            msg.word[:] = 3
+        assert [sub.read(timeout=0) is not None for _ in range(2)] == [True, True]
 
 
 def test_borrowed_sample_overwritten_is_reported(manager: Manager) -> None:
