@@ -202,7 +202,16 @@ class RemoteRings:
             return []
         if self.link is not None:
             for name in ring.names:
-                await self._quietly(self.link.ring_remove(name))
+                try:
+                    await self.link.ring_remove(name)
+                except ConnectionError as exc:
+                    # the daemon died and the link is not marked down yet: the segment
+                    # stays in its host's /dev/shm, so remove it when the daemon is back
+                    log.warning("host %r: %s; %s is removed when its daemon is back",
+                                self.host, exc, name)
+                    self._unremoved.append(name)
+                except Exception as exc:
+                    log.warning("host %r: %s", self.host, exc)
         else:
             log.warning("host %r unreachable: its segments %s are removed when its daemon "
                         "is back", self.host, ", ".join(ring.names))
