@@ -298,6 +298,11 @@ int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t
     ln_ring_header* h = ring->hdr;
     for (;;) {
         uint64_t w = atomic_load_explicit(&h->write_seq, memory_order_acquire);
+        /* No publisher gets there; n + 1 below would wrap and this loop never end. */
+        if (w > LN_RING_MAX_SEQ)
+            return ln_set_error(NULL, LN_EPROTOCOL, "ring '%s' is corrupted: its write_seq %llu "
+                                "is beyond every sequence number", ring->name,
+                                (unsigned long long)w);
         if (w < c->next)
             return LN_EAGAIN;
         uint64_t n = w;

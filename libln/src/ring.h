@@ -187,7 +187,8 @@ typedef struct ln_ring_cursor {
 } ln_ring_cursor;
 
 /* Choose the sample to read now: LN_OK with *slot and *word (its seq word) set, LN_EAGAIN if
- * there is none.  Samples a queued cursor can no longer get are counted in `pending`. */
+ * there is none, LN_EPROTOCOL for a corrupted write_seq.  Samples a queued cursor can no
+ * longer get are counted in `pending`. */
 int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t* word);
 /* After the payload was copied or used: LN_OK if the slot still holds that sample (the cursor
  * moves on), LN_EOVERRUN if a publisher reused the slot meanwhile (pick again).  count_loss: a
