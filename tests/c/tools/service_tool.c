@@ -53,11 +53,16 @@ static void json_string(const char* s, size_t n)
     putchar('"');
 }
 
-static void json_doubles(const double* v, int n)
+/* `v` points into a packed struct (every md layout is), so it may be misaligned for double:
+ * each element is copied out instead of dereferenced (UBSan caught that). */
+static void json_doubles(const void* v, int n)
 {
     putchar('[');
-    for (int i = 0; i < n; i++)
-        printf("%s%.17g", i ? ", " : "", v[i]);
+    for (int i = 0; i < n; i++) {
+        double d;
+        memcpy(&d, (const char*)v + (size_t)i * sizeof d, sizeof d);
+        printf("%s%.17g", i ? ", " : "", d);
+    }
     putchar(']');
 }
 
@@ -118,11 +123,14 @@ static int plan_path_handler(ln_client* clnt, ln_service_request* r, void* user_
     return rc < 0 ? rc : 0;
 }
 
-static double sum7(const double* v)
+static double sum7(const void* v) /* a packed member, like json_doubles' */
 {
     double s = 0;
-    for (int j = 0; j < 7; j++)
-        s += v[j];
+    for (int j = 0; j < 7; j++) {
+        double d;
+        memcpy(&d, (const char*)v + (size_t)j * sizeof d, sizeof d);
+        s += d;
+    }
     return s;
 }
 

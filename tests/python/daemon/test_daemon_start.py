@@ -15,7 +15,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from daemonproc import WAIT, alive, daemon_exe, free_port, wait_for
+from daemonproc import DAEMON, WAIT, alive, daemon_exe, free_port, wait_for
 from polling import free_daemon_port
 
 from links_and_nodes.manager import daemon_client as dc
@@ -205,7 +205,7 @@ def test_key_file_helpers(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
     monkeypatch.setenv("LN_DAEMON", "/opt/ln/bin/ln_daemon")
     assert dc.daemon_executable() == "/opt/ln/bin/ln_daemon"
     monkeypatch.delenv("LN_DAEMON")
-    assert dc.daemon_executable() == daemon_exe()  # the in-tree build
+    assert dc.daemon_executable() == str(DAEMON)  # the in-tree release build
 
 
 def test_ensure_local_daemon(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

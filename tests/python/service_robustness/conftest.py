@@ -16,9 +16,10 @@ import pytest
 
 from links_and_nodes.manager import launch
 from links_and_nodes.manager.launch import ManagerProcess
+from buildtree import build_dir
 
 REPO = Path(__file__).resolve().parents[3]
-STRESS = REPO / "build" / "release" / "tests" / "c" / "tools" / "service_stress"
+STRESS = build_dir() / "tests" / "c" / "tools" / "service_stress"
 LIMIT = 60.0  # upper bound for anything to happen, never a measurement
 
 

@@ -17,9 +17,10 @@ import pytest
 import links_and_nodes as ln
 from links_and_nodes.manager import launch
 from links_and_nodes.manager.launch import ManagerProcess, segments
+from buildtree import build_dir
 
 REPO = Path(__file__).resolve().parents[3]
-TOOLS = REPO / "build" / "release" / "tests" / "c" / "tools"
+TOOLS = build_dir() / "tests" / "c" / "tools"
 TOPIC_MDS = REPO / "tests" / "md" / "topics"
 
 ln.add_message_definition_dir(TOPIC_MDS)

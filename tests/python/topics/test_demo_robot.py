@@ -15,9 +15,11 @@ import time
 
 import pytest
 
+from buildtree import build_dir
+
 from .conftest import REPO, Manager
 
-BIN = REPO / "build" / "release" / "examples" / "robot"
+BIN = build_dir() / "examples" / "robot"
 LIMIT = 60.0  # upper bound for anything to happen, never a measurement
 TRACKING = re.compile(r"^t=\d+ s tracking error rms +([\d.]+) mrad, .* gains '(\w+)'")
 
