@@ -1,7 +1,8 @@
 """Benchmark of topics: latency, throughput and publish cost of links_and_nodes beside a raw
-futex floor and pyzmq, in one run with its own ln_manager (builds nothing: run scons first).
-Prints tables and the goals with PASS/MISS, writes bench/results/topics.json, exits 0 either way.
-"""
+futex floor, a raw shared-memory ring (the zero-copy floor), pyzmq and, where installed,
+iceoryx and iceoryx2, in one run with its own ln_manager (and iox-roudi; builds nothing: run
+scons first).  Prints tables and the goals with PASS/MISS, writes bench/results/topics.json,
+exits 0 either way."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import importlib.util
 import json
 import os
 import platform
+import subprocess
 import sys
 import tempfile
 import time
@@ -18,15 +20,25 @@ from pathlib import Path
 from typing import Any
 
 import topics_report as report
+from topics_peers import Iceoryx, iceoryx2_status
 from topics_run import CaseError, Manager, Runner, can_pin, run_facts, warn_leftover
 
 REPO = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
-PROGRAMS = ("lat_ln", "lat_futex", "thr_ln", "pub_cost")
-SIZES = [64, 4096, 1 << 20, 4 << 20]
-# size -> (round trips, warm-up); fewer for MiB sizes, where each one takes milliseconds
-LAT_ITERATIONS = {64: (20000, 2000), 4096: (20000, 2000), 1 << 20: (2000, 200),
-                  4 << 20: (1000, 100)}
+PROGRAMS = ("lat_ln", "lat_futex", "thr_ln", "pub_cost", "ring_floor")
+MIB = 1 << 20
+SIZES = [64, 4096, MIB, 4 * MIB, 16 * MIB, 64 * MIB]
+# size -> (round trips, warm-up); fewer for MiB sizes, where a copy takes milliseconds
+LAT_ITERATIONS = {64: (20000, 2000), 4096: (20000, 2000), MIB: (2000, 200),
+                  4 * MIB: (1000, 100), 16 * MIB: (300, 30), 64 * MIB: (100, 10)}
+ZMQ_MAX_SIZE = 4 * MIB  # pyzmq's four copies of 16 and 64 MiB would take most of the run
+COPY_KEYS = ("futex", "ln_c", "ln_py", "zmq")  # latency cases that copy the whole sample
+# zero-copy throughput: sizes, queue depth (ring slots - 1) and how long each case publishes
+ZC_SIZES = [64, MIB, 4 * MIB, 16 * MIB, 64 * MIB]
+ZC_BUFFERS = {64: 256, MIB: 16, 4 * MIB: 16, 16 * MIB: 8, 64 * MIB: 4}
+ZC_SECONDS = 2.0
+ZC_COUNT = 10**9  # never reached: the time limit ends a case
+SPIN_US = 20  # the iceoryx peer spins before it sleeps, as libln's default spin_us
 THR_SIZES = [64, 4096, 1 << 20]
 THR_COUNT_C = {64: 2_000_000, 4096: 400_000, 1 << 20: 4000}
 THR_COUNT_PY = {64: 300_000, 4096: 150_000, 1 << 20: 3000}
@@ -43,12 +55,23 @@ def log(text: str) -> None:
 class Bench:
     """The cases: each starts its programs through the runner and returns one record."""
 
-    def __init__(self, args: argparse.Namespace, runner: Runner, zmq: bool) -> None:
+    def __init__(self, args: argparse.Namespace, runner: Runner, zmq: bool, iox: Iceoryx,
+                 iox2: bool) -> None:
         self.bin = args.build_dir / "bench" / "topics"
         self.scale = 10 if args.quick else 1
         self.runner = runner
         self.zmq = zmq
+        self.iox = iox.available
+        self.iox2 = iox2
         self.py = [sys.executable]
+
+    def has(self, key: str, size: int) -> bool:
+        """Whether a transport takes part at this size in this run."""
+        if self.scale > 1 and size > 4 * MIB and key in COPY_KEYS:
+            return False  # --quick: copies of 16 and 64 MiB take seconds
+        if key == "zmq":
+            return self.zmq and size <= ZMQ_MAX_SIZE
+        return {"iox": self.iox, "iox2": self.iox2}.get(key, True)
 
     def n(self, count: int, floor: int = 10) -> int:
         return max(floor, count // self.scale)
@@ -63,17 +86,36 @@ class Bench:
             pong_cpu = [] if cpus[0] is None or cpus[0] == cpus[1] else [str(cpus[0])]
             self.runner.single([str(self.bin / "lat_futex"), str(size), *tail, *pong_cpu],
                                cpus[1])
-        elif key in ("ln_c", "ln_c_zc"):
-            prog, mode = str(self.bin / "lat_ln"), "zc" if key == "ln_c_zc" else "copy"
-            self.runner.pair([prog, "pong", name, str(size), mode, total],
-                             [prog, "ping", name, str(size), mode, *tail], cpus, key)
+            return {**report.one_way_stats(out), "warmup": warmup,
+                    "same_cpu": self.runner.same_cpu}
+        if key == "floor_zc":
+            pong_cpu = [] if cpus[0] is None or cpus[0] == cpus[1] else [str(cpus[0])]
+            got = last_json(self.runner.single([str(self.bin / "ring_floor"), "lat", str(size),
+                                                *tail, *pong_cpu], cpus[1]))
+            faults = {"ping_minflt": got["ping_minflt"], "pong_minflt": got["pong_minflt"]}
         else:
-            script = str(HERE / ("py_ln.py" if key == "ln_py" else "py_zmq.py"))
-            where = name if key == "ln_py" else f"ipc://{self.runner.path('zmq')}.sock"
-            self.runner.pair([*self.py, script, "pong", where, str(size), total],
-                             [*self.py, script, "ping", where, str(size), *tail], cpus, key)
+            if key in ("ln_c", "ln_c_zc"):
+                prog, mode = str(self.bin / "lat_ln"), "zc" if key == "ln_c_zc" else "copy"
+                pong = [prog, "pong", name, str(size), mode, total, str(warmup)]
+                ping = [prog, "ping", name, str(size), mode, *tail]
+            elif key == "iox":
+                prog, spin = str(self.bin / "iox_bench"), str(SPIN_US)
+                pong = [prog, "pong", name, str(size), total, str(warmup), spin]
+                ping = [prog, "ping", name, str(size), *tail, spin]
+            else:
+                script = str(HERE / ("py_ln.py" if key == "ln_py" else "py_zmq.py"))
+                where = name if key == "ln_py" else f"ipc://{self.runner.path('zmq')}.sock"
+                pong = [*self.py, script, "pong", where, str(size), total]
+                pong += [str(warmup)] if key == "ln_py" else []
+                ping = [*self.py, script, "ping", where, str(size), *tail]
+            pong_out, ping_out = self.runner.pair(pong, ping, cpus, key)
+            faults = {}
+            if key != "zmq":
+                faults = {"ping_minflt": last_json(ping_out)["minflt"],
+                          "pong_minflt": last_json(pong_out)["minflt"]}
+        per_sample = {f"{k}_per_sample": v / count for k, v in faults.items()}
         return {**report.one_way_stats(out), "warmup": warmup,
-                "same_cpu": self.runner.same_cpu}
+                "same_cpu": self.runner.same_cpu, **faults, **per_sample}
 
     def throughput_case(self, key: str, mode: str, size: int) -> Record:
         count = self.n(THR_COUNT_C[size] if key == "ln_c" else THR_COUNT_PY[size], 100)
@@ -102,11 +144,70 @@ class Bench:
                 "gb_per_s": rate * size / 1e9, "send_rate": sent["sent"] / sent["elapsed_s"],
                 "buffers": THR_BUFFERS[size] if key != "zmq" else None}
 
+    def zc_throughput_case(self, key: str, size: int) -> Record:
+        """Zero-copy publisher as fast as it can for ZC_SECONDS into a queued subscriber that
+        keeps up or holds it back (no loss by design): loan, first and last 8 bytes, commit."""
+        buffers = ZC_BUFFERS[size]
+        warm = 2 * (buffers + 1)  # faults are counted after two laps of the ring
+        seconds = ZC_SECONDS / self.scale
+        name = f"bench.zc{self.runner.serial}"
+        self.runner.serial += 1
+        common = [str(size), str(ZC_COUNT)]
+        if key == "floor_zc":
+            got = last_json(self.runner.single(
+                [str(self.bin / "ring_floor"), "thr", *common, str(buffers), str(warm),
+                 str(seconds)], None))
+            sent = {"sent": got["sent"], "elapsed_s": got["send_elapsed_s"],
+                    "minflt": got["pub_minflt"], "fault_samples": got["fault_samples"]}
+            got = {"received": got["received"], "overruns": 0, "disorder": 0,
+                   "elapsed_s": got["elapsed_s"], "minflt": got["sub_minflt"],
+                   "fault_samples": got["fault_samples"]}
+        else:
+            if key == "ln_c_zc":
+                prog = str(self.bin / "thr_ln")
+                sub = [prog, "sub", name, *common, str(buffers), "zc", str(warm)]
+                pub = [prog, "pub", name, *common, "wait", "zc", str(warm), str(seconds)]
+            elif key == "ln_py_zc":
+                script = str(HERE / "py_ln.py")
+                sub = [*self.py, script, "sub", name, *common, str(buffers), "zc", str(warm)]
+                pub = [*self.py, script, "pub", name, *common, "wait", "zc", str(warm),
+                       str(seconds)]
+            elif key == "iox":
+                prog = str(self.bin / "iox_bench")
+                sub = [prog, "sub", name, *common, str(buffers), str(warm), str(SPIN_US)]
+                pub = [prog, "pub", name, *common, str(warm), str(seconds)]
+            else:  # iox2
+                script = str(HERE / "py_iox2.py")
+                sub = [*self.py, script, "sub", name, *common, str(buffers), str(warm)]
+                pub = [*self.py, script, "pub", name, *common, str(buffers), str(warm),
+                       str(seconds)]
+            sub_out, pub_out = self.runner.pair(sub, pub, (None, None), f"{key} zc")
+            got, sent = last_json(sub_out), last_json(pub_out)
+        rate = got["received"] / got["elapsed_s"] if got["elapsed_s"] > 0 else 0.0
+        return {"sent": sent["sent"], "received": got["received"],
+                "lost": sent["sent"] - got["received"], "overruns": got["overruns"],
+                "disorder": got["disorder"], "elapsed_s": got["elapsed_s"], "recv_rate": rate,
+                "gb_per_s": rate * size / 1e9, "send_rate": sent["sent"] / sent["elapsed_s"],
+                "buffers": buffers, "seconds": seconds,
+                "pub_minflt": sent["minflt"], "sub_minflt": got["minflt"],
+                "pub_minflt_per_sample": per(sent["minflt"], sent["fault_samples"]),
+                "sub_minflt_per_sample": per(got["minflt"], got["fault_samples"])}
+
     def pub_cost(self) -> Record:
         count, rounds = self.n(PUB_COST[0], 1000), PUB_COST[1] if self.scale == 1 else 3
         argv = [str(self.bin / "pub_cost"), "bench.cost", "64", str(count), str(rounds)]
         out = self.runner.finish(self.runner.spawn(argv, None), "pub_cost")
         return {**json.loads(out.strip().splitlines()[-1]), "count": count, "rounds": rounds}
+
+
+def last_json(out: str) -> Record:
+    """The last line of a program's output, which is its JSON result."""
+    result: Record = json.loads(out.strip().splitlines()[-1])
+    return result
+
+
+def per(faults: int, samples: int) -> float | None:
+    return faults / samples if samples else None
 
 
 def attempt(what: str, fn: Any, *args: Any) -> Record:
@@ -134,7 +235,7 @@ def placements(usable: list[int], pin_cpu: int) -> tuple[dict[str, tuple[Cpus, l
 
 
 def run_all(bench: Bench, where: dict[str, tuple[Cpus, list[int]]]
-            ) -> tuple[list[Record], list[Record], Record]:
+            ) -> tuple[list[Record], list[Record], list[Record], Record]:
     log("publish cost")
     cost = attempt("pub_cost", bench.pub_cost)
     latency: list[Record] = []
@@ -142,7 +243,7 @@ def run_all(bench: Bench, where: dict[str, tuple[Cpus, list[int]]]
         log(f"latency, {placement}")
         for size in sizes:  # all transports of one size close together in time
             for key in report.LATENCY:
-                if key == "zmq" and not bench.zmq:
+                if not bench.has(key, size):
                     continue
                 rec = attempt(f"{report.size_label(size)} {key}", bench.latency_case, key, size,
                               cpus)
@@ -156,7 +257,27 @@ def run_all(bench: Bench, where: dict[str, tuple[Cpus, list[int]]]
             rec = attempt(f"{report.size_label(size)} {key} {mode}", bench.throughput_case,
                           key, mode, size)
             throughput.append({"size": size, "transport": key, "mode": mode, **rec})
-    return latency, throughput, cost
+    log("zero-copy throughput")
+    zc: list[Record] = []
+    sizes = ZC_SIZES if bench.scale == 1 else [64, 4 * MIB, 64 * MIB]
+    for size in sizes:  # all systems of one size close together in time
+        for key in report.ZC_THROUGHPUT:
+            if not bench.has(key, size):
+                continue
+            rec = attempt(f"{report.size_label(size)} {key} zc", bench.zc_throughput_case, key,
+                          size)
+            zc.append({"size": size, "transport": key, **rec})
+    return latency, throughput, zc, cost
+
+
+def git_head(tree: Path) -> str | None:
+    """The commit a tree is at (read-only), to tell runs of different commits apart."""
+    try:
+        out = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
+                             capture_output=True, text=True, timeout=10)
+    except OSError:
+        return None
+    return out.stdout.strip() or None
 
 
 def main() -> int:
@@ -164,11 +285,25 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true",
                         help="a tenth of the iterations: a smoke run, not a measurement")
     parser.add_argument("--cpu", type=int, help="CPU for the pinned runs (default: the last)")
-    parser.add_argument("--build-dir", type=Path, default=REPO / "build" / "release",
-                        help="SCons variant directory with bench/topics/ (build/release)")
+    parser.add_argument("--checkout", type=Path, default=REPO,
+                        help="the tree whose build (CHECKOUT/build/release) and Python package "
+                        "(CHECKOUT/python) are measured: another worktree, e.g. an older commit "
+                        "(default: this one)")
+    parser.add_argument("--build-dir", type=Path,
+                        help="SCons variant directory with bench/topics/ "
+                        "(default: CHECKOUT/build/release)")
     parser.add_argument("--json", type=Path, default=REPO / "bench" / "results" / "topics.json",
                         help="where the results go (bench/results/topics.json)")
+    parser.add_argument("--no-peers", action="store_true",
+                        help="leave out iceoryx and iceoryx2 even where they are installed")
     args = parser.parse_args()
+    args.checkout = args.checkout.resolve()
+    if args.build_dir is None:
+        args.build_dir = args.checkout / "build" / "release"
+    # The manager and every Python child import links_and_nodes (and so libln) of CHECKOUT.
+    python_dir = args.checkout / "python"
+    os.environ["PYTHONPATH"] = os.pathsep.join(
+        [str(python_dir), *filter(None, [os.environ.get("PYTHONPATH")])])
 
     missing = [p for p in PROGRAMS if not (args.build_dir / "bench" / "topics" / p).exists()]
     if missing:
@@ -186,22 +321,31 @@ def main() -> int:
         names["split"] = f"pong on CPU {where['split'][0][0]}, ping on CPU {pin_cpu}"
     load_start = os.getloadavg()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    iox2_version, iox2_why = (None, "--no-peers") if args.no_peers else iceoryx2_status()
 
     with tempfile.TemporaryDirectory(prefix="ln_bench_topics_") as tmp_name:
         tmp = Path(tmp_name)
+        iox_program = args.build_dir / "bench" / "topics" / "iox_bench"
+        iox = (Iceoryx(iox_program, why_not="--no-peers") if args.no_peers
+               else Iceoryx.start(iox_program, tmp, SIZES, ZC_BUFFERS))
         manager = Manager.start(tmp)
         runner = Runner(tmp, manager.process.env)  # LN_MANAGER and LN_RUNTIME_DIR set
         try:
-            latency, throughput, cost = run_all(Bench(args, runner, has_zmq), where)
+            latency, throughput, zc, cost = run_all(
+                Bench(args, runner, has_zmq, iox, iox2_version is not None), where)
         finally:
             runner.kill_all()
             leftover = manager.stop()
-    goals = report.goals(latency, throughput, cost)
+            iox.stop()
+    goals = report.goals(latency, throughput, zc, cost)
     zmq_version = importlib.metadata.version("pyzmq") if has_zmq else None
 
-    print("goals: C 64 B p50 <= 1.2x futex floor; zero-copy 4 MiB p50 <= 2x zero-copy 64 B; "
-          "Python 64 B p50 <= 0.5x pyzmq;\n       Python 64 B queued throughput >= 2x pyzmq "
-          "with zero loss; publish with no waiting reader <= 100 ns")
+    print("goals: C 64 B p50 <= 1.2x futex floor; zero-copy 4 MiB p50 <= iceoryx and <= 1.5x "
+          "zero-copy 64 B;\n       Python 64 B p50 <= 0.5x pyzmq; Python 64 B queued throughput "
+          ">= 2x pyzmq with zero loss;\n       Python zero-copy 4 MiB throughput >= iceoryx2; "
+          "no minor page faults per sample in steady state;\n       publish with no waiting "
+          "reader <= 100 ns")
+    print(f"measured: {args.checkout} ({git_head(args.checkout)}), build {args.build_dir}")
     print(f"cpu: os.cpu_count()={os.cpu_count()}, usable={len(usable)} {usable}; "
           f"pinning: {pin_text}")
     perf = cost.get("perf_counters")
@@ -211,9 +355,12 @@ def main() -> int:
     print(f"python {platform.python_version()}, "
           + (f"pyzmq {zmq_version}" if has_zmq else "pyzmq not installed: its rows are missing")
           + ("; --quick: a smoke run, the numbers are not a measurement" if args.quick else ""))
+    iox_text = f"{iox.version or '?'} (own iox-roudi)" if iox.available else iox.why_not
+    print(f"iceoryx: {iox_text}; iceoryx2: {iox2_version or iox2_why}")
     for lines in (report.latency_tables(latency, SIZES, {k: names[k] for k in where}),
-                  report.throughput_table(throughput), report.pub_cost_table(cost),
-                  report.goals_table(goals)):
+                  report.throughput_table(throughput), report.zc_throughput_table(zc),
+                  report.faults_table(latency, zc), report.summary_table(latency, zc, ZC_SIZES),
+                  report.pub_cost_table(cost), report.goals_table(goals)):
         print()
         print("\n".join(lines))
     warn_leftover(leftover)
@@ -223,8 +370,12 @@ def main() -> int:
         **run_facts(started, args.quick), "usable_cpus": usable, "pinning": pin_text,
         "placements": {k: {"cpus": v[0], "sizes": v[1], "what": names[k]} for k, v in where.items()},
         "perf_counters": perf, "loadavg_start": load_start, "loadavg_end": os.getloadavg(),
-        "pyzmq": zmq_version,
-        "latency": latency, "throughput": throughput, "publish_cost": cost, "goals": goals,
+        "pyzmq": zmq_version, "checkout": str(args.checkout), "commit": git_head(args.checkout),
+        "build_dir": str(args.build_dir),
+        "iceoryx": iox.version if iox.available else None, "iceoryx_why_not": iox.why_not,
+        "roudi_mempools": iox.config, "iceoryx2": iox2_version, "iceoryx2_why_not": iox2_why,
+        "latency": latency, "throughput": throughput, "zero_copy_throughput": zc,
+        "publish_cost": cost, "goals": goals,
         "leftover_segments": leftover,
     }, indent=2) + "\n")
     print(f"\nwrote {args.json}")

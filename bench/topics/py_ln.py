@@ -1,11 +1,14 @@
 """Python side of the topic benchmark over links_and_nodes: the roles of lat_ln.c (copy mode)
-and thr_ln.c with the same arguments and output, written as a user would (pub.write(),
-sub.read()).  The manager comes from $LN_MANAGER.  See bench_topics.py."""
+and thr_ln.c with the same arguments and output, written as a user would (pub.write() and
+sub.read(); zero-copy: `with pub.loan()` and `with sub.borrow()`, touching the first and last
+8 bytes).  The manager comes from $LN_MANAGER.  See bench_topics.py."""
 
 from __future__ import annotations
 
+import ctypes
 import json
 import os
+import resource
 import sys
 import time
 from array import array
@@ -15,21 +18,33 @@ import links_and_nodes as ln
 
 MD_DIR = Path(__file__).resolve().parents[1] / "md"
 MDS = {64: "lnbench/sample_64", 4096: "lnbench/sample_4k", 1 << 20: "lnbench/sample_1m",
-       4 << 20: "lnbench/sample_4m"}
-USAGE = """usage: py_ln.py pong PREFIX SIZE TOTAL | ping PREFIX SIZE COUNT WARMUP OUT
-       | sub TOPIC SIZE COUNT BUFFERS | pub TOPIC SIZE COUNT wait|nowait"""
+       4 << 20: "lnbench/sample_4m", 16 << 20: "lnbench/sample_16m",
+       64 << 20: "lnbench/sample_64m"}
+USAGE = """usage: py_ln.py pong PREFIX SIZE TOTAL [WARMUP] | ping PREFIX SIZE COUNT WARMUP OUT
+       | sub TOPIC SIZE COUNT BUFFERS [copy|zc WARM]
+       | pub TOPIC SIZE COUNT wait|nowait [copy|zc WARM SECONDS]
+Every role ends with a JSON line that has its minor page faults (minflt) from sample WARM on."""
+U64 = ctypes.c_uint64
 
 
 def ready() -> None:
     print("ready", flush=True)
 
 
-def pong(clnt: ln.client, prefix: str, md: str, total: int) -> None:
+def minflt() -> int:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+
+
+def pong(clnt: ln.client, prefix: str, md: str, total: int, warmup: int) -> None:
     pub = clnt.publish(f"{prefix}.pong", md)
     sub = clnt.subscribe(f"{prefix}.ping", md)
     ready()
-    for _ in range(total):
+    for _ in range(min(warmup, total)):
         pub.write(sub.read())
+    faults = minflt()
+    for _ in range(total - min(warmup, total)):
+        pub.write(sub.read())
+    print(json.dumps({"minflt": minflt() - faults, "samples": total - min(warmup, total)}))
 
 
 def ping(clnt: ln.client, prefix: str, md: str, count: int, warmup: int, out: str) -> None:
@@ -37,7 +52,10 @@ def ping(clnt: ln.client, prefix: str, md: str, count: int, warmup: int, out: st
     sub = clnt.subscribe(f"{prefix}.pong", md)
     rtt = array("Q", bytes(8 * count))
     pkt, now = pub.packet, time.perf_counter_ns
+    faults = 0
     for i in range(warmup + count):
+        if i == warmup:
+            faults = minflt()
         t0 = now()
         pkt.counter = i
         pub.write()
@@ -47,21 +65,43 @@ def ping(clnt: ln.client, prefix: str, md: str, count: int, warmup: int, out: st
             sys.exit(f"py_ln: round trip {i} came back wrong")
         if i >= warmup:
             rtt[i - warmup] = t1 - t0
+    print(json.dumps({"minflt": minflt() - faults, "samples": count}))
     with open(out, "wb") as f:
         rtt.tofile(f)
 
 
-def subscriber(clnt: ln.client, topic: str, md: str, count: int, buffers: int) -> None:
+def read_copy(sub: ln.subscriber, timeout: float) -> int | None:
+    pkt = sub.read(timeout=timeout)
+    return None if pkt is None else pkt.counter
+
+
+def read_zc(sub: ln.subscriber, timeout: float) -> int | None:
+    """One sample by borrow: its first and last 8 bytes, checked against each other."""
+    with sub.borrow(timeout=timeout) as msg:
+        if msg is None:
+            return None
+        counter = msg.counter
+        tail = U64.from_address(ctypes.addressof(msg) + ctypes.sizeof(msg) - 8).value
+    if tail != counter:
+        sys.exit(f"py_ln: torn sample {counter}/{tail}")
+    return counter
+
+
+def subscriber(clnt: ln.client, topic: str, md: str, count: int, buffers: int, zc: bool,
+               warm: int) -> None:
     sub = clnt.subscribe(topic, md, buffers=buffers)
-    received = disorder = last = first_ns = last_ns = 0
+    read = read_zc if zc else read_copy
+    received = disorder = last = first_ns = last_ns = faults = counted = 0
     now = time.perf_counter_ns
     ready()
     while received == 0 or last + 1 < count:
-        pkt = sub.read(timeout=2.0 if received else 60.0)
-        if pkt is None:
+        counter = read(sub, 2.0 if received else 60.0)
+        if counter is None:
             break
         last_ns = now()
-        counter = pkt.counter
+        if not counted and counter >= warm:
+            faults = minflt()
+        counted += counted > 0 or counter >= warm
         if received == 0:
             first_ns = last_ns
         elif counter <= last:
@@ -69,19 +109,40 @@ def subscriber(clnt: ln.client, topic: str, md: str, count: int, buffers: int) -
         received += 1
         last = counter
     print(json.dumps({"received": received, "overruns": sub.overruns, "disorder": disorder,
-                      "elapsed_s": (last_ns - first_ns) * 1e-9}))
+                      "elapsed_s": (last_ns - first_ns) * 1e-9,
+                      "minflt": minflt() - faults if counted else 0, "fault_samples": counted}))
 
 
-def publisher(clnt: ln.client, topic: str, md: str, count: int, wait: bool) -> None:
+def publisher(clnt: ln.client, topic: str, md: str, count: int, wait: bool, zc: bool,
+              warm: int, seconds: float) -> None:
     pub = clnt.publish(topic, md, wait_for_subscribers=wait)
     pkt = pub.packet
+    tail_offset = ctypes.sizeof(pkt) - 8
     ready()
-    t0 = time.perf_counter_ns()
+    now = time.perf_counter_ns
+    t0 = now()
+    stop = t0 + int(seconds * 1e9) if seconds > 0 else None
+    faults = minflt()
+    sent = 0
     for i in range(count):
-        pkt.counter = i
-        pub.write()
-    elapsed = (time.perf_counter_ns() - t0) * 1e-9
-    print(json.dumps({"sent": count, "elapsed_s": elapsed}))
+        if i == warm:
+            faults = minflt()
+        last = stop is not None and (i & 15) == 0 and now() > stop
+        counter = count - 1 if last else i
+        if zc:
+            with pub.loan() as msg:  # zero-copy: write in the ring, commit at the end
+                msg.counter = counter
+                U64.from_address(ctypes.addressof(msg) + tail_offset).value = counter
+        else:
+            pkt.counter = counter
+            pub.write()
+        sent += 1
+        if last:
+            break
+    elapsed = (now() - t0) * 1e-9
+    print(json.dumps({"sent": sent, "elapsed_s": elapsed,
+                      "minflt": minflt() - faults if sent > warm else 0,
+                      "fault_samples": max(0, sent - warm)}))
 
 
 def main(argv: list[str]) -> int:
@@ -91,14 +152,17 @@ def main(argv: list[str]) -> int:
     role, name, md = argv[1], argv[2], MDS[int(argv[3])]
     ln.add_message_definition_dir(MD_DIR)
     with ln.client(f"py_ln_{role}", os.environ["LN_MANAGER"]) as clnt:
+        zc = len(argv) > 6 and argv[6] == "zc"
+        warm = int(argv[7]) if len(argv) > 7 else 0
         if role == "pong":
-            pong(clnt, name, md, int(argv[4]))
+            pong(clnt, name, md, int(argv[4]), int(argv[5]) if len(argv) > 5 else 0)
         elif role == "ping":
             ping(clnt, name, md, int(argv[4]), int(argv[5]), argv[6])
         elif role == "sub":
-            subscriber(clnt, name, md, int(argv[4]), int(argv[5]))
+            subscriber(clnt, name, md, int(argv[4]), int(argv[5]), zc, warm)
         else:
-            publisher(clnt, name, md, int(argv[4]), argv[5] == "wait")
+            publisher(clnt, name, md, int(argv[4]), argv[5] == "wait", zc, warm,
+                      float(argv[8]) if len(argv) > 8 else 0.0)
     return 0
 
 

@@ -1,2 +1,3 @@
 """Crash injection (tests/python/robustness): a synthetic system under a real manager and
-daemon whose components are SIGKILLed at random; see docs/robustness_crash_injection.md."""
+daemon whose components are SIGKILLed at random; see docs/robustness.md
+("Crash injection")."""

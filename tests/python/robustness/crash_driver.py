@@ -6,7 +6,7 @@ everything recovered, and after the final shutdown that nothing of the instance 
     python tests/python/robustness/crash_driver.py --count 200 --seed 1 [--small]
         [--two-hosts] [--kinds publisher,daemon,...] [--work DIR]
 
-docs/robustness_crash_injection.md describes the system, the checks and the results.
+docs/robustness.md ("Crash injection") describes the system, the checks and the results.
 """
 
 from __future__ import annotations
@@ -565,7 +565,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="processes on two emulated hosts (tests/python/netlab.py, root)")
     parser.add_argument("--kinds", help="comma-separated kinds to kill (default: all of "
                         f"{','.join(KINDS)}; with --two-hosts all but manager, see "
-                        "docs/robustness_crash_injection.md)")
+                        "docs/robustness.md, \"Crash injection\")")
     parser.add_argument("--work", type=Path, help="directory for the configuration, logs "
                         "and reports (default: a new one under /tmp)")
     args = parser.parse_args(argv)
