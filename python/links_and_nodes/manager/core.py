@@ -363,10 +363,27 @@ class Core:
                   service.calls, service.errors)
         return p.Ok(msg.request_id)
 
+    def _provider_is_local(self, service: Service) -> bool:
+        """Whether the service's provider runs on the manager's host: a socket path of
+        another host's provider names a file there, and the same path here may be a live
+        socket of a local provider (pids repeat across hosts)."""
+        if self.hosts is None:
+            return True
+        try:
+            return self.hosts.rings_for(service.provider) is self.local
+        except RequestError:  # on a host this manager does not know
+            return False
+
     def _remove_sockets(self, gone: list[Service]) -> None:
-        """Unlink the unix sockets of removed services that no remaining service offers
-        (runtime.remove_service_socket decides which files may go)."""
-        for path in sorted({s.offer.unix_path for s in gone if s.offer.unix_path}):
+        """Unlink the unix sockets of removed services of local providers that no
+        remaining service offers (runtime.remove_service_socket decides which files may
+        go).  Another host's provider socket is that host's: left alone here."""
+        for s in gone:
+            if s.offer.unix_path and not self._provider_is_local(s):
+                log.debug("left service socket %s: its provider %s ran on another host",
+                          s.offer.unix_path, s.provider.name)
+        local = [s for s in gone if s.offer.unix_path and self._provider_is_local(s)]
+        for path in sorted({s.offer.unix_path for s in local}):
             if self.service_registry.unix_path_in_use(path):
                 log.debug("left service socket %s: another service still offers it", path)
                 continue

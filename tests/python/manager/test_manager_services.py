@@ -5,10 +5,13 @@ cut at the frame limit), malformed bodies and the limit."""
 
 from __future__ import annotations
 
+import os
 import re
 import socket
 import struct
 from collections.abc import Callable
+from pathlib import Path
+from typing import Any
 
 import lnwire
 import pytest
@@ -259,6 +262,45 @@ async def test_core_listing() -> None:
     other = Session("127.0.0.1:10")
     core.hello(other, p.Hello(p.MAGIC, p.VERSION, 43, "user", "0.1.0", ""))
     assert await core.request(other, p.ListServices(1)) == p.ServiceList(1, 0, ())
+
+
+class _TwoHosts:
+    """HostRings of a manager whose client "remote" runs on another host."""
+
+    def __init__(self, core: Core) -> None:
+        self.core = core
+        self.remote_rings = object()
+
+    def rings_for(self, client: Any) -> Any:
+        return self.remote_rings if client.name == "remote" else self.core.local
+
+
+async def test_only_local_providers_sockets_are_removed(tmp_path: Path) -> None:
+    """A provider on another host named a socket path on its host; the same path here may
+    be a live socket of a local provider (pids repeat across hosts): it must stay."""
+    registry = Registry(lambda size, slots: size * slots)
+    core = Core("inst", registry, _NoSegments(), Services())  # type: ignore[arg-type]
+    core.hosts = _TwoHosts(core)  # type: ignore[assignment]
+    paths = {name: str(tmp_path / f"svc.4242.{i}.sock") for i, name in enumerate(
+        ("local", "remote"))}
+    sockets = []
+    for path in paths.values():
+        sock = socket.socket(socket.AF_UNIX)
+        sock.bind(path)
+        sockets.append(sock)
+    sessions = {}
+    for i, name in enumerate(("local", "remote")):
+        session = sessions[name] = Session(f"127.0.0.1:{10 + i}")
+        core.hello(session, p.Hello(p.MAGIC, p.VERSION, 50 + i, name, "0.1.0", ""))
+        reply = await core.request(session, p.RegisterService(
+            1, f"{name}.svc", MD, HASH, SIG, "", "h", paths[name], "", 0))
+        assert reply == p.Ok(1)
+    await core.disconnect(sessions["remote"])
+    await core.disconnect(sessions["local"])
+    assert not os.path.exists(paths["local"])  # its provider is gone: removed
+    assert os.path.exists(paths["remote"])  # another host's path: left alone
+    for sock in sockets:
+        sock.close()
 
 
 def test_service_limit(start_manager: Start, instance: str) -> None:
