@@ -16,9 +16,11 @@
 /* `data`: a publisher's or subscriber's mapping of a whole ring.  Its page tables are filled
  * now (MAP_POPULATE), so that no sample ever pays a page fault on the first touch of a slot:
  * the pages exist already (posix_fallocate at creation), only this process's mapping of them
- * is made here instead of one fault per 4 KiB page in the data path.  Large ones are advised
- * for huge pages, which tmpfs gives where /dev/shm is mounted with huge=advise (or
- * within_size/always): 512 times fewer page-table entries and TLB misses. */
+ * is made here instead of one fault per 4 KiB page in the data path.  Where /dev/shm is
+ * mounted with huge=within_size (or always) the pages are 2 MiB ones already: 512 times fewer
+ * page-table entries and TLB misses.  Large rings are also advised for huge pages, so that
+ * with huge=advise (where the creation's allocation got small pages) khugepaged may merge
+ * them later. */
 static int map_fd(int fd, const char* name, size_t len, int data, ln_map* out)
 {
     int flags = MAP_SHARED | (data ? MAP_POPULATE : 0);
