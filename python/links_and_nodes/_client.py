@@ -351,6 +351,18 @@ class _Port:
         finally:
             calls.pop()
 
+    def _begin(self) -> _CallArgs:
+        """Start one libln call of the port (see _calls) and return its arguments; the
+        caller ends the call with `self._calls.pop()` in a `finally`.  ValueError /
+        LnBusyError as _unusable, with nothing started."""
+        calls = self._calls
+        calls.append(None)
+        a = self._args
+        if a is None or len(calls) != 1:
+            calls.pop()
+            self._unusable(a)
+        return a
+
     def _wait_idle(self) -> None:
         """Until no call of the port runs in another thread (they end within a slice once
         _args is None)."""
@@ -565,12 +577,8 @@ class _Loan:
 
     def __enter__(self) -> LnStruct:
         port, timeout = self.port, self.timeout
-        calls = port._calls
-        calls.append(None)
+        a = port._begin()
         try:
-            a = port._args
-            if a is None or len(calls) != 1:
-                port._unusable(a)
             _ln_write_loan(a.handle, port._ptr_ref, a.timeout(timeout))
             return port._from_address(port._ptr.value)
         except _TimeoutError as exc:
@@ -578,7 +586,7 @@ class _Loan:
                 raise
             first = exc
         finally:
-            calls.pop()
+            port._calls.pop()
 
         def once(a: _CallArgs, t: float) -> LnStruct:
             _ln_write_loan(a.handle, port._ptr_ref, t)
@@ -587,15 +595,11 @@ class _Loan:
 
     def __exit__(self, exc_type: object, exc: object, tb: object) -> None:
         port = self.port
-        calls = port._calls
-        calls.append(None)
+        a = port._begin()
         try:
-            a = port._args
-            if a is None or len(calls) != 1:
-                port._unusable(a)
             (_ln_write_commit if exc_type is None else _ln_write_abort)(a.handle)
         finally:
-            calls.pop()
+            port._calls.pop()
 
 
 class _Borrow:
@@ -611,16 +615,12 @@ class _Borrow:
 
     def __enter__(self) -> LnStruct | None:
         port, timeout = self.port, self.timeout
-        calls = port._calls
-        calls.append(None)
+        a = port._begin()
         try:
-            a = port._args
-            if a is None or len(calls) != 1:
-                port._unusable(a)
             rc = _ln_read_borrow(a.handle, port._ptr_ref, a.timeout(timeout), port._info_ref)
             address = port._ptr.value
         finally:
-            calls.pop()
+            port._calls.pop()
         if rc == C.LN_ETIMEOUT and W.waits_longer(timeout):
             rc, address = port._borrow_on(W.deadline(timeout))
         if not port._result(rc):
@@ -633,14 +633,10 @@ class _Borrow:
             return
         self.held = False
         port = self.port
-        calls = port._calls
-        calls.append(None)
+        a = port._begin()
         try:
-            a = port._args
-            if a is None or len(calls) != 1:
-                port._unusable(a)
             rc = _ln_read_release(a.handle)
         finally:
-            calls.pop()
+            port._calls.pop()
         if rc < 0 and exc_type is None:
             raise error_from_code(rc, C.last_error())
