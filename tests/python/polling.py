@@ -1,13 +1,16 @@
 """Helpers the end-to-end tests share: waiting for a condition with an upper bound (which is
-never a measurement, only how long a test may hang before it fails), a free TCP port and a
-free port for an ln_daemon (with its data port beside it)."""
+never a measurement, only how long a test may hang before it fails), a free TCP port, a
+free port for an ln_daemon (with its data port beside it), and the live processes whose
+command line holds a marker."""
 
 from __future__ import annotations
 
 import contextlib
+import os
 import socket
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -50,3 +53,20 @@ def free_daemon_port() -> int:
         except OSError:
             continue
     pytest.fail("found no free port with a free neighbour for an ln_daemon")
+
+
+def pids_with(marker: str | bytes) -> list[int]:
+    """Pids of live (not zombie) processes whose command line contains `marker`."""
+    needle = marker.encode() if isinstance(marker, str) else marker
+    found = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            raw = Path(f"/proc/{entry}/cmdline").read_bytes()
+            stat = Path(f"/proc/{entry}/stat").read_text()
+        except OSError:
+            continue
+        if needle in raw and stat.rsplit(")", 1)[1].split()[0] != "Z":
+            found.append(int(entry))
+    return found

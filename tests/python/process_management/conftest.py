@@ -21,29 +21,12 @@ from links_and_nodes.manager import scripting
 from polling import (  # noqa: F401  (shared with the tests of this package)
     free_daemon_port,
     free_port,
+    pids_with,
     wait_for,
 )
 
 LIMIT = 60.0  # upper bound for anything to happen, never a measurement
 REPO = Path(__file__).resolve().parents[3]
-
-
-
-
-def pids_with(marker: str) -> list[int]:
-    """Pids of live processes whose command line contains `marker`."""
-    found = []
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            raw = Path(f"/proc/{entry}/cmdline").read_bytes()
-            stat = Path(f"/proc/{entry}/stat").read_text()
-        except OSError:
-            continue
-        if marker.encode() in raw and stat.rsplit(")", 1)[1].split()[0] != "Z":
-            found.append(int(entry))
-    return found
 
 
 def parent(pid: int) -> int:

@@ -33,7 +33,7 @@ for _p in (REPO / "python", REPO, REPO / "tests" / "python"):
 
 from links_and_nodes.manager import scripting  # noqa: E402
 from links_and_nodes.manager.launch import segments  # noqa: E402
-from polling import free_daemon_port, free_port  # noqa: E402
+from polling import free_daemon_port, free_port, pids_with  # noqa: E402
 
 if TYPE_CHECKING:
     from netlab import DaemonProc, NetLab
@@ -82,22 +82,6 @@ def design(processes: int, topics: int, services: int) -> list[Node]:
     for i in range(n_call):
         nodes.append(Node(f"call{i}", "caller", "", tuple(snames)))
     return nodes
-
-
-def pids_with(marker: bytes) -> list[int]:
-    """Pids of live (not zombie) processes whose command line contains `marker`."""
-    found = []
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            raw = Path(f"/proc/{entry}/cmdline").read_bytes()
-            stat = Path(f"/proc/{entry}/stat").read_text()
-        except OSError:
-            continue
-        if marker in raw and stat.rsplit(")", 1)[1].split()[0] != "Z":
-            found.append(int(entry))
-    return found
 
 
 def alive(pid: int) -> bool:
