@@ -341,15 +341,11 @@ class _Port:
     def _call(self) -> Iterator[_CallArgs]:
         """The call arguments for one libln call of the port, which is running while the
         block runs (see _calls); ValueError / LnBusyError as _unusable."""
-        calls = self._calls
-        calls.append(None)
+        a = self._begin()
         try:
-            a = self._args
-            if a is None or len(calls) != 1:
-                self._unusable(a)
             yield a
         finally:
-            calls.pop()
+            self._calls.pop()
 
     def _begin(self) -> _CallArgs:
         """Start one libln call of the port (see _calls) and return its arguments; the

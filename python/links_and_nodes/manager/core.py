@@ -378,12 +378,16 @@ class Core:
         """Unlink the unix sockets of removed services of local providers that no
         remaining service offers (runtime.remove_service_socket decides which files may
         go).  Another host's provider socket is that host's: left alone here."""
+        local = set()
         for s in gone:
-            if s.offer.unix_path and not self._provider_is_local(s):
+            if not s.offer.unix_path:
+                continue
+            if self._provider_is_local(s):
+                local.add(s.offer.unix_path)
+            else:
                 log.debug("left service socket %s: its provider %s ran on another host",
                           s.offer.unix_path, s.provider.name)
-        local = [s for s in gone if s.offer.unix_path and self._provider_is_local(s)]
-        for path in sorted({s.offer.unix_path for s in local}):
+        for path in sorted(local):
             if self.service_registry.unix_path_in_use(path):
                 log.debug("left service socket %s: another service still offers it", path)
                 continue

@@ -18,12 +18,19 @@ from collections.abc import Mapping
 from .commands import SHELL_TIMEOUT, CommandError, run_command
 from .errors import LineError, Problem, did_you_mean, shift
 from .model import Location
-from .text import split_args, unquote
+from .text import split_args, unescape, unquote
 
 MAX_DEPTH = 16  # nesting of %( ) calls
 CONDITIONALS = ("ifdef", "ifndef", "ifeq", "ifexists")  # evaluate one branch only
 FUNCTIONS = ("env", "dirname", "basename", "subst", "get_port_from_string", "shell",
              *CONDITIONALS)
+# conditional -> (fewest, most arguments, usage), and the arguments that are its branches
+_CONDITIONAL_ARITY = {
+    "ifdef": (2, 3, '"NAME", "THEN" or "NAME", "THEN", "ELSE"'),
+    "ifndef": (2, 2, '"NAME", "DEFAULT"'),
+    "ifeq": (3, 4, '"A", "B", "THEN" or "A", "B", "THEN", "ELSE"'),
+    "ifexists": (2, 3, '"PATH", "THEN" or "PATH", "THEN", "ELSE"')}
+_BRANCHES = {"ifdef": (1, 2), "ifndef": (1,), "ifeq": (2, 3), "ifexists": (1, 2)}
 _CONDITIONAL_RE = re.compile(r"\s*(" + "|".join(CONDITIONALS) + r")\s")
 CONTEXT_BUILTINS = ("CURDIR", "CURRENT", "_PROCESS", "_FULL_PROCESS")
 GLOBAL_BUILTINS = ("instance_name", "hostname", "manager", "LN_PYTHON", "LN_PYTHONPATH")
@@ -175,9 +182,7 @@ class Evaluator:
                 value, _ = self._scan(text[:last], first, 0, loc, file, args, problems)
             finally:
                 self._level -= depth
-            if quoted and "%(" not in text[first:last]:
-                value = unquote(f'"{value}"')[0]
-            return value
+            return unescape(value) if quoted and "%(" not in text[first:last] else value
 
         def skip(*ks: int) -> None:
             """Check branches not taken: unknown names there are warnings."""
@@ -189,12 +194,9 @@ class Evaluator:
             finally:
                 self._dry -= 1
 
-        usage = {"ifdef": (2, 3, '"NAME", "THEN" or "NAME", "THEN", "ELSE"'),
-                 "ifndef": (2, 2, '"NAME", "DEFAULT"'),
-                 "ifeq": (3, 4, '"A", "B", "THEN" or "A", "B", "THEN", "ELSE"'),
-                 "ifexists": (2, 3, '"PATH", "THEN" or "PATH", "THEN", "ELSE"')}[name]
-        if not usage[0] <= len(spans) <= usage[1]:
-            problems.append(Problem(call_loc, f"'{name}' takes {usage[2]}, got {len(spans)} "
+        least, most, usage = _CONDITIONAL_ARITY[name]
+        if not least <= len(spans) <= most:
+            problems.append(Problem(call_loc, f"'{name}' takes {usage}, got {len(spans)} "
                                               f"argument{'s' if len(spans) != 1 else ''}"))
             return ""
         if self._dry:
@@ -215,7 +217,7 @@ class Evaluator:
                     return "" if value is None else value
                 return arg(1)
             taken = 1 if self.is_defined(define, args) else 2
-        skip(*(k for k in (1, 2, 3) if k != taken and k >= (2 if name == "ifeq" else 1)))
+        skip(*(k for k in _BRANCHES[name] if k != taken))
         return arg(taken) if taken < len(spans) else ""
 
     def _call(self, inner: str, loc: Location, file: str, args: Mapping[str, str] | None,

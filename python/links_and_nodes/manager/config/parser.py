@@ -478,13 +478,13 @@ class Parser:
         command, _ = unquote(v.text.strip())
         if not command:
             raise LineError.at(line.loc, "'pipe_include' needs a command")
+        if len(self.stack) >= MAX_INCLUDE_DEPTH:  # before running anything
+            raise LineError.at(v.loc, f"includes nested more than {MAX_INCLUDE_DEPTH} deep")
         try:
             text = self.evaluator.run(command, ctx.file)
         except ValueError as exc:
             raise LineError.at(v.loc, str(exc)) from None
         where = f"{line.loc.file}:{line.loc.line}:{line.loc.col}"
-        if len(self.stack) >= MAX_INCLUDE_DEPTH:
-            raise LineError.at(v.loc, f"includes nested more than {MAX_INCLUDE_DEPTH} deep")
         # A name without '/' after the including file's: CURDIR and relative paths in the
         # output are those of the including file.
         self.read_file(f"{where}: output of pipe_include",

@@ -49,8 +49,13 @@ def unquote(text: str) -> tuple[str, bool]:
     """The content of a value written entirely in double quotes (with `\\"` and `\\\\`
     unescaped), and whether quotes were removed; other text is returned unchanged."""
     if len(text) >= 2 and text[0] == '"' and closing_quote(text, 0) == len(text) - 1:
-        return re.sub(r'\\(["\\])', r"\1", text[1:-1]), True
+        return unescape(text[1:-1]), True
     return text, False
+
+
+def unescape(text: str) -> str:
+    """The text inside double quotes with `\\"` and `\\\\` unescaped."""
+    return re.sub(r'\\(["\\])', r"\1", text)
 
 
 def find_top(text: str, chars: str, start: int = 0) -> int:
