@@ -6,20 +6,16 @@ from __future__ import annotations
 
 import ctypes
 import json
-import resource
 import sys
 import time
 
 import iceoryx2 as iox2
+from receipts import minflt, Receipts
 
 USAGE = """usage: py_iox2.py sub NAME SIZE COUNT BUFFERS WARM | pub NAME SIZE COUNT BUFFERS WARM SECONDS
 The subscriber polls (iceoryx2 publish-subscribe has no blocking receive) until the last
 sample or 2 s without one; the publisher retries until delivered (no loss)."""
 U64 = ctypes.c_uint64
-
-
-def minflt() -> int:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
 
 
 def payload_type(size: int) -> type[ctypes.Structure]:
@@ -48,14 +44,14 @@ def subscriber(name: str, size: int, count: int, buffers: int, warm: int) -> Non
     _node, service = open_service(name, size, buffers)
     sub = service.subscriber_builder().buffer_size(buffers).create()
     print("ready", flush=True)
-    received = disorder = last = first_ns = last_ns = faults = counted = 0
+    tally = Receipts(warm)
     now = time.perf_counter_ns
     idle_since = now()
     tail = size - 8
-    while received == 0 or last + 1 < count:
+    while not tally.done(count):
         sample = sub.receive()
         if sample is None:
-            if now() - idle_since > (2e9 if received else 60e9):
+            if now() - idle_since > (2e9 if tally.received else 60e9):
                 break
             continue
         addr = sample.payload_ptr
@@ -64,19 +60,9 @@ def subscriber(name: str, size: int, count: int, buffers: int, warm: int) -> Non
         sample.delete()  # release it to the publisher
         if end != counter:
             sys.exit(f"py_iox2: torn sample {counter}/{end}")
-        last_ns = idle_since = now()
-        if not counted and counter >= warm:
-            faults = minflt()
-        counted += counted > 0 or counter >= warm
-        if received == 0:
-            first_ns = last_ns
-        elif counter <= last:
-            disorder += 1
-        received += 1
-        last = counter
-    print(json.dumps({"received": received, "overruns": 0, "disorder": disorder,
-                      "elapsed_s": (last_ns - first_ns) * 1e-9,
-                      "minflt": minflt() - faults if counted else 0, "fault_samples": counted}))
+        tally.got(counter)
+        idle_since = tally.last_ns
+    tally.report()
 
 
 def publisher(name: str, size: int, count: int, buffers: int, warm: int,

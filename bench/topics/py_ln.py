@@ -8,13 +8,13 @@ from __future__ import annotations
 import ctypes
 import json
 import os
-import resource
 import sys
 import time
 from array import array
 from pathlib import Path
 
 import links_and_nodes as ln
+from receipts import Receipts, minflt
 
 MD_DIR = Path(__file__).resolve().parents[1] / "md"
 MDS = {64: "lnbench/sample_64", 4096: "lnbench/sample_4k", 1 << 20: "lnbench/sample_1m",
@@ -29,10 +29,6 @@ U64 = ctypes.c_uint64
 
 def ready() -> None:
     print("ready", flush=True)
-
-
-def minflt() -> int:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
 
 
 def pong(clnt: ln.client, prefix: str, md: str, total: int, warmup: int) -> None:
@@ -91,26 +87,14 @@ def subscriber(clnt: ln.client, topic: str, md: str, count: int, buffers: int, z
                warm: int) -> None:
     sub = clnt.subscribe(topic, md, buffers=buffers)
     read = read_zc if zc else read_copy
-    received = disorder = last = first_ns = last_ns = faults = counted = 0
-    now = time.perf_counter_ns
+    tally = Receipts(warm)
     ready()
-    while received == 0 or last + 1 < count:
-        counter = read(sub, 2.0 if received else 60.0)
+    while not tally.done(count):
+        counter = read(sub, 2.0 if tally.received else 60.0)
         if counter is None:
             break
-        last_ns = now()
-        if not counted and counter >= warm:
-            faults = minflt()
-        counted += counted > 0 or counter >= warm
-        if received == 0:
-            first_ns = last_ns
-        elif counter <= last:
-            disorder += 1
-        received += 1
-        last = counter
-    print(json.dumps({"received": received, "overruns": sub.overruns, "disorder": disorder,
-                      "elapsed_s": (last_ns - first_ns) * 1e-9,
-                      "minflt": minflt() - faults if counted else 0, "fault_samples": counted}))
+        tally.got(counter)
+    tally.report(sub.overruns)
 
 
 def publisher(clnt: ln.client, topic: str, md: str, count: int, wait: bool, zc: bool,

@@ -11,6 +11,7 @@ import time
 from array import array
 
 import zmq
+from receipts import Receipts
 
 USAGE = """usage: py_zmq.py pong ADDR SIZE TOTAL | ping ADDR SIZE COUNT WARMUP OUT
        | pull|sub ADDR SIZE COUNT | push|pub ADDR SIZE COUNT"""
@@ -56,23 +57,14 @@ def receiver(ctx: zmq.Context, kind: int, addr: str, count: int) -> None:
     if kind == zmq.SUB:
         sock.setsockopt(zmq.SUBSCRIBE, b"")
     sock.bind(addr)
-    received = disorder = last = first_ns = last_ns = 0
-    now, unpack = time.perf_counter_ns, COUNTER.unpack_from
+    tally = Receipts()
+    unpack = COUNTER.unpack_from
     ready()
-    while received == 0 or last + 1 < count:
-        if not sock.poll(2000 if received else 60000):
+    while not tally.done(count):
+        if not sock.poll(2000 if tally.received else 60000):
             break
-        msg = sock.recv()
-        last_ns = now()
-        counter = unpack(msg)[0]
-        if received == 0:
-            first_ns = last_ns
-        elif counter <= last:
-            disorder += 1
-        received += 1
-        last = counter
-    print(json.dumps({"received": received, "overruns": 0, "disorder": disorder,
-                      "elapsed_s": (last_ns - first_ns) * 1e-9}))
+        tally.got(unpack(sock.recv())[0])
+    tally.report()
     sock.close(linger=0)
     done = ctx.socket(zmq.PUSH)
     done.connect(addr + ".done")
