@@ -3,11 +3,13 @@
  * while the client does its handshake and TOPIC_INFO, CLOSE_PORT and FIND_SERVICE round trips. */
 #define _GNU_SOURCE 1
 #include <arpa/inet.h>
+#include <errno.h>
 #include <netinet/in.h>
 #include <pthread.h>
 #include <semaphore.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
@@ -30,16 +32,20 @@ static void* manager(void* arg)
         if (fd < 0)
             continue;
         /* The client sends before it reads, so this never deadlocks; once the client closes,
-         * the rest of the input fails to send (EPIPE), as with a real manager. */
+         * the rest of the input fails to send (EPIPE), as with a real manager.  EINTR (from
+         * libFuzzer's SIGALRM, see below) is retried. */
         for (size_t off = 0; off < input_size;) {
             ssize_t n = send(fd, input + off, input_size - off, MSG_NOSIGNAL);
+            if (n < 0 && errno == EINTR)
+                continue;
             if (n <= 0)
                 break;
             off += (size_t)n;
         }
         shutdown(fd, SHUT_WR);
         char sink[4096];
-        while (recv(fd, sink, sizeof sink, 0) > 0)
+        ssize_t n;
+        while ((n = recv(fd, sink, sizeof sink, 0)) > 0 || (n < 0 && errno == EINTR))
             ; /* whatever the client says, until it closes */
         close(fd);
         sem_post(&served);
@@ -112,12 +118,18 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         request(c, LN_MSG_FIND_SERVICE, &b);
         ln_client_destroy(c);
     }
-    /* The next input gets a fresh connection; a client that never connected is a bug here. */
+    /* The next input gets a fresh connection; a client that never connected is a bug here.
+     * libFuzzer's -timeout watchdog is a SIGALRM every timeout/2 + 1 s without SA_RESTART,
+     * which cuts sem_timedwait short with EINTR: wait on, for the same absolute deadline. */
     struct timespec limit;
     clock_gettime(CLOCK_REALTIME, &limit);
     limit.tv_sec += 10;
-    if (sem_timedwait(&served, &limit) != 0) {
-        fprintf(stderr, "fuzz_client: the client never talked to the manager\n");
+    int rc;
+    while ((rc = sem_timedwait(&served, &limit)) != 0 && errno == EINTR)
+        ;
+    if (rc != 0) {
+        fprintf(stderr, "fuzz_client: the client never talked to the manager (%s)\n",
+                strerror(errno));
         abort();
     }
     return 0;
