@@ -1,8 +1,11 @@
 // ln_daemon's entry point: options, the key file, the listening socket, detaching from the
-// terminal, signal set-up, the Forwarder's data port, then the poll loop (server.cpp).
+// terminal, signal set-up, the Forwarder's data port, the loggers' memory limit, then the
+// poll loop (server.cpp).
 // Start-up problems are one line "ln_daemon: error: ..." on stderr and exit status 1 (2 for
 // a usage error); a detaching daemon reports them through a pipe before its launcher exits.
 #include <cerrno>
+#include <cinttypes>
+#include <cstdint>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -23,6 +26,7 @@
 #include "fd.hpp"
 #include "forward.hpp"
 #include "log.hpp"
+#include "loggers.hpp"
 #include "network.hpp"
 #include "os_linux.hpp"
 #include "server.hpp"
@@ -36,7 +40,7 @@ constexpr size_t kMinFragment = 256, kMaxFragment = 65000; // --udp-fragment-siz
 const char kUsage[] =
     "usage: ln_daemon [--port P] [--bind ADDR] --key-file FILE [--log FILE] [--foreground]\n"
     "                 [--data-port P] [--advertise-data-port P] [--udp-fragment-size N]\n"
-    "                 [--spin-us N]\n"
+    "                 [--spin-us N] [--logger-memory BYTES]\n"
     "\n"
     "Supervises processes for ln_manager instances on this host and forwards topics\n"
     "between hosts (docs/daemon.md).\n"
@@ -53,7 +57,10 @@ const char kUsage[] =
     "  --udp-fragment-size N\n"
     "                  payload bytes per forwarded UDP datagram, 256..65000 (default 1400)\n"
     "  --spin-us N     forwarding polls up to N microseconds for the next sample, datagram\n"
-    "                  or frame before sleeping, 0..10000 (default 0; lower latency for CPU)\n";
+    "                  or frame before sleeping, 0..10000 (default 0; lower latency for CPU)\n"
+    "  --logger-memory BYTES\n"
+    "                  memory of all topic loggers together, with k, M or G for KiB, MiB,\n"
+    "                  GiB (default 256M; 0 disables topic logging)\n";
 
 int fail(const std::string &text)
 {
@@ -78,6 +85,43 @@ bool parse_port(const char *text, unsigned &port)
     if (!parse_number(text, 0, 65535, v))
         return false;
     port = static_cast<unsigned>(v);
+    return true;
+}
+
+// BYTES with an optional binary suffix k/K, m/M or g/G ("256M").
+bool parse_bytes(const char *text, uint64_t &out)
+{
+    if (*text < '0' || *text > '9') // strtoull would take a sign or white space
+        return false;
+    char *end;
+    errno = 0;
+    unsigned long long v = std::strtoull(text, &end, 10);
+    if (errno)
+        return false;
+    unsigned shift = 0;
+    switch (*end) {
+    case '\0':
+        break;
+    case 'k':
+    case 'K':
+        shift = 10;
+        break;
+    case 'm':
+    case 'M':
+        shift = 20;
+        break;
+    case 'g':
+    case 'G':
+        shift = 30;
+        break;
+    default:
+        return false;
+    }
+    if (*end && end[1])
+        return false;
+    if (shift && v > (UINT64_MAX >> shift))
+        return false;
+    out = static_cast<uint64_t>(v) << shift;
     return true;
 }
 
@@ -174,6 +218,7 @@ int main(int argc, char **argv)
     long data_port = -1, advertised_port = -1; // -1: the default
     unsigned long fragment = lnd::fwd::Options().udp_payload;
     unsigned long spin_us = 0;
+    uint64_t logger_memory = lnd::kDefaultLoggerMemory;
     static const option options[] = {
         {"port", required_argument, nullptr, 'p'},
         {"bind", required_argument, nullptr, 'b'},
@@ -184,6 +229,7 @@ int main(int argc, char **argv)
         {"advertise-data-port", required_argument, nullptr, 'a'},
         {"udp-fragment-size", required_argument, nullptr, 's'},
         {"spin-us", required_argument, nullptr, 'w'},
+        {"logger-memory", required_argument, nullptr, 'm'},
         {"help", no_argument, nullptr, 'h'},
         {nullptr, 0, nullptr, 0},
     };
@@ -223,6 +269,11 @@ int main(int argc, char **argv)
         case 'w':
             if (!parse_number(optarg, 0, 10000, spin_us))
                 return usage_error("--spin-us needs a number 0..10000");
+            break;
+        case 'm':
+            if (!parse_bytes(optarg, logger_memory))
+                return usage_error("--logger-memory needs a number of bytes, optionally with "
+                                   "k, M or G (e.g. 256M)");
             break;
         case 'h':
             std::fputs(kUsage, stdout);
@@ -353,10 +404,13 @@ int main(int argc, char **argv)
                     static_cast<int>(::getpid()), real_data_port);
         std::fflush(stdout);
     }
-    lnd::logf("listening on %s:%u, data port %u (advertised %u), host id %s, key file %s",
-              bind.c_str(), bound, real_data_port, advertised, host_id, key_file.c_str());
+    lnd::logf("listening on %s:%u, data port %u (advertised %u), host id %s, key file %s, "
+              "logger memory %" PRIu64 " bytes",
+              bind.c_str(), bound, real_data_port, advertised, host_id, key_file.c_str(),
+              logger_memory);
     lnd::LinuxOs os;
     lnd::NetCommands net(host_id, static_cast<uint16_t>(advertised), *forwarder);
-    lnd::Server server(os, key, std::move(listener), std::move(signals), log_file, net);
+    lnd::Loggers loggers(logger_memory);
+    lnd::Server server(os, key, std::move(listener), std::move(signals), log_file, net, loggers);
     return server.run();
 }

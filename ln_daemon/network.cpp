@@ -16,33 +16,12 @@ namespace lnd {
 using proto::Err;
 using proto::Msg;
 
+using outcome::error;
+using outcome::malformed;
+using outcome::ok;
+using outcome::reply;
+
 namespace {
-
-NetOutcome ok() { return {}; }
-
-NetOutcome reply(Msg type, std::string payload)
-{
-    NetOutcome o;
-    o.type = type;
-    o.payload = std::move(payload);
-    return o;
-}
-
-NetOutcome error(Err code, std::string text)
-{
-    NetOutcome o;
-    o.kind = NetOutcome::Kind::error;
-    o.code = code;
-    o.text = std::move(text);
-    return o;
-}
-
-NetOutcome malformed()
-{
-    NetOutcome o;
-    o.kind = NetOutcome::Kind::malformed;
-    return o;
-}
 
 NetOutcome value(uint64_t v)
 {

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 #include <unordered_map>
+#include <utility>
 
 #include "forward.hpp"
 #include "protocol.hpp"
@@ -27,6 +28,32 @@ struct NetOutcome {
     proto::Err code = proto::Err::bad_request; // error
     std::string text;                          // error
 };
+
+// Building outcomes (network.cpp, loggers.cpp).
+namespace outcome {
+inline NetOutcome ok() { return {}; }
+inline NetOutcome reply(proto::Msg type, std::string payload)
+{
+    NetOutcome o;
+    o.type = type;
+    o.payload = std::move(payload);
+    return o;
+}
+inline NetOutcome error(proto::Err code, std::string text)
+{
+    NetOutcome o;
+    o.kind = NetOutcome::Kind::error;
+    o.code = code;
+    o.text = std::move(text);
+    return o;
+}
+inline NetOutcome malformed()
+{
+    NetOutcome o;
+    o.kind = NetOutcome::Kind::malformed;
+    return o;
+}
+} // namespace outcome
 
 class NetCommands {
 public:

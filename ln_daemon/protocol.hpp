@@ -49,6 +49,11 @@ enum class Msg : uint8_t {
     stream_recv = 0x49,
     stream_remove = 0x4a,
     stream_stats = 0x4b,
+    logger_topic = 0x4c, // topic logging (docs/daemon.md, "Topic logging")
+    logger_remove = 0x4d,
+    logger_enable = 0x4e,
+    logger_fetch = 0x4f,
+    logger_status = 0x50,
     ok = 0x20,
     error = 0x21,
     spawned = 0x22,
@@ -57,6 +62,8 @@ enum class Msg : uint8_t {
     net_details = 0x25, // reply to NET_INFO
     value = 0x26,       // u64 reply to RING_PURGE and RING_SEQ
     stream_list = 0x27, // reply to STREAM_STATS
+    logger_data = 0x28, // reply to LOGGER_FETCH
+    logger_list = 0x29, // reply to LOGGER_STATUS
     ev_output = 0x30,
     ev_exited = 0x31,
     ev_state = 0x32,
@@ -78,6 +85,7 @@ enum class Err : uint16_t {
     ring_failed = 13,    // a ring request refused, or libln failed (ln_last_error's text)
     stream_failed = 14,  // the forwarder refused a stream (its text)
     unknown_stream = 15, // STREAM_REMOVE of a token this instance has no stream for
+    logger_failed = 16,  // a logger request refused (no such logger, memory limit, ...)
 };
 
 enum class Stream : uint8_t { pty = 0, out = 1, err = 2 };

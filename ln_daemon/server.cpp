@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "log.hpp"
+#include "logger_messages.hpp"
 #include "messages.hpp"
 #include "net_messages.hpp"
 
@@ -93,7 +94,8 @@ const char *msg_name(uint8_t type) noexcept
         return "CLIENT_HELLO";
     default: {
         const char *net = net_msg_name(type);
-        return net ? net : "unknown";
+        const char *logger = logger_msg_name(type);
+        return net ? net : logger ? logger : "unknown";
     }
     }
 }
@@ -101,9 +103,9 @@ const char *msg_name(uint8_t type) noexcept
 } // namespace
 
 Server::Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
-               NetCommands &net)
+               NetCommands &net, Loggers &loggers)
     : os_(os), key_(key), listener_(std::move(listener)), signals_(std::move(signals)),
-      log_path_(std::move(log_path)), supervisor_(os, *this), net_(net)
+      log_path_(std::move(log_path)), supervisor_(os, *this), net_(net), loggers_(loggers)
 {
 }
 
@@ -470,11 +472,15 @@ void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Re
     default:
         break;
     }
-    if (!NetCommands::handles(type)) {
+    NetOutcome out;
+    if (NetCommands::handles(type)) {
+        out = net_.handle(c.instance, type, r);
+    } else if (Loggers::handles(type)) {
+        out = loggers_.handle(c.instance, type, r);
+    } else {
         refuse(c, req, Err::bad_request, "unknown message type " + std::to_string(type));
         return;
     }
-    NetOutcome out = net_.handle(c.instance, type, r);
     switch (out.kind) {
     case NetOutcome::Kind::malformed:
         return malformed();
@@ -668,6 +674,7 @@ int Server::run()
     }
     for (auto &entry : conns_) // best effort: the last events
         flush(*entry.second);
+    loggers_.shutdown(); // they logged what the processes published while they stopped
     logf("every process has exited; daemon ends");
     return 0;
 }

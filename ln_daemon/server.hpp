@@ -1,8 +1,8 @@
 // The daemon's poll loop and its TCP side: accepting connections, the authentication
-// handshake, framing with per-frame tags, dispatching commands to the Supervisor (processes)
-// and to NetCommands (rings, forwarding), and turning the Supervisor's news into replies and
-// events.  A connection that misbehaves is closed with one log line; nothing it sends can
-// affect another connection or a process.
+// handshake, framing with per-frame tags, dispatching commands to the Supervisor (processes),
+// to NetCommands (rings, forwarding) and to Loggers (topic logging), and turning the
+// Supervisor's news into replies and events.  A connection that misbehaves is closed with
+// one log line; nothing it sends can affect another connection or a process.
 #pragma once
 
 #include <cstdint>
@@ -14,6 +14,7 @@
 
 #include "auth.hpp"
 #include "fd.hpp"
+#include "loggers.hpp"
 #include "network.hpp"
 #include "process.hpp"
 #include "protocol.hpp"
@@ -33,11 +34,13 @@ class Server final : public Sink {
 public:
     // `listener` is a bound, listening, non-blocking socket; `signals` a signalfd for
     // SIGCHLD, SIGTERM, SIGINT and SIGHUP.  `log_path` is reopened on SIGHUP.  `net` takes
-    // the ring and stream requests and must outlive the server.
+    // the ring and stream requests, `loggers` the LOGGER_* ones; both must outlive the
+    // server.
     Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
-           NetCommands &net);
+           NetCommands &net, Loggers &loggers);
     ~Server() override;
-    // Runs until SIGTERM/SIGINT has stopped every process; returns the exit status.
+    // Runs until SIGTERM/SIGINT has stopped every process, then stops the logger threads;
+    // returns the exit status.
     int run();
 
     void spawn_result(const Process &p, bool ok, proto::Err code,
@@ -71,6 +74,7 @@ private:
     std::string log_path_;
     Supervisor supervisor_;
     NetCommands &net_;
+    Loggers &loggers_;
     std::map<uint64_t, std::unique_ptr<Connection>> conns_;
     uint64_t next_conn_ = 1;
     uint64_t next_token_ = 1;

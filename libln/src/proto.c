@@ -93,6 +93,19 @@ void ln_wbuf_str(ln_wbuf* b, const char* s)
     ln_wbuf_bytes(b, s, n);
 }
 
+void ln_wbuf_text(ln_wbuf* b, const char* s)
+{
+    if (b->failed)
+        return;
+    size_t n = s != NULL ? strlen(s) : 0;
+    if (s == NULL || n > UINT32_MAX || !ln_utf8_valid(s, n)) {
+        b->failed = LN_EINVAL;
+        return;
+    }
+    ln_wbuf_u32(b, (uint32_t)n);
+    ln_wbuf_bytes(b, s, n);
+}
+
 /* ---- reader -------------------------------------------------------------------------- */
 
 void ln_rbuf_init(ln_rbuf* r, const void* data, size_t len)
@@ -144,6 +157,21 @@ void ln_rbuf_str(ln_rbuf* r, char* out, size_t outsize)
     }
     memcpy(out, s, n);
     out[n] = '\0';
+}
+
+const char* ln_rbuf_text(ln_rbuf* r, size_t* len)
+{
+    *len = 0;
+    size_t n = ln_rbuf_u32(r);
+    const char* s = (const char*)rbuf_take(r, n);
+    if (s == NULL)
+        return NULL;
+    if (memchr(s, '\0', n) != NULL || !ln_utf8_valid(s, n)) {
+        r->failed = LN_EPROTOCOL;
+        return NULL;
+    }
+    *len = n;
+    return s;
 }
 
 int ln_rbuf_end(const ln_rbuf* r)
@@ -242,7 +270,7 @@ int ln_proto_decode_frame(const void* data, size_t len, uint16_t* type, ln_rbuf*
 
 /* ---- message types ------------------------------------------------------------------- */
 
-/* Every message's fields in order, one letter each: w u16, d u32, q u64, i i32, s str.  The
+/* Every message's fields in order, one letter each: w u16, d u32, q u64, i i32, s str, t text.  The
  * request id is the leading `d` of the types that carry one. */
 static const struct {
     uint16_t type;
@@ -267,6 +295,8 @@ static const struct {
     {LN_MSG_FIND_SERVICE, LN_MSG_SERVICE_INFO, 0, "dssq", "FIND_SERVICE"},
     {LN_MSG_SERVICE_INFO, 0, 1, "dssssws", "SERVICE_INFO"},
     {LN_MSG_SERVICE_CALLED, LN_MSG_OK, 0, "dsqq", "SERVICE_CALLED"},
+    {LN_MSG_CONTROL, LN_MSG_CONTROL_RESULT, 0, "dt", "CONTROL"},
+    {LN_MSG_CONTROL_RESULT, 0, 1, "dt", "CONTROL_RESULT"},
 };
 
 static int find_type(uint16_t type)
@@ -313,6 +343,11 @@ int ln_proto_check_fields(uint16_t type, const ln_rbuf* body)
         case 'd': ln_rbuf_u32(&r); break;
         case 'q': ln_rbuf_u64(&r); break;
         case 'i': ln_rbuf_i32(&r); break;
+        case 't': {
+            size_t n;
+            ln_rbuf_text(&r, &n);
+            break;
+        }
         default: ln_rbuf_str(&r, text, sizeof text); break;
         }
     }

@@ -35,6 +35,8 @@ enum ln_msg_type {
     LN_MSG_FIND_SERVICE = 22,
     LN_MSG_SERVICE_INFO = 23,
     LN_MSG_SERVICE_CALLED = 24,
+    LN_MSG_CONTROL = 30,
+    LN_MSG_CONTROL_RESULT = 31,
 };
 
 /* Growable writer.  `failed` is 0, or the LN_E* code of the first failure: LN_ENOMEM, or
@@ -57,6 +59,9 @@ void ln_wbuf_u64(ln_wbuf* b, uint64_t v);
 void ln_wbuf_i32(ln_wbuf* b, int32_t v);
 void ln_wbuf_str(ln_wbuf* b, const char* s); /* u16 length + bytes, no NUL */
 void ln_wbuf_bytes(ln_wbuf* b, const void* data, size_t n);
+/* u32 length + bytes, no NUL: a `text` field (UTF-8, bounded by the frame size only);
+ * LN_EINVAL for NULL or invalid UTF-8. */
+void ln_wbuf_text(ln_wbuf* b, const char* s);
 
 /* Bounds-checked reader over memory it does not own.  Reading past the end, or a str that is
  * too long for the caller, not UTF-8 or contains NUL, sets `failed` (LN_EPROTOCOL) and yields
@@ -75,6 +80,9 @@ int32_t ln_rbuf_i32(ln_rbuf* r);
 /* Copies a str field NUL-terminated into out[outsize]; sets failed if it does not fit, is
  * longer than LN_PROTO_MAX_STR, is not valid UTF-8 or contains NUL. */
 void ln_rbuf_str(ln_rbuf* r, char* out, size_t outsize);
+/* A `text` field: points *len bytes into the reader's memory (not NUL-terminated); sets
+ * failed if it is truncated, not UTF-8 or contains NUL.  NULL (and *len 0) on failure. */
+const char* ln_rbuf_text(ln_rbuf* r, size_t* len);
 /* LN_OK if nothing failed and every byte was consumed, else LN_EPROTOCOL. */
 int ln_rbuf_end(const ln_rbuf* r);
 
@@ -100,7 +108,7 @@ int ln_proto_decode_frame(const void* data, size_t len, uint16_t* type, ln_rbuf*
 /* 1 for the types of docs/protocol.md, else 0. */
 int ln_proto_type_known(uint16_t type);
 /* 1 for the types the manager sends (WELCOME, ERROR, PORT_OK, OK, TOPIC_INFO_OK,
- * SERVICE_INFO), else 0. */
+ * SERVICE_INFO, CONTROL_RESULT), else 0. */
 int ln_proto_to_client(uint16_t type);
 /* LN_OK if `body` (from its start; the reader itself is not moved) holds exactly the fields of
  * message `type` with valid strs, else LN_EPROTOCOL.  A reader that passes can then be read

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import atexit
 import ctypes
+import json
 import operator
 import threading
 import time
@@ -102,6 +103,26 @@ class client:  # noqa: N801 - the LN name
         buf = ctypes.create_string_buffer(2048)
         code = C.ln_client_last_error(self.handle, buf, len(buf))
         return code, buf.value.decode("utf-8", "replace")
+
+    def control(self, op: str, **args: Any) -> dict[str, Any]:
+        """One manager control command on this client's connection (docs/protocol.md,
+        "Control"): its JSON answer as a dict; a refusal raises the LnError class of the
+        code it names (LnRefusedError by default) with the manager's reason."""
+        result = ctypes.c_void_p()
+        C.ln_control(self.handle, json.dumps({"op": op, **args}).encode(),
+                     ctypes.byref(result))
+        try:
+            text = ctypes.string_at(result.value).decode() if result.value else "{}"
+        finally:
+            C.ln_free(result)
+        answer: dict[str, Any] = json.loads(text)
+        return answer
+
+    def get_logger(self, name: str) -> Any:
+        """The manager's topic logger `name` (made if it does not exist; docs/logging.md)."""
+        from ._logger import logger
+
+        return logger(self, name)
 
     def unpublish(self, port: publisher) -> None:
         port.close()

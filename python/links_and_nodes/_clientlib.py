@@ -95,6 +95,11 @@ ln_ring_tap_inject = _declare("ln_ring_tap_inject", c_int, [c_void_p, c_void_p, 
 ln_ring_tap_write_seq = _declare("ln_ring_tap_write_seq", c_uint64, [c_void_p])
 ln_ring_tap_segment = _declare("ln_ring_tap_segment", c_char_p, [c_void_p])
 
+# ---- manager commands (ln_control; loggers use it) -----------------------------------------
+ln_control = _declare("ln_control", c_int, [c_void_p, c_char_p, ctypes.POINTER(c_void_p)],
+                      _check)
+ln_free = _declare("ln_free", None, [c_void_p])
+
 # ---- services ----------------------------------------------------------------------------
 LN_EINTR = -21
 # int handler(ln_client*, ln_service_request*, void* user_data); ctypes takes the GIL for it,

@@ -348,7 +348,7 @@ static void test_message_types(void)
     int known = 0;
     for (uint32_t t = 0; t <= UINT16_MAX; t++)
         known += ln_proto_type_known((uint16_t)t);
-    LN_CHECK_EQ(known, 16);
+    LN_CHECK_EQ(known, 18);
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_RECLAIM_PORT), LN_MSG_PORT_OK);
     LN_CHECK_STREQ(ln_proto_type_name(LN_MSG_RECLAIM_PORT), "RECLAIM_PORT");
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_REGISTER_SERVICE), LN_MSG_OK);
@@ -356,6 +356,37 @@ static void test_message_types(void)
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_FIND_SERVICE), LN_MSG_SERVICE_INFO);
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_SERVICE_CALLED), LN_MSG_OK);
     LN_CHECK(ln_proto_to_client(LN_MSG_SERVICE_INFO) && !ln_proto_to_client(LN_MSG_FIND_SERVICE));
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_CONTROL), LN_MSG_CONTROL_RESULT);
+    LN_CHECK(ln_proto_to_client(LN_MSG_CONTROL_RESULT) && !ln_proto_to_client(LN_MSG_CONTROL));
+}
+
+static void test_text_fields(void)
+{
+    ln_wbuf b;
+    ln_wbuf_init(&b);
+    ln_wbuf_u32(&b, 7); /* request id */
+    ln_wbuf_text(&b, "{\"op\": \"status\"}");
+    LN_CHECK(bytes_equal(&b, "\x07\0\0\0\x10\0\0\0{\"op\": \"status\"}", 24));
+    ln_rbuf r;
+    ln_rbuf_init(&r, b.data, b.len);
+    LN_CHECK_EQ(ln_proto_check_fields(LN_MSG_CONTROL, &r), LN_OK);
+    ln_rbuf_u32(&r);
+    size_t n;
+    const char* text = ln_rbuf_text(&r, &n);
+    LN_CHECK(text != NULL && n == 16 && memcmp(text, "{\"op\": \"status\"}", 16) == 0);
+    LN_CHECK_EQ(ln_rbuf_end(&r), LN_OK);
+    ln_rbuf_init(&r, b.data, b.len - 1); /* truncated */
+    LN_CHECK_EQ(ln_proto_check_fields(LN_MSG_CONTROL, &r), LN_EPROTOCOL);
+    ln_wbuf_reset(&b);
+    ln_wbuf_u32(&b, 7);
+    ln_wbuf_u32(&b, 3);
+    ln_wbuf_bytes(&b, "a\0b", 3); /* NUL inside */
+    ln_rbuf_init(&r, b.data, b.len);
+    LN_CHECK_EQ(ln_proto_check_fields(LN_MSG_CONTROL_RESULT, &r), LN_EPROTOCOL);
+    ln_wbuf_reset(&b);
+    ln_wbuf_text(&b, "\xff"); /* not UTF-8: nothing written */
+    LN_CHECK_EQ(b.failed, LN_EINVAL);
+    ln_wbuf_free(&b);
 }
 
 /* A protocol-3 HELLO by hand: magic, version, pid, client name, libln version, host id,
@@ -439,6 +470,7 @@ int main(void)
     LN_TEST_RUN(test_header_bounds);
     LN_TEST_RUN(test_oversized_frame_not_encoded);
     LN_TEST_RUN(test_message_types);
+    LN_TEST_RUN(test_text_fields);
     LN_TEST_RUN(test_check_fields);
     LN_TEST_EXIT();
 }

@@ -1,11 +1,14 @@
 // fuzz_daemon_msgs.cpp — fuzz target: ln_daemon's command codec (protocol.hpp Reader,
-// messages.cpp, net_messages.cpp, spec.cpp) on a stream of manager frames, each decoded by
-// its type's decoder; a decoded SPAWN goes through check_spawn.  (Frame HMAC tags are left out.)
+// messages.cpp, net_messages.cpp, logger_messages.cpp, spec.cpp) on a stream of manager
+// frames, each decoded by its type's decoder; a decoded SPAWN goes through check_spawn, and a
+// decoded LOGGER_* request is encoded back and must decode to the same.  (Frame HMAC tags are
+// left out.)
 #include <cassert>
 #include <cstdint>
 #include <cstring>
 #include <string>
 
+#include "logger_messages.hpp"
 #include "messages.hpp"
 #include "net_messages.hpp"
 #include "protocol.hpp"
@@ -25,7 +28,34 @@ uint32_t le32(const uint8_t *p)
     return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
 }
 
-// One request body, decoded as Server::handle_hello / handle_request and Network do.
+// A decoded request encoded again, as the Python client does, and decoded once more.
+template <typename Request, typename Encode, typename Decode>
+void round_trip(const Request &req, Encode encode, Decode decode_again)
+{
+    proto::Writer w;
+    encode(w, req);
+    proto::Reader again(w.buffer().data(), w.buffer().size());
+    Request copy;
+    bool ok = decode_again(again, copy);
+    assert(ok);
+    (void)ok;
+}
+
+void encode_logger_topic(proto::Writer &w, const LoggerTopicRequest &req)
+{
+    w.str(req.logger);
+    w.str(req.topic);
+    w.str(req.ring);
+    w.str(req.md_name);
+    w.u64(req.layout_hash);
+    w.u64(req.message_size);
+    w.u32(req.depth);
+    w.u32(req.divisor);
+    w.f64(req.span_s);
+}
+
+// One request body, decoded as Server::handle_hello / handle_request, NetCommands and
+// Loggers do.
 void decode(uint8_t type, proto::Reader &r)
 {
     switch (static_cast<Msg>(type)) {
@@ -108,6 +138,41 @@ void decode(uint8_t type, proto::Reader &r)
     case Msg::stream_remove: {
         uint64_t token;
         decode_stream_token(r, token);
+        break;
+    }
+    case Msg::logger_topic: {
+        LoggerTopicRequest req;
+        if (decode_logger_topic(r, req)) {
+            assert(req.logger.size() <= proto::kMaxName && req.ring.size() <= proto::kMaxName);
+            round_trip(req, encode_logger_topic, decode_logger_topic);
+        }
+        break;
+    }
+    case Msg::logger_remove: {
+        LoggerRemoveRequest req;
+        decode_logger_remove(r, req);
+        break;
+    }
+    case Msg::logger_enable: {
+        LoggerEnableRequest req;
+        if (decode_logger_enable(r, req))
+            round_trip(req,
+                       [](proto::Writer &w, const LoggerEnableRequest &q) {
+                           w.str(q.logger);
+                           w.u8(q.enable);
+                           w.u8(q.clear);
+                       },
+                       decode_logger_enable);
+        break;
+    }
+    case Msg::logger_fetch: {
+        LoggerFetchRequest req;
+        decode_logger_fetch(r, req);
+        break;
+    }
+    case Msg::logger_status: {
+        std::string logger;
+        decode_logger_status(r, logger);
         break;
     }
     default:
@@ -270,4 +335,48 @@ extern "C" void ln_fuzz_seeds(ln_fuzz_emit *emit)
         frame(out, Msg::stream_remove, w);
     }
     emit("streams", out.data(), out.size());
+
+    out.clear();
+    {
+        LoggerTopicRequest req;
+        req.logger = "blackbox";
+        req.topic = "/arm/state";
+        req.ring = "/ln.testinstance.1.1";
+        req.md_name = "robot/joint_state";
+        req.layout_hash = 0x1122334455667788u;
+        req.message_size = 96;
+        req.depth = 1000;
+        req.divisor = 10;
+        req.span_s = 2.5;
+        proto::Writer w;
+        encode_logger_topic(w, req);
+        frame(out, Msg::logger_topic, w);
+    }
+    {
+        proto::Writer w;
+        w.str("blackbox");
+        w.u8(1);
+        w.u8(1);
+        frame(out, Msg::logger_enable, w);
+    }
+    {
+        proto::Writer w;
+        w.str("blackbox");
+        w.str("/arm/state");
+        w.u64(41);
+        w.u32(1 << 20);
+        frame(out, Msg::logger_fetch, w);
+    }
+    {
+        proto::Writer w;
+        w.str("");
+        frame(out, Msg::logger_status, w);
+    }
+    {
+        proto::Writer w;
+        w.str("blackbox");
+        w.str("");
+        frame(out, Msg::logger_remove, w);
+    }
+    emit("loggers", out.data(), out.size());
 }

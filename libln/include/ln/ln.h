@@ -60,7 +60,8 @@ extern "C" {
     XX(EMD, -18, "bad message definition")                                                    \
     XX(ESERVICE, -19, "service provider answered with an error")                              \
     XX(EBADHANDLE, -20, "invalid or destroyed handle")                                        \
-    XX(EINTR, -21, "interrupted")
+    XX(EINTR, -21, "interrupted")                                                             \
+    XX(EREFUSED, -22, "refused by the manager")
 
 enum ln_error {
     LN_OK = 0,
@@ -311,6 +312,38 @@ LN_EXPORT int ln_service_request_respond(ln_service_request* req, const void* re
 LN_EXPORT int ln_service_request_respond_error(ln_service_request* req, const char* text);
 /* Name of the service being called (owned by the provider). */
 LN_EXPORT const char* ln_service_request_service_name(const ln_service_request* req);
+
+/* ==== manager commands and topic loggers (docs/logging.md) ================================
+ * ln_control sends one control command, a JSON object with a string "op" (docs/protocol.md,
+ * "Control"), on the client's manager connection and waits (up to the client's timeout) for
+ * the answer.  LN_OK: *result is the answer's JSON text, which the caller frees with
+ * ln_free; result may be NULL if the text is not wanted.  A command the manager refuses is
+ * LN_EREFUSED (or the code its answer names) with the manager's reason as ln_last_error().
+ * Thread-safe like every client request. */
+LN_EXPORT int ln_control(ln_client* clnt, const char* command, char** result);
+/* Frees memory libln handed out (ln_control's result).  NULL is fine. */
+LN_EXPORT void ln_free(void* p);
+
+/* A logger keeps the last samples of its topics in memory on their publishers' hosts (in
+ * ln_daemon, never slowing the publisher), from enable to disable; the manager merges and
+ * saves them.  The handle names a logger of the manager: ln_logger_open creates it there
+ * if it does not exist, ln_logger_close frees only the handle.  Every call is one request
+ * to the manager; errors as for ln_control (e.g. LN_ELIMIT: over the daemon's logger
+ * memory; LN_ENOTFOUND). */
+typedef struct ln_logger ln_logger;
+LN_EXPORT int ln_logger_open(ln_client* clnt, const char* name, ln_logger** out);
+/* Log topic (a name or an fnmatch pattern) `depth` samples deep (>= 1), keeping the samples
+ * whose sequence number is a multiple of `divisor` (>= 1), none older than `span` seconds
+ * before the newest (0: no limit). */
+LN_EXPORT int ln_logger_add_topic(ln_logger* lg, const char* topic, uint32_t depth,
+                                  uint32_t divisor, double span);
+/* Start a new capture (what the logger held is cleared) / stop it, keeping what it has. */
+LN_EXPORT int ln_logger_enable(ln_logger* lg);
+LN_EXPORT int ln_logger_disable(ln_logger* lg);
+/* Fetch every host's samples and write them, merged in publish order, to `path` on the
+ * manager's host: MCAP for *.mcap, numpy arrays for *.npz. */
+LN_EXPORT int ln_logger_save(ln_logger* lg, const char* path);
+LN_EXPORT void ln_logger_close(ln_logger* lg);
 
 /* ==== topic segment administration (used by ln_manager) ===================================
  * The manager creates, sizes, grows and removes the shared-memory segments of topics; clients

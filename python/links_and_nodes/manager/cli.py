@@ -46,6 +46,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "processes of a configuration file.  `ln_manager COMMAND --help` for "
                     "the commands that talk to a running manager: "
                     "status, start, stop, restart, output, wait-ready, quit, detach; "
+                    "`ln_manager topic echo|hz|bw|info`, `md show`, `service call` "
+                    "look into its topics, mds and services (docs/introspection.md); "
                     "`ln_manager check FILE.lnc` validates a configuration without "
                     "starting anything.")
     parser.add_argument("-c", "--config", metavar="FILE",
@@ -201,12 +203,18 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
     else:
         from .control import Control
 
-        server.control = Control(core, None, shutdown=shutdown).handle_json
+        control = Control(core, None, shutdown=shutdown)
+        control.loggers, bare_pool = _bare_loggers(args, core, directory, port)
+        control.loggers.start()
+        server.control = control.handle_json
     if status == 0:
         await stop.wait()
     if runner is not None:
         await runner.end(stop_processes[0])
         status = max(status, runner.exit_status)
+    else:
+        await control.loggers.close(remove=stop_processes[0])
+        await bare_pool.close()
     log.info("shutting down: closing %d client%s", len(core.registry.clients),
              "" if len(core.registry.clients) == 1 else "s")
     if adoption is not None:
@@ -217,6 +225,19 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
         await runner.finish()
     log.info("removed %d segment%s, exiting", removed, "" if removed == 1 else "s")
     return status
+
+
+def _bare_loggers(args: argparse.Namespace, core: Any, directory: Path, port: int) -> Any:
+    """Loggers of a manager without a configuration: its host's ln_daemon (started when a
+    logger first needs it) logs the topics, which all have their publishers here."""
+    from .config import model
+    from .daemons import DaemonPool
+    from .loggers import Loggers
+
+    config = model.Config(files=[], instance=model.Instance(
+        args.instance, f":{port}", model.Location("<command line>", 0, 0)))
+    pool = DaemonPool(config, args.instance, key_file=args.daemon_key_file, log_dir=directory)
+    return Loggers(core, lambda: pool.link(pool.local_host), lambda: pool.local_host), pool
 
 
 def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
@@ -272,6 +293,10 @@ def main(argv: list[str] | None = None) -> int:
         return check.main(argv[1:])
     if argv and argv[0] in remote_cli.COMMANDS:
         return remote_cli.main(argv)
+    if argv and argv[0] in ("topic", "md", "service"):  # live introspection
+        from . import introspect_cli
+
+        return introspect_cli.main(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
     config = _load_config(parser, args) if args.config else None

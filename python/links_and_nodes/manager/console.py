@@ -2,13 +2,16 @@
 on stdout.  Every command goes through control.Control, like remote ones.
 
     start|stop|restart NAME|GROUP|all    status    output NAME [-n N] [-f]
-    history NAME    topics    services    hosts    network    reload    quit    detach
-    help
+    history NAME    topics    services    hosts    network    logger ...    reload
+    quit    detach    help
+    topic echo|hz|bw|info NAME ...    md show NAME    service call NAME REQUEST
+    (these three: introspect_console.py, docs/introspection.md)
 """
 
 from __future__ import annotations
 
 import asyncio
+import os
 import shlex
 import sys
 import threading
@@ -16,7 +19,10 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
+from . import logger_cli
 from .control import Control, ControlError
+from .introspect_console import execute as introspect
+from .introspect_console import stop_watch
 
 HELP = """commands:
   start NAME|GROUP|all     start (dependencies first)
@@ -29,6 +35,16 @@ HELP = """commands:
   services                 services with provider, md and calls
   hosts                    every host: its ln_daemon's state, host id, data port
   network                  topics forwarded between hosts: rates, drops, per host pair
+  topic echo NAME [-n N] [--field F] [--json] [--full]
+                           samples decoded by the md, until done or the next command
+  topic hz|bw NAME [--window N] [-n N] [--duration S]
+                           rate / bandwidth every second, until done or the next command
+  topic info NAME          md, ring, publishers and subscribers with hosts, transports
+  md show NAME [-r]        a message definition's text (-r: and the mds it uses)
+  service call NAME REQ    call a service; REQ like 'a: 1, b: [1, 2], name: "x"' or JSON
+  logger [NAME ...]        topic loggers: NAME add TOPIC [DEPTH] [--divisor K] [--span S],
+                           NAME remove [TOPIC], NAME enable [--keep]|disable|status,
+                           NAME save FILE (.mcap or .npz; on the manager's host)
   reload                   read the configuration file again
   quit                     stop every process and exit
   detach                   exit, leaving the processes running under their daemons
@@ -151,6 +167,10 @@ class Console:
                 self.say(text)
         elif cmd == "network":
             self._network(await c.handle({"op": "network"}))
+        elif cmd == "logger":
+            await self._logger(args)
+        elif cmd in ("topic", "md", "service"):
+            await introspect(self, [cmd, *args])
         elif cmd == "reload":
             result = await c.handle({"op": "reload"})
             self.say("reloaded: " + "; ".join(f"{k}: {', '.join(v) or '-'}"
@@ -161,6 +181,17 @@ class Console:
         else:
             raise ControlError(f"unknown command {cmd!r} (try help)")
         return False
+
+    async def _logger(self, args: list[str]) -> None:
+        try:
+            op, command = logger_cli.parse(args)
+        except logger_cli.UsageError as exc:
+            raise ControlError(str(exc)) from None
+        if op == "logger_save":  # a file name as typed: relative to the manager's directory
+            command["path"] = os.path.abspath(command["path"])
+        result = await self.control.handle({"op": op, **command})
+        for text in logger_cli.format_result(op, command, result):
+            self.say(text)
 
     def _network(self, result: dict[str, Any]) -> None:
         rows = [["topic", "from", "to", "via", "msgs/s", "bytes/s", "sent", "received",
@@ -209,6 +240,7 @@ class Console:
             self.control.scheduler.output_listeners.append(follow_line)
 
     def _unfollow(self) -> None:
+        stop_watch(self)  # a topic echo/hz/bw
         if self._follow is not None and self.control.scheduler is not None:
             self.control.scheduler.output_listeners.remove(self._follow)
         self._follow = None

@@ -10,9 +10,13 @@ import json
 import logging
 import math
 from collections.abc import Awaitable, Callable
+from pathlib import Path
 from typing import Any
 
+from .. import logger_files
+from . import logger_control
 from .core import Core
+from .loggers import LoggerError, Loggers
 from .scheduler import Scheduler, StartError
 
 log = logging.getLogger("ln_manager")
@@ -21,7 +25,12 @@ MAX_OUTPUT_LINES = 10000
 
 
 class ControlError(Exception):
-    """A command that cannot be carried out; the text goes back as {"error": TEXT}."""
+    """A command that cannot be carried out; the text goes back as {"error": TEXT}, with
+    {"code": "ELIMIT"} etc. when an LN_E* name says more than "refused"."""
+
+    def __init__(self, text: str, code: str = "") -> None:
+        super().__init__(text)
+        self.code = code
 
 
 class Control:
@@ -40,6 +49,12 @@ class Control:
             "hosts": self.hosts, "network": self.network,
         }
         self.network_view: Any = None  # network.Network of a multi-host configuration
+        self.manager_address: str | None = None  # HOST:PORT, for the console's clients
+        from .introspect_control import add_commands
+
+        add_commands(self)  # topic_info, service_info, md_show
+        self.loggers: Loggers | None = None  # set once the manager can reach its daemons
+        self.commands.update(logger_control.commands(self._loggers, self._save_logger))
 
     async def handle_json(self, text: str) -> str:
         """One CONTROL request to its CONTROL_RESULT text."""
@@ -55,6 +70,8 @@ class Control:
             result = {"ok": False, "error": f"command is not JSON: {exc}"}
         except ControlError as exc:
             result = {"ok": False, "error": str(exc)}
+            if exc.code:
+                result["code"] = exc.code
         return json.dumps(result)
 
     async def handle(self, command: dict[str, Any]) -> dict[str, Any]:
@@ -66,6 +83,8 @@ class Control:
             result = await func(command)
         except (KeyError, StartError) as exc:
             raise ControlError(exc.args[0] if exc.args else str(exc)) from None
+        except LoggerError as exc:
+            raise ControlError(str(exc), exc.code) from None
         except (ControlError, asyncio.CancelledError):
             raise
         except Exception as exc:  # a bug of ours: answer it, keep the manager running
@@ -101,6 +120,19 @@ class Control:
         if not isinstance(name, str) or name not in sched.procs:
             raise ControlError(f"no process named {name!r}")
         return name
+
+    def _loggers(self) -> Loggers:
+        if self.loggers is None:
+            raise LoggerError("this manager has no loggers (it could not reach its host's "
+                              "ln_daemon)", "ENOTFOUND")
+        return self.loggers
+
+    async def _save_logger(self, name: str, path: Path) -> dict[str, Any]:
+        data = await self._loggers().download(name)
+        try:
+            return await asyncio.to_thread(logger_files.save, data, path)
+        except (OSError, ValueError) as exc:
+            raise LoggerError(f"cannot save logger {name!r} to {path}: {exc}") from None
 
     # ---- commands ------------------------------------------------------------------------
     async def status(self, command: dict[str, Any]) -> dict[str, Any]:

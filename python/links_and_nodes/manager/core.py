@@ -501,6 +501,28 @@ class Core:
                                    f"run on one host, this client runs on "
                                    f"{self.hosts.host_label(client)!r}")
 
+    async def ensure_slots(self, name: str, slots: int, label: str) -> bool:
+        """Grow topic `name`'s ring to at least `slots` slots (for a reader outside the
+        registry, such as a daemon's logger, that needs slack), but never past the
+        per-topic ring memory limit; True if it grew.  Nothing for an unknown topic."""
+        async with self._lock:
+            topic = self.registry.topics.get(name)
+            if topic is None or topic.slots >= slots:
+                return False
+            limits = self.registry.limits
+            while slots > topic.slots and \
+                    self.registry.ring_bytes(topic.message_size, slots) > limits.ring_memory:
+                slots -= 1
+            if slots <= topic.slots:
+                return False
+            try:
+                await self._grow(topic, slots, label)
+            except RequestError as exc:
+                log.warning("topic %r: cannot grow its ring for %s: %s", name, label, exc.text)
+                return False
+        self._changed()
+        return True
+
     async def _grow(self, topic: Topic, slots: int, label: str) -> None:
         """Replace the topic's ring by a deeper generation on every host that has one."""
         for rings in self._topic_rings(topic):

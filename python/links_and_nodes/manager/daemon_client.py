@@ -52,6 +52,11 @@ class Msg(enum.IntEnum):
     STREAM_RECV = 0x49
     STREAM_REMOVE = 0x4A
     STREAM_STATS = 0x4B
+    LOGGER_TOPIC = 0x4C
+    LOGGER_REMOVE = 0x4D
+    LOGGER_ENABLE = 0x4E
+    LOGGER_FETCH = 0x4F
+    LOGGER_STATUS = 0x50
     OK = 0x20
     ERROR = 0x21
     SPAWNED = 0x22
@@ -60,6 +65,8 @@ class Msg(enum.IntEnum):
     NET_DETAILS = 0x25
     VALUE = 0x26
     STREAM_LIST = 0x27
+    LOGGER_DATA = 0x28
+    LOGGER_LIST = 0x29
     EV_OUTPUT = 0x30
     EV_EXITED = 0x31
     EV_STATE = 0x32
@@ -81,6 +88,7 @@ class ErrorCode(enum.IntEnum):
     RING_FAILED = 13
     STREAM_FAILED = 14
     UNKNOWN_STREAM = 15
+    LOGGER_FAILED = 16
 
 
 STREAMS = {0: "pty", 1: "stdout", 2: "stderr"}
@@ -195,6 +203,61 @@ class StreamTotals:
 
     unknown_stream: int
     malformed: int
+
+
+@dataclass(frozen=True)
+class LoggerChunk:
+    """A LOGGER_FETCH reply: the topic's layout, whether its logger is enabled, its counters
+    (received: samples the tap delivered while enabled; stored: in the buffer now; missed:
+    sequence numbers it never got while enabled; skipped: not kept because of the divisor;
+    dropped: evicted by depth or span), the sequence numbers of the buffer's oldest and
+    newest sample (0 when empty) and stored samples as (seq, timestamp_ns, data), oldest
+    first."""
+
+    message_size: int
+    layout_hash: int
+    md_name: str
+    enabled: bool
+    received: int
+    stored: int
+    missed: int
+    skipped: int
+    dropped: int
+    first_seq: int
+    last_seq: int
+    samples: list[tuple[int, int, bytes]]
+
+
+@dataclass(frozen=True)
+class LoggerTopicStatus:
+    """One topic of a logger on a daemon; the counters as in LoggerChunk.  last_error: why
+    the logger cannot read its ring right now ("" if it can)."""
+
+    logger: str
+    topic: str
+    ring: str
+    md_name: str
+    enabled: bool
+    depth: int
+    divisor: int
+    span: float
+    message_size: int
+    received: int
+    stored: int
+    missed: int
+    skipped: int
+    dropped: int
+    last_error: str
+
+
+@dataclass(frozen=True)
+class LoggerStatus:
+    """A LOGGER_STATUS reply: the daemon's logger memory limit and what all its loggers use
+    (every instance), and the topics asked for."""
+
+    memory_limit: int
+    memory_used: int
+    topics: list[LoggerTopicStatus]
 
 
 class DaemonError(Exception):
@@ -502,6 +565,43 @@ def _decode_stream_list(payload: bytes) -> tuple[list[StreamStat], StreamTotals]
     return streams, StreamTotals(unknown_stream=unknown, malformed=malformed)
 
 
+def _decode_logger_chunk(payload: bytes) -> LoggerChunk:
+    r = _Reader(payload)
+    message_size, layout_hash = r.take("<QQ")
+    md_name = r.text()
+    enabled, received, stored, missed, skipped, dropped, first, last, count = \
+        r.take("<BQQQQQQQI")
+    samples = []
+    for _ in range(count):
+        seq, timestamp_ns = r.take("<Qq")
+        if r.pos + message_size > len(r.data):
+            raise _Malformed("short payload")
+        samples.append((seq, timestamp_ns, r.data[r.pos:r.pos + message_size]))
+        r.pos += message_size
+    if r.pos != len(r.data):
+        raise _Malformed("bytes left over")
+    return LoggerChunk(message_size=message_size, layout_hash=layout_hash, md_name=md_name,
+                       enabled=bool(enabled), received=received, stored=stored, missed=missed,
+                       skipped=skipped, dropped=dropped, first_seq=first, last_seq=last,
+                       samples=samples)
+
+
+def _decode_logger_list(payload: bytes) -> LoggerStatus:
+    r = _Reader(payload)
+    limit, used, count = r.take("<QQI")
+    topics = []
+    for _ in range(count):
+        logger, topic, ring, md_name = r.text(), r.text(), r.text(), r.text()
+        enabled, depth, divisor, span, message_size, received, stored, missed, skipped, \
+            dropped = r.take("<BIIdQQQQQQ")
+        topics.append(LoggerTopicStatus(
+            logger=logger, topic=topic, ring=ring, md_name=md_name, enabled=bool(enabled),
+            depth=depth, divisor=divisor, span=span, message_size=message_size,
+            received=received, stored=stored, missed=missed, skipped=skipped, dropped=dropped,
+            last_error=r.text()))
+    return LoggerStatus(memory_limit=limit, memory_used=used, topics=topics)
+
+
 # ---- the client ------------------------------------------------------------------------------
 
 
@@ -801,6 +901,54 @@ class DaemonClient:
             return _decode_stream_list(payload)
         except _Malformed as e:
             raise DaemonError(f"malformed STREAM_STATS reply: {e}") from None
+
+    # -- topic logging (docs/daemon.md, "Topic logging") --
+    # Loggers belong to this instance and outlive the connection; refusals raise
+    # DaemonError with code LOGGER_FAILED (or LIMIT) and the daemon's text.
+
+    async def logger_topic(self, logger: str, topic: str, ring: str, md_name: str,
+                           layout_hash: int, message_size: int, depth: int, divisor: int = 1,
+                           span: float = 0.0) -> None:
+        """Create or update topic `topic` of `logger`: log local `ring` (which may not exist
+        yet) into a buffer of `depth` samples, keeping those whose seq is a multiple of
+        `divisor`, and with span > 0 none older than the newest's timestamp minus `span`
+        seconds.  A new ring of the same shape keeps the data; another message size, depth
+        or layout starts a new buffer."""
+        await self._call(Msg.LOGGER_TOPIC, _str(logger) + _str(topic) + _str(ring)
+                         + _str(md_name)
+                         + _pack("logger topic", "<QQIId", layout_hash, message_size, depth,
+                                 divisor, span), Msg.OK)
+
+    async def logger_remove(self, logger: str, topic: str = "") -> None:
+        """Remove one topic of `logger`, or with topic "" the whole logger, and its data."""
+        await self._call(Msg.LOGGER_REMOVE, _str(logger) + _str(topic), Msg.OK)
+
+    async def logger_enable(self, logger: str, enable: bool = True, clear: bool = False) -> None:
+        """Start logging every topic of `logger` (samples published from now on), or stop
+        it, keeping the data; `clear` first empties the buffers and zeroes the counters."""
+        await self._call(Msg.LOGGER_ENABLE, _str(logger) + struct.pack("<BB", enable, clear),
+                         Msg.OK)
+
+    async def logger_fetch(self, logger: str, topic: str, after_seq: int = 0,
+                           max_bytes: int = 1 << 20) -> LoggerChunk:
+        """The stored samples of a logger topic with seq > after_seq, oldest first, as many
+        as fit `max_bytes` (16 + message size each; at least one if there is any)."""
+        payload = await self._call(Msg.LOGGER_FETCH, _str(logger) + _str(topic)
+                                   + _pack("fetch", "<QI", after_seq, max_bytes),
+                                   Msg.LOGGER_DATA)
+        try:
+            return _decode_logger_chunk(payload)
+        except _Malformed as e:
+            raise DaemonError(f"malformed LOGGER_FETCH reply: {e}") from None
+
+    async def logger_status(self, logger: str = "") -> LoggerStatus:
+        """Every topic of `logger` ("": of every logger of this instance) and the daemon's
+        logger memory."""
+        payload = await self._call(Msg.LOGGER_STATUS, _str(logger), Msg.LOGGER_LIST)
+        try:
+            return _decode_logger_list(payload)
+        except _Malformed as e:
+            raise DaemonError(f"malformed LOGGER_STATUS reply: {e}") from None
 
     async def _value(self, mtype: Msg, payload: bytes) -> int:
         reply = await self._call(mtype, payload, Msg.VALUE)

@@ -242,7 +242,7 @@ class Registry:
             # Doubling keeps a series of ever deeper subscribers from making a generation
             # each; it never goes past the deepest ring a port can ask for.
             grow_to = min(max(needed, 2 * topic.slots), limits.buffers + 1)
-            if self._ring_bytes(request.message_size, grow_to) > limits.ring_memory:
+            if self.ring_bytes(request.message_size, grow_to) > limits.ring_memory:
                 grow_to = needed
             self._check_ring(request, grow_to)
         return PortPlan(client, request, topic, topic.id, topic.slots, grow_to, reader_index)
@@ -365,11 +365,11 @@ class Registry:
         return topic
 
     # ---- internals ----------------------------------------------------------------------
-    def _ring_bytes(self, message_size: int, slots: int) -> int:
+    def ring_bytes(self, message_size: int, slots: int) -> int:
         return self._ring_size(message_size, slots)
 
     def _check_ring(self, request: PortRequest, slots: int) -> None:
-        size = self._ring_bytes(request.message_size, slots)
+        size = self.ring_bytes(request.message_size, slots)
         if size == 0 or size > self.limits.ring_memory:
             raise RequestError("ELIMIT", f"topic {request.topic!r}: a ring of {slots} slots "
                                f"of {request.message_size} bytes takes {size} bytes, the "

@@ -1,4 +1,4 @@
-"""`ln_manager status|start|stop|restart|output|wait-ready|quit|detach`: one function per
+"""`ln_manager status|start|stop|restart|output|wait-ready|logger|quit|detach`: one function per
 command, each talking to a running manager through the scripting API (scripting.py).
 Exit status 0 on success, 1 when the manager refuses or cannot be reached, 2 for usage."""
 
@@ -73,6 +73,44 @@ def _detach(args: argparse.Namespace) -> int:
     return 0
 
 
+def _logger(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .. import logger_files
+    from . import logger_cli
+
+    words = []
+    for word in args.words:  # the options may also come after the words
+        if word in ("--json", "--on-manager"):
+            setattr(args, word[2:].replace("-", "_"), True)
+        else:
+            words.append(word)
+    try:
+        op, command = logger_cli.parse(words)
+    except logger_cli.UsageError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    with connect(args.manager) as mgr:
+        if op == "logger_save" and not args.on_manager:  # written here, where the user is
+            data = logger_files.download(lambda o, **a: mgr.command(o, name=command["name"],
+                                                                     **a))
+            try:
+                result = logger_files.save(data, Path(command["path"]))
+            except (OSError, ValueError) as exc:
+                print(f"ln_manager logger: error: cannot save {command['path']}: {exc}",
+                      file=sys.stderr)
+                return 1
+        else:
+            if op == "logger_save":
+                command["path"] = str(Path(command["path"]).absolute())
+            result = mgr.command(op, **command)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print("\n".join(logger_cli.format_result(op, command, result)))
+    return 0
+
+
 def _parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argparse.Namespace], int]]]:
     parser = argparse.ArgumentParser(prog="ln_manager",
                                      description="Commands for a running ln_manager.")
@@ -106,12 +144,22 @@ def _parser() -> tuple[argparse.ArgumentParser, dict[str, Callable[[argparse.Nam
     p = command("wait-ready", _wait_ready, "wait until a process, group or all is ready")
     p.add_argument("target", nargs="?", default="all")
     p.add_argument("--timeout", type=float, default=None, help="seconds")
+    p = command("logger", _logger, "topic loggers: list, add, remove, enable, disable, "
+                "status, save (docs/logging.md)")
+    p.add_argument("--json", action="store_true", help="the answer as JSON")
+    p.add_argument("--on-manager", action="store_true",
+                   help="save: write the file on the manager's host instead of here")
+    p.add_argument("words", nargs=argparse.REMAINDER,
+                   help="NAME add TOPIC [DEPTH] [--divisor K] [--span S] | NAME remove "
+                        "[TOPIC] | NAME enable [--keep] | NAME disable | NAME status | "
+                        "NAME save FILE")
     command("quit", _quit, "stop every process and end the manager")
     command("detach", _detach, "end the manager, leaving the processes running")
     return parser, funcs
 
 
-COMMANDS = ("status", "start", "stop", "restart", "output", "wait-ready", "quit", "detach")
+COMMANDS = ("status", "start", "stop", "restart", "output", "wait-ready", "logger", "quit",
+            "detach")
 
 
 def main(argv: list[str]) -> int:

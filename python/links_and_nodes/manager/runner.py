@@ -19,6 +19,7 @@ from .console import Console, stdin_reader
 from .control import Control, ControlError
 from .core import Core
 from .daemons import DaemonPool
+from .loggers import Loggers
 from .network import Network
 from .process_states import ProcState
 from .scheduler import Scheduler, StartError, Transition
@@ -39,11 +40,16 @@ class Runner:
         self.scheduler = Scheduler(config, core, self.pool.backend(), manager_address=address,
                                    extra_env={"LN_RUNTIME_DIR": str(runtime_dir)})
         self.control = Control(core, self.scheduler, reload=self.reload, shutdown=shutdown)
+        self.control.manager_address = address  # the console's topic echo etc. connect here
         self.network: Network | None = None
         if routes.spans_hosts(config, self.pool.local_host):
             self.network = Network(config, core, self.pool, args.instance)
             self.control.network_view = self.network
             self.scheduler.manager_address_for = self._manager_address_for
+        local_name = self.network.local_name if self.network is not None else \
+            (lambda: self.pool.local_host)
+        self.loggers = Loggers(core, lambda: self.pool.link(self.pool.local_host), local_name)
+        self.control.loggers = self.loggers
         self.address = address
         self._console: asyncio.Task[None] | None = None
         if args.exit_on_failure:
@@ -54,6 +60,8 @@ class Runner:
         if self.network is not None:
             self.network.start()
         await self.scheduler.attach()
+        self.loggers.start()
+        await self.loggers.configure(self.scheduler.config)
 
     def _manager_address_for(self, node: str) -> str:
         """LN_MANAGER for a process on `node`: the manager's own address unless that is a
@@ -146,6 +154,7 @@ class Runner:
         result = self.scheduler.apply_config(config)
         if self.network is not None:
             self.network.config = config  # routes and topic transports of the new file
+        await self.loggers.configure(config)  # loggers and topics the new file adds
         return result
 
     async def end(self, stop_processes: bool) -> None:
@@ -153,6 +162,7 @@ class Runner:
             self._console.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._console
+        await self.loggers.close(remove=stop_processes)  # detached: the samples stay
         if stop_processes:
             log.info("stopping every process")
             await self.scheduler.shutdown()

@@ -18,6 +18,7 @@ from typing import Any
 
 from .. import __version__
 from . import protocol as p
+from .introspect_api import Introspection
 from .listing import parse_address, receive
 
 DEFAULT_TIMEOUT = 10.0  # seconds for connecting and for answers that do not wait
@@ -27,8 +28,9 @@ class ManagerError(Exception):
     """The manager refused a command or could not be reached; the text says why."""
 
 
-class Manager:
-    """One connection to a manager (use as a context manager or call close())."""
+class Manager(Introspection):
+    """One connection to a manager (use as a context manager or call close()); the live
+    introspection methods (topic_echo, topic_hz, ...) are in introspect_api.py."""
 
     def __init__(self, address: str, *, timeout: float = DEFAULT_TIMEOUT,
                  name: str = "ln_script") -> None:
@@ -75,6 +77,17 @@ class Manager:
             raise ManagerError("no answer from the manager in time") from None
         except OSError as exc:
             raise ManagerError(f"connection to the manager lost: {exc}") from None
+
+    def control(self, op: str, **args: Any) -> dict[str, Any]:
+        """Same as command(): the name the Python client uses, so both reach loggers."""
+        return self.command(op, **args)
+
+    def get_logger(self, name: str) -> Any:
+        """The manager's topic logger `name` (made if missing): add_topic, enable,
+        disable, status, download, save (docs/logging.md)."""
+        from .._logger import logger
+
+        return logger(self, name)
 
     def command(self, op: str, *, wait: float | None = None, **args: Any) -> dict[str, Any]:
         """Send one control command; its result dict.  `wait` is how long the command itself

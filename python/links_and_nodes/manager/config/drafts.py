@@ -7,7 +7,17 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from .model import Group, Host, Location, Member, Network, Process, State, TopicSetting
+from .model import (
+    Group,
+    Host,
+    Location,
+    Logger,
+    Member,
+    Network,
+    Process,
+    State,
+    TopicSetting,
+)
 from .text import Piece
 
 
@@ -136,4 +146,5 @@ class Drafts:
     states: dict[str, StateDraft] = field(default_factory=dict)
     groups: dict[str, GroupDraft] = field(default_factory=dict)
     message_definition_dirs: list[str] = field(default_factory=list)
+    loggers: dict[str, Logger] = field(default_factory=dict)
     order: list[str] = field(default_factory=list)  # process and state names, as defined

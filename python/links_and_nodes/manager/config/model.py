@@ -145,6 +145,34 @@ class TopicSetting:
         return fnmatch.fnmatchcase(topic, self.pattern)
 
 
+@dataclass(frozen=True)
+class LoggerTopic:
+    """One line of a `logger` section: the topics `pattern` matches (a name or an fnmatch
+    glob) are logged on their publishers' hosts, `depth` samples deep, keeping every
+    sample whose sequence number is a multiple of `divisor`, none older than `span`
+    seconds before the newest (0: no span)."""
+
+    pattern: str
+    depth: int
+    location: Location
+    divisor: int = 1
+    span: float = 0.0
+
+    def matches(self, topic: str) -> bool:
+        return fnmatch.fnmatchcase(topic, self.pattern)
+
+
+@dataclass
+class Logger:
+    """A `logger NAME` section (docs/logging.md): its topics, and whether the manager
+    enables it as soon as it runs."""
+
+    name: str
+    location: Location
+    autostart: bool = False
+    topics: list[LoggerTopic] = field(default_factory=list)  # in file order
+
+
 @dataclass
 class Process:
     name: str  # full name, with the push_name_prefix prefixes joined by "/"
@@ -220,6 +248,7 @@ class Config:
     states: dict[str, State] = field(default_factory=dict)
     groups: dict[str, Group] = field(default_factory=dict)
     message_definition_dirs: list[str] = field(default_factory=list)
+    loggers: dict[str, Logger] = field(default_factory=dict)  # in file order
     # Problems that did not stop the load (config.errors.Problem; `--strict` makes them
     # errors)
     warnings: list = field(default_factory=list)

@@ -29,7 +29,7 @@ from .errors import Gather, LineError, Problem, describe, did_you_mean, relative
 from .expand import Evaluator
 from .language import LANGUAGE_VERSION, parse_version
 from .lexer import SECTION_WORDS, RawLine, decode, lex
-from .model import Group, Location, Network, Process, State
+from .model import Group, Location, Logger, Network, Process, State
 from .process_keys import KNOWN as PROCESS_KEYS
 from .sections import (
     NETWORK_NAME_RE,
@@ -38,6 +38,7 @@ from .sections import (
     GroupSection,
     HostsSection,
     InstanceSection,
+    LoggerSection,
     NetworkSection,
     NodeMapSection,
     ProcessSection,
@@ -345,6 +346,9 @@ class Parser:
         if word == "network":
             self.network(name, line.loc, rest_loc)
             return
+        if word == "logger":
+            self.logger(name, line.loc, rest_loc)
+            return
         if not name or _BAD_NAME_RE.search(name):
             raise LineError.at(rest_loc, f"bad {word} name '{name}' (no , * ? [ ] ! \" % # "
                                          "or control characters; '/' only between parts)")
@@ -365,6 +369,20 @@ class Parser:
             gdraft = GroupDraft(Group(full, line.loc), rest_loc)
             self.drafts.groups[full] = gdraft
             self.section = GroupSection(gdraft)
+
+    def logger(self, name: str, loc: Location, name_loc: Location) -> None:
+        """A `logger NAME` header.  Loggers are not prefixed: a manager has one set."""
+        if not NETWORK_NAME_RE.match(name):  # the same rules as for networks
+            raise LineError.at(name_loc, f"bad logger name '{name}' (letters, digits, "
+                                         "_ . -)")
+        first = self.drafts.loggers.get(name)
+        if first is not None:
+            where = describe(first.location, loc.file, self.drafts.root)
+            raise LineError.at(name_loc, f"duplicate logger '{name}' (first defined at "
+                                         f"{where})")
+        logger = Logger(name, loc)
+        self.drafts.loggers[name] = logger
+        self.section = LoggerSection(logger)
 
     def network(self, name: str, loc: Location, name_loc: Location) -> None:
         """A `network NAME` header.  Networks are not prefixed: they describe hosts."""

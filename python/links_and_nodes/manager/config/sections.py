@@ -21,7 +21,7 @@ from .drafts import (
 )
 from .errors import LineError, Problem, closest, did_you_mean
 from .expand import BUILTINS, Evaluator
-from .model import Host, Member, TopicSetting
+from .model import Host, Logger, LoggerTopic, Member, TopicSetting
 from .process_keys import process_key, ref_items
 from .templates import Template
 from .text import Value, split_value, unquote
@@ -332,6 +332,54 @@ class TopicsSection(Section):
                                f"topic pattern '{pattern}' needs settings like "
                                "transport:udp")
         p.drafts.topic_settings.append(TopicSetting(pattern, found["transport"], kl.loc))
+
+
+class LoggerSection(Section):
+    """A `logger NAME` section: `autostart: true|false`, and `PATTERN: depth:N, divisor:K,
+    span:DURATION` lines naming the topics it logs (docs/logging.md)."""
+
+    kind = "logger"
+    general_keys = True
+    SETTINGS = ("depth", "divisor", "span")
+    MAX_DEPTH = 1 << 30
+
+    def __init__(self, logger: Logger) -> None:
+        self.logger = logger
+
+    def key(self, p: Parser, kl: KeyLine) -> None:
+        _no_add(kl)
+        pattern = p.expand_key(kl)
+        if pattern == "autostart":
+            values = p.values(kl)
+            word = values[0].text.strip().lower() if len(values) == 1 else ""
+            if word not in ("true", "false", "on", "off", "yes", "no", "1", "0"):
+                raise LineError.at(values[0].loc if values else kl.loc,
+                                   "'autostart' must be true or false")
+            self.logger.autostart = word in ("true", "on", "yes", "1")
+            return
+        problem = topic_pattern_problem(pattern)
+        if problem:
+            raise LineError.at(kl.loc, problem)
+        found: dict[str, float] = {}
+
+        def handle(name: str, item: Value, value: Value) -> None:
+            if name not in self.SETTINGS:
+                raise fail(item, f"unknown logger setting '{name}'"
+                                 f"{did_you_mean(name, self.SETTINGS)}")
+            if name == "span":
+                found[name] = parse_float(value, name, 0.0, above=True) \
+                    if value.text.replace(".", "", 1).isdigit() else parse_duration(value, name)
+            else:
+                found[name] = parse_int(value, name, 1, self.MAX_DEPTH)
+
+        if not setting_items(p, kl, "logger", handle) or "depth" not in found:
+            values = p.values(kl)
+            raise LineError.at(values[0].loc if values else kl.block_loc or kl.loc,
+                               f"logged topic '{pattern}' needs its depth in samples, like "
+                               "depth:5000 (and optionally divisor:K, span:30s)")
+        self.logger.topics.append(LoggerTopic(pattern, int(found["depth"]), kl.loc,
+                                              int(found.get("divisor", 1)),
+                                              found.get("span", 0.0)))
 
 
 def topic_pattern_problem(pattern: str) -> str | None:

@@ -1,0 +1,159 @@
+"""What a logger download becomes (docs/logging.md, "Downloads and files"): per topic a
+numpy structured array with the md's fields plus `seq` and `publish_time` (ns), and files:
+`.npz` (one array per topic, plus a JSON description under `__loggers__`) or `.mcap` (the
+mapping of recording, mcap_format).  Used by the manager (`logger NAME save FILE`) and by
+the Python client's `logger.download()` / `logger.save()`.
+
+A download is topic -> {md_name, layout_hash, message_size, samples: [(seq, time_ns,
+bytes)] in publish order, hosts, received, missed, skipped, dropped, divisor}."""
+
+from __future__ import annotations
+
+import base64
+import json
+import struct
+from pathlib import Path
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+HEAD_FIELDS = [("seq", "<u8"), ("publish_time", "<i8")]
+SAMPLE_HEAD = struct.Struct("<Qq")
+FETCH_MAX = 512 * 1024  # sample bytes in one logger_fetch answer (base64 fits in 1 MiB)
+
+
+def pack_samples(samples: list[tuple[int, int, bytes]]) -> bytes:
+    """(seq, time_ns, bytes) samples as packed records, as logger_fetch carries them."""
+    return b"".join(SAMPLE_HEAD.pack(seq, t) + data for seq, t, data in samples)
+
+
+def unpack_samples(blob: bytes, message_size: int) -> list[tuple[int, int, bytes]]:
+    step = SAMPLE_HEAD.size + message_size
+    if len(blob) % step:
+        raise ValueError(f"{len(blob)} bytes of samples are no multiple of {step}")
+    return [(*SAMPLE_HEAD.unpack_from(blob, at), blob[at + SAMPLE_HEAD.size:at + step])
+            for at in range(0, len(blob), step)]
+
+
+def download(call: Callable[..., dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """A logger's samples through `call(op, **args)`, a control command on the logger (the
+    Python client's or the scripting API's): every topic on every host, chunk by chunk up
+    to what each buffer held at its first chunk, merged in publish order."""
+    out: dict[str, dict[str, Any]] = {}
+    for t in call("logger_status")["topics"]:
+        topic, host = t["topic"], t["host"]
+        entry = out.setdefault(topic, {
+            "md_name": t["md_name"], "layout_hash": int(t["layout_hash"], 16),
+            "message_size": t["message_size"], "samples": [], "hosts": [], "received": 0,
+            "missed": 0, "skipped": 0, "dropped": 0, "divisor": t["divisor"]})
+        entry["hosts"].append(host)
+        after, until = 0, None
+        while True:
+            chunk = call("logger_fetch", topic=topic, host=host, after=after,
+                         max_bytes=FETCH_MAX)
+            until = chunk["last_seq"] if until is None else until
+            samples = unpack_samples(base64.b64decode(chunk["samples"]),
+                                     chunk["message_size"])
+            entry["samples"].extend(s for s in samples if s[0] <= until)
+            if not samples or samples[-1][0] >= until:
+                break
+            after = samples[-1][0]
+        for key in ("received", "missed", "skipped", "dropped"):
+            entry[key] += chunk[key]
+    for entry in out.values():
+        entry["samples"].sort(key=lambda s: (s[1], s[0]))
+    return out
+
+
+def message_dtype(md_name: str, message_size: int) -> np.dtype:
+    """The md's fields as a numpy dtype; one opaque `data` field if the md cannot be
+    loaded here (or its layout does not have the size the samples have)."""
+    try:
+        from .md_loader import message_class
+
+        dtype = np.dtype(message_class(md_name))
+        if dtype.itemsize == message_size:
+            return dtype
+    except Exception:  # noqa: BLE001 - an md this host cannot read: keep the bytes
+        pass
+    return np.dtype([("data", f"V{message_size}")])
+
+
+def sample_dtype(md_name: str, message_size: int) -> np.dtype:
+    """`seq`, `publish_time`, then the md's fields at their offsets + 16."""
+    inner = message_dtype(md_name, message_size)
+    names = [n for n, _ in HEAD_FIELDS] + list(inner.names or ())
+    formats = [f for _, f in HEAD_FIELDS] + [inner.fields[n][0] for n in inner.names or ()]
+    offsets = [0, 8] + [16 + inner.fields[n][1] for n in inner.names or ()]
+    return np.dtype({"names": names, "formats": formats, "offsets": offsets,
+                     "itemsize": 16 + message_size})
+
+
+def to_array(entry: dict[str, Any]) -> np.ndarray:
+    dtype = sample_dtype(entry["md_name"], entry["message_size"])
+    blob = pack_samples(entry["samples"])
+    return np.frombuffer(blob, dtype=dtype).copy() if blob else np.zeros(0, dtype)
+
+
+def gaps(entry: dict[str, Any]) -> int:
+    """Sequence numbers missing between consecutive downloaded samples of one host that the
+    divisor does not explain: what the logger lost (it fell behind, or depth/span evicted
+    samples in the middle of a merge of hosts)."""
+    divisor = max(1, int(entry.get("divisor", 1)))
+    seqs = sorted(seq for seq, _, _ in entry["samples"])
+    return sum((b - a) // divisor - 1 for a, b in zip(seqs, seqs[1:], strict=False)
+               if b - a > divisor)
+
+
+def describe(download: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    return {topic: {"md_name": e["md_name"], "layout_hash": f"{e['layout_hash']:016x}",
+                    "message_size": e["message_size"], "hosts": e["hosts"],
+                    "samples": len(e["samples"]), "received": e["received"],
+                    "missed": e["missed"], "skipped": e["skipped"], "dropped": e["dropped"],
+                    "gaps": gaps(e)}
+            for topic, e in download.items()}
+
+
+def save(download: dict[str, dict[str, Any]], path: Path) -> dict[str, Any]:
+    """Write a download to `path` (.mcap or .npz); what was written."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".npz":
+        arrays = {topic: to_array(e) for topic, e in download.items()}
+        meta = np.frombuffer(json.dumps(describe(download)).encode(), dtype=np.uint8)
+        with open(path, "wb") as f:
+            np.savez(f, __loggers__=meta, **arrays)
+    elif suffix == ".mcap":
+        from .mcap_format import McapWriter
+
+        writer = McapWriter(path)
+        try:
+            for topic, e in download.items():
+                channel = writer.add_topic(topic, e["md_name"], _schema(e["md_name"]),
+                                           e["layout_hash"], e["message_size"])
+                for seq, t, data in e["samples"]:
+                    writer.write(channel, seq, t, data)
+        finally:
+            writer.close()
+    else:
+        raise ValueError(f"unknown file type {suffix or '(none)'!r}: name it .mcap or .npz")
+    return {"path": str(path), "topics": describe(download)}
+
+
+def _schema(md_name: str) -> bytes:
+    """The md text (with what it imports) for an MCAP schema; empty if this host does not
+    have the md (a reader then needs the md installed to decode)."""
+    from .mcap_format import md_schema_text
+
+    try:
+        return md_schema_text(md_name)
+    except Exception:  # noqa: BLE001 - an md only the publisher's host has
+        return b""
+
+
+def load_npz(path: Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """The arrays and the description of a saved .npz."""
+    with np.load(path, allow_pickle=False) as f:
+        meta = json.loads(bytes(f["__loggers__"]).decode())
+        return {k: f[k] for k in f.files if k != "__loggers__"}, meta
