@@ -80,6 +80,7 @@ void encode_logger_data_head(proto::Writer &w, const LoggerDataHead &head)
     counters(w, head.counters);
     w.u64(head.first_seq);
     w.u64(head.last_seq);
+    w.u64(head.start_seq);
 }
 
 void encode_logger_list(proto::Writer &w, uint64_t memory_limit, uint64_t memory_used,

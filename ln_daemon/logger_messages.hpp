@@ -71,6 +71,7 @@ struct LoggerDataHead {
     LoggerCounters counters;
     uint64_t first_seq = 0; // of the buffer; 0 if it is empty
     uint64_t last_seq = 0;
+    uint64_t start_seq = 0; // the ring's newest seq when the capture began reading it
 };
 
 // One entry of LOGGER_LIST.
@@ -91,7 +92,7 @@ struct LoggerTopicStatus {
 // Longest last_error text in LOGGER_LIST; a longer one is cut.
 constexpr size_t kMaxLoggerErrorText = 256;
 // Bytes of LOGGER_DATA before its samples, at most (the md name at its longest).
-constexpr size_t kLoggerDataHeadBytes = 8 + 8 + 4 + proto::kMaxName + 1 + 7 * 8 + 4;
+constexpr size_t kLoggerDataHeadBytes = 8 + 8 + 4 + proto::kMaxName + 1 + 8 * 8 + 4;
 // Payload bytes a LOGGER_DATA reply may have: the frame minus its header and tag.
 constexpr size_t kMaxReplyPayload = proto::kMaxFrame - proto::kHeaderBytes - proto::kTagBytes;
 // Bytes one sample takes in LOGGER_DATA: seq, timestamp, the message.

@@ -138,13 +138,14 @@ void LoggerTopic::start_run(bool keep_baseline)
     {
         std::lock_guard<std::mutex> lock(mutex_);
         if (!keep_baseline)
-            last_seq_ = 0; // what was published while disabled is not missed
+            last_seq_ = start_seq_ = 0; // what was published while disabled is not missed
         ring = ring_;
     }
     fwd::Tap tap;
     std::string error = open_tap(tap, ring);
     set_error(error);
     if (tap) {
+        began(tap.get());
         std::lock_guard<std::mutex> lock(mutex_);
         segment_ = ln_ring_tap_segment(tap.get());
     }
@@ -152,6 +153,14 @@ void LoggerTopic::start_run(bool keep_baseline)
     Run &r = *run;
     r.thread = std::thread([this, &r, t = std::move(tap)]() mutable { loop(r, std::move(t)); });
     run_ = std::move(run);
+}
+
+void LoggerTopic::began(ln_ring_tap *tap)
+{
+    uint64_t newest = ln_ring_tap_write_seq(tap);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (last_seq_ == 0)
+        last_seq_ = start_seq_ = newest;
 }
 
 void LoggerTopic::request_stop() noexcept
@@ -212,6 +221,7 @@ void LoggerTopic::fetch(proto::Writer &w, uint64_t after_seq, uint32_t max_bytes
     head.counters.stored = buffer_.size();
     head.first_seq = buffer_.first_seq();
     head.last_seq = buffer_.last_seq();
+    head.start_seq = start_seq_;
     encode_logger_data_head(w, head);
     buffer_.encode_after(w, after_seq, static_cast<uint32_t>(n));
 }
@@ -288,6 +298,7 @@ void LoggerTopic::loop(Run &run, fwd::Tap tap)
                 run.stop.sleep_us(kLoggerRetryUs);
                 continue;
             }
+            began(tap.get());
             seen.clear();
             pacer = Pacer(Clock::now());
         }

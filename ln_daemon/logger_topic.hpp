@@ -90,6 +90,8 @@ private:
     };
 
     void start_run(bool keep_baseline);
+    // A tap was opened: a fresh capture (nothing seen since enable) starts at its newest seq.
+    void began(ln_ring_tap *tap);
     void loop(Run &run, fwd::Tap tap);
     // Opens a tap on `ring`; "" or why not.
     std::string open_tap(fwd::Tap &tap, const std::string &ring) const;
@@ -113,6 +115,9 @@ private:
     std::string segment_; // the segment the tap is on now, "" without a tap
     std::string last_error_;
     uint64_t last_seq_ = 0; // the newest seq the tap delivered; 0: none since enabled
+    // The ring's newest seq when this capture began reading it (enable, or the ring's
+    // appearance): the samples after it are logged or counted as missed.
+    uint64_t start_seq_ = 0;
 
     std::unique_ptr<Run> run_; // the poll loop's: set while enabled
 };

@@ -56,7 +56,7 @@ class logger:  # noqa: N801 - the LN name
 
     def download(self) -> dict[str, np.ndarray]:
         """Per topic a numpy structured array: `seq`, `publish_time` (ns) and the md's
-        fields, in publish order.  `gaps(topic)` after it says what was lost."""
+        fields, in publish order.  `describe()` after it says what was lost."""
         self._last = self.download_raw()
         return {topic: logger_files.to_array(e) for topic, e in self._last.items()}
 

@@ -5,7 +5,9 @@ mapping of recording, mcap_format).  Used by the manager (`logger NAME save FILE
 the Python client's `logger.download()` / `logger.save()`.
 
 A download is topic -> {md_name, layout_hash, message_size, samples: [(seq, time_ns,
-bytes)] in publish order, hosts, received, missed, skipped, dropped, divisor}."""
+bytes)] in publish order, hosts, received, missed, skipped, dropped, gaps, divisor}; `gaps`
+(the kept sequence numbers missing in the download, host by host) equals `missed` with
+divisor 1, and is at most `missed` otherwise."""
 
 from __future__ import annotations
 
@@ -36,6 +38,37 @@ def unpack_samples(blob: bytes, message_size: int) -> list[tuple[int, int, bytes
             for at in range(0, len(blob), step)]
 
 
+def new_entry(md_name: str, layout_hash: int, message_size: int, divisor: int
+              ) -> dict[str, Any]:
+    """An empty download entry of one topic."""
+    return {"md_name": md_name, "layout_hash": layout_hash, "message_size": message_size,
+            "samples": [], "hosts": [], "received": 0, "missed": 0, "skipped": 0,
+            "dropped": 0, "gaps": 0, "divisor": divisor}
+
+
+def host_gaps(seqs: list[int], start_seq: int, divisor: int, dropped: int) -> int:
+    """Kept-sample sequence numbers (multiples of the divisor) missing among one host's
+    samples: from the capture's start (or, once depth or span evicted some, from the oldest
+    kept one) to the newest.  What the logger missed, as the download sees it."""
+    if not seqs:
+        return 0
+    k = max(1, divisor)
+    low = start_seq if dropped == 0 else seqs[0] - 1
+    return max(0, seqs[-1] // k - min(low, seqs[0] - 1) // k - len(seqs))
+
+
+def add_host(entry: dict[str, Any], host: str, samples: list[tuple[int, int, bytes]],
+             counters: dict[str, int]) -> None:
+    """One host's samples and counters (received, missed, skipped, dropped, start_seq) into
+    a topic's download entry."""
+    entry["hosts"].append(host)
+    entry["samples"].extend(samples)
+    for key in ("received", "missed", "skipped", "dropped"):
+        entry[key] += counters[key]
+    entry["gaps"] += host_gaps([seq for seq, _, _ in samples], counters["start_seq"],
+                               entry["divisor"], counters["dropped"])
+
+
 def download(call: Callable[..., dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """A logger's samples through `call(op, **args)`, a control command on the logger (the
     Python client's or the scripting API's): every topic on every host, chunk by chunk up
@@ -43,24 +76,20 @@ def download(call: Callable[..., dict[str, Any]]) -> dict[str, dict[str, Any]]:
     out: dict[str, dict[str, Any]] = {}
     for t in call("logger_status")["topics"]:
         topic, host = t["topic"], t["host"]
-        entry = out.setdefault(topic, {
-            "md_name": t["md_name"], "layout_hash": int(t["layout_hash"], 16),
-            "message_size": t["message_size"], "samples": [], "hosts": [], "received": 0,
-            "missed": 0, "skipped": 0, "dropped": 0, "divisor": t["divisor"]})
-        entry["hosts"].append(host)
+        entry = out.setdefault(topic, new_entry(t["md_name"], int(t["layout_hash"], 16),
+                                                t["message_size"], t["divisor"]))
+        samples: list[tuple[int, int, bytes]] = []
         after, until = 0, None
         while True:
             chunk = call("logger_fetch", topic=topic, host=host, after=after,
                          max_bytes=FETCH_MAX)
             until = chunk["last_seq"] if until is None else until
-            samples = unpack_samples(base64.b64decode(chunk["samples"]),
-                                     chunk["message_size"])
-            entry["samples"].extend(s for s in samples if s[0] <= until)
-            if not samples or samples[-1][0] >= until:
+            got = unpack_samples(base64.b64decode(chunk["samples"]), chunk["message_size"])
+            samples.extend(s for s in got if s[0] <= until)
+            if not got or got[-1][0] >= until:
                 break
-            after = samples[-1][0]
-        for key in ("received", "missed", "skipped", "dropped"):
-            entry[key] += chunk[key]
+            after = got[-1][0]
+        add_host(entry, host, samples, chunk)
     for entry in out.values():
         entry["samples"].sort(key=lambda s: (s[1], s[0]))
     return out
@@ -96,22 +125,12 @@ def to_array(entry: dict[str, Any]) -> np.ndarray:
     return np.frombuffer(blob, dtype=dtype).copy() if blob else np.zeros(0, dtype)
 
 
-def gaps(entry: dict[str, Any]) -> int:
-    """Sequence numbers missing between consecutive downloaded samples of one host that the
-    divisor does not explain: what the logger lost (it fell behind, or depth/span evicted
-    samples in the middle of a merge of hosts)."""
-    divisor = max(1, int(entry.get("divisor", 1)))
-    seqs = sorted(seq for seq, _, _ in entry["samples"])
-    return sum((b - a) // divisor - 1 for a, b in zip(seqs, seqs[1:], strict=False)
-               if b - a > divisor)
-
-
 def describe(download: dict[str, dict[str, Any]]) -> dict[str, Any]:
     return {topic: {"md_name": e["md_name"], "layout_hash": f"{e['layout_hash']:016x}",
                     "message_size": e["message_size"], "hosts": e["hosts"],
                     "samples": len(e["samples"]), "received": e["received"],
                     "missed": e["missed"], "skipped": e["skipped"], "dropped": e["dropped"],
-                    "gaps": gaps(e)}
+                    "gaps": e["gaps"]}
             for topic, e in download.items()}
 
 

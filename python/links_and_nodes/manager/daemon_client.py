@@ -225,6 +225,7 @@ class LoggerChunk:
     dropped: int
     first_seq: int
     last_seq: int
+    start_seq: int  # the ring's newest seq when the capture began: later ones are logged or missed
     samples: list[tuple[int, int, bytes]]
 
 
@@ -569,8 +570,8 @@ def _decode_logger_chunk(payload: bytes) -> LoggerChunk:
     r = _Reader(payload)
     message_size, layout_hash = r.take("<QQ")
     md_name = r.text()
-    enabled, received, stored, missed, skipped, dropped, first, last, count = \
-        r.take("<BQQQQQQQI")
+    enabled, received, stored, missed, skipped, dropped, first, last, start, count = \
+        r.take("<BQQQQQQQQI")
     samples = []
     for _ in range(count):
         seq, timestamp_ns = r.take("<Qq")
@@ -583,7 +584,7 @@ def _decode_logger_chunk(payload: bytes) -> LoggerChunk:
     return LoggerChunk(message_size=message_size, layout_hash=layout_hash, md_name=md_name,
                        enabled=bool(enabled), received=received, stored=stored, missed=missed,
                        skipped=skipped, dropped=dropped, first_seq=first, last_seq=last,
-                       samples=samples)
+                       start_seq=start, samples=samples)
 
 
 def _decode_logger_list(payload: bytes) -> LoggerStatus:

@@ -78,6 +78,7 @@ def commands(loggers: Callable[[], Loggers], save: Callable[[str, Path], Awaitab
                 "received": chunk.received, "stored": chunk.stored, "missed": chunk.missed,
                 "skipped": chunk.skipped, "dropped": chunk.dropped,
                 "first_seq": chunk.first_seq, "last_seq": chunk.last_seq,
+                "start_seq": chunk.start_seq,
                 "count": len(chunk.samples),
                 "samples": base64.b64encode(pack_samples(chunk.samples)).decode()}
 

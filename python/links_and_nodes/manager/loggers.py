@@ -15,6 +15,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from .. import logger_files
 from . import daemon_client as dc
 from .config import model
 from .core import Core
@@ -411,22 +412,18 @@ class Loggers:
         logger = self.get(name)
         out: dict[str, dict[str, Any]] = {}
         for (topic, host), p in sorted(logger.placements.items()):
-            entry = out.setdefault(topic, {"md_name": p.md_name, "layout_hash": p.layout_hash,
-                                           "message_size": p.message_size, "samples": [],
-                                           "hosts": [], "received": 0, "missed": 0,
-                                           "skipped": 0, "dropped": 0,
-                                           "divisor": p.spec.divisor})
-            entry["hosts"].append(host)
+            entry = out.setdefault(topic, logger_files.new_entry(
+                p.md_name, p.layout_hash, p.message_size, p.spec.divisor))
+            samples: list[tuple[int, int, bytes]] = []
             after, until = 0, None
             while True:  # up to what the buffer held at the first chunk (it may be enabled)
                 chunk = await self.fetch(logger.name, topic, host, after, FETCH_BYTES)
                 until = chunk.last_seq if until is None else until
-                entry["samples"].extend(s for s in chunk.samples if s[0] <= until)
+                samples.extend(s for s in chunk.samples if s[0] <= until)
                 if not chunk.samples or chunk.samples[-1][0] >= until:
                     break
                 after = chunk.samples[-1][0]
-            for key in ("received", "missed", "skipped", "dropped"):
-                entry[key] += getattr(chunk, key)
+            logger_files.add_host(entry, host, samples, vars(chunk))
         for entry in out.values():
             entry["samples"].sort(key=lambda s: (s[1], s[0]))
         return out

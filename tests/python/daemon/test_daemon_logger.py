@@ -27,8 +27,8 @@ LAYOUT, SIZE, SLOTS = 0x5EED_0003, 64, 256
 TOPIC, MD = "/arm/state", "lntest/pattern"
 FRAME = 4 << 20
 # One sample has to fit a LOGGER_DATA reply: the frame minus header (5), tag (32), the reply's
-# fields before its samples at their longest (8+8+4+255+1+7*8+4) and seq and timestamp (16).
-MAX_LOGGED = FRAME - 5 - 32 - 336 - 16
+# fields before its samples at their longest (8+8+4+255+1+8*8+4) and seq and timestamp (16).
+MAX_LOGGED = FRAME - 5 - 32 - 344 - 16
 HERE = Path(__file__).resolve().parent
 
 
