@@ -2,29 +2,27 @@
 (@mcap/core with @mcap/support's decompressors) under Node.js, run by mcap_js/check_mcap.mjs.
 
 It is installed with npm into build/mcap_js (once; a lock keeps parallel workers from
-installing it twice).  Where Node.js or npm is missing or the install fails the test is
-skipped, saying why, and fails instead under CI=1."""
+installing it twice).  Where Node.js or npm is missing or the install fails,
+buildtree.missing_test_tool decides: a failure in CI's main run, a skip elsewhere."""
 
 from __future__ import annotations
 
 import fcntl
 import json
-import os
 import shutil
 import subprocess
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
-import pytest
+
+from buildtree import missing_test_tool
 
 HERE = Path(__file__).resolve().parent / "mcap_js"
 TARGET = Path(__file__).resolve().parents[3] / "build" / "mcap_js"
 
 
-def _unavailable(why: str) -> None:
-    if os.environ.get("CI"):
-        pytest.fail(f"the TypeScript MCAP reader: {why}")
-    pytest.skip(f"the TypeScript MCAP reader: {why}")
+def _unavailable(why: str) -> NoReturn:
+    missing_test_tool(f"the TypeScript MCAP reader ({why})")
 
 
 def _installed() -> Path:
