@@ -25,7 +25,7 @@ import pytest
 from links_and_nodes.manager.config import load, model
 from links_and_nodes.manager.launch import segments
 from links_and_nodes.manager.scripting import Manager, connect
-from polling import free_daemon_port, free_port
+from polling import free_daemon_port, free_port, wait_for
 
 REPO = Path(__file__).resolve().parents[3]
 CONFIG = REPO / "examples" / "robot" / "robot.lnc"
@@ -256,6 +256,12 @@ def test_robot_lnc_end_to_end(demo: Demo) -> None:
         assert topics["arm.command"]["publishers"] == 1
         services = {s["name"]: s for s in mgr.services()}
         assert services["arm.set_gains"]["provider"] == "arm.controller"
+        # the always-on logger of robot.lnc keeps every arm topic on the arm's host
+        logged = wait_for(lambda: (t := mgr.command("logger_status", name="arm")["topics"])
+                          and len(t) == 3 and all(x["stored"] > 0 for x in t) and t,
+                          "the arm logger to hold samples")
+        assert sorted(x["topic"] for x in logged) == ["arm.command", "arm.reference",
+                                                      "arm.state"]
 
         # The supervisor's report: the tracking error, a refused setting, then stiffer gains.
         lines = wait_for_output(mgr, "supervisor", re.compile(r"tracking error .* 'stiff'"))
