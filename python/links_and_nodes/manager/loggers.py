@@ -159,6 +159,30 @@ class Loggers:
             except LoggerError as exc:
                 log.warning("logger %r (%s): %s", section.name, section.location, exc)
 
+    async def adopt(self) -> None:
+        """Take over the loggers a predecessor of this instance left in the ln_daemon of the
+        manager's host (it detached or died): their topics become patterns of the same
+        name, their samples stay, and a logger enabled there stays enabled."""
+        try:
+            link = await self.local_link()
+            status = await link.logger_status("")
+            host = self.local_name()
+            for t in status.topics:
+                logger = self.loggers.setdefault(t.logger, Logger(t.logger))
+                spec = logger.spec_for(t.topic)
+                if spec is None:
+                    spec = Pattern(t.topic, t.depth, t.divisor, t.span)
+                    logger.patterns.append(spec)
+                head = await link.logger_fetch(t.logger, t.topic, (1 << 64) - 1, 1)
+                logger.placements[(t.topic, host)] = Placement(
+                    t.topic, host, t.ring, t.md_name, head.layout_hash, t.message_size, spec,
+                    active=False)
+                logger.enabled = logger.enabled or t.enabled
+                log.info("logger %r: took over topic %r (%d samples) from a previous manager",
+                         t.logger, t.topic, t.stored)
+        except (dc.DaemonError, OSError, TimeoutError) as exc:
+            log.info("loggers of a previous manager: cannot ask the local daemon: %s", exc)
+
     async def _follow(self) -> None:
         """Re-place the loggers' topics whenever clients, ports or rings change."""
         while True:

@@ -60,8 +60,19 @@ class Runner:
         if self.network is not None:
             self.network.start()
         await self.scheduler.attach()
+        if await self._local_daemon_runs():  # never start one just to look
+            await self.loggers.adopt()
         self.loggers.start()
         await self.loggers.configure(self.scheduler.config)
+
+    async def _local_daemon_runs(self) -> bool:
+        host, port = self.pool.address(self.pool.local_host)
+        try:
+            _, writer = await asyncio.wait_for(asyncio.open_connection(host, port), 1.0)
+        except (OSError, TimeoutError):
+            return False
+        writer.close()
+        return True
 
     def _manager_address_for(self, node: str) -> str:
         """LN_MANAGER for a process on `node`: the manager's own address unless that is a

@@ -30,8 +30,8 @@ class LogLab:
         self.procs: list[subprocess.Popen[str]] = []
         self.clients: list[ln.client] = []
 
-    def start(self, body: str = "") -> None:
-        proc = self.lab.manager(self.lab.write(body), "--no-console")
+    def start(self, body: str = "", *args: str) -> None:
+        proc = self.lab.manager(self.lab.write(body), "--no-console", *args)
         self.lab.wait_listening(proc)
 
     def tool(self, name: str, *args: str) -> subprocess.Popen[str]:

@@ -218,3 +218,27 @@ def test_a_saved_mcap_holds_the_download_and_ln_play_reads_it(loglab, tmp_path) 
     assert cycles == [seq for seq, _, _ in raw["samples"]]
     with pytest.raises(ln.LnInvalError, match="absolute path"):
         lg.clnt.control("logger_save", name="tomcap", path="relative.mcap")
+
+
+def test_a_manager_takes_over_the_loggers_its_predecessor_left(loglab) -> None:
+    """A manager that dies (or detaches) leaves the loggers and their samples in the daemon;
+    the next manager of the instance adopts them by name (a manager that quits removes
+    them)."""
+    loglab.start()
+    loglab.publisher(TOPIC)
+    lg = loglab.client("first").get_logger("kept")
+    lg.add_topic(TOPIC, 20000)
+    lg.enable()
+    wait_for(lambda: received(lg, 200), "samples before the detach")
+    lg.disable()
+    before = lg.download_raw()[TOPIC]["samples"]
+    proc = loglab.lab.managers[-1]
+    proc.kill()
+    proc.wait(timeout=60)
+    loglab.start("", "--adopt-window", "5")  # the publisher's ring is taken over too
+    lg2 = loglab.client("second").get_logger("kept")
+    st = lg2.status()
+    assert not st["enabled"] and [p["pattern"] for p in st["patterns"]] == [TOPIC]
+    assert lg2.download_raw()[TOPIC]["samples"][:len(before)] == before
+    lg2.enable()  # and it goes on logging the publisher, which reconnected
+    wait_for(lambda: received(lg2, 100), "samples under the new manager")
