@@ -124,6 +124,7 @@ def pypi_stream(path: Path) -> tuple[list[Any], bool]:
 
 def pypi_messages(path: Path) -> list[tuple[str, int, int, bytes]]:
     """(topic, sequence, publish time, data) of every message, by the PyPI stream reader."""
+    pypi_mcap()
     from mcap.records import Channel, Message
 
     records, _ = pypi_stream(path)
