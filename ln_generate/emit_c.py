@@ -81,6 +81,8 @@ def emit_md(md: MessageDef) -> list[str]:
         out.append(f"#define {macro}_MD {macro}_MD_NAME, {macro}_LAYOUT_HASH, sizeof({base}_t)")
     if md.kind == "service":  # the (md name, layout hash, signature) arguments of ln_get_service
         out.append(f"#define {macro}_SERVICE {macro}_MD_NAME, {macro}_LAYOUT_HASH, {macro}_SIGNATURE")
+    if md.kind == "event":  # the (md name, layout hash, signature) arguments of ln_event_*
+        out.append(f"#define {macro}_EVENT {macro}_MD_NAME, {macro}_LAYOUT_HASH, {macro}_SIGNATURE")
     out += asserts
     out += [f"#elif {marker} != {hash_lit}",
             f'#error "{md.name}: included from two generated headers with different layouts"',

@@ -2,7 +2,7 @@
 
 `robot/joint_state` becomes `robot::joint_state_t` with `robot::joint_state_signature`,
 `..._layout_hash`, `..._md_name`; services nest `request_t req` / `response_t resp`.
-Messages and services also get an `ln::md_traits` specialisation for ln.hpp.
+Messages, services and events also get an `ln::md_traits` specialisation for ln.hpp.
 """
 
 from __future__ import annotations
@@ -89,7 +89,7 @@ def emit_md(md: MessageDef) -> list[str]:
     out += asserts
     if ns:
         out.append(f"}}  // namespace {'::'.join(ns)}")
-    if md.kind in ("message", "service"):
+    if md.kind in ("message", "service", "event"):
         prefix = "::".join(ns) + "::" if ns else ""
         out += [f"template <> struct ln::md_traits<::{prefix}{leaf}_t> {{",
                 f"    static constexpr const char* md_name = {'::' + prefix}{leaf}_md_name;",
@@ -98,6 +98,10 @@ def emit_md(md: MessageDef) -> list[str]:
             out += [f"    static constexpr const char* signature = ::{prefix}{leaf}_signature;",
                     f"    using request_type = ::{prefix}{leaf}_t::request_t;",
                     f"    using response_type = ::{prefix}{leaf}_t::response_t;"]
+        if md.kind == "event":  # what ln.hpp's event and event_handler take
+            out += [f"    static constexpr const char* signature = ::{prefix}{leaf}_signature;",
+                    f"    using connect_type = ::{prefix}{leaf}_t::connect_t;",
+                    f"    using call_type = ::{prefix}{leaf}_t::call_t;"]
         out.append("};")
     out += [f"#elif {marker} != {hash_lit}",
             f'#error "{md.name}: included from two generated headers with different layouts"',

@@ -5,6 +5,10 @@
 // (robot/joint_state: target position and velocity, commanded torque, the state's cycle).
 // The service arm.set_gains (robot/set_gains) changes the gains; it is answered between
 // cycles, never blocking the loop, and unsafe gains are refused with ok=0 and the reason.
+// The gains the loop uses are the parameters kp and kd of the parameter block "gains"
+// (ln/parameters.hpp, docs/parameters.md): their input is what arm.set_gains set, and
+// `ln_manager param set arm.controller.gains kp [...]` overrides them, checked against the
+// same limits, from the next cycle on (`param reset` hands them back to the service).
 // A status line every second; SIGTERM or SIGINT ends it with exit status 0.
 // Manager from -ln_manager or $LN_MANAGER.  Usage: arm_controller
 #include <csignal>
@@ -14,6 +18,7 @@
 #include <string>
 
 #include <ln/ln.hpp>
+#include <ln/parameters.hpp>
 
 #include "robot_messages.hpp"
 
@@ -92,9 +97,26 @@ int main(int argc, char** argv)
 
     // Moderate gains until the supervisor sets its own.
     gains active{{50, 50, 30, 25, 12, 8, 4}, {10, 10, 6, 5, 2.5, 1.6, 0.8}, "default"};
+    double kp[joints], kd[joints];  // what the loop uses: the parameters' outputs
     unsigned long accepted = 0, refused = 0;
     try {
         ln::client clnt("arm_controller", argc, argv);
+        // The gains as parameters: input = the service's gains, checked like them.
+        ln::parameters::parameter_block params(clnt, "gains");
+        params.set_validator([](const std::string& name, const void* value) -> std::string {
+            double v[joints];
+            std::memcpy(v, value, sizeof v);
+            for (int j = 0; j < joints; j++)
+                if (name == "kp" && !(v[j] > 0.0))
+                    return "kp[" + std::to_string(j) + "] must be above 0 Nm/rad";
+            return "";
+        });
+        params.register_parameters(
+            ln::parameters::port_description{"kp", "stiffness per joint (Nm/rad)", &active.kp,
+                                             &kp, 0.0, kp_max},
+            ln::parameters::port_description{"kd", "damping per joint (Nm s/rad)", &active.kd,
+                                             &kd, 0.0, kd_max});
+        params.update();
         auto state_in = clnt.subscribe<robot::joint_state_t>("arm.state");  // latest mode
         auto command_out = clnt.publish<robot::command_t>("arm.command");
         auto reference_out = clnt.publish<robot::joint_state_t>("arm.reference");
@@ -136,13 +158,18 @@ int main(int argc, char** argv)
         double next_status = 1.0;
         while (!stop_signal) {
             if (state_in.read(state, 0.05)) {
+                if (params.update() > 0) {  // an override came (or went): from this cycle on
+                    std::printf("parameters: kp[0] %g (%s), kd[0] %g (%s)\n", kp[0],
+                                params.changed("kp") ? "changed" : "same", kd[0],
+                                params.changed("kd") ? "changed" : "same");
+                    std::fflush(stdout);
+                }
                 double t = state.timestamp;
                 double q_target[joints], qd_target[joints];
                 target(t, q_target, qd_target);
                 for (int j = 0; j < joints; j++) {
                     double q = state.position[j], qd = state.velocity[j];
-                    command.target[j] = active.kp[j] * (q_target[j] - q) +
-                                        active.kd[j] * (qd_target[j] - qd);
+                    command.target[j] = kp[j] * (q_target[j] - q) + kd[j] * (qd_target[j] - qd);
                     reference.position[j] = q_target[j];
                     reference.velocity[j] = qd_target[j];
                     reference.effort[j] = command.target[j];
@@ -164,7 +191,7 @@ int main(int argc, char** argv)
                     std::printf("t=%.0f s: %lu cycles in the last second, %lu "
                                 "skipped in all%s, gains '%s' (kp[0] %g, kd[0] %g)\n",
                                 t, cycles_in_second, skipped, extra.c_str(),
-                                active.profile.c_str(), active.kp[0], active.kd[0]);
+                                active.profile.c_str(), kp[0], kd[0]);
                     std::fflush(stdout);
                     cycles_in_second = 0;
                     next_status = std::floor(t) + 1.0;

@@ -85,6 +85,36 @@ static const char* find_member(const char* json, const char* key)
     }
 }
 
+const char* ln_json_array(const char* json, const char* key)
+{
+    const char* v = find_member(json, key);
+    return v != NULL && *v == '[' ? v : NULL;
+}
+
+int ln_json_next(const char** pos, const char** start, size_t* len)
+{
+    const char* p = *pos;
+    if (*p == '[') {
+        p = skip_ws(p + 1);
+        if (*p == ']')
+            return 0;
+    } else {
+        p = skip_ws(p);
+        if (*p == ']')
+            return 0;
+        if (*p != ',')
+            return -1;
+        p = skip_ws(p + 1);
+    }
+    const char* end = skip_value(p);
+    if (end == NULL || end == p)
+        return -1;
+    *start = p;
+    *len = (size_t)(end - p);
+    *pos = end;
+    return 1;
+}
+
 int ln_json_bool(const char* json, const char* key)
 {
     const char* v = find_member(json, key);

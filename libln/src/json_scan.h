@@ -13,6 +13,14 @@ int ln_json_bool(const char* json, const char* key);
  * \u escapes become UTF-8; a surrogate half becomes '?'. */
 int ln_json_string(const char* json, const char* key, char* out, size_t size);
 
+/* Walking an array member (events use it for their handler lists): ln_json_array gives the
+ * start of the top-level member `key` if it is an array (else NULL); starting with *pos at
+ * that, each ln_json_next gives the text of the next element as (start, len) and returns 1,
+ * 0 after the last one, -1 for malformed text.  An element that is an object is read with
+ * the functions above after copying it into a NUL-terminated buffer. */
+const char* ln_json_array(const char* json, const char* key);
+int ln_json_next(const char** pos, const char** start, size_t* len);
+
 /* Writes s as a quoted JSON string into out[size] (NUL-terminated, cut if it does not fit);
  * returns the length the whole quoted string needs (without the NUL), like snprintf. */
 size_t ln_json_quote(const char* s, char* out, size_t size);

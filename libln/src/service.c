@@ -361,8 +361,8 @@ static int connection_stale(const ln_service* s)
 
 /* ---- calls ---- */
 
-static int call_locked(ln_service* s, const void* request, void* response,
-                       const struct timespec* deadline)
+/* The first half of a call: connects if needed and sends the request (s->last_call). */
+static int send_request(ln_service* s, const void* request, const struct timespec* deadline)
 {
     int rc;
     if (s->fd >= 0 && !s->is_unix && connection_stale(s))
@@ -393,13 +393,21 @@ static int call_locked(ln_service* s, const void* request, void* response,
             return rc;
         rc = send_buf(s, &s->tx, deadline);
     }
-    if (rc != LN_OK) {
+    if (rc != LN_OK)
         disconnect(s);
-        return rc;
-    }
+    return rc;
+}
+
+/* The second half of a call: waits for the answer to the request send_request sent. */
+static int receive_response(ln_service* s, void* response, const struct timespec* deadline)
+{
+    uint32_t call_id = s->last_call;
+    if (s->fd < 0)
+        return ln_set_error(s->clnt, LN_ECONNECTION, "service \"%s\": no request is waiting "
+                            "for an answer", s->name);
     uint16_t type;
     ln_rbuf body;
-    rc = read_frame(s, deadline, &type, &body);
+    int rc = read_frame(s, deadline, &type, &body);
     if (rc != LN_OK) {
         disconnect(s);
         return rc;
@@ -423,6 +431,23 @@ static int call_locked(ln_service* s, const void* request, void* response,
         return ln_set_error(s->clnt, rc, "service \"%s\": bad response from provider \"%s\": %s",
                             s->name, s->provider, ln_last_error());
     return LN_OK;
+}
+
+static int call_locked(ln_service* s, const void* request, void* response,
+                       const struct timespec* deadline)
+{
+    int rc = send_request(s, request, deadline);
+    return rc != LN_OK ? rc : receive_response(s, response, deadline);
+}
+
+int ln_svc_call_send(ln_service* s, const void* request, const struct timespec* deadline)
+{
+    return send_request(s, request, deadline);
+}
+
+int ln_svc_call_receive(ln_service* s, void* response, const struct timespec* deadline)
+{
+    return receive_response(s, response, deadline);
 }
 
 int ln_service_call(ln_service* s, const void* request, void* response, double timeout)

@@ -104,4 +104,12 @@ int ln_svc_check_names(ln_client* clnt, const char* what, const char* name, cons
 int ln_svc_parse_signature(ln_client* clnt, const char* md_name, const char* signature,
                            ln_sig** req, ln_sig** resp);
 
+/* ---- service.c: one call in two halves, so that events (event_call.c) send a call to every
+ * handler before waiting for any answer.  The caller owns the handle exclusively (no other
+ * thread calls on it); receive only after a send that returned LN_OK.  Errors as for
+ * ln_service_call (recorded); deadline NULL waits forever. ---- */
+struct timespec;
+int ln_svc_call_send(ln_service* s, const void* request, const struct timespec* deadline);
+int ln_svc_call_receive(ln_service* s, void* response, const struct timespec* deadline);
+
 #endif /* LN_SVC_INTERNAL_H */

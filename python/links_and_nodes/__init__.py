@@ -20,13 +20,16 @@ from .errors import LibraryNotFoundError, LnError
 
 __version__ = "0.1.0"
 
-__all__ = ["LibraryNotFoundError", "LnError", "__version__", "add_message_definition_dir",
-           "client", "message_class", "provided_service", "publisher", "service",
+__all__ = ["EventResult", "LibraryNotFoundError", "LnError", "__version__",
+           "add_message_definition_dir", "client", "event", "event_handler", "message_class", "provided_service", "publisher", "service",
            "service_provider", "service_request", "subscriber"]
 
 _CLIENT_NAMES = ("client", "publisher", "subscriber")
 _MD_NAMES = ("add_message_definition_dir", "message_class")
 _SERVICE_NAMES = ("provided_service", "service", "service_provider", "service_request")
+_EVENT_NAMES = ("EventResult", "event", "event_handler")
+_PARAMETER_NAMES = ("parameter", "parameter_block")
+__all__ += ["parameter", "parameter_block"]
 
 
 def __getattr__(name: str) -> Any:
@@ -44,6 +47,14 @@ def __getattr__(name: str) -> Any:
         from . import _services
 
         return getattr(_services, name)
+    if name in _EVENT_NAMES:
+        from . import _events
+
+        return getattr(_events, name)
+    if name in _PARAMETER_NAMES:
+        from . import _parameters
+
+        return getattr(_parameters, name)
     if name.startswith("Ln") and name.endswith("Error"):
         from . import _libln
 

@@ -156,6 +156,40 @@ class client:  # noqa: N801 - the LN name
     def unregister_service_provider(self, provider: provided_service) -> None:
         provider.close()
 
+    # ---- events (see _events.py and docs/events.md) ----
+    def connect_event(self, name: str, message_definition_name: str,
+                      handler: Callable[[Any], Any], connect: Any = None, *,
+                      group: str | None = None, **connect_fields: Any) -> Any:
+        """Connect `handler(call)` to event `name` with the connect struct `connect` (a
+        struct or dict) and/or keyword fields; its calls are handled with the service
+        group `group`.  Returns the event_handler (close() disconnects it)."""
+        from . import _events
+
+        return _events.connect_event(self, name, message_definition_name, handler, connect,
+                                     group, connect_fields)
+
+    def get_event(self, name: str, message_definition_name: str) -> Any:
+        """A caller's handle of event `name`: ev.call(**fields), ev.results, ev.filter."""
+        from . import _events
+
+        return _events.get_event(self, name, message_definition_name)
+
+    def call_event(self, name: str, message_definition_name: str, fields: Any = None, *,
+                   timeout: float | None = None, **call_fields: Any) -> int:
+        """Call event `name` once (through a handle the client keeps): returns how many
+        handlers received the call."""
+        from . import _events
+
+        return _events.call_event(self, name, message_definition_name, fields, timeout,
+                                  call_fields)
+
+    # ---- parameters (see _parameters.py and docs/parameters.md) ----
+    def get_parameter_block(self, name: str) -> Any:
+        """A new parameter block `name` of this client: add(), register(), update()."""
+        from ._parameters import parameter_block
+
+        return parameter_block(self, name)
+
     def wait_and_handle_service_group_requests(self, group: str | None = None,
                                                timeout: float | None = None) -> int:
         """Wait up to `timeout` seconds (None: forever) for a request of `group`, then

@@ -64,8 +64,38 @@ static void test_quote(void)
     LN_CHECK(strcmp(back, "a\"b\\c\n\x01/") == 0);
 }
 
+/* The array walk events use for their handler lists. */
+static void test_arrays(void)
+{
+    const char* j = "{\"n\": 1, \"h\": [ {\"s\": \"a]\"}, \"x\" ,[1,2], {} ], \"e\": []}";
+    const char* pos = ln_json_array(j, "h");
+    LN_CHECK(pos != NULL);
+    const char* start;
+    size_t len;
+    const char* want[] = {"{\"s\": \"a]\"}", "\"x\"", "[1,2]", "{}"};
+    for (size_t i = 0; i < 4; i++) {
+        LN_CHECK_EQ(ln_json_next(&pos, &start, &len), 1);
+        LN_CHECK(len == strlen(want[i]) && memcmp(start, want[i], len) == 0);
+    }
+    LN_CHECK_EQ(ln_json_next(&pos, &start, &len), 0);
+    pos = ln_json_array(j, "e");
+    LN_CHECK(pos != NULL);
+    LN_CHECK_EQ(ln_json_next(&pos, &start, &len), 0);
+    LN_CHECK(ln_json_array(j, "n") == NULL); /* not an array */
+    LN_CHECK(ln_json_array(j, "missing") == NULL);
+    const char* bad[] = {"{\"h\": [1 2]}", "{\"h\": [1,]}", "{\"h\": [\"open]}"};
+    for (size_t i = 0; i < 3; i++) {
+        pos = ln_json_array(bad[i], "h");
+        int rc = 1;
+        while (pos != NULL && rc == 1)
+            rc = ln_json_next(&pos, &start, &len);
+        LN_CHECK_EQ(rc, -1);
+    }
+}
+
 int main(void)
 {
+    LN_TEST_RUN(test_arrays);
     LN_TEST_RUN(test_members_past_nested_values);
     LN_TEST_RUN(test_refusal);
     LN_TEST_RUN(test_malformed);

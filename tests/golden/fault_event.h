@@ -44,6 +44,7 @@ typedef struct robot_fault_event {
 #define ROBOT_FAULT_EVENT_LAYOUT_HASH UINT64_C(0x4a5dee34a9c40442)
 #define ROBOT_FAULT_EVENT_CONNECT_SIZE 4
 #define ROBOT_FAULT_EVENT_CALL_SIZE 20
+#define ROBOT_FAULT_EVENT_EVENT ROBOT_FAULT_EVENT_MD_NAME, ROBOT_FAULT_EVENT_LAYOUT_HASH, ROBOT_FAULT_EVENT_SIGNATURE
 LN_MD_STATIC_ASSERT(sizeof(void*) == 8, "robot/fault_event: dynamic fields need 64-bit pointers");
 LN_MD_STATIC_ASSERT(sizeof(robot_fault_event_connect_t) == 4, "robot/fault_event connect: size");
 LN_MD_STATIC_ASSERT(offsetof(robot_fault_event_connect_t, min_severity) == 0, "robot/fault_event connect: offset of min_severity");

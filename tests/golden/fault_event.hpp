@@ -50,6 +50,13 @@ static_assert(offsetof(fault_event_t::call_t, code) == 4, "robot/fault_event cal
 static_assert(offsetof(fault_event_t::call_t, text_len) == 8, "robot/fault_event call: offset of text_len");
 static_assert(offsetof(fault_event_t::call_t, text) == 12, "robot/fault_event call: offset of text");
 }  // namespace robot
+template <> struct ln::md_traits<::robot::fault_event_t> {
+    static constexpr const char* md_name = ::robot::fault_event_md_name;
+    static constexpr std::uint64_t layout_hash = 0x4a5dee34a9c40442ULL;
+    static constexpr const char* signature = ::robot::fault_event_signature;
+    using connect_type = ::robot::fault_event_t::connect_t;
+    using call_type = ::robot::fault_event_t::call_t;
+};
 #elif LN_MD_CPP_ROBOT_FAULT_EVENT != 0x4a5dee34a9c40442ULL
 #error "robot/fault_event: included from two generated headers with different layouts"
 #endif

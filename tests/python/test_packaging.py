@@ -36,12 +36,19 @@ def test_pip_installs_every_message_definition_folder() -> None:
     pyproject = tomllib.loads((REPO / "pyproject.toml").read_text())
     data_files = pyproject["tool"]["setuptools"]["data-files"]
     md_root = REPO / "message_definitions"
-    folders = sorted(p.name for p in md_root.iterdir()
-                     if p.is_dir() and not p.name.startswith("."))
-    # Only one level: a nested folder would need its own entry, so it must not appear.
-    assert not [p for p in md_root.glob("*/*") if p.is_dir()]
-    assert data_files == {f"share/links_and_nodes/message_definitions/{f}":
-                          [f"message_definitions/{f}/*"] for f in folders}
+    prefix = "share/links_and_nodes/message_definitions"
+    # Every md file goes to its own folder (nested ones too, e.g. ln/parameters/query), and
+    # no pattern matches a folder (setuptools would try to copy it as a file).
+    installed: dict[Path, str] = {}
+    for dest, patterns in data_files.items():
+        for pattern in patterns:
+            for path in sorted(REPO.glob(pattern)):
+                assert path.is_file(), f"{pattern} matches the folder {path}"
+                installed[path] = dest
+    wanted = {p: f"{prefix}/{p.parent.relative_to(md_root)}" for p in md_root.rglob("*")
+              if p.is_file() and p.name != "SConscript"
+              and not any(part.startswith(".") for part in p.relative_to(md_root).parts)}
+    assert installed == wanted
 
 
 def debian_lines(name: str) -> list[str]:

@@ -313,6 +313,92 @@ LN_EXPORT int ln_service_request_respond_error(ln_service_request* req, const ch
 /* Name of the service being called (owned by the provider). */
 LN_EXPORT const char* ln_service_request_service_name(const ln_service_request* req);
 
+/* ==== events (docs/events.md) ==============================================================
+ * An event is a named one-to-many call typed by an event md (sections `connect` and `call`):
+ * any number of clients *connect* a handler to event "robot.faults", each stating its connect
+ * struct (e.g. a minimum severity); any client *calls* the event with a call struct, which
+ * goes to every handler connected at that moment, in parallel.  Each handler may answer with
+ * a reply (a struct of the call section) or an error.  Nothing is queued: a call while no
+ * handler is connected reaches nobody and returns 0.
+ *
+ * A handler is a service provider named "ln_event/EVENT/CLIENT.N" whose request is the call
+ * struct, registered in a service group like any provider (its calls are handled by
+ * ln_wait_and_handle_service_group_requests or a thread pool of that group); the manager keeps
+ * its connect struct.  Both are registered again after a manager restart.  Generated headers
+ * give the md as NAME_EVENT (md name, layout hash, signature "connect|call"). */
+typedef struct ln_event ln_event;                 /* a caller's handle */
+typedef struct ln_event_handler ln_event_handler; /* a connected handler */
+typedef struct ln_event_request ln_event_request; /* one call, inside a handler */
+
+#define LN_EVENT_MAX_NAME 160         /* bytes of an event name */
+#define LN_EVENT_MAX_CONNECT_SIZE 1024 /* bytes of a connect struct in wire form */
+#define LN_EVENT_MAX_HANDLERS 256      /* handlers connected to one event */
+
+/* Runs once per call on the thread that handles the group.  It reads the call with
+ * ln_event_request_get_data and may answer with ln_event_request_reply (a call struct; encoded
+ * at once) or ln_event_request_reply_error (the caller's result for this handler gets
+ * LN_ESERVICE and the text).  Returning 0 without answering delivers the call without a
+ * reply; a negative return answers an error with the text of that code. */
+typedef int (*ln_event_handler_fn)(ln_client* clnt, ln_event_request* call, void* user_data);
+
+/* Connect `handler` to event `event` (1..LN_EVENT_MAX_NAME bytes of A-Z a-z 0-9 _ . : / -,
+ * not starting with '.'), stating *connect (the struct of the connect section; NULL only if
+ * that section is empty).  It is registered in service group `group` (NULL: the default) and
+ * receives calls once this returns.  All handlers of an event use one layout: another one is
+ * refused with LN_ELAYOUT; more than LN_EVENT_MAX_HANDLERS with LN_ELIMIT; a connect struct
+ * over LN_EVENT_MAX_CONNECT_SIZE wire bytes with LN_ETOOBIG.  ln_client_destroy disconnects
+ * the handlers a client still has. */
+LN_EXPORT int ln_event_connect(ln_client* clnt, ln_event_handler** out, const char* event,
+                               const char* md_name, uint64_t layout_hash,
+                               const char* signature, const void* connect,
+                               ln_event_handler_fn handler, void* user_data, const char* group);
+/* Unregisters the handler and frees it; waits for a call of it running in another thread,
+ * LN_EBUSY from inside its own handler. */
+LN_EXPORT int ln_event_disconnect(ln_event_handler* handler);
+/* The handler's service name, "ln_event/EVENT/CLIENT.N" (owned by the handler). */
+LN_EXPORT const char* ln_event_handler_name(const ln_event_handler* handler);
+
+/* Inside a handler: the call struct (dynamic fields point into memory of the call, valid until
+ * the handler returns), an answer, and the name of the event. */
+LN_EXPORT int ln_event_request_get_data(ln_event_request* call, void* data);
+LN_EXPORT int ln_event_request_reply(ln_event_request* call, const void* reply);
+LN_EXPORT int ln_event_request_reply_error(ln_event_request* call, const char* text);
+LN_EXPORT const char* ln_event_request_event_name(const ln_event_request* call);
+
+/* ---- callers ----
+ * ln_get_event makes a handle without contacting anyone.  ln_event_call asks the manager which
+ * handlers are connected, skips those the filter (if set) declines, sends *call to all the
+ * others at once and then waits, up to `timeout` seconds in all (< 0: forever), for their
+ * answers.  It returns how many handlers received the call and answered without error (0 if
+ * none is connected: not an error), or an error of the call as a whole: LN_ELAYOUT (the
+ * handlers use another layout; the text names both mds), LN_EINVAL (bad arguments, a call
+ * struct that cannot be encoded), LN_ECONNECTION (the manager is unreachable and this handle
+ * has never seen the handler list; once it has, the last list is used instead), or what the
+ * filter returned.  What happened at each handler is in its result. */
+typedef struct ln_event_result {
+    const char* handler; /* the handler's service name */
+    const char* client;  /* the name of the client that connected it */
+    int code;            /* LN_OK: received; else why not (LN_ESERVICE: answered an error,
+                          * LN_ECONNECTION: died or unreachable, LN_ETIMEOUT, ...) */
+    const char* error;   /* the text for code != LN_OK, "" otherwise */
+    const void* connect; /* its connect struct */
+    const void* reply;   /* its reply (a call struct), NULL if it sent none */
+} ln_event_result;
+
+/* Decides per handler before anything is sent: > 0 call it, 0 skip it, < 0 abort the whole
+ * call with that code (nothing is sent). */
+typedef int (*ln_event_filter)(const void* connect, void* user_data);
+
+LN_EXPORT int ln_get_event(ln_client* clnt, ln_event** out, const char* event,
+                           const char* md_name, uint64_t layout_hash, const char* signature);
+LN_EXPORT int ln_event_set_filter(ln_event* ev, ln_event_filter filter, void* user_data);
+LN_EXPORT int ln_event_call(ln_event* ev, const void* call, double timeout);
+/* The results of the last call, one per handler it was sent to, ordered by handler name; they
+ * (and the memory they point to) stay valid until the next call or ln_event_release. */
+LN_EXPORT int ln_event_result_count(const ln_event* ev);
+LN_EXPORT int ln_event_get_result(const ln_event* ev, size_t index, ln_event_result* out);
+LN_EXPORT int ln_event_release(ln_event* ev);
+
 /* ==== manager commands and topic loggers (docs/logging.md) ================================
  * ln_control sends one control command, a JSON object with a string "op" (docs/protocol.md,
  * "Control"), on the client's manager connection and waits (up to the client's timeout) for
@@ -344,6 +430,77 @@ LN_EXPORT int ln_logger_disable(ln_logger* lg);
  * manager's host: MCAP for *.mcap, numpy arrays for *.npz. */
 LN_EXPORT int ln_logger_save(ln_logger* lg, const char* path);
 LN_EXPORT void ln_logger_close(ln_logger* lg);
+
+/* ==== parameter blocks (docs/parameters.md) ================================================
+ * A block is a named set of typed parameters of one client.  Each parameter has an input
+ * (a variable of the program, or none: then its default) and an output the program uses; the
+ * manager's tools (ln_manager param ..., the console, the scripting API) may override the
+ * output.  An override is checked (type, element count, range, read-only, the program's
+ * validator) on libln's own service thread and becomes visible at the program's next
+ * ln_parameter_block_update(), all overrides of one request together.  update() takes no
+ * lock, makes no system call and allocates nothing: call it from the real-time loop.
+ *
+ * The block is served as service "<client name>.parameters.<block>" (md ln/parameters/query)
+ * in service group "ln.parameters", handled by the client's thread pool "ln.parameters";
+ * a manager restart changes nothing (the client registers it again, values and overrides
+ * live in the program).  Initial overrides come from $LN_PARAMETERS (the manager sets it
+ * from the process's `parameters:` in the .lnc).  Setup (create, add, set_validator,
+ * register, destroy) from one thread; update() and changed() from the loop's thread. */
+typedef struct ln_parameter_block ln_parameter_block;
+
+#define LN_PARAMETER_MIN 0x1u       /* desc.min is checked: every element >= min */
+#define LN_PARAMETER_MAX 0x2u       /* desc.max is checked: every element <= max */
+#define LN_PARAMETER_READ_ONLY 0x4u /* shown by the tools, never overridden */
+#define LN_PARAMETER_MAX_NAME 63    /* bytes of a block or parameter name */
+
+typedef struct ln_parameter_desc {
+    const char* name;        /* 1..LN_PARAMETER_MAX_NAME bytes of A-Z a-z 0-9 _ . - */
+    const char* type;        /* an md primitive: char, int8_t .. uint64_t, float, double
+                              * (and the md aliases int, short, float32_t, float64_t) */
+    uint32_t count;          /* elements (0 counts as 1); char[count] holds a string */
+    uint32_t flags;          /* LN_PARAMETER_* */
+    const char* description; /* may be NULL */
+    const void* input;       /* count elements the program writes, or NULL: the value
+                              * without an override is then *output as it was at add() */
+    void* output;            /* count elements update() writes; required */
+    double min, max;         /* with LN_PARAMETER_MIN / _MAX (not for char) */
+} ln_parameter_desc;
+
+/* Called on the service thread for every value about to be taken (after the type, count,
+ * range and read-only checks): return 0 to accept it, anything else to refuse it, with a
+ * reason written into reason[reason_size] (NUL-terminated) that the setter receives.
+ * `value` holds count elements of the parameter's type.  For the initial overrides it runs
+ * on the thread calling register. */
+typedef int (*ln_parameter_validator)(ln_parameter_block* blk, int index, const char* name,
+                                      const void* value, char* reason, size_t reason_size,
+                                      void* user_data);
+
+/* A block `name` (1..LN_PARAMETER_MAX_NAME bytes of A-Z a-z 0-9 _ -) of the client; nothing
+ * is registered yet.  ln_client_destroy destroys the blocks the client still has. */
+LN_EXPORT int ln_parameter_block_create(ln_client* clnt, ln_parameter_block** out,
+                                        const char* name);
+/* Adds a parameter (before register); returns its index (>= 0) or LN_EINVAL, LN_EEXIST,
+ * LN_EBUSY (registered already), LN_ELIMIT.  The strings of *desc are copied; input and
+ * output are kept and must stay valid while the block exists. */
+LN_EXPORT int ln_parameter_block_add(ln_parameter_block* blk, const ln_parameter_desc* desc);
+LN_EXPORT int ln_parameter_block_set_validator(ln_parameter_block* blk,
+                                               ln_parameter_validator validator,
+                                               void* user_data);
+/* Takes the initial overrides of $LN_PARAMETERS (those it refuses are printed on stderr and
+ * listed by the tools) and registers the block's service.  From now on overrides may come.
+ * After a failure (e.g. LN_ECONNECTION) it may be called again; LN_EBUSY once registered. */
+LN_EXPORT int ln_parameter_block_register(ln_parameter_block* blk);
+/* The loop's update point: takes the overrides that arrived since the last call, then writes
+ * every output (the override, else the input; a parameter without input only when its value
+ * changed).  Returns how many parameters changed their override (set or reset) since the last
+ * call, 0 mostly; LN_EBADHANDLE for a bad handle. */
+LN_EXPORT int ln_parameter_block_update(ln_parameter_block* blk);
+/* 1 if parameter `index` changed in the last update(), 0 if not, < 0 for a bad argument. */
+LN_EXPORT int ln_parameter_block_changed(const ln_parameter_block* blk, int index);
+/* The service name "<client>.parameters.<block>" (owned by the block). */
+LN_EXPORT const char* ln_parameter_block_service_name(const ln_parameter_block* blk);
+/* Unregisters the service (waiting for a request being handled) and frees the block. */
+LN_EXPORT int ln_parameter_block_destroy(ln_parameter_block* blk);
 
 /* ==== topic segment administration (used by ln_manager) ===================================
  * The manager creates, sizes, grows and removes the shared-memory segments of topics; clients

@@ -15,11 +15,13 @@
 #include <string>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 namespace ln {
 
 // md name and layout hash of a generated message type, plus signature, request_type and
-// response_type for a service type; ln_generate's C++ headers specialise it.
+// response_type for a service type, signature, connect_type and call_type for an event type;
+// ln_generate's C++ headers specialise it.
 template <typename T> struct md_traits;
 
 class error : public std::runtime_error {
@@ -48,6 +50,8 @@ template <typename T> class outport;
 template <typename T> class inport;
 template <typename T> class service;
 template <typename T> class service_provider;
+template <typename T> class event;
+template <typename T> class event_handler;
 
 class client {
 public:
@@ -67,6 +71,9 @@ public:
     }
 
     ln_client* get() const noexcept { return c_.get(); }
+    // Shared ownership of the connection, for wrappers that must keep it alive
+    // (ln/parameters.hpp).
+    detail::client_ptr share() const noexcept { return c_; }
     std::string name() const { return ln_client_name(c_.get()); }
 
     template <typename T> outport<T> publish(const std::string& topic, unsigned flags = 0)
@@ -109,6 +116,23 @@ public:
     void set_max_threads(const std::string& pool, unsigned max_threads)
     {
         check(ln_set_max_threads(c_.get(), pool.c_str(), max_threads));
+    }
+
+    // Events (docs/events.md): T is a generated event type (e.g. robot::fault_event_t).
+    template <typename T> event<T> get_event(const std::string& name)
+    {
+        return event<T>(c_, name);
+    }
+    // The handler gets an event_handler<T>::call; it is connected with `connect` in `group`
+    // ("" = default) and receives calls until it is destroyed.
+    template <typename T>
+    std::unique_ptr<event_handler<T>> connect_event(
+        const std::string& name, const typename md_traits<T>::connect_type& connect,
+        std::function<void(typename event_handler<T>::call&)> handler,
+        const std::string& group = "")
+    {
+        return std::unique_ptr<event_handler<T>>(
+            new event_handler<T>(c_, name, connect, std::move(handler), group));
     }
 
 private:
@@ -404,6 +428,167 @@ private:
     detail::client_ptr c_;
     std::function<void(call&)> handler_;
     ln_service_provider* p_ = nullptr;
+};
+
+// An event caller (docs/events.md): call() sends a call struct to every handler connected
+// at that moment and returns how many received it; results() says what happened at each.
+// Failures of the call as a whole throw ln::error.  Movable, not copyable.
+template <typename T> class event {
+    using traits = md_traits<T>;
+
+public:
+    using connect_type = typename traits::connect_type;
+    using call_type = typename traits::call_type;
+    using filter_type = std::function<bool(const connect_type&)>;
+
+    struct result {
+        std::string handler, client;
+        int code;                    // LN_OK: received
+        std::string error;           // why not
+        const connect_type* connect; // valid until the next call
+        const call_type* reply;      // nullptr without a reply; valid until the next call
+    };
+
+    event(detail::client_ptr c, const std::string& name)
+        : c_(std::move(c)), filter_(new filter_type())
+    {
+        check(ln_get_event(c_.get(), &e_, name.c_str(), traits::md_name, traits::layout_hash,
+                           traits::signature));
+    }
+    event(event&& o) noexcept
+        : c_(std::move(o.c_)), e_(std::exchange(o.e_, nullptr)), filter_(std::move(o.filter_)) {}
+    event& operator=(event&& o) noexcept
+    {
+        if (this != &o) {
+            release();
+            c_ = std::move(o.c_);
+            e_ = std::exchange(o.e_, nullptr);
+            filter_ = std::move(o.filter_);
+        }
+        return *this;
+    }
+    event(const event&) = delete;
+    event& operator=(const event&) = delete;
+    ~event() { release(); }
+
+    // timeout in seconds for the whole call, < 0 waits forever.
+    int call(const call_type& data, double timeout = -1)
+    {
+        return check(ln_event_call(e_, &data, timeout));
+    }
+    // Only handlers whose connect struct `f` accepts get the calls; an empty f: all of them.
+    void set_filter(filter_type f)
+    {
+        *filter_ = std::move(f);
+        check(ln_event_set_filter(e_, *filter_ ? &filter_trampoline : nullptr, filter_.get()));
+    }
+    std::vector<result> results() const
+    {
+        std::vector<result> out;
+        int n = check(ln_event_result_count(e_));
+        for (int i = 0; i < n; i++) {
+            ln_event_result r;
+            check(ln_event_get_result(e_, static_cast<std::size_t>(i), &r));
+            out.push_back(result{r.handler, r.client, r.code, r.error,
+                                 static_cast<const connect_type*>(r.connect),
+                                 static_cast<const call_type*>(r.reply)});
+        }
+        return out;
+    }
+    ln_event* get() const noexcept { return e_; }
+
+private:
+    static int filter_trampoline(const void* connect, void* f)
+    {
+        try {
+            return (*static_cast<filter_type*>(f))(*static_cast<const connect_type*>(connect))
+                       ? 1
+                       : 0;
+        } catch (...) {
+            return LN_EINVAL; // the call stops, nothing is sent
+        }
+    }
+    void release() noexcept
+    {
+        if (e_ != nullptr)
+            ln_event_release(e_);
+        e_ = nullptr;
+    }
+    detail::client_ptr c_;
+    ln_event* e_ = nullptr;
+    std::unique_ptr<filter_type> filter_;
+};
+
+// A connected event handler.  The handler gets a `call` with the decoded call struct
+// (`data`); it may reply() with a call struct or reply_error(); returning without either
+// delivers the call without a reply, an exception answers an error with its what() text.
+// Handlers run on the thread that handles the group.  Not movable: libln holds a pointer to it.
+template <typename T> class event_handler {
+    using traits = md_traits<T>;
+
+public:
+    using connect_type = typename traits::connect_type;
+    using call_type = typename traits::call_type;
+
+    class call {
+    public:
+        call_type data{};
+
+        void reply(const call_type& r)
+        {
+            check(ln_event_request_reply(r_, &r));
+            answered_ = true;
+        }
+        void reply_error(const std::string& text)
+        {
+            check(ln_event_request_reply_error(r_, text.c_str()));
+            answered_ = true;
+        }
+        bool answered() const noexcept { return answered_; }
+        std::string event_name() const { return ln_event_request_event_name(r_); }
+
+    private:
+        friend class event_handler;
+        explicit call(ln_event_request* r) : r_(r) {}
+        ln_event_request* r_;
+        bool answered_ = false;
+    };
+
+    event_handler(detail::client_ptr c, const std::string& name, const connect_type& connect,
+                  std::function<void(call&)> handler, const std::string& group)
+        : c_(std::move(c)), handler_(std::move(handler))
+    {
+        check(ln_event_connect(c_.get(), &h_, name.c_str(), traits::md_name,
+                               traits::layout_hash, traits::signature, &connect, &trampoline,
+                               this, group.c_str()));
+    }
+    event_handler(const event_handler&) = delete;
+    event_handler& operator=(const event_handler&) = delete;
+    ~event_handler() { ln_event_disconnect(h_); }
+
+    std::string name() const { return ln_event_handler_name(h_); }
+    ln_event_handler* get() const noexcept { return h_; }
+
+private:
+    static int trampoline(ln_client*, ln_event_request* r, void* self)
+    {
+        auto* h = static_cast<event_handler*>(self);
+        call c(r);
+        try {
+            check(ln_event_request_get_data(r, &c.data));
+            h->handler_(c);
+        } catch (const std::exception& e) {
+            if (!c.answered())
+                ln_event_request_reply_error(r, e.what());
+        } catch (...) {
+            if (!c.answered())
+                ln_event_request_reply_error(r, "handler threw a non-standard exception");
+        }
+        return 0;
+    }
+    detail::client_ptr c_;
+    std::function<void(call&)> handler_;
+    ln_event_handler* h_ = nullptr;
 };
 
 }  // namespace ln

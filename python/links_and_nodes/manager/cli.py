@@ -48,6 +48,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "status, start, stop, restart, output, wait-ready, quit, detach; "
                     "`ln_manager topic echo|hz|bw|info`, `md show`, `service call` "
                     "look into its topics, mds and services (docs/introspection.md); "
+                    "`ln_manager param list|get|set|reset|changes|save|load` its parameter "
+                    "blocks "
+                    "(docs/parameters.md); "
                     "`ln_manager check FILE.lnc` validates a configuration without "
                     "starting anything.")
     parser.add_argument("-c", "--config", metavar="FILE",
@@ -297,6 +300,10 @@ def main(argv: list[str] | None = None) -> int:
         from . import introspect_cli
 
         return introspect_cli.main(argv)
+    if argv and argv[0] == "param":  # parameter blocks (docs/parameters.md)
+        from . import param_cli
+
+        return param_cli.main(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
     config = _load_config(parser, args) if args.config else None

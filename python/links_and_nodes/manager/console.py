@@ -3,6 +3,7 @@ on stdout.  Every command goes through control.Control, like remote ones.
 
     start|stop|restart NAME|GROUP|all    status    output NAME [-n N] [-f]
     history NAME    topics    services    hosts    network    logger ...    reload
+    param list|get|set|reset|changes|save|load ...    (param_console.py, docs/parameters.md)
     quit    detach    help
     topic echo|hz|bw|info NAME ...    md show NAME    service call NAME REQUEST
     (these three: introspect_console.py, docs/introspection.md)
@@ -42,6 +43,9 @@ HELP = """commands:
   topic info NAME          md, ring, publishers and subscribers with hosts, transports
   md show NAME [-r]        a message definition's text (-r: and the mds it uses)
   service call NAME REQ    call a service; REQ like 'a: 1, b: [1, 2], name: "x"' or JSON
+  param list [BLOCK] | get BLOCK [PARAM] | set BLOCK PARAM VALUE | reset BLOCK [PARAM]
+  param changes BLOCK | save FILE | load FILE
+                           parameter blocks of the processes (docs/parameters.md)
   logger [NAME ...]        topic loggers: NAME add TOPIC [DEPTH] [--divisor K] [--span S],
                            NAME remove [TOPIC], NAME enable [--keep]|disable|status,
                            NAME save FILE (.mcap or .npz; on the manager's host)
@@ -171,6 +175,10 @@ class Console:
             await self._logger(args)
         elif cmd in ("topic", "md", "service"):
             await introspect(self, [cmd, *args])
+        elif cmd == "param":
+            from .param_console import execute as param
+
+            await param(self, args)
         elif cmd == "reload":
             result = await c.handle({"op": "reload"})
             self.say("reloaded: " + "; ".join(f"{k}: {', '.join(v) or '-'}"

@@ -53,6 +53,9 @@ class Control:
         from .introspect_control import add_commands
 
         add_commands(self)  # topic_info, service_info, md_show
+        from .event_control import add_commands as add_event_commands
+
+        add_event_commands(self)  # event_connect, events (docs/events.md)
         self.loggers: Loggers | None = None  # set once the manager can reach its daemons
         self.commands.update(logger_control.commands(self._loggers, self._save_logger))
 

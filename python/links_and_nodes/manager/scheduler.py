@@ -502,6 +502,10 @@ class Scheduler:
             env.update({k: os.environ[k] for k in X11_ENV if k in os.environ})
         env["LN_MANAGER"] = self.manager_address_for(cfg.node)
         env["LN_PROGRAM_NAME"] = cfg.name.replace("/", ".")
+        if cfg.parameters:  # initial overrides of its parameter blocks (docs/parameters.md)
+            from .param_tools import to_json
+
+            env["LN_PARAMETERS"] = to_json(cfg.parameters)
         dirs = cfg.message_definition_dirs + self.config.message_definition_dirs
         if dirs:
             env["LN_MESSAGE_DEFINITION_DIRS"] = ":".join(dirs)

@@ -20,6 +20,7 @@ from .. import __version__
 from . import protocol as p
 from .introspect_api import Introspection
 from .listing import parse_address, receive
+from .param_api import Parameters
 
 DEFAULT_TIMEOUT = 10.0  # seconds for connecting and for answers that do not wait
 
@@ -28,9 +29,10 @@ class ManagerError(Exception):
     """The manager refused a command or could not be reached; the text says why."""
 
 
-class Manager(Introspection):
+class Manager(Introspection, Parameters):
     """One connection to a manager (use as a context manager or call close()); the live
-    introspection methods (topic_echo, topic_hz, ...) are in introspect_api.py."""
+    introspection methods (topic_echo, topic_hz, ...) are in introspect_api.py, the
+    parameter methods (param_get, param_set, ...) in param_api.py."""
 
     def __init__(self, address: str, *, timeout: float = DEFAULT_TIMEOUT,
                  name: str = "ln_script") -> None:
@@ -55,6 +57,7 @@ class Manager(Introspection):
 
     # ---- plumbing --------------------------------------------------------------------------
     def close(self) -> None:
+        self.close_parameters()
         self._sock.close()
 
     def __enter__(self) -> Manager:

@@ -207,6 +207,9 @@ class Process:
     restart_delay: float = 1.0  # seconds before the first restart; doubles, at most 30 s
     watchdog: Watchdog | None = None
     message_definition_dirs: list[str] = field(default_factory=list)
+    # Initial overrides of its parameter blocks: block -> parameter -> value (plain JSON
+    # values); passed as $LN_PARAMETERS (docs/parameters.md).
+    parameters: dict[str, dict[str, object]] = field(default_factory=dict)
 
     @property
     def has_readiness(self) -> bool:

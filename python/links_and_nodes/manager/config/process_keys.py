@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 from .drafts import KeyLine, ProcessDraft, Ref
 from .errors import LineError, Problem, closest, did_you_mean
 from .model import ResourceLimit
+from .process_params import parameters_key
 from .text import Value, split_value
 from .values import (
     env_name,
@@ -237,6 +238,7 @@ LISTS: dict[str, ListKey] = {
     "start_on_ready": _refs,
     "flags": _flags,
     "set_resource_limits": _limits,
+    "parameters": parameters_key,  # process_params.py
 }
 
 KNOWN = frozenset(SCALARS) | frozenset(LISTS) | IGNORED

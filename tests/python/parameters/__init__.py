@@ -1,0 +1,1 @@
+"""Tests of parameter blocks (docs/parameters.md)."""
