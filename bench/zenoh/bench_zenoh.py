@@ -1,0 +1,277 @@
+"""Benchmark of ln_zenoh: one-way latency (ping-pong / 2, p50/p99) and one-way throughput of
+64 B and 1 MiB samples between lab hosts a and b (network namespaces on a bridge,
+tests/python/netlab.py), for
+
+    bridge   ln topics at site a -> ln_zenoh (a) -> Zenoh TCP -> ln_zenoh (b) -> ln topics at b
+    zenoh    plain Zenoh pub/sub between two Python processes on a and b (the floor)
+    daemons  the same ln programs with one manager, the ln_daemons forwarding over UDP
+
+All measuring programs are Python (zb_bench_peer.py), so the three differ only in the path.
+Goal: the bridge adds at most 1.3x over plain Zenoh (p50 latency; throughput at least 1/1.3).
+Prints a table, writes bench/results/zenoh.json, exits 0 either way.  Needs root and zenoh.
+
+    sudo .venv/bin/python bench/zenoh/bench_zenoh.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[1]
+for _p in (REPO / "tests" / "python", HERE.parent / "network", REPO, REPO / "python"):
+    sys.path.insert(0, str(_p))
+
+from netlab import Host, NetLab, netlab_available  # noqa: E402
+from network_cases import CaseError, Lab, Proc, json_line  # noqa: E402
+
+PEER = HERE / "zb_bench_peer.py"
+MIB = 1 << 20
+SIZES = (64, MIB)
+LAT = {64: (2000, 200), MIB: (200, 20)}  # round trips, warm-up
+THR = {64: 20000, MIB: 400}  # samples of a throughput run
+GOAL = 1.3
+SITE_PORT = 54500  # the bridge case's managers (one per host)
+ZENOH_PORT = 7447
+PLAIN_PORT = 7450
+TIMEOUT = 600.0
+
+
+def log(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+def env(host: Host, manager: str | None = None) -> dict[str, str]:
+    e = {**host.env(), "PYTHONPATH": os.pathsep.join([str(REPO / "python"), str(REPO)]),
+         "LN_MESSAGE_DEFINITION_DIRS": str(REPO / "bench" / "md"), "PYTHONUNBUFFERED": "1"}
+    if manager:
+        e["LN_MANAGER"] = manager
+    return e
+
+
+def wait_line(path: Path, text: str, proc: subprocess.Popen[Any]) -> None:
+    deadline = time.monotonic() + 60
+    while text not in (path.read_text(errors="replace") if path.exists() else ""):
+        if proc.poll() is not None or time.monotonic() > deadline:
+            raise CaseError(f"{path.name}: no {text!r}: {path.read_text()[-500:]}")
+        time.sleep(0.02)
+
+
+class Bench:
+    def __init__(self, nl: NetLab, quick: bool) -> None:
+        self.nl = nl
+        self.lab = Lab(nl, REPO / "build" / "release" / "bench" / "network")
+        self.a, self.b = self.lab.a, self.lab.b
+        self.scale = 10 if quick else 1
+        self.procs: list[subprocess.Popen[Any]] = []
+        self._bridges_up = False
+
+    def close(self) -> None:
+        for proc in self.procs:
+            if proc.poll() is None:
+                proc.terminate()
+        for proc in self.procs:
+            try:
+                proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+    def spawn(self, host: Host, argv: list[str], log_name: str,
+              manager: str | None = None) -> subprocess.Popen[Any]:
+        proc = host.popen(argv, env=env(host, manager), log=log_name)
+        self.procs.append(proc)
+        return proc
+
+    def peer(self, host: Host, args: list[str], log_name: str,
+             manager: str | None = None) -> subprocess.Popen[Any]:
+        return self.spawn(host, [sys.executable, str(PEER), *args], log_name, manager)
+
+    def finish(self, proc: subprocess.Popen[Any], what: str) -> dict[str, Any]:
+        try:
+            proc.wait(timeout=TIMEOUT)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            raise CaseError(f"{what}: no result in {TIMEOUT:.0f} s") from None
+        assert proc.log_path is not None  # type: ignore[attr-defined]
+        return json_line(proc.log_path.read_text(errors="replace"), what)  # type: ignore
+
+    # ---- the bridge ----------------------------------------------------------------------------
+    def bridges(self) -> None:
+        if self._bridges_up:
+            return
+        for host, name in ((self.a, "a"), (self.b, "b")):
+            mgr = self.spawn(host, [sys.executable, "-m", "links_and_nodes.manager", "--port",
+                                    str(SITE_PORT), "--instance",
+                                    f"zbench{name}{uuid.uuid4().hex[:6]}", "--no-console",
+                                    "--log-level", "warning"], f"site-{name}.manager.log")
+            wait_line(mgr.log_path, "listening on", mgr)  # type: ignore[attr-defined]
+        manager = f"127.0.0.1:{SITE_PORT}"
+        names = [f"b{size}" for size in SIZES]
+        # queued depth of the data topics: 1024 samples of 64 B, 32 of 1 MiB (ring memory)
+        data = {f"b{size}": f"b{size}.data,queued={1024 if size == 64 else 32}"
+                for size in SIZES}
+        out_a = [x for n in names for x in ("--out", f"{n}.ping", "--out", data[n])]
+        in_a = [x for n in names for x in ("--in", f"{n}.pong")]
+        out_b = [x for n in names for x in ("--out", f"{n}.pong")]
+        in_b = [x for n in names for x in ("--in", f"{n}.ping", "--in", data[n])]
+        cli = [sys.executable, "-m", "links_and_nodes.zenoh_bridge.cli", "--poll", "0.2"]
+        bridge_a = self.spawn(self.a, [*cli, "--prefix", "ln/a", "--remote", "ln/b", "--listen",
+                                       f"tcp/{self.a.address}:{ZENOH_PORT}", *out_a, *in_a],
+                              "bridge-a.log", manager)
+        bridge_b = self.spawn(self.b, [*cli, "--prefix", "ln/b", "--remote", "ln/a", "--connect",
+                                       f"tcp/{self.a.address}:{ZENOH_PORT}", *out_b, *in_b],
+                              "bridge-b.log", manager)
+        for proc in (bridge_a, bridge_b):
+            wait_line(proc.log_path, "remote bridge", proc)  # type: ignore[attr-defined]
+        self._bridges_up = True
+
+    # ---- cases ---------------------------------------------------------------------------------
+    def latency(self, size: int, system: str) -> dict[str, Any]:
+        count, warmup = (n // self.scale for n in LAT[size])
+        tail = [str(size), str(count), str(warmup)]
+        if system == "daemons":
+            got = self.lab.managed(self.lab.mgr, [
+                Proc("pong", "b", self._managed_argv(["ln-pong", str(size), "--transport",
+                                                      "udp"]), ready=True),
+                Proc("ping", "a", self._managed_argv(["ln-ping", *tail, "--transport", "udp"]))],
+                ["ping"], system)
+            return got["ping"]
+        if system == "zenoh":
+            endpoint = f"tcp/{self.b.address}:{PLAIN_PORT}"
+            pong = self.peer(self.b, ["z-pong", str(size), "--listen", endpoint,
+                                      "--name", f"z{size}"], f"zpong{size}.log")
+            wait_line(pong.log_path, "ready", pong)  # type: ignore[attr-defined]
+            ping = self.peer(self.a, ["z-ping", *tail, "--connect", endpoint,
+                                      "--name", f"z{size}"], f"zping{size}.log")
+            result = self.finish(ping, system)
+            pong.terminate()
+            return result
+        self.bridges()
+        manager = f"127.0.0.1:{SITE_PORT}"
+        pong = self.peer(self.b, ["ln-pong", str(size), "--name", f"b{size}"],
+                         f"bpong{size}.log", manager)
+        wait_line(pong.log_path, "ready", pong)  # type: ignore[attr-defined]
+        ping = self.peer(self.a, ["ln-ping", *tail, "--name", f"b{size}"], f"bping{size}.log",
+                         manager)
+        result = self.finish(ping, system)
+        pong.terminate()
+        return result
+
+    def throughput(self, size: int, system: str) -> dict[str, Any]:
+        count = str(THR[size] // self.scale)
+        if system == "daemons":
+            got = self.lab.managed(self.lab.mgr, [
+                Proc("sink", "b", self._managed_argv(["ln-sink", str(size), count,
+                                                      "--transport", "udp"]), ready=True),
+                Proc("source", "a", self._managed_argv(["ln-source", str(size), count]))],
+                ["sink"], system)
+            return got["sink"]
+        if system == "zenoh":
+            endpoint = f"tcp/{self.b.address}:{PLAIN_PORT + 1}"
+            sink = self.peer(self.b, ["z-sink", str(size), count, "--listen", endpoint,
+                                      "--name", f"z{size}"], f"zsink{size}.log")
+            wait_line(sink.log_path, "ready", sink)  # type: ignore[attr-defined]
+            self.peer(self.a, ["z-source", str(size), count, "--connect", endpoint,
+                               "--name", f"z{size}"], f"zsource{size}.log")
+            return self.finish(sink, system)
+        self.bridges()
+        manager = f"127.0.0.1:{SITE_PORT}"
+        sink = self.peer(self.b, ["ln-sink", str(size), count, "--name", f"b{size}"],
+                         f"bsink{size}.log", manager)
+        wait_line(sink.log_path, "ready", sink)  # type: ignore[attr-defined]
+        self.peer(self.a, ["ln-source", str(size), count, "--wait", "--name", f"b{size}"],
+                  f"bsource{size}.log", manager)
+        return self.finish(sink, system)
+
+    @staticmethod
+    def _managed_argv(args: list[str]) -> list[str]:
+        return ["env", f"PYTHONPATH={REPO / 'python'}:{REPO}",
+                f"LN_MESSAGE_DEFINITION_DIRS={REPO / 'bench' / 'md'}", sys.executable,
+                str(PEER), *args]
+
+
+def table(results: dict[str, Any]) -> list[str]:
+    lines = ["", f"{'case':<28}{'zenoh':>14}{'bridge':>14}{'daemons':>14}{'bridge/zenoh':>14}"]
+    verdicts = []
+    for size in SIZES:
+        label = "64 B" if size == 64 else "1 MiB"
+        lat = results["latency"][str(size)]
+        for q in ("p50_us", "p99_us"):
+            vals = [lat.get(s, {}).get(q) for s in ("zenoh", "bridge", "daemons")]
+            ratio = vals[1] / vals[0] if vals[0] and vals[1] else None
+            lines.append(f"{label + ' one-way ' + q[:3] + ' (µs)':<28}"
+                         + "".join(f"{v:>14.1f}" if v else f"{'-':>14}" for v in vals)
+                         + (f"{ratio:>13.2f}x" if ratio else f"{'-':>14}"))
+            if q == "p50_us" and ratio:
+                verdicts.append((f"{label} p50 latency bridge/zenoh {ratio:.2f}x <= {GOAL}x",
+                                 ratio <= GOAL))
+        thr = results["throughput"][str(size)]
+        vals = [thr.get(s, {}).get("msgs_per_s") for s in ("zenoh", "bridge", "daemons")]
+        got = [thr.get(s, {}).get("received") for s in ("zenoh", "bridge", "daemons")]
+        sent = thr.get("zenoh", {}).get("sent")
+        ratio = vals[0] / vals[1] if vals[0] and vals[1] else None
+        lines.append(f"{label + ' msgs/s':<28}" + "".join(f"{v:>14.0f}" if v else f"{'-':>14}"
+                                                          for v in vals)
+                     + (f"{1 / ratio:>13.2f}x" if ratio else f"{'-':>14}"))
+        lines.append(f"{label + ' received of ' + str(sent):<28}"
+                     + "".join(f"{g:>14}" if g is not None else f"{'-':>14}" for g in got))
+        if ratio:
+            verdicts.append((f"{label} throughput zenoh/bridge {ratio:.2f}x <= {GOAL}x",
+                             ratio <= GOAL))
+    lines.append("")
+    lines += [f"{'PASS' if ok else 'MISS'}  {text}" for text, ok in verdicts]
+    return lines
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="a tenth of the samples")
+    args = ap.parse_args()
+    why = netlab_available()
+    if why:
+        log(f"bench_zenoh: cannot build the lab: {why}")
+        return 0
+    try:
+        import zenoh  # noqa: F401
+    except ImportError:
+        log("bench_zenoh: the Python package zenoh is missing: pip install eclipse-zenoh")
+        return 0
+    results: dict[str, Any] = {"latency": {}, "throughput": {}, "errors": []}
+    with tempfile.TemporaryDirectory(prefix="bench_zenoh.") as tmp, NetLab(Path(tmp)) as nl:
+        bench = Bench(nl, args.quick)
+        try:
+            for size in SIZES:
+                for kind in ("latency", "throughput"):
+                    slot = results[kind].setdefault(str(size), {})
+                    for system in ("zenoh", "bridge", "daemons"):
+                        log(f"{kind} {size} B {system} ...")
+                        try:
+                            slot[system] = getattr(bench, kind)(size, system)
+                        except CaseError as exc:
+                            results["errors"].append(str(exc))
+                            log(f"  failed: {exc}")
+        finally:
+            bench.close()
+    results.update(machine=platform.machine(), cpus=os.cpu_count(), quick=args.quick,
+                   goal=f"bridge <= {GOAL}x plain Zenoh", python=platform.python_version())
+    lines = table(results)
+    print("\n".join(lines))
+    out = REPO / "bench" / "results" / "zenoh.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results, indent=1))
+    print(f"\n{os.cpu_count()} CPUs; results in {out.relative_to(REPO)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,239 @@
+"""Inbound topics (Zenoh -> links_and_nodes): one Zenoh subscription per inbound rule, and per
+topic a queue (1 sample in latest mode, the rule's buffers when queued) and a thread that
+publishes here; once a topic is set up, a sample that finds its queue empty is published
+directly in Zenoh's thread.
+
+The first good sample of a topic decides its md: the name and layout hash in its attachment,
+the class from the local md or, if the md is not known here, from the text the remote bridge
+serves (mds.py).  A layout hash that differs from the local md, or a local topic of that name
+with another layout, refuses the topic (one log line naming both hashes); the other topics go
+on.  Samples without a valid attachment, or whose size is not the md's, are dropped and
+counted, never published.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import threading
+import time
+from collections import deque
+from typing import Any
+
+from .config import TopicRule
+from .mds import LayoutMismatch, MdUnavailable
+from .wire import Attachment, AttachmentError, decode_attachment, matches, name_in, \
+    pattern_key, topic_key
+
+MD_RETRY = 2.0  # seconds before an md that could not be had is asked for again
+COMPLAIN_EVERY = 5.0  # seconds between log lines about the same kind of bad sample
+MAX_TOPICS = 1024  # topics one inbound rule takes; samples of further names are counted only
+
+
+class InTopic:
+    def __init__(self, bridge: Any, name: str, rule: TopicRule) -> None:
+        self.bridge = bridge
+        self.name = name
+        self.rule = rule
+        self.remote = rule.remote or ""
+        self.stats = bridge.stats.topic(name, "in")
+        self.stats.state = "waiting for a sample"
+        self.queue: deque[tuple[bytes, bytes | None]] = deque(maxlen=rule.depth)
+        self._cond = threading.Condition()
+        self._handling = threading.Lock()  # held while a sample is handled (see offer)
+        self._stop = False
+        self.port: Any = None
+        self.md: tuple[str, int] | None = None
+        self.refused: tuple[str, int] | None = None
+        self._size = 0
+        self._retry_at = 0.0
+        self._next_ok = 0.0
+        self._interval = 1.0 / rule.rate if rule.rate else 0.0
+        self._complained: dict[str, float] = {}
+        self._thread = threading.Thread(target=self._run, daemon=True, name=f"in {name}")
+        self._thread.start()
+
+    def offer(self, payload: bytes, attachment: bytes | None) -> None:
+        """A sample from Zenoh, called in Zenoh's thread.  Once the topic is set up and
+        nothing waits in its queue it is published right here (no thread hand-over);
+        otherwise it is queued for the topic's thread, which alone may block (md fetch)."""
+        self.stats.received += 1
+        if self.md is not None and self._handling.acquire(blocking=False):
+            try:
+                with self._cond:
+                    inline = not self.queue
+                if inline:
+                    self._handle_safely(payload, attachment)
+                    return
+            finally:
+                self._handling.release()
+        with self._cond:
+            if len(self.queue) == self.queue.maxlen:
+                self.stats.superseded += 1
+            self.queue.append((payload, attachment))
+            self._cond.notify()
+
+    def _run(self) -> None:
+        while True:
+            with self._cond:
+                while not self.queue and not self._stop:
+                    self._cond.wait()
+                if self._stop:
+                    return
+            # Samples are handled under _handling, taken before the queue is looked at: a
+            # sample handled inline by offer() never overtakes a queued one.
+            with self._handling:
+                with self._cond:
+                    item = self.queue.popleft() if self.queue else None
+                if item is not None:
+                    self._handle_safely(*item)
+
+    def _handle_safely(self, payload: bytes, attachment: bytes | None) -> None:
+        try:
+            self._handle(payload, attachment)
+        except Exception as exc:  # noqa: BLE001 - counted and said; the topic goes on
+            self.stats.errors += 1
+            self._complain("error", f"publishing failed: {type(exc).__name__}: {exc}")
+
+    def _complain(self, kind: str, text: str) -> None:
+        now = time.monotonic()
+        if now - self._complained.get(kind, -COMPLAIN_EVERY) >= COMPLAIN_EVERY:
+            self._complained[kind] = now
+            self.bridge.say(f"topic '{self.name}' from {self.remote}: {text}")
+
+    def _handle(self, payload: bytes, raw_attachment: bytes | None) -> None:
+        stats = self.stats
+        try:
+            att = decode_attachment(raw_attachment)
+        except AttachmentError as exc:
+            stats.bad_attachment += 1
+            self._complain("attachment", f"sample dropped: {exc} (counted as bad_attachment)")
+            return
+        md = (att.md_name, att.layout_hash)
+        if md == self.refused:
+            stats.refused += 1
+            return
+        if self.md is None and not self._setup(att):
+            return
+        if md != self.md:
+            stats.refused += 1
+            assert self.md is not None
+            self._complain("md", f"sample of md '{att.md_name}' 0x{att.layout_hash:016x} "
+                           f"dropped: this topic carries '{self.md[0]}' 0x{self.md[1]:016x}")
+            return
+        if len(payload) != self._size:
+            stats.bad_size += 1
+            self._complain("size", f"sample of {len(payload)} bytes dropped: md "
+                           f"'{att.md_name}' has {self._size} (counted as bad_size)")
+            return
+        if stats.last_seq and att.seq > stats.last_seq + 1:
+            stats.gaps += att.seq - stats.last_seq - 1
+        stats.last_seq = att.seq
+        if self._interval:
+            now = time.monotonic()
+            if now < self._next_ok:
+                stats.rate_limited += 1
+                return
+            self._next_ok = now + self._interval
+        ctypes.memmove(self._address, payload, self._size)
+        self.port.write()
+        stats.published += 1
+        stats.bytes += self._size
+
+    def _setup(self, att: Attachment) -> bool:
+        """Find the md of the topic's first good sample and publish the topic here; False if
+        that cannot be done (now, or at all: refused)."""
+        stats = self.stats
+        if time.monotonic() < self._retry_at:
+            stats.md_unavailable += 1
+            return False
+        try:
+            cls = self.bridge.mds.resolve(att.md_name, att.layout_hash, self.remote)
+        except LayoutMismatch as exc:
+            return self._refuse(att, str(exc))
+        except MdUnavailable as exc:
+            stats.md_unavailable += 1
+            self._retry_at = time.monotonic() + MD_RETRY
+            stats.state = "md unavailable"
+            self.bridge.say(f"topic '{self.name}' from {self.remote}: {exc}; "
+                            f"asking again in {MD_RETRY:g} s")
+            return False
+        from .. import LnError
+
+        self.bridge.on_inbound_published(self.name)  # never sent back out, also not meanwhile
+        try:
+            port = self.bridge.client.publish(self.name, att.md_name)
+        except LnError as exc:
+            if type(exc).__name__ == "LnLayoutError":
+                return self._refuse(att, f"the topic here has another layout than remote "
+                                    f"0x{att.layout_hash:016x}: {exc}")
+            stats.errors += 1
+            self._retry_at = time.monotonic() + MD_RETRY
+            self.bridge.say(f"topic '{self.name}': cannot publish it here: {exc}")
+            return False
+        self.port = port
+        self._size = ctypes.sizeof(cls)
+        self._address = ctypes.addressof(port.packet)
+        self.md = (att.md_name, att.layout_hash)
+        self.refused = None
+        stats.md_name = att.md_name
+        stats.state = "publishing"
+        self.bridge.say(f"topic '{self.name}': publishing samples from {self.remote} here "
+                        f"(md '{att.md_name}', layout 0x{att.layout_hash:016x})")
+        return True
+
+    def _refuse(self, att: Attachment, why: str) -> bool:
+        self.refused = (att.md_name, att.layout_hash)
+        self.stats.refused += 1
+        self.stats.state = "refused: layout mismatch"
+        self.bridge.say(f"error: topic '{self.name}' from {self.remote} is not published "
+                        f"here: {why}")
+        return False
+
+    def close(self) -> None:
+        with self._cond:
+            self._stop = True
+            self._cond.notify()
+        self._thread.join()
+        if self.port is not None:
+            self.port.close()
+
+
+class InRule:
+    """The Zenoh subscription of one inbound rule; creates an InTopic per topic it sees."""
+
+    def __init__(self, bridge: Any, rule: TopicRule) -> None:
+        self.bridge = bridge
+        self.rule = rule
+        self.remote = rule.remote or ""
+        self.topics: dict[str, InTopic] = {}
+        self._lock = threading.Lock()
+        self.key = topic_key(self.remote, pattern_key(rule.pattern))
+        self._subscriber = bridge.session.declare_subscriber(self.key, self._on_sample)
+
+    def _on_sample(self, sample: Any) -> None:
+        name = name_in(str(sample.key_expr), self.remote, "topic")
+        if (name is None or not matches(name, self.rule.pattern)
+                or self.bridge.config.topic_rule(name, "in") is not self.rule):
+            return
+        topic = self.topics.get(name)
+        if topic is None:
+            with self._lock:
+                topic = self.topics.get(name)
+                if topic is None:
+                    if len(self.topics) >= MAX_TOPICS:  # a flood of keys costs no threads
+                        self.bridge.stats.unknown_keys += 1
+                        return
+                    topic = self.topics[name] = InTopic(self.bridge, name, self.rule)
+        attachment = sample.attachment
+        topic.offer(sample.payload.to_bytes(),
+                    attachment.to_bytes() if attachment is not None else None)
+
+    def close(self) -> None:
+        try:
+            self._subscriber.undeclare()
+        except Exception:  # noqa: BLE001 - the session may be closed already
+            pass
+        with self._lock:
+            topics = list(self.topics.values())
+        for topic in topics:
+            topic.close()
