@@ -46,6 +46,13 @@ static void read_fields(uint16_t type, ln_rbuf r)
         ln_rbuf_u32(&r);
         ln_rbuf_u32(&r);
         break;
+    case LN_MSG_CONTROL_RESULT: { /* control.c: id, the answer's JSON text */
+        size_t n;
+        ln_rbuf_u32(&r);
+        const char* json = ln_rbuf_text(&r, &n);
+        assert(r.failed || (json != NULL && memchr(json, '\0', n) == NULL));
+        break;
+    }
     default: /* OK */
         ln_rbuf_u32(&r);
         break;
@@ -71,7 +78,7 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         }
         assert(type2 == type && body.left == body_len);
         /* every type, as the manager side would check it too */
-        for (uint16_t t = 0; t <= LN_MSG_SERVICE_CALLED + 1; t++)
+        for (uint16_t t = 0; t <= LN_MSG_CONTROL_RESULT + 1; t++)
             ln_proto_check_fields(t, &body);
         if (ln_proto_to_client(type)) {
             ln_rbuf peek = body;
@@ -144,4 +151,11 @@ void ln_fuzz_seeds(ln_fuzz_emit* emit)
     ln_wbuf_str(&b, "double 8 7|uint32_t 4 1,char* 1 1");
     ln_proto_frame_end(&b, s);
     emit_frames(emit, "service_info", &b);
+
+    ln_wbuf_init(&b);
+    s = ln_proto_frame_begin(&b, LN_MSG_CONTROL_RESULT);
+    ln_wbuf_u32(&b, 6);
+    ln_wbuf_text(&b, "{\"ok\": false, \"error\": \"no logger 'x'\", \"code\": \"ENOTFOUND\"}");
+    ln_proto_frame_end(&b, s);
+    emit_frames(emit, "control_result", &b);
 }
