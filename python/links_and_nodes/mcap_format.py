@@ -11,7 +11,7 @@
 One channel per topic (message encoding "ln-md": the raw bytes of the md's packed
 little-endian layout), one schema per md (encoding "ln-md-text": the definition text and
 every md it imports, so a file decodes without the md files).  Written against the MCAP
-spec with the standard library only; zstandard and lz4 are needed only for chunks
+spec with Python's own modules only; zstandard and lz4 are needed only for chunks
 compressed with them.  Chunks go to the file whole, in one write each, so a recorder killed
 at any moment leaves a file that readers (this one, and MCAP stream readers) read up to its
 last complete chunk; only the summary and footer are missing.
@@ -68,7 +68,7 @@ def _str_map(entries: dict[str, str]) -> bytes:
 
 def _compressor(compression: str) -> tuple[str, Callable[[bytes], bytes] | None]:
     """(MCAP compression name, function) of `compression`; ValueError for an unknown one,
-    ImportError naming the package for one whose library is missing."""
+    ImportError naming the package for one whose module is missing."""
     if compression == "none":
         return "", None
     if compression == "zstd":
@@ -172,7 +172,7 @@ class McapWriter:
 
     def __init__(self, path: str | os.PathLike[str], compression: str = "zstd",
                  chunk_size: int = DEFAULT_CHUNK_SIZE, *,
-                 library: str = "links_and_nodes", overwrite: bool = True) -> None:
+                 writer_name: str = "links_and_nodes", overwrite: bool = True) -> None:
         self._compression, self._compress = _compressor(compression)
         if chunk_size < 1:
             raise ValueError(f"chunk_size must be positive, not {chunk_size}")
@@ -193,7 +193,7 @@ class McapWriter:
         self.chunk_count = 0
         self._start = self._end = 0
         try:
-            self._write(MAGIC + _record(HEADER, _s("") + _s(library)))
+            self._write(MAGIC + _record(HEADER, _s("") + _s(writer_name)))
         except BaseException:
             self._abandon()
             raise

@@ -17,13 +17,13 @@ class SplitWriter:
     """McapWriters one after the other; split_size 0: one file."""
 
     def __init__(self, directory: Path, prefix: str, compression: str, chunk_size: int,
-                 split_size: int, library: str = "links_and_nodes ln_record") -> None:
+                 split_size: int, writer_name: str = "links_and_nodes ln_record") -> None:
         self.directory = directory
         self.prefix = prefix
         self.compression = compression
         self.chunk_size = chunk_size
         self.split_size = split_size
-        self.library = library
+        self.writer_name = writer_name
         self.files: list[Path] = []
         self._topics: list[tuple[str, str, bytes, int, int]] = []
         self.bytes_closed = 0  # of the files finished before the current one
@@ -40,7 +40,7 @@ class SplitWriter:
 
     def _open(self) -> McapWriter:
         path = self.directory / f"{self.prefix}_{len(self.files):04d}.mcap"
-        writer = McapWriter(path, self.compression, self.chunk_size, library=self.library,
+        writer = McapWriter(path, self.compression, self.chunk_size, writer_name=self.writer_name,
                             overwrite=False)
         self.files.append(path)
         for topic in self._topics:
