@@ -120,12 +120,14 @@ def test_lnc_overrides_and_console_commands(console: Console, tmp_path: Path) ->
     console.expect(lambda line: line == "starting: arm/ctl", "the start")
     with connect(console.address, timeout=LIMIT) as mgr:
         mgr.wait_ready("arm/ctl", LIMIT)
-        # in effect from the first update, reported there once
+        # in effect from the first update, reported there once; the lines of one update
+        # may reach the manager's output buffer one by one, so wait for the last of them
         deadline = time.monotonic() + LIMIT
-        while not any(line.startswith("change 1 kp") for line in mgr.output("arm/ctl")):
+        while not any(line.startswith("change 1 label") for line in mgr.output("arm/ctl")):
             assert time.monotonic() < deadline, mgr.output("arm/ctl")
             time.sleep(0.05)
         output = mgr.output("arm/ctl")
+        assert any(line.startswith("change 1 kp [1, 2, 3") for line in output), output
         assert "change 1 gain 1.5" in output
         assert 'change 1 label "from lnc"' in output
         assert not any(" limits " in line for line in output)
