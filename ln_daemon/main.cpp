@@ -27,6 +27,7 @@
 #include "forward.hpp"
 #include "log.hpp"
 #include "loggers.hpp"
+#include "pulls.hpp"
 #include "network.hpp"
 #include "os_linux.hpp"
 #include "server.hpp"
@@ -411,6 +412,8 @@ int main(int argc, char **argv)
     lnd::LinuxOs os;
     lnd::NetCommands net(host_id, static_cast<uint16_t>(advertised), *forwarder);
     lnd::Loggers loggers(logger_memory);
-    lnd::Server server(os, key, std::move(listener), std::move(signals), log_file, net, loggers);
+    lnd::Pulls pulls;
+    lnd::Server server(os, key, std::move(listener), std::move(signals), log_file, net, loggers,
+                       pulls);
     return server.run();
 }

@@ -54,6 +54,9 @@ enum class Msg : uint8_t {
     logger_enable = 0x4e,
     logger_fetch = 0x4f,
     logger_status = 0x50,
+    pull_topic = 0x51, // pull topics over NDN (docs/daemon.md, "Pull topics")
+    pull_remove = 0x52,
+    pull_status = 0x53,
     ok = 0x20,
     error = 0x21,
     spawned = 0x22,
@@ -64,6 +67,7 @@ enum class Msg : uint8_t {
     stream_list = 0x27, // reply to STREAM_STATS
     logger_data = 0x28, // reply to LOGGER_FETCH
     logger_list = 0x29, // reply to LOGGER_STATUS
+    pull_list = 0x2a,   // reply to PULL_STATUS
     ev_output = 0x30,
     ev_exited = 0x31,
     ev_state = 0x32,
@@ -86,6 +90,7 @@ enum class Err : uint16_t {
     stream_failed = 14,  // the forwarder refused a stream (its text)
     unknown_stream = 15, // STREAM_REMOVE of a token this instance has no stream for
     logger_failed = 16,  // a logger request refused (no such logger, memory limit, ...)
+    pull_failed = 16,    // a pull topic request refused (the same number as logger_failed)
 };
 
 enum class Stream : uint8_t { pty = 0, out = 1, err = 2 };

@@ -22,6 +22,7 @@
 
 #include "log.hpp"
 #include "logger_messages.hpp"
+#include "pull_messages.hpp"
 #include "messages.hpp"
 #include "net_messages.hpp"
 
@@ -95,7 +96,8 @@ const char *msg_name(uint8_t type) noexcept
     default: {
         const char *net = net_msg_name(type);
         const char *logger = logger_msg_name(type);
-        return net ? net : logger ? logger : "unknown";
+        const char *pull = pull_msg_name(type);
+        return net ? net : logger ? logger : pull ? pull : "unknown";
     }
     }
 }
@@ -103,9 +105,10 @@ const char *msg_name(uint8_t type) noexcept
 } // namespace
 
 Server::Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
-               NetCommands &net, Loggers &loggers)
+               NetCommands &net, Loggers &loggers, Pulls &pulls)
     : os_(os), key_(key), listener_(std::move(listener)), signals_(std::move(signals)),
-      log_path_(std::move(log_path)), supervisor_(os, *this), net_(net), loggers_(loggers)
+      log_path_(std::move(log_path)), supervisor_(os, *this), net_(net), loggers_(loggers),
+      pulls_(pulls)
 {
 }
 
@@ -477,6 +480,8 @@ void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Re
         out = net_.handle(c.instance, type, r);
     } else if (Loggers::handles(type)) {
         out = loggers_.handle(c.instance, type, r);
+    } else if (Pulls::handles(type)) {
+        out = pulls_.handle(c.instance, type, r);
     } else {
         refuse(c, req, Err::bad_request, "unknown message type " + std::to_string(type));
         return;
@@ -675,6 +680,7 @@ int Server::run()
     for (auto &entry : conns_) // best effort: the last events
         flush(*entry.second);
     loggers_.shutdown(); // they logged what the processes published while they stopped
+    pulls_.shutdown();
     logf("every process has exited; daemon ends");
     return 0;
 }

@@ -1,7 +1,7 @@
 // The daemon's poll loop and its TCP side: accepting connections, the authentication
 // handshake, framing with per-frame tags, dispatching commands to the Supervisor (processes),
-// to NetCommands (rings, forwarding) and to Loggers (topic logging), and turning the
-// Supervisor's news into replies and events.  A connection that misbehaves is closed with
+// to NetCommands (rings, forwarding), to Loggers (topic logging) and to Pulls (pull topics),
+// and turning the Supervisor's news into replies and events.  A connection that misbehaves is closed with
 // one log line; nothing it sends can affect another connection or a process.
 #pragma once
 
@@ -18,6 +18,7 @@
 #include "network.hpp"
 #include "process.hpp"
 #include "protocol.hpp"
+#include "pulls.hpp"
 #include "supervisor.hpp"
 
 namespace lnd {
@@ -34,12 +35,13 @@ class Server final : public Sink {
 public:
     // `listener` is a bound, listening, non-blocking socket; `signals` a signalfd for
     // SIGCHLD, SIGTERM, SIGINT and SIGHUP.  `log_path` is reopened on SIGHUP.  `net` takes
-    // the ring and stream requests, `loggers` the LOGGER_* ones; both must outlive the
-    // server.
+    // the ring and stream requests, `loggers` the LOGGER_* ones, `pulls` the PULL_* ones;
+    // all must outlive the server.
     Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
-           NetCommands &net, Loggers &loggers);
+           NetCommands &net, Loggers &loggers, Pulls &pulls);
     ~Server() override;
-    // Runs until SIGTERM/SIGINT has stopped every process, then stops the logger threads;
+    // Runs until SIGTERM/SIGINT has stopped every process, then stops the logger and pull
+    // threads;
     // returns the exit status.
     int run();
 
@@ -75,6 +77,7 @@ private:
     Supervisor supervisor_;
     NetCommands &net_;
     Loggers &loggers_;
+    Pulls &pulls_;
     std::map<uint64_t, std::unique_ptr<Connection>> conns_;
     uint64_t next_conn_ = 1;
     uint64_t next_token_ = 1;

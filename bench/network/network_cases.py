@@ -73,7 +73,10 @@ class Lab:
     the daemon has one), and the programs of bench/network."""
 
     def __init__(self, lab: NetLab, bin_dir: Path, force_multihost: bool = False,
-                 daemon_args: tuple[str, ...] = ()) -> None:
+                 daemon_args: tuple[str, ...] = (),
+                 host_args: dict[str, tuple[str, ...]] | None = None) -> None:
+        """`host_args`: further daemon options of one host (e.g. bench/pull's
+        --advertise-data-port on b, whose data port sits behind a relay)."""
         from links_and_nodes.manager.daemon_client import daemon_executable
 
         self.lab = lab
@@ -85,7 +88,8 @@ class Lab:
         self.multihost_missing = None if force_multihost else missing
         data_port = None if missing else DATA_PORT
         self.daemons: dict[str, DaemonProc] = {
-            h.name: h.start_daemon(lab.key_file, data_port=data_port, extra_args=daemon_args)
+            h.name: h.start_daemon(lab.key_file, data_port=data_port,
+                                   extra_args=daemon_args + (host_args or {}).get(h.name, ()))
             for h in (self.a, self.b)}
 
     def path(self, stem: str) -> Path:
@@ -133,17 +137,18 @@ class Lab:
     # ---- ln pairs through a manager -----------------------------------------------------
 
     def managed(self, manager: Host, procs: list[Proc], results: list[str],
-                what: str) -> dict[str, dict[str, Any]]:
+                what: str, extra: str = "") -> dict[str, dict[str, Any]]:
         """Run `procs` with an ln_manager on `manager` (`--start-all`; a process with
         `ready` is one the others depend on) until every process in `results` has printed its
-        JSON line; then stop the manager, which stops the rest.  The JSON lines by name."""
+        JSON line; then stop the manager, which stops the rest.  The JSON lines by name.
+        `extra`: further .lnc sections (e.g. `topics`)."""
         local = manager is not self.mgr
         address = f"{'127.0.0.1' if local else manager.address}:{MANAGER_PORT}"
         instance = f"lnbench-net-{uuid.uuid4().hex[:8]}"
         config = self.path("case").with_suffix(".lnc")
         for proc in procs:
             proc.log = self.path(f"{proc.name}.out")
-        config.write_text(self._config(instance, address, procs))
+        config.write_text(self._config(instance, address, procs) + extra)
         argv = [sys.executable, "-m", "links_and_nodes.manager", "-c", str(config),
                 "--start-all", "--no-console", "--exit-on-failure", "--log-level", "warning",
                 "--daemon-key-file", str(self.lab.key_file)]

@@ -44,6 +44,8 @@ int ln_ring_tap_open(ln_ring_tap** out, const char* shm_name, uint64_t layout_ha
     if (!shm_name || message_size == 0)
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_open: a segment name and a message "
                             "size are required");
+    const unsigned from_newest = mode & LN_TAP_INCLUDE_NEWEST;
+    mode &= ~LN_TAP_INCLUDE_NEWEST;
     if (mode != LN_TAP_EVERY && mode != LN_TAP_NEWEST)
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_open: mode %u is neither "
                             "LN_TAP_EVERY nor LN_TAP_NEWEST", mode);
@@ -64,7 +66,8 @@ int ln_ring_tap_open(ln_ring_tap** out, const char* shm_name, uint64_t layout_ha
     t->mode = mode;
     t->cur.reader = -1;
     fit_cursor(t);
-    t->cur.next = atomic_load_explicit(&t->ring.hdr->write_seq, memory_order_acquire) + 1;
+    uint64_t newest = atomic_load_explicit(&t->ring.hdr->write_seq, memory_order_acquire);
+    t->cur.next = from_newest && newest > 0 ? newest : newest + 1;
     t->magic = LN_TAP_MAGIC;
     *out = t;
     return LN_OK;

@@ -30,6 +30,8 @@ _SERVICE_NAMES = ("provided_service", "service", "service_provider", "service_re
 _EVENT_NAMES = ("EventResult", "event", "event_handler")
 _PARAMETER_NAMES = ("parameter", "parameter_block")
 __all__ += ["parameter", "parameter_block"]
+_PULL_NAMES = ("PullSample", "pull_subscribe")
+__all__ += list(_PULL_NAMES)
 
 
 def __getattr__(name: str) -> Any:
@@ -51,6 +53,10 @@ def __getattr__(name: str) -> Any:
         from . import _events
 
         return getattr(_events, name)
+    if name in _PULL_NAMES:
+        from . import pull
+
+        return getattr(pull, name)
     if name in _PARAMETER_NAMES:
         from . import _parameters
 

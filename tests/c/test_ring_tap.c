@@ -294,8 +294,21 @@ static void test_modes_and_start_point(void)
     LN_CHECK_EQ(rc, LN_ETIMEOUT);
     LN_CHECK_EQ(tap_read(newest, 0, NULL, &rc), 0);
     LN_CHECK_EQ(rc, LN_ETIMEOUT);
+    /* With LN_TAP_INCLUDE_NEWEST they start at it: 3, then what comes after. */
+    ln_ring_tap* every3 = tap(seg_name, LN_TAP_EVERY | LN_TAP_INCLUDE_NEWEST);
+    ln_ring_tap* newest3 = tap(seg_name, LN_TAP_NEWEST | LN_TAP_INCLUDE_NEWEST);
+    LN_CHECK_EQ(tap_read(every3, 0, NULL, NULL), 3);
+    LN_CHECK_EQ(tap_read(newest3, 0, NULL, NULL), 3);
+    LN_CHECK_EQ(tap_read(every3, 0, NULL, &rc), 0);
+    LN_CHECK_EQ(rc, LN_ETIMEOUT);
     uint64_t ov = 99;
     LN_CHECK_EQ(inject(in, 4), LN_OK);
+    LN_CHECK_EQ(tap_read(every3, 0, &ov, NULL), 4);
+    LN_CHECK_EQ(ov, 0);
+    LN_CHECK_EQ(tap_read(newest3, 0, &ov, NULL), 4);
+    LN_CHECK_EQ(ov, 0);
+    ln_ring_tap_close(every3);
+    ln_ring_tap_close(newest3);
     LN_CHECK_EQ(tap_read(every, 0, &ov, NULL), 4);
     LN_CHECK_EQ(ov, 0);
     LN_CHECK_EQ(tap_read(newest, 0, &ov, NULL), 4);
@@ -454,7 +467,9 @@ static void test_open_checks(void)
     LN_CHECK(t == NULL);
     LN_CHECK(strstr(ln_last_error(), "test/tap") != NULL);
     LN_CHECK_EQ(ln_ring_tap_open(&t, seg_name, HASH, MSG + 8, LN_TAP_EVERY), LN_ELAYOUT);
-    LN_CHECK_EQ(ln_ring_tap_open(&t, seg_name, HASH, MSG, 2), LN_EINVAL);
+    LN_CHECK_EQ(ln_ring_tap_open(&t, seg_name, HASH, MSG, 4), LN_EINVAL);
+    LN_CHECK_EQ(ln_ring_tap_open(&t, seg_name, HASH, MSG, 4 | LN_TAP_INCLUDE_NEWEST),
+                LN_EINVAL);
     LN_CHECK_EQ(ln_ring_tap_open(&t, NULL, HASH, MSG, LN_TAP_EVERY), LN_EINVAL);
     LN_CHECK_EQ(ln_ring_tap_open(NULL, seg_name, HASH, MSG, LN_TAP_EVERY), LN_EINVAL);
     LN_CHECK_EQ(ln_ring_tap_open(&t, "/ln.taptest.no.such.ring", HASH, MSG, LN_TAP_EVERY),

@@ -1,8 +1,8 @@
 // fuzz_daemon_msgs.cpp — fuzz target: ln_daemon's command codec (protocol.hpp Reader,
-// messages.cpp, net_messages.cpp, logger_messages.cpp, spec.cpp) on a stream of manager
-// frames, each decoded by its type's decoder; a decoded SPAWN goes through check_spawn, and a
-// decoded LOGGER_* request is encoded back and must decode to the same.  (Frame HMAC tags are
-// left out.)
+// messages.cpp, net_messages.cpp, logger_messages.cpp, pull_messages.cpp, spec.cpp) on a
+// stream of manager frames, each decoded by its type's decoder; a decoded SPAWN goes through
+// check_spawn, and a decoded LOGGER_* or PULL_TOPIC request is encoded back and must decode to
+// the same.  (Frame HMAC tags are left out.)
 #include <cassert>
 #include <cstdint>
 #include <cstring>
@@ -12,6 +12,7 @@
 #include "messages.hpp"
 #include "net_messages.hpp"
 #include "protocol.hpp"
+#include "pull_messages.hpp"
 #include "spec.hpp"
 
 extern "C" {
@@ -173,6 +174,20 @@ void decode(uint8_t type, proto::Reader &r)
     case Msg::logger_status: {
         std::string logger;
         decode_logger_status(r, logger);
+        break;
+    }
+    case Msg::pull_topic: {
+        PullTopicRequest req;
+        if (decode_pull_topic(r, req)) {
+            assert(req.name.size() <= kMaxPullName && req.key.size() <= kMaxPullKey);
+            round_trip(req, encode_pull_topic, decode_pull_topic);
+        }
+        break;
+    }
+    case Msg::pull_remove:
+    case Msg::pull_status: {
+        std::string topic;
+        decode_pull_topic_name(r, topic);
         break;
     }
     default:
@@ -379,4 +394,35 @@ extern "C" void ln_fuzz_seeds(ln_fuzz_emit *emit)
         frame(out, Msg::logger_remove, w);
     }
     emit("loggers", out.data(), out.size());
+
+    out.clear();
+    {
+        PullTopicRequest req;
+        req.topic = "arm.state";
+        req.ring = "/ln.testinstance.1.1";
+        req.md_name = "robot/joint_state";
+        req.layout_hash = 0x1122334455667788u;
+        req.message_size = 96;
+        req.address = "0.0.0.0";
+        req.port = 6363;
+        req.name = "/ln/testinstance/arm.state";
+        req.history = 64;
+        req.freshness_ms = 1000;
+        req.signature = 4;
+        req.key = "secret";
+        proto::Writer w;
+        encode_pull_topic(w, req);
+        frame(out, Msg::pull_topic, w);
+    }
+    {
+        proto::Writer w;
+        w.str("");
+        frame(out, Msg::pull_status, w);
+    }
+    {
+        proto::Writer w;
+        w.str("arm.state");
+        frame(out, Msg::pull_remove, w);
+    }
+    emit("pulls", out.data(), out.size());
 }

@@ -564,6 +564,8 @@ LN_EXPORT int ln_ring_admin_open(ln_ring_admin** out, const char* shm_name);
 typedef struct ln_ring_tap ln_ring_tap;
 #define LN_TAP_EVERY 0u  /* read: every sample in order while the ring still holds it */
 #define LN_TAP_NEWEST 1u /* read: always the newest sample, skipping older ones */
+/* Or'ed into the mode: start at the newest sample present at open (if any), not after it. */
+#define LN_TAP_INCLUDE_NEWEST 2u
 /* Map ring `shm_name` (following it to its newest successor if it is retired) after checking
  * it has layout_hash and message_size (LN_ELAYOUT if not; LN_ENOTFOUND if there is no such
  * segment; LN_EINVAL for another mode).  *out belongs to the caller: ln_ring_tap_close. */
@@ -575,8 +577,8 @@ LN_EXPORT void ln_ring_tap_close(ln_ring_tap* tap);
  * overwritten before the tap got to them, skipped for the newest, or never written into this
  * ring), LN_ETIMEOUT if none came within `timeout` seconds (0: poll, also LN_ETIMEOUT;
  * < 0: forever; NaN: LN_EINVAL).  A fresh tap starts after the newest sample present at
- * open.  A blocked read sleeps on the ring's futex and is woken by every write, inject and
- * retirement.  On a retired ring it first reads what is left there (NEWEST: its newest
+ * open (at it with LN_TAP_INCLUDE_NEWEST).  A blocked read sleeps on the ring's futex and
+ * is woken by every write, inject and retirement.  On a retired ring it first reads what is left there (NEWEST: its newest
  * sample), then moves on to the successor, so EVERY loses nothing to ring growth. */
 LN_EXPORT int ln_ring_tap_read(ln_ring_tap* tap, void* buf, ln_sample_info* info,
                                double timeout);

@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 from . import remote_cli
-
 from .registry import Limits, RequestError
 from .runtime import (
     InstanceLock,
@@ -45,14 +44,12 @@ def build_parser() -> argparse.ArgumentParser:
                     "clients, topics and their shared-memory segments, and with -c the "
                     "processes of a configuration file.  `ln_manager COMMAND --help` for "
                     "the commands that talk to a running manager: "
-                    "status, start, stop, restart, output, wait-ready, quit, detach; "
-                    "`ln_manager topic echo|hz|bw|info`, `md show`, `service call` "
-                    "look into its topics, mds and services (docs/introspection.md); "
-                    "`ln_manager param list|get|set|reset|changes|save|load` its parameter "
-                    "blocks "
-                    "(docs/parameters.md); "
+                    + ", ".join(remote_cli.names()) + " "
+                    "(`ln_manager topic echo|hz|bw|info`, `md show`, `service call`: "
+                    "docs/introspection.md; `ln_manager param ...`: docs/parameters.md); "
                     "`ln_manager check FILE.lnc` validates a configuration without "
-                    "starting anything.")
+                    "starting anything; `ln_manager webui-passwd USER` prints a line for "
+                    "the web UI's auth file (docs/webui.md).")
     parser.add_argument("-c", "--config", metavar="FILE",
                         help="configuration (.lnc) whose processes this manager runs; its "
                              "instance section gives --instance and --port")
@@ -95,6 +92,9 @@ def build_parser() -> argparse.ArgumentParser:
                              f"(default {ADOPT_WINDOW:g}; 0 removes them at once)")
     parser.add_argument("--log-level", choices=LOG_LEVELS, default="info",
                         help="least severe log messages shown on stderr (default info)")
+    from .webui import add_arguments as add_webui_arguments
+
+    add_webui_arguments(parser)  # --webui, --webui-port, --webui-host (docs/webui.md)
     return parser
 
 
@@ -201,7 +201,9 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
         await runner.attach()
     print(f"ln_manager: instance {args.instance} listening on {_address(args.host, port)}",
           flush=True)
+    webui = None
     if runner is not None:
+        webui = await _start_webui(args, runner.control, server, port)
         status = await runner.begin()
     else:
         from .control import Control
@@ -210,6 +212,9 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
         control.loggers, bare_pool = _bare_loggers(args, core, directory, port)
         control.loggers.start()
         server.control = control.handle_json
+        control.manager_address = _address(
+            "127.0.0.1" if args.host in ("0.0.0.0", "::", "") else args.host, port)
+        webui = await _start_webui(args, control, server, port)
     if status == 0:
         await stop.wait()
     if runner is not None:
@@ -222,12 +227,58 @@ async def _serve(args: argparse.Namespace, directory: Path, config: Any = None) 
              "" if len(core.registry.clients) == 1 else "s")
     if adoption is not None:
         adoption.cancel()
+    if webui is not None:
+        await webui.close()
     await server.close()
     removed = await core.shutdown()
     if runner is not None:
         await runner.finish()
     log.info("removed %d segment%s, exiting", removed, "" if removed == 1 else "s")
     return status
+
+
+async def _start_webui(args: argparse.Namespace, control: Any, server: Any, port: int) -> Any:
+    """The web UI of args.webui_plan (docs/webui.md) on the manager's port or its own;
+    prints its URL."""
+    from .webui import WebUI
+
+    plan = getattr(args, "webui_plan", None)
+    if plan is None:
+        return None
+    webui = WebUI(control, args.webui_users)
+    if plan.port is None:
+        server.webui = webui
+        host, ui_port = args.host, port
+    else:
+        from .server import listen_socket
+
+        try:
+            sock = listen_socket(plan.host, plan.port)
+        except OSError as exc:
+            print(f"ln_manager: error: web UI cannot listen on "
+                  f"{_address(plan.host, plan.port)}: {exc.strerror or exc}", file=sys.stderr)
+            await webui.close()
+            return None
+        await webui.listen(sock)
+        host, ui_port = plan.host, sock.getsockname()[1]
+    shown = "127.0.0.1" if host in ("0.0.0.0", "::", "") else host
+    print(f"ln_manager: web UI on http://{_address(shown, ui_port)}/", flush=True)
+    return webui
+
+
+def _webui_plan(args: argparse.Namespace, config: Any) -> None:
+    """args.webui_plan and args.webui_users from the options; exit 2 if they are wrong."""
+    from .webui import WebUIError, plan
+    from .webui.auth import AuthFileError, load_auth_file
+
+    try:
+        args.webui_plan = plan(args, config)
+        args.webui_users = None
+        if args.webui_plan is not None and args.webui_plan.auth_file is not None:
+            args.webui_users = load_auth_file(args.webui_plan.auth_file)
+    except (WebUIError, AuthFileError) as exc:
+        print(f"ln_manager: error: {exc}", file=sys.stderr)
+        sys.exit(2)
 
 
 def _bare_loggers(args: argparse.Namespace, core: Any, directory: Path, port: int) -> Any:
@@ -294,20 +345,17 @@ def main(argv: list[str] | None = None) -> int:
         from . import check
 
         return check.main(argv[1:])
-    if argv and argv[0] in remote_cli.COMMANDS:
+    if argv and argv[0] in remote_cli.names():  # the command table (commands/)
         return remote_cli.main(argv)
-    if argv and argv[0] in ("topic", "md", "service"):  # live introspection
-        from . import introspect_cli
+    if argv and argv[0] == "webui-passwd":  # a line for the web UI's auth file
+        from .webui.auth import passwd_main
 
-        return introspect_cli.main(argv)
-    if argv and argv[0] == "param":  # parameter blocks (docs/parameters.md)
-        from . import param_cli
-
-        return param_cli.main(argv)
+        return passwd_main(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     config = _load_config(parser, args) if args.config else None
     _check_args(parser, args)
+    _webui_plan(args, config)
     logging.basicConfig(stream=sys.stderr, level=args.log_level.upper(),
                         format="%(asctime)s ln_manager %(levelname)s: %(message)s")
     try:

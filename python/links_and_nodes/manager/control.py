@@ -1,27 +1,26 @@
-"""Control commands of a running manager: what the console, `ln_manager status|start|...`
-and the scripting API (links_and_nodes.manager.connect) ask for, as JSON objects in CONTROL
-frames.  One function per command; each returns a JSON-able dict (docs/process_management.md,
-"Control requests")."""
+"""Control commands of a running manager: what the console, `ln_manager status|start|...`,
+the scripting API (links_and_nodes.manager.connect) and the web UI ask for, as JSON objects
+in CONTROL frames (or WebSocket messages).  The command table (commands/) says which
+commands there are and checks their arguments; the process commands' handlers are the
+methods here, each returning a JSON-able dict (docs/process_management.md, "Control
+requests")."""
 
 from __future__ import annotations
 
 import asyncio
 import json
 import logging
-import math
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
 from .. import logger_files
-from . import logger_control
+from .commands import ArgError, check_args, table
 from .core import Core
 from .loggers import LoggerError, Loggers
 from .scheduler import Scheduler, StartError
 
 log = logging.getLogger("ln_manager")
-
-MAX_OUTPUT_LINES = 10000
 
 
 class ControlError(Exception):
@@ -41,23 +40,11 @@ class Control:
         self.scheduler = scheduler
         self._reload = reload
         self._shutdown = shutdown
-        self.commands: dict[str, Callable[[dict[str, Any]], Awaitable[dict[str, Any]]]] = {
-            "status": self.status, "start": self.start, "stop": self.stop,
-            "restart": self.restart, "wait_ready": self.wait_ready, "output": self.output,
-            "history": self.history, "topics": self.topics, "services": self.services,
-            "reload": self.reload, "quit": self.quit, "detach": self.detach,
-            "hosts": self.hosts, "network": self.network,
-        }
+        self.pull: Any = None  # pull.PullTopics of a manager with a configuration
         self.network_view: Any = None  # network.Network of a multi-host configuration
         self.manager_address: str | None = None  # HOST:PORT, for the console's clients
-        from .introspect_control import add_commands
-
-        add_commands(self)  # topic_info, service_info, md_show
-        from .event_control import add_commands as add_event_commands
-
-        add_event_commands(self)  # event_connect, events (docs/events.md)
         self.loggers: Loggers | None = None  # set once the manager can reach its daemons
-        self.commands.update(logger_control.commands(self._loggers, self._save_logger))
+        self.event_connections: Any = None  # event_control's handlers, made on first use
 
     async def handle_json(self, text: str) -> str:
         """One CONTROL request to its CONTROL_RESULT text."""
@@ -77,13 +64,31 @@ class Control:
                 result["code"] = exc.code
         return json.dumps(result)
 
-    async def handle(self, command: dict[str, Any]) -> dict[str, Any]:
+    @staticmethod
+    def describe() -> list[dict[str, Any]]:
+        """Every command of the table as JSON (commands/table.py describe())."""
+        return table.describe()
+
+    async def handle(self, command: dict[str, Any], session: Any = None) -> dict[str, Any]:
+        """Carry out {"op": NAME, ...arguments}: the arguments checked by the table, then
+        the command's handler; its result with "ok": true, or ControlError.  `session`: the
+        live connection (a WebSocket) for the commands that need one."""
         op = command["op"]
-        func = self.commands.get(op)
-        if func is None:
-            raise ControlError(f"unknown command {op!r}; known: {', '.join(self.commands)}")
+        cmd = table.command(op) if isinstance(op, str) else None
+        if cmd is None:
+            known = ", ".join(c.name for c in table.commands())
+            raise ControlError(f"unknown command {op!r}; known: {known}")
         try:
-            result = await func(command)
+            args = check_args(cmd, command)
+            if cmd.session:
+                if session is None:
+                    raise ControlError(f"{op} needs a live connection (the web UI's "
+                                       "WebSocket)")
+                result = await cmd.handler(self, args, session)
+            else:
+                result = await cmd.handler(self, args)
+        except ArgError as exc:
+            raise ControlError(str(exc), exc.code) from None
         except (KeyError, StartError) as exc:
             raise ControlError(exc.args[0] if exc.args else str(exc)) from None
         except LoggerError as exc:
@@ -102,25 +107,9 @@ class Control:
         return self.scheduler
 
     @staticmethod
-    def _target(command: dict[str, Any]) -> str:
-        target = command.get("target", "all")
-        if not isinstance(target, str) or not target:
-            raise ControlError('"target" must be a process, a group or "all"')
-        return target
-
-    @staticmethod
-    def _timeout(command: dict[str, Any]) -> float | None:
-        timeout = command.get("timeout")
-        if timeout is not None and (isinstance(timeout, bool)
-                                    or not isinstance(timeout, int | float)
-                                    or not math.isfinite(timeout) or timeout < 0):
-            raise ControlError('"timeout" must be a number of seconds >= 0 or null')
-        return timeout
-
-    @staticmethod
-    def _name(command: dict[str, Any], sched: Scheduler) -> str:
-        name = command.get("name")
-        if not isinstance(name, str) or name not in sched.procs:
+    def _name(args: dict[str, Any], sched: Scheduler) -> str:
+        name = args["name"]
+        if name not in sched.procs:
             raise ControlError(f"no process named {name!r}")
         return name
 
@@ -138,29 +127,26 @@ class Control:
             raise LoggerError(f"cannot save logger {name!r} to {path}: {exc}") from None
 
     # ---- commands ------------------------------------------------------------------------
-    async def status(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def status(self, args: dict[str, Any]) -> dict[str, Any]:
         if self.scheduler is None:
             return {"processes": [], "states": []}
         states = [{"name": name, "up": st.up} for name, st in self.scheduler.states.items()]
         return {"processes": self.scheduler.status(), "states": states}
 
-    async def start(self, command: dict[str, Any]) -> dict[str, Any]:
-        return {"processes": self._sched().start(self._target(command))}
+    async def start(self, args: dict[str, Any]) -> dict[str, Any]:
+        return {"processes": self._sched().start(args["target"])}
 
-    async def stop(self, command: dict[str, Any]) -> dict[str, Any]:
-        force = command.get("force", False)
-        if not isinstance(force, bool):
-            raise ControlError('"force" must be true or false')
-        return {"processes": await self._sched().stop(self._target(command), force=force)}
+    async def stop(self, args: dict[str, Any]) -> dict[str, Any]:
+        return {"processes": await self._sched().stop(args["target"], force=args["force"])}
 
-    async def restart(self, command: dict[str, Any]) -> dict[str, Any]:
-        return {"processes": await self._sched().restart(self._target(command))}
+    async def restart(self, args: dict[str, Any]) -> dict[str, Any]:
+        return {"processes": await self._sched().restart(args["target"])}
 
-    async def wait_ready(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def wait_ready(self, args: dict[str, Any]) -> dict[str, Any]:
         sched = self._sched()
-        target = self._target(command)
+        target = args["target"]
         try:
-            await sched.wait_ready(target, self._timeout(command))
+            await sched.wait_ready(target, args["timeout"])
         except TimeoutError:
             waiting = [p["name"] + " (" + p["state"] + ")" for p in sched.status()
                        if p["name"] in sched.targets(target)
@@ -168,22 +154,20 @@ class Control:
             raise ControlError(f"not ready in time: {', '.join(waiting)}") from None
         return {}
 
-    async def output(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def output(self, args: dict[str, Any]) -> dict[str, Any]:
         sched = self._sched()
-        name = self._name(command, sched)
-        n = command.get("n", 100)
-        if isinstance(n, bool) or not isinstance(n, int) or not 0 <= n <= MAX_OUTPUT_LINES:
-            raise ControlError(f'"n" must be 0..{MAX_OUTPUT_LINES}')
+        name = self._name(args, sched)
+        n = args["n"]
         return {"lines": [{"time": line.time, "stream": line.stream, "text": line.text}
                           for line in sched.output(name, n)]}
 
-    async def history(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def history(self, args: dict[str, Any]) -> dict[str, Any]:
         sched = self._sched()
-        name = self._name(command, sched)
+        name = self._name(args, sched)
         return {"transitions": [{"time": t.time, "state": t.state.value, "reason": t.reason}
                                 for t in sched.history(name)]}
 
-    async def topics(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def topics(self, args: dict[str, Any]) -> dict[str, Any]:
         topics = []
         for name, topic in sorted(self.core.registry.topics.items()):
             topics.append({"name": name, "md_name": topic.md_name,
@@ -191,33 +175,38 @@ class Control:
                            "published": await self.core.topic_published(name)})
         return {"topics": topics}
 
-    async def services(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def services(self, args: dict[str, Any]) -> dict[str, Any]:
         return {"services": self.core.services()}
 
-    async def hosts(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def hosts(self, args: dict[str, Any]) -> dict[str, Any]:
         """Every host of the configuration: daemon state, host id, data port."""
         view = self.network_view
         return {"hosts": view.host_listing() if view is not None else []}
 
-    async def network(self, command: dict[str, Any]) -> dict[str, Any]:
-        """Topic streams between hosts with their rates and drops, per host pair too."""
+    async def network(self, args: dict[str, Any]) -> dict[str, Any]:
+        """Topic streams between hosts with their rates and drops, per host pair too, and
+        the pull producers' counters per host ("pull")."""
         view = self.network_view
-        if view is None:
-            return {"streams": [], "pairs": [], "problems": []}
-        return view.stream_listing()
+        result = view.stream_listing() if view is not None else \
+            {"streams": [], "pairs": [], "problems": []}
+        return {**result, "pull": await self.pull.status() if self.pull is not None else []}
 
-    async def reload(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def pull_topics(self, args: dict[str, Any]) -> dict[str, Any]:
+        """The pull topics served by the daemons: NDN name, port, host (docs/pull.md)."""
+        return {"topics": self.pull.listing() if self.pull is not None else []}
+
+    async def reload(self, args: dict[str, Any]) -> dict[str, Any]:
         if self._reload is None:
             raise ControlError("this manager runs no configuration file to reload")
         return await self._reload()
 
-    async def quit(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def quit(self, args: dict[str, Any]) -> dict[str, Any]:
         if self._shutdown is None:
             raise ControlError("this manager cannot be shut down remotely")
         asyncio.get_running_loop().call_soon(self._shutdown, True)
         return {}
 
-    async def detach(self, command: dict[str, Any]) -> dict[str, Any]:
+    async def detach(self, args: dict[str, Any]) -> dict[str, Any]:
         """Exit the manager, leaving every process running under its daemon."""
         if self._shutdown is None:
             raise ControlError("this manager cannot be shut down remotely")

@@ -21,6 +21,8 @@ import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from . import daemon_pull
+
 PROTOCOL_VERSION = 1
 MAGIC = b"LNDAEMON"
 MAX_FRAME = 4 << 20  # bytes after the length field, both directions
@@ -57,6 +59,9 @@ class Msg(enum.IntEnum):
     LOGGER_ENABLE = 0x4E
     LOGGER_FETCH = 0x4F
     LOGGER_STATUS = 0x50
+    PULL_TOPIC = 0x51
+    PULL_REMOVE = 0x52
+    PULL_STATUS = 0x53
     OK = 0x20
     ERROR = 0x21
     SPAWNED = 0x22
@@ -67,6 +72,7 @@ class Msg(enum.IntEnum):
     STREAM_LIST = 0x27
     LOGGER_DATA = 0x28
     LOGGER_LIST = 0x29
+    PULL_LIST = 0x2A
     EV_OUTPUT = 0x30
     EV_EXITED = 0x31
     EV_STATE = 0x32
@@ -89,6 +95,7 @@ class ErrorCode(enum.IntEnum):
     STREAM_FAILED = 14
     UNKNOWN_STREAM = 15
     LOGGER_FAILED = 16
+    PULL_FAILED = 16  # the same number: a pull topic request refused
 
 
 STREAMS = {0: "pty", 1: "stdout", 2: "stderr"}
@@ -950,6 +957,31 @@ class DaemonClient:
             return _decode_logger_list(payload)
         except _Malformed as e:
             raise DaemonError(f"malformed LOGGER_STATUS reply: {e}") from None
+
+    # -- pull topics (docs/pull.md); refusals raise DaemonError PULL_FAILED with the text --
+    async def pull_topic(self, topic: str, ring: str, md_name: str, layout_hash: int,
+                         message_size: int, address: str, port: int, name: str,
+                         history: int, freshness_ms: int, key: bytes = b"") -> None:
+        """Serve local `ring` as the NDN name `name` on UDP `address`:`port`."""
+        try:
+            payload = daemon_pull.encode_pull_topic(topic, ring, md_name, layout_hash,
+                                                    message_size, address, port, name,
+                                                    history, freshness_ms, key)
+        except struct.error as e:
+            raise DaemonError(f"invalid pull topic {topic!r}: {e}") from None
+        await self._call(Msg.PULL_TOPIC, payload, Msg.OK)
+
+    async def pull_remove(self, topic: str = "") -> None:
+        """Stop serving `topic` ("": every pull topic of this instance)."""
+        await self._call(Msg.PULL_REMOVE, _str(topic), Msg.OK)
+
+    async def pull_status(self, topic: str = "") -> daemon_pull.PullStatus:
+        """The producer's ports and `topic` ("": every pull topic of this instance)."""
+        payload = await self._call(Msg.PULL_STATUS, _str(topic), Msg.PULL_LIST)
+        try:
+            return daemon_pull.decode_pull_list(payload)
+        except ValueError as e:
+            raise DaemonError(f"malformed PULL_STATUS reply: {e}") from None
 
     async def _value(self, mtype: Msg, payload: bytes) -> int:
         reply = await self._call(mtype, payload, Msg.VALUE)

@@ -21,6 +21,7 @@ import weakref
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from .commands import Arg, ArgError, Command, register
 from .registry import topic_name_problem
 
 if TYPE_CHECKING:
@@ -45,13 +46,11 @@ class Connection:
     connect: str  # hex of the wire form
 
 
-def add_commands(control: Control) -> None:
-    """Make the event commands known to `control`."""
-    connections: weakref.WeakKeyDictionary[Service, Connection] = weakref.WeakKeyDictionary()
-    control.commands.update({
-        "event_connect": lambda command: event_connect(control, connections, command),
-        "events": lambda command: events(control, connections, command),
-    })
+def _connections(control: Control) -> weakref.WeakKeyDictionary[Service, Connection]:
+    """The handlers connected through `control`, by their service."""
+    if control.event_connections is None:
+        control.event_connections = weakref.WeakKeyDictionary()
+    return control.event_connections  # type: ignore[no-any-return]
 
 
 def _error(text: str, code: str = "") -> Exception:
@@ -60,20 +59,21 @@ def _error(text: str, code: str = "") -> Exception:
     return ControlError(text, code)
 
 
-def _string(command: dict[str, Any], key: str) -> str:
-    value = command.get(key)
-    if not isinstance(value, str):
-        raise _error(f'"{key}" must be a string', "EINVAL")
-    return value
-
-
 def _event_name(name: str) -> str:
     problem = topic_name_problem(name, "event")
     if problem is None and len(name.encode()) > MAX_EVENT_NAME:
         problem = f"event name of {len(name.encode())} bytes, must be 1..{MAX_EVENT_NAME}"
     if problem:
-        raise _error(problem, "EINVAL")
+        raise ArgError(problem, "EINVAL")
     return name
+
+
+def _hex(text: str) -> str:
+    try:
+        int(text, 16)
+    except ValueError:
+        raise ArgError('"layout_hash" must be a hex number', "EINVAL") from None
+    return text
 
 
 def _live(control: Control,
@@ -85,18 +85,11 @@ def _live(control: Control,
                    if registered.get(s.name) is s), key=lambda sc: sc[0].name)
 
 
-async def event_connect(control: Control,
-                        connections: weakref.WeakKeyDictionary[Service, Connection],
-                        command: dict[str, Any]) -> dict[str, Any]:
-    event = _event_name(_string(command, "event"))
-    name = _string(command, "service")
-    md_name = _string(command, "md_name")
-    signature = _string(command, "signature")
-    connect = _string(command, "connect")
-    try:
-        layout_hash = int(_string(command, "layout_hash"), 16)
-    except ValueError:
-        raise _error('"layout_hash" must be a hex number', "EINVAL") from None
+async def event_connect(control: Control, command: dict[str, Any]) -> dict[str, Any]:
+    connections = _connections(control)
+    event, name, md_name = command["event"], command["service"], command["md_name"]
+    signature, connect = command["signature"], command["connect"]
+    layout_hash = int(command["layout_hash"], 16)
     prefix = f"{SERVICE_PREFIX}{event}/"
     if not name.startswith(prefix) or "/" in name[len(prefix):] or name == prefix:
         raise _error(f"{name!r} is not the name of a handler of event {event!r} "
@@ -125,12 +118,9 @@ async def event_connect(control: Control,
     return {"event": event, "handlers": len(others) + 1}
 
 
-async def events(control: Control,
-                 connections: weakref.WeakKeyDictionary[Service, Connection],
-                 command: dict[str, Any]) -> dict[str, Any]:
-    only = command.get("name")
-    if only is not None:
-        _event_name(_string(command, "name"))
+async def events(control: Control, command: dict[str, Any]) -> dict[str, Any]:
+    connections = _connections(control)
+    only = command["name"]
     listing: dict[str, dict[str, Any]] = {}
     for service, conn in _live(control, connections):
         if only is not None and conn.event != only:
@@ -145,3 +135,27 @@ async def events(control: Control,
             "host_id": service.offer.host_id, "group": service.offer.group,
             "connect": conn.connect, "calls": service.calls, "errors": service.errors})
     return {"events": [listing[name] for name in sorted(listing)]}
+
+
+def _string(name: str, help_text: str, check: Any = None) -> Arg:
+    return Arg(name, "str", help_text, required=True, check=check)
+
+
+register(
+    Command("event_connect", "a handler's libln, right after registering the handler's "
+            "service ln_event/EVENT/CLIENT.N: its connect struct", "events", event_connect,
+            (_string("event", "the event's name", _event_name),
+             _string("service", "the handler's service (ln_event/EVENT/CLIENT.N)"),
+             _string("md_name", "the event's md"),
+             _string("layout_hash", "the md's layout hash (hex)", _hex),
+             _string("signature", "the md's signature"),
+             _string("connect", "the connect struct, wire form in hex")),
+            result="event, handlers (how many are connected now)", changes_state=True,
+            code="EINVAL", console=False, cli=False, script=""),
+    Command("events", "every event with connected handlers (or one)", "events", events,
+            (Arg("name", "str", "only this event", nullable=True, positional=True,
+                 check=_event_name),),
+            result="events: [{name, md_name, layout_hash, signature, handlers: [{service, "
+                   "client, client_id, host_id, group, connect, calls, errors}]}]",
+            code="EINVAL", script_result=lambda result: result["events"]),
+)

@@ -1,7 +1,8 @@
 """Live introspection in the scripting API (docs/introspection.md): the methods of
 `links_and_nodes.manager.connect(...)` that look at topics, mds and services and return
 Python values.  topic_echo/hz/bw and service_call attach a libln client to the manager
-(loaded on first use); topic_info and md_show only ask the manager."""
+(loaded on first use); md_show only asks the manager (topic_info, a command of the table,
+is made by commands/script_methods.py)."""
 
 from __future__ import annotations
 
@@ -39,16 +40,6 @@ class Introspection:
             return func(self._context(), *args, **kwargs)
         except CommandError as exc:
             raise ManagerError(str(exc)) from None
-
-    def topic_info(self, name: str) -> dict[str, Any]:
-        """What the manager knows of topic `name`: md_name, layout_hash ("0x%016x"),
-        message_size, slots, ring_bytes, published (samples so far), rings (host, segment,
-        generations), publishers and subscribers (client, pid, host, port, buffers; mode,
-        reader and transport of subscribers), streams (forwarding to other hosts with
-        rates), md_dirs (the manager's md search path)."""
-        from .introspect_commands import topic_info
-
-        return self._run(topic_info, name)
 
     def md_show(self, name: str, recursive: bool = False) -> str:
         """The text of md `name` from the manager's md search path; with `recursive` also

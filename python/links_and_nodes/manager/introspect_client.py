@@ -87,10 +87,11 @@ class Sample:
 
 class TopicReader:
     """A latest-mode subscriber of `topic` with the given layout, for one thread; use as a
-    context manager.  libln errors (refusals of the manager) raise LnError."""
+    context manager.  libln errors (refusals of the manager) raise LnError.  `buffers` > 1
+    makes it a queued subscriber (ln_foxglove's queued channels)."""
 
     def __init__(self, address: str, client_name: str, topic: str, md_name: str,
-                 layout_hash: int, message_size: int) -> None:
+                 layout_hash: int, message_size: int, buffers: int = 1) -> None:
         from .. import _clientlib as C
         from .._client import client
 
@@ -99,7 +100,7 @@ class TopicReader:
         try:
             opts = C.PortOptions()
             C.ln_port_options_init(ctypes.byref(opts))
-            opts.buffers = 1  # latest: never holds a publisher back
+            opts.buffers = buffers  # 1, latest: never holds a publisher back
             opts.spin_us = 0  # mostly waits long: sleep at once instead of polling
             handle = ctypes.c_void_p()
             self.subscribed_ns = time.time_ns()

@@ -16,32 +16,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import protocol as p
+from .commands import Arg, Command, Verb, register
 from .registry import Client, Port, PortKind, Topic
 
 if TYPE_CHECKING:
     from .control import Control
 
 
-def add_commands(control: Control) -> None:
-    """Make the introspection commands known to `control`."""
-    control.commands.update({
-        "topic_info": lambda command: topic_info(control, command),
-        "service_info": lambda command: service_info(control, command),
-        "md_show": lambda command: md_show(control, command),
-    })
-
-
 def _error(text: str) -> Exception:
     from .control import ControlError
 
     return ControlError(text)
-
-
-def _string(command: dict[str, Any], key: str) -> str:
-    value = command.get(key)
-    if not isinstance(value, str) or not value:
-        raise _error(f'"{key}" must be a non-empty string')
-    return value
 
 
 def md_dirs(control: Control) -> list[str]:
@@ -98,7 +83,7 @@ def _rings(control: Control, topic: Topic) -> list[dict[str, Any]]:
 
 
 async def topic_info(control: Control, command: dict[str, Any]) -> dict[str, Any]:
-    name = _string(command, "name")
+    name = command["name"]
     topic = control.core.registry.topics.get(name)
     if topic is None:
         raise _error(f"no topic {name!r}")
@@ -135,7 +120,7 @@ async def topic_info(control: Control, command: dict[str, Any]) -> dict[str, Any
 
 # ---- services ----------------------------------------------------------------------------
 async def service_info(control: Control, command: dict[str, Any]) -> dict[str, Any]:
-    name = _string(command, "name")
+    name = command["name"]
     for service in control.core.services():
         if service["name"] == name:
             return {**service, "layout_hash": f"0x{service['layout_hash']:016x}",
@@ -150,10 +135,7 @@ async def md_show(control: Control, command: dict[str, Any]) -> dict[str, Any]:
 
     from .introspect_client import md_error_text
 
-    name = _string(command, "name")
-    recursive = command.get("recursive", False)
-    if not isinstance(recursive, bool):
-        raise _error('"recursive" must be true or false')
+    name, recursive = command["name"], command["recursive"]
     dirs = md_dirs(control)
     paths = [Path(d) for d in dirs]
     try:
@@ -176,3 +158,54 @@ def _read(path: Path) -> str:
         return path.read_bytes().decode("utf-8", "replace")
     except OSError as exc:
         raise _error(f"cannot read {path}: {exc.strerror or exc}") from None
+
+
+# ---- the table ---------------------------------------------------------------------------
+async def _console(console: Any, words: list[str]) -> None:
+    from .introspect_console import execute
+
+    await execute(console, words)
+
+
+def _cli(argv: list[str]) -> int:
+    from .introspect_cli import main
+
+    return main(argv)
+
+
+def _verb(name: str, help_text: str, words: tuple[str, ...]) -> Verb:
+    from .introspect_args import SPECS
+
+    usage = tuple(line for key, spec in SPECS.items() if key[0] == name
+                  for line in (spec.usage, "    " + spec.text))
+    return Verb(name, help_text, "introspection", usage,
+                lambda console, rest: _console(console, [name, *rest]), _cli, words)
+
+
+_NAME = Arg("name", "str", "its name", required=True, positional=True, nonempty=True)
+register(
+    Command("topic_info", "md, layout, ring, publishers and subscribers with their clients "
+            "and hosts, transports, forwarding rates", "topics", topic_info, (_NAME,),
+            result="name, id, md_name, layout_hash, message_size, slots, ring_bytes, "
+                   "published, adopted, rings, publishers, subscribers, streams, md_dirs",
+            console=False, cli=False,
+            script_doc="What the manager knows of topic `name`: md_name, layout_hash "
+                       "(\"0x%016x\"), message_size, slots, ring_bytes, published (samples "
+                       "so far), rings (host, segment, generations), publishers and "
+                       "subscribers (client, pid, host, port, buffers; mode, reader and "
+                       "transport of subscribers), streams (forwarding to other hosts with "
+                       "rates), md_dirs (the manager's md search path)."),
+    Command("service_info", "a service as `services` lists it, plus md_dirs", "services",
+            service_info, (_NAME,), result="name, provider, md_name, layout_hash, calls, "
+            "errors, ..., md_dirs", console=False, cli=False),
+    Command("md_show", "a message definition's text (recursive: and the mds it uses)",
+            "topics", md_show,
+            (_NAME, Arg("recursive", "bool", "also the mds it uses", default=False,
+                        flag="-r")),
+            result="name, path, mds: [{name, path, text}], md_dirs", console=False,
+            cli=False),
+    _verb("topic", "samples, rates and what the manager knows of a topic",
+          ("echo", "hz", "bw", "info")),
+    _verb("md", "a message definition's text", ("show",)),
+    _verb("service", "call a service", ("call",)),
+)

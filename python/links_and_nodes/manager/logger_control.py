@@ -1,96 +1,184 @@
-"""The CONTROL commands of topic loggers (docs/logging.md, "Control commands"): argument
-checks and JSON results around loggers.Loggers.  `logger_fetch` carries samples as base64
-of packed (u64 seq, i64 publish time ns, message bytes) records, at most FETCH_MAX bytes of
-them per answer, so an answer stays within the protocol's 1 MiB frame."""
+"""The commands of topic loggers (docs/logging.md, "Control commands"): their table entries
+and handlers around loggers.Loggers, and the console's and CLI's `logger ...` words
+(logger_cli.py).  `logger_fetch` carries samples as base64 of packed (u64 seq, i64 publish
+time ns, message bytes) records, at most FETCH_MAX bytes of them per answer, so an answer
+stays within the protocol's 1 MiB frame.  Light to import: loggers.py (libln) and
+logger_files.py (numpy) are loaded when a command runs."""
 
 from __future__ import annotations
 
 import base64
-import math
-from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
-from ..logger_files import FETCH_MAX, pack_samples
-from .loggers import LoggerError, Loggers, check_pattern
+from .commands import Arg, ArgError, Command, Verb, register
+
+FETCH_MAX = 512 * 1024  # logger_files.FETCH_MAX (checked in tests/python/loggers)
 
 
-Handler = Callable[[dict[str, Any]], Awaitable[dict[str, Any]]]
+def _name(value: str) -> str:
+    from .loggers import LoggerError, check_name
+
+    try:
+        return check_name(value)
+    except LoggerError as exc:
+        raise ArgError(str(exc), "EINVAL") from None
 
 
-def _int(command: dict[str, Any], key: str, default: int, lo: int, hi: int) -> int:
-    value = command.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-        raise LoggerError(f'"{key}" must be an integer from {lo} to {hi}', "EINVAL")
+def _depth(value: int) -> int:
+    from .loggers import MAX_DEPTH
+
+    if value > MAX_DEPTH:
+        raise ArgError(f'"depth" must be an integer from 1 to {MAX_DEPTH}', "EINVAL")
     return value
 
 
-def _str(command: dict[str, Any], key: str, default: str | None = None) -> str:
-    value = command.get(key, default)
-    if not isinstance(value, str) or (default is None and not value):
-        raise LoggerError(f'"{key}" must be a non-empty string', "EINVAL")
+def _pattern(value: str) -> str:
+    from .registry import topic_name_problem
+
+    if not any(c in value for c in "*?[") and (problem := topic_name_problem(value)):
+        raise ArgError(problem, "EINVAL")
     return value
 
 
-def commands(loggers: Callable[[], Loggers], save: Callable[[str, Path], Awaitable[dict]]
-             ) -> dict[str, Handler]:
-    """The logger ops; `loggers()` raises LoggerError where the manager has none, `save`
-    writes a download to a file on the manager's host."""
+# ---- handlers ------------------------------------------------------------------------------
+async def logger_open(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    return {"name": control._loggers().open(c["name"]).name}
 
-    async def logger_open(c: dict[str, Any]) -> dict[str, Any]:
-        return {"name": loggers().open(c.get("name")).name}
 
-    async def logger_add(c: dict[str, Any]) -> dict[str, Any]:
-        span = c.get("span", 0.0)
-        if isinstance(span, float) and not math.isfinite(span):
-            raise LoggerError('"span" must be a finite number of seconds', "EINVAL")
-        spec = check_pattern(c.get("topic"), c.get("depth", 1000), c.get("divisor", 1), span)
-        await loggers().add(c.get("name"), spec)
-        return await loggers().status(c.get("name"))
+async def logger_add(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    from .loggers import check_pattern
 
-    async def logger_remove(c: dict[str, Any]) -> dict[str, Any]:
-        await loggers().remove(c.get("name"), _str(c, "topic", ""))
-        return {}
+    spec = check_pattern(c["topic"], c["depth"], c["divisor"], c["span"])
+    await control._loggers().add(c["name"], spec)
+    return dict(await control._loggers().status(c["name"]))
 
-    async def logger_enable(c: dict[str, Any]) -> dict[str, Any]:
-        keep = c.get("keep", False)
-        if not isinstance(keep, bool):
-            raise LoggerError('"keep" must be true or false', "EINVAL")
-        await loggers().enable(c.get("name"), keep)
-        return {}
 
-    async def logger_disable(c: dict[str, Any]) -> dict[str, Any]:
-        await loggers().disable(c.get("name"))
-        return {}
+async def logger_remove(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    await control._loggers().remove(c["name"], c["topic"])
+    return {}
 
-    async def logger_status(c: dict[str, Any]) -> dict[str, Any]:
-        return await loggers().status(c.get("name"))
 
-    async def logger_list(c: dict[str, Any]) -> dict[str, Any]:
-        return {"loggers": loggers().listing()}
+async def logger_enable(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    await control._loggers().enable(c["name"], c["keep"])
+    return {}
 
-    async def logger_fetch(c: dict[str, Any]) -> dict[str, Any]:
-        chunk = await loggers().fetch(c.get("name"), _str(c, "topic"), _str(c, "host"),
-                                      _int(c, "after", 0, 0, (1 << 64) - 1),
-                                      _int(c, "max_bytes", FETCH_MAX, 1, FETCH_MAX))
-        return {"md_name": chunk.md_name, "layout_hash": f"{chunk.layout_hash:016x}",
-                "message_size": chunk.message_size, "enabled": chunk.enabled,
-                "received": chunk.received, "stored": chunk.stored, "missed": chunk.missed,
-                "skipped": chunk.skipped, "dropped": chunk.dropped,
-                "first_seq": chunk.first_seq, "last_seq": chunk.last_seq,
-                "start_seq": chunk.start_seq,
-                "count": len(chunk.samples),
-                "samples": base64.b64encode(pack_samples(chunk.samples)).decode()}
 
-    async def logger_save(c: dict[str, Any]) -> dict[str, Any]:
-        path = Path(_str(c, "path"))
-        if not path.is_absolute():
-            raise LoggerError(f"save needs an absolute path on the manager's host, got "
-                              f"{str(path)!r}", "EINVAL")
-        return await save(c.get("name"), path)
+async def logger_disable(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    await control._loggers().disable(c["name"])
+    return {}
 
-    return {"logger_open": logger_open, "logger_add": logger_add,
-            "logger_remove": logger_remove, "logger_enable": logger_enable,
-            "logger_disable": logger_disable, "logger_status": logger_status,
-            "logger_list": logger_list, "logger_fetch": logger_fetch,
-            "logger_save": logger_save}
+
+async def logger_status(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    return dict(await control._loggers().status(c["name"]))
+
+
+async def logger_list(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    return {"loggers": control._loggers().listing()}
+
+
+async def logger_fetch(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    from ..logger_files import pack_samples
+
+    chunk = await control._loggers().fetch(c["name"], c["topic"], c["host"], c["after"],
+                                           c["max_bytes"])
+    return {"md_name": chunk.md_name, "layout_hash": f"{chunk.layout_hash:016x}",
+            "message_size": chunk.message_size, "enabled": chunk.enabled,
+            "received": chunk.received, "stored": chunk.stored, "missed": chunk.missed,
+            "skipped": chunk.skipped, "dropped": chunk.dropped,
+            "first_seq": chunk.first_seq, "last_seq": chunk.last_seq,
+            "start_seq": chunk.start_seq,
+            "count": len(chunk.samples),
+            "samples": base64.b64encode(pack_samples(chunk.samples)).decode()}
+
+
+async def logger_save(control: Any, c: dict[str, Any]) -> dict[str, Any]:
+    from .loggers import LoggerError
+
+    path = Path(c["path"])
+    if not path.is_absolute():
+        raise LoggerError(f"save needs an absolute path on the manager's host, got "
+                          f"{str(path)!r}", "EINVAL")
+    return dict(await control._save_logger(c["name"], path))
+
+
+# ---- the console's and the CLI's `logger ...` ------------------------------------------------
+async def _console(console: Any, words: list[str]) -> None:
+    import os
+
+    from . import logger_cli
+
+    try:
+        op, command = logger_cli.parse(words)
+    except logger_cli.UsageError as exc:
+        raise ArgError(str(exc)) from None
+    if op == "logger_save":  # a file name as typed: relative to the manager's directory
+        command["path"] = os.path.abspath(command["path"])
+    result = await console.control.handle({"op": op, **command})
+    for text in logger_cli.format_result(op, command, result):
+        console.say(text)
+
+
+def _cli(argv: list[str]) -> int:
+    from .remote_cli import logger_main
+
+    return logger_main(argv)
+
+
+# ---- the table -----------------------------------------------------------------------------
+_NAME = Arg("name", "str", "the logger", required=True, check=_name)
+_STATUS = ("name, enabled, patterns: [{pattern, depth, divisor, span}], topics: [{topic, "
+           "host, stored, received, missed, skipped, dropped, error}]")
+_TOPIC = Arg("topic", "str", "a topic name or pattern (* ? [])", required=True, nonempty=True,
+             error="a logged topic needs a name or pattern", check=_pattern)
+
+
+def _logger(name: str, help_text: str, handler: Any, *args: Arg, result: str = "{}",
+            changes: bool = True) -> Command:
+    return Command(name, help_text, "loggers", handler, args, result=result,
+                   changes_state=changes, code="EINVAL", console=False, cli=False)
+
+
+register(
+    _logger("logger_open", "make logger NAME if missing", logger_open, _NAME,
+            result="name"),
+    _logger("logger_add", "log the topics of a name or pattern", logger_add, _NAME, _TOPIC,
+            Arg("depth", "int", "samples kept per topic", default=1000, low=1,
+                check=_depth),
+            Arg("divisor", "int", "keep every K-th sample", default=1, low=1),
+            Arg("span", "float", "keep the last S seconds (0: by depth only)", default=0.0,
+                low=0, high=1e9, finite=True,
+                error='"span" must be a finite number of seconds >= 0', metavar="S"),
+            result=_STATUS),
+    _logger("logger_remove", "remove a topic pattern, or the whole logger", logger_remove,
+            _NAME, Arg("topic", "str", "the pattern (none: the whole logger)", default="")),
+    _logger("logger_enable", "start logging", logger_enable, _NAME,
+            Arg("keep", "bool", "keep what was logged before", default=False)),
+    _logger("logger_disable", "stop logging (what was logged stays)", logger_disable,
+            _NAME),
+    _logger("logger_status", "a logger's patterns and topics with their counters",
+            logger_status, _NAME, result=_STATUS, changes=False),
+    _logger("logger_list", "every logger", logger_list,
+            result="loggers: [{name, enabled, patterns, topics}]", changes=False),
+    _logger("logger_fetch", "logged samples of one topic on one host", logger_fetch, _NAME,
+            Arg("topic", "str", "the topic", required=True, nonempty=True),
+            Arg("host", "str", "the host", required=True, nonempty=True),
+            Arg("after", "int", "samples after this seq", default=0, low=0,
+                high=(1 << 64) - 1),
+            Arg("max_bytes", "int", "at most this many sample bytes", default=FETCH_MAX,
+                low=1, high=FETCH_MAX),
+            result="md_name, layout_hash, message_size, enabled, received, stored, missed, "
+                   "skipped, dropped, first_seq, last_seq, start_seq, count, samples "
+                   "(base64)", changes=False),
+    _logger("logger_save", "write what a logger holds to a file on the manager's host",
+            logger_save, _NAME,
+            Arg("path", "str", "an absolute path, .mcap or .npz", required=True,
+                nonempty=True),
+            result="path, topics: {TOPIC: {samples, md_name, missed, dropped, gaps}}"),
+    Verb("logger", "topic loggers (docs/logging.md)", "loggers",
+         ("logger [NAME ...]",
+          "    topic loggers: NAME add TOPIC [DEPTH] [--divisor K] [--span S],",
+          "    NAME remove [TOPIC], NAME enable [--keep]|disable|status,",
+          "    NAME save FILE (.mcap or .npz)"),
+         _console, _cli, ("add", "remove", "enable", "disable", "status", "save")),
+)

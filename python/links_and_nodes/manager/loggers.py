@@ -107,6 +107,26 @@ def check_pattern(pattern: Any, depth: Any, divisor: Any, span: Any) -> Pattern:
     return Pattern(pattern, depth, divisor, float(span))
 
 
+def publisher_rings(core: Core, local_name: Callable[[], str],
+                    topic: Topic) -> list[tuple[str, Any, str]]:
+    """(host name, rings, segment name) of every host with a publisher of the topic."""
+    out: dict[str, tuple[str, Any, str]] = {}
+    hosts = core.hosts
+    for port in topic.ports.values():
+        if port.kind is not PortKind.PUBLISHER:
+            continue
+        try:
+            rings = hosts.rings_for(port.client) if hosts is not None else core.local
+        except Exception:  # a client on a host the manager does not know
+            continue
+        if not rings.has(topic.id):
+            continue
+        local = rings is core.local
+        host = local_name() if local or hosts is None else rings.host
+        out[host] = (host, rings, rings.current(topic.id))
+    return list(out.values())
+
+
 Link = Callable[[], Awaitable[Any]]  # the manager host's daemon client
 
 
@@ -199,22 +219,7 @@ class Loggers:
 
     # ---- where topics live --------------------------------------------------------------------
     def _rings_of(self, topic: Topic) -> list[tuple[str, Any, str]]:
-        """(host name, rings, segment name) of every host with a publisher of the topic."""
-        out: dict[str, tuple[str, Any, str]] = {}
-        hosts = self.core.hosts
-        for port in topic.ports.values():
-            if port.kind is not PortKind.PUBLISHER:
-                continue
-            try:
-                rings = hosts.rings_for(port.client) if hosts is not None else self.core.local
-            except Exception:  # a client on a host the manager does not know
-                continue
-            if not rings.has(topic.id):
-                continue
-            local = rings is self.core.local
-            host = self.local_name() if local or hosts is None else rings.host
-            out[host] = (host, rings, rings.current(topic.id))
-        return list(out.values())
+        return publisher_rings(self.core, self.local_name, topic)
 
     async def _link(self, rings: Any) -> Any:
         if rings is self.core.local:

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from .commands import Verb, register
 from .param_tools import (
     ParamError,
     Session,
@@ -232,3 +233,21 @@ def run(s: Session, words: list[str], say: Callable[[str], None], can_follow: bo
         _file(s, op, rest, say, as_json)
     else:
         raise ParamUsage(f"unknown param command {op!r}\n{USAGE}")
+
+
+# ---- the table -------------------------------------------------------------------------------
+async def _console(console: Any, words: list[str]) -> None:
+    from .param_console import execute
+
+    await execute(console, words)
+
+
+def _cli(argv: list[str]) -> int:
+    from .param_cli import main
+
+    return main(argv)
+
+
+register(Verb("param", "parameter blocks of the processes (docs/parameters.md)", "parameters",
+              tuple(USAGE.splitlines()), _console, _cli,
+              ("list", "get", "set", "reset", "changes", "save", "load")))

@@ -22,6 +22,7 @@ from .daemons import DaemonPool
 from .loggers import Loggers
 from .network import Network
 from .process_states import ProcState
+from .pull import PullTopics
 from .scheduler import Scheduler, StartError, Transition
 
 log = logging.getLogger("ln_manager")
@@ -50,6 +51,9 @@ class Runner:
             (lambda: self.pool.local_host)
         self.loggers = Loggers(core, lambda: self.pool.link(self.pool.local_host), local_name)
         self.control.loggers = self.loggers
+        self.pull = PullTopics(core, config, lambda: self.pool.link(self.pool.local_host),
+                               local_name)
+        self.control.pull = self.pull
         self.address = address
         self._console: asyncio.Task[None] | None = None
         if args.exit_on_failure:
@@ -62,7 +66,9 @@ class Runner:
         await self.scheduler.attach()
         if await self._local_daemon_runs():  # never start one just to look
             await self.loggers.adopt()
+            await self.pull.adopt()
         self.loggers.start()
+        self.pull.start()
         await self.loggers.configure(self.scheduler.config)
 
     async def _local_daemon_runs(self) -> bool:
@@ -166,6 +172,7 @@ class Runner:
         if self.network is not None:
             self.network.config = config  # routes and topic transports of the new file
         await self.loggers.configure(config)  # loggers and topics the new file adds
+        self.pull.configure(config)
         return result
 
     async def end(self, stop_processes: bool) -> None:
@@ -174,6 +181,7 @@ class Runner:
             with contextlib.suppress(asyncio.CancelledError):
                 await self._console
         await self.loggers.close(remove=stop_processes)  # detached: the samples stay
+        await self.pull.close(remove=stop_processes)  # detached: still served
         if stop_processes:
             log.info("stopping every process")
             await self.scheduler.shutdown()

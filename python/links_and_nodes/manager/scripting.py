@@ -18,6 +18,9 @@ from typing import Any
 
 from .. import __version__
 from . import protocol as p
+from .commands import command as command_entry
+from .commands import commands
+from .commands.script_methods import add_methods, method
 from .introspect_api import Introspection
 from .listing import parse_address, receive
 from .param_api import Parameters
@@ -97,7 +100,8 @@ class Manager(Introspection, Parameters):
         may take (None: forever) on top of the connection's timeout."""
         self._next_id += 1
         self._send(p.Control(self._next_id, json.dumps({"op": op, **args})))
-        limit = None if wait is None and op in ("wait_ready", "stop", "restart") \
+        cmd = command_entry(op)
+        limit = None if wait is None and cmd is not None and cmd.slow \
             else (wait or 0) + self.timeout
         reply = self._receive(limit)
         if isinstance(reply, p.Error):
@@ -114,70 +118,27 @@ class Manager(Introspection, Parameters):
             raise ManagerError(str(result.get("error", "unknown error")))
         return result
 
-    # ---- commands --------------------------------------------------------------------------
-    def start(self, target: str = "all") -> list[str]:
-        """Start a process, a group or "all" (with dependencies); returns at once."""
-        return self.command("start", target=target)["processes"]
-
-    def stop(self, target: str = "all", *, force: bool = False) -> list[str]:
-        """Stop (dependents first); returns once they are down."""
-        return self.command("stop", target=target, force=force)["processes"]
-
-    def restart(self, target: str = "all") -> list[str]:
-        return self.command("restart", target=target)["processes"]
-
-    def wait_ready(self, target: str = "all", timeout: float | None = None) -> None:
-        """Until everything of `target` is ready (or finished); ManagerError as soon as
-        one of them fails, or after `timeout` seconds."""
-        self.command("wait_ready", target=target, timeout=timeout, wait=timeout)
-
-    def status(self) -> list[dict[str, Any]]:
-        """One dict per process: name, state, pid, node, reason, exit_code, restarts, ..."""
-        return self.command("status")["processes"]
+    # ---- commands ------------------------------------------------------------------------
+    # start, stop, restart, wait_ready, status, output, history, topics, services, hosts,
+    # network, pull, reload, quit, detach, events, logger_*, ...: one method per command
+    # of the table (commands/), added below the class by add_methods().
+    def __getattr__(self, name: str) -> Any:
+        """The method of a command registered after this module was imported."""
+        if not name.startswith("_"):
+            for cmd in commands():
+                if cmd.script_name == name:
+                    return method(cmd).__get__(self)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def state(self, name: str) -> str:
-        for entry in self.status():
+        """The state of process `name` ("ready", "stopped", ...)."""
+        for entry in self.status():  # type: ignore[attr-defined]
             if entry["name"] == name:
                 return str(entry["state"])
         raise ManagerError(f"no process named {name!r}")
 
-    def output(self, name: str, n: int = 100) -> list[str]:
-        """The last `n` lines of a process's output."""
-        return [line["text"] for line in self.command("output", name=name, n=n)["lines"]]
 
-    def history(self, name: str) -> list[dict[str, Any]]:
-        """Every state transition of a process: time, state, reason."""
-        return self.command("history", name=name)["transitions"]
-
-    def topics(self) -> list[dict[str, Any]]:
-        return self.command("topics")["topics"]
-
-    def services(self) -> list[dict[str, Any]]:
-        return self.command("services")["services"]
-
-    def hosts(self) -> list[dict[str, Any]]:
-        """One dict per configured host: name, state (connecting/up/unreachable), error,
-        host_id, data_port, local, for_s (seconds in that state), unknown_stream,
-        malformed (datagrams its daemon could not place)."""
-        return self.command("hosts")["hosts"]
-
-    def network(self) -> dict[str, Any]:
-        """Forwarding between hosts: {"streams": [per topic and hop: topic, src, dst,
-        transport, active, connected, sent, received, msgs_per_s, bytes_per_s, drops,
-        send_drops, recv_drops, stale, invalid, error], "pairs": [per host pair: src, dst,
-        topics, msgs_per_s, bytes_per_s, drops], "problems": [topic, src, dst, error]}."""
-        return self.command("network")
-
-    def reload(self) -> dict[str, Any]:
-        return self.command("reload")
-
-    def quit(self) -> None:
-        """Stop every process and end the manager."""
-        self.command("quit")
-
-    def detach(self) -> None:
-        """End the manager; its processes keep running under their daemons."""
-        self.command("detach")
+add_methods(Manager)
 
 
 def connect(address: str | None = None, *, timeout: float = DEFAULT_TIMEOUT) -> Manager:

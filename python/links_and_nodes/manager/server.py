@@ -81,6 +81,9 @@ class Server:
         self.core = core
         # Answers CONTROL requests (control.Control.handle_json); None: refused.
         self.control: Callable[[str], Awaitable[str]] | None = None
+        # The web UI sharing this port (webui.WebUI), given every connection that starts
+        # with an HTTP request line; a client's first frame never does (docs/webui.md).
+        self.webui: Any = None
         self._writers: set[asyncio.StreamWriter] = set()
         self._tasks: set[asyncio.Task[Any]] = set()
         self._server: asyncio.base_events.Server | None = None
@@ -129,7 +132,17 @@ class Server:
 
     async def _serve(self, session: Session, reader: asyncio.StreamReader,
                      writer: asyncio.StreamWriter) -> None:
-        first = await self._read(reader)
+        header = None
+        if self.webui is not None:
+            header = await self._header(reader)
+            if header is None:
+                return
+            from .webui import REQUEST_LINE_STARTS
+
+            if header in REQUEST_LINE_STARTS:
+                await self.webui.serve(reader, writer, header)
+                return
+        first = await self._read(reader, header)
         if first is None:
             return  # connected and left without a word
         type_, body = first
@@ -174,15 +187,25 @@ class Server:
         return p.ControlResult(msg.request_id, await self.control(msg.command))
 
     @staticmethod
-    async def _read(reader: asyncio.StreamReader) -> tuple[int, bytes] | None:
-        """(type, body) of the next frame; None at a clean end of the stream."""
+    async def _header(reader: asyncio.StreamReader) -> bytes | None:
+        """The length field of the next frame; None at a clean end of the stream."""
         try:
-            header = await reader.readexactly(p.HEADER_SIZE)
+            return await reader.readexactly(p.HEADER_SIZE)
         except asyncio.IncompleteReadError as exc:
             if not exc.partial:
                 return None
             raise Closing(f"truncated frame: connection closed after {len(exc.partial)} "
                           f"of {p.HEADER_SIZE} header bytes") from None
+
+    @classmethod
+    async def _read(cls, reader: asyncio.StreamReader,
+                    header: bytes | None = None) -> tuple[int, bytes] | None:
+        """(type, body) of the next frame (whose length field `header` may have been read
+        already); None at a clean end of the stream."""
+        if header is None:
+            header = await cls._header(reader)
+            if header is None:
+                return None
         try:
             length = p.frame_length(header)
         except p.ProtocolError as exc:

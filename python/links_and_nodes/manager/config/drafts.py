@@ -128,6 +128,8 @@ class InstanceDraft:
     manager: str | None = None
     documentation: str = ""
     webui_auth_file: str | None = None
+    webui: bool = False
+    webui_port: int | None = None
     failed: set[str] = field(default_factory=set)
 
 

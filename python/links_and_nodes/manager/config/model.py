@@ -69,6 +69,8 @@ class Instance:
     location: Location
     documentation: str = ""
     webui_auth_file: str | None = None  # absolute path; LNM_WEBUI_AUTH_FILE overrides it
+    webui: bool = False  # `webui: on`: serve the web UI (docs/webui.md)
+    webui_port: int | None = None  # its own port; None: the manager's
 
 
 @dataclass
@@ -132,14 +134,33 @@ class Network:
         return list(dict.fromkeys(i.host for i in self.interfaces))
 
 
+DEFAULT_PULL_PORT = 6363  # NDN's UDP port
+
+
+@dataclass(frozen=True)
+class PullSetting:
+    """The `pull:...` settings of a `topics` line (docs/pull.md): how the daemons of the
+    publishers' hosts serve the topics to NDN consumers."""
+
+    transport: str  # "ndn-udp", or "off": the topics it matches are not served
+    port: int = DEFAULT_PULL_PORT
+    prefix: str | None = None  # NDN name prefix, "/a/b"; None: /ln/<instance name>
+    history: int = 64  # samples kept per topic
+    freshness_ms: int = 1000  # FreshnessPeriod of sample Data
+    key: bytes = b""  # HMAC-SHA256 key; empty: DigestSha256 signatures
+    address: str = "0.0.0.0"  # the daemon's bind address
+
+
 @dataclass(frozen=True)
 class TopicSetting:
     """One line of a `topics` section: the settings of the topics `pattern` matches (a
-    topic name or an fnmatch glob, case-sensitive)."""
+    topic name or an fnmatch glob, case-sensitive).  Each setting comes from the first
+    matching line that has it."""
 
     pattern: str
-    transport: str  # "udp" or "tcp": how samples go to other hosts
+    transport: str | None  # "udp" or "tcp": how samples go to other hosts; None: not set
     location: Location
+    pull: PullSetting | None = None  # None: not set on this line
 
     def matches(self, topic: str) -> bool:
         return fnmatch.fnmatchcase(topic, self.pattern)
@@ -259,8 +280,17 @@ class Config:
 
 def topic_transport(config: Config, topic: str) -> str | None:
     """The transport the `topics` sections give `topic` ("udp" or "tcp"): that of the first
-    line, in file order, whose pattern matches it; None if none does."""
+    line, in file order, that sets one and whose pattern matches it; None if none does."""
     for setting in config.topic_settings:
-        if setting.matches(topic):
+        if setting.transport is not None and setting.matches(topic):
             return setting.transport
+    return None
+
+
+def topic_pull(config: Config, topic: str) -> PullSetting | None:
+    """How `topic` is served to pull consumers: the pull settings of the first line that
+    sets `pull` and matches it; None if none does or that line says `pull:off`."""
+    for setting in config.topic_settings:
+        if setting.pull is not None and setting.matches(topic):
+            return setting.pull if setting.pull.transport != "off" else None
     return None

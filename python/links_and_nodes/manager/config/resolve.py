@@ -75,7 +75,7 @@ class _Resolver:
         if draft.name is None or address is None:
             return None
         return Instance(draft.name, address, draft.loc, draft.documentation,
-                        draft.webui_auth_file)
+                        draft.webui_auth_file, draft.webui, draft.webui_port)
 
     # ------------------------------------------------------------------ processes
 

@@ -23,6 +23,7 @@ from .errors import LineError, Problem, closest, did_you_mean
 from .expand import BUILTINS, Evaluator
 from .model import Host, Logger, LoggerTopic, Member, TopicSetting
 from .process_keys import process_key, ref_items
+from .pull_settings import PULL_KEYS, parse_pull
 from .templates import Template
 from .text import Value, split_value, unquote
 from .values import (
@@ -73,7 +74,8 @@ def _no_add(kl: KeyLine) -> None:
 
 class InstanceSection(Section):
     kind = "instance"
-    KEYS = frozenset({"name", "manager", "documentation", "webui_auth_file"})
+    KEYS = frozenset({"name", "manager", "documentation", "webui_auth_file", "webui",
+                      "webui_port"})
     IGNORED = frozenset({"enable_auto_groups", "groups_opened_default",
                          "groups_sorted_default"})
     UNSUPPORTED = {"verbose2_base": "the manager's log verbosity is "
@@ -103,6 +105,14 @@ class InstanceSection(Section):
             self.draft.manager = p.evaluator.manager = parse_address(v, "manager")
         elif kl.key == "documentation":
             self.draft.documentation = v.text
+        elif kl.key == "webui":  # docs/webui.md
+            if v.text not in ("on", "off", "true", "false", "yes", "no", "1", "0"):
+                raise fail(v, f"webui must be on or off, not {v.text!r}")
+            self.draft.webui = v.text in ("on", "true", "yes", "1")
+        elif kl.key == "webui_port":
+            if not v.text.isdigit() or not 0 <= int(v.text) <= 65535:
+                raise fail(v, f"webui_port must be a TCP port 0..65535, not {v.text!r}")
+            self.draft.webui_port = int(v.text)
         else:
             self.draft.webui_auth_file = p.path(v.text, kl)
 
@@ -302,11 +312,11 @@ class NetworkSection(Section):
 
 class TopicsSection(Section):
     """`PATTERN: SETTING:VALUE, ...` lines: settings of the topics a name or fnmatch glob
-    matches; the first matching line in file order wins."""
+    matches; for each setting the first matching line in file order that has it wins."""
 
     kind = "topics"
     general_keys = True
-    SETTINGS = ("transport",)
+    SETTINGS = ("transport", *PULL_KEYS)
 
     def key(self, p: Parser, kl: KeyLine) -> None:
         _no_add(kl)
@@ -315,23 +325,30 @@ class TopicsSection(Section):
         if problem:
             raise LineError.at(kl.loc, problem)
         found: dict[str, str] = {}
+        pull: dict[str, Value] = {}
 
         def handle(name: str, item: Value, value: Value) -> None:
             if name not in self.SETTINGS:
                 raise fail(item, f"unknown topic setting '{name}'"
                                  f"{did_you_mean(name, self.SETTINGS)}")
             word = value.text.strip().lower()
-            if word not in TRANSPORTS:
+            if name == "transport" and word not in TRANSPORTS:
                 raise fail(value, f"'transport' must be udp or tcp, got '{value.text}'"
                                   f"{did_you_mean(word, TRANSPORTS)}")
-            found[name] = word
+            if name in found or name in pull:
+                raise fail(item, f"topic setting '{name}' given twice")
+            if name == "transport":
+                found[name] = word
+            else:
+                pull[name] = value
 
         if not setting_items(p, kl, "topic", handle):
             values = p.values(kl)
             raise LineError.at(values[0].loc if values else kl.block_loc or kl.loc,
                                f"topic pattern '{pattern}' needs settings like "
-                               "transport:udp")
-        p.drafts.topic_settings.append(TopicSetting(pattern, found["transport"], kl.loc))
+                               "transport:udp or pull:ndn-udp")
+        p.drafts.topic_settings.append(TopicSetting(pattern, found.get("transport"), kl.loc,
+                                                    parse_pull(pull, pattern)))
 
 
 class LoggerSection(Section):

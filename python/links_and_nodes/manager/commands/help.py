@@ -1,0 +1,80 @@
+"""The console's `help` (every command, or one with its arguments) and its completion of a
+line, both read from the command table."""
+
+from __future__ import annotations
+
+import textwrap
+
+from .spec import SAME, Command, Verb
+from .table import commands, console_entry, verbs
+
+WIDTH = 25  # column of the help texts
+LINE = 92  # their right margin
+
+
+def _entry(usage: str, text: str) -> list[str]:
+    texts = textwrap.wrap(text, LINE - WIDTH - 1) or [""]
+    lines = [f"  {usage:<{WIDTH - 1}}{texts[0]}"] if len(usage) < WIDTH - 1 else \
+        [f"  {usage}", f"  {'':<{WIDTH - 1}}{texts[0]}"]
+    return lines + [f"  {'':<{WIDTH - 1}}{more}" for more in texts[1:]]
+
+
+def help_text() -> str:
+    """`help`: every console command with its words and what it does."""
+    lines = ["commands:"]
+    for cmd in commands():
+        if cmd.console_word:
+            lines += _entry(cmd.usage("console"), cmd.help)
+    for verb in verbs():
+        if verb.console is not None:
+            lines += ["  " + line for line in verb.usage]
+    lines += _entry("help [COMMAND]", "this text, or one command with its arguments")
+    return "\n".join(lines)
+
+
+def _arg_line(cmd: Command, name: str) -> str:
+    arg = cmd.arg(name)
+    spell = arg.word if arg.positional else arg.option
+    default = arg.default if arg.text_default is SAME else arg.text_default
+    notes = [arg.type]
+    if arg.choices:
+        notes.append("one of " + ", ".join(str(c) for c in arg.choices))
+    if default not in (None, "", False) and not arg.required:
+        notes.append(f"default {default}")
+    return f"  {spell:<{WIDTH - 1}}{arg.help} ({'; '.join(notes)})"
+
+
+def help_command(word: str) -> str:
+    """`help COMMAND`: its usage, text and arguments."""
+    entry = console_entry(word)
+    if entry is None:
+        return f"unknown command {word!r} (try help)"
+    if isinstance(entry, Verb):
+        return "\n".join([f"{entry.name}: {entry.help}", *entry.usage])
+    lines = [f"usage: {entry.usage('console')}", f"  {entry.help}"]
+    lines += [_arg_line(entry, a.name) for a in entry.args if a.where in ("", "console")]
+    return "\n".join(lines)
+
+
+def complete(line: str) -> list[str]:
+    """The words that may complete the last word of `line` (a console line being typed)."""
+    words = line.split()
+    if line.endswith(" ") or not words:
+        words.append("")
+    *before, last = words
+    if not before:
+        names = [c.console_word for c in commands() if c.console_word]
+        names += [a for c in commands() if c.console_word for a in c.aliases]
+        names += [v.name for v in verbs() if v.console is not None] + ["help"]
+        return sorted(n for n in set(names) if n.startswith(last))
+    if before[0] == "help" and len(before) == 1:
+        return complete(last)
+    entry = console_entry(before[0])
+    if isinstance(entry, Verb):
+        return sorted(w for w in entry.words if w.startswith(last))
+    if isinstance(entry, Command):
+        options = [a.option for a in entry.args
+                   if not a.positional and a.where in ("", "console")]
+        choices = [str(c) for a in entry.args if a.positional for c in a.choices]
+        return sorted(w for w in options + choices if w.startswith(last))
+    return []
