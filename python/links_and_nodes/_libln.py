@@ -3,44 +3,17 @@ once (argtypes, restype, errcheck), checks the library version against the packa
 builds the exception classes from libln's error table.  Public modules sit on top of this."""
 
 import ctypes
-import os
-from collections.abc import Callable, Iterator
-from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
-from . import __version__
-from .errors import LibraryNotFoundError, LnError, make_error_classes
+from . import __version__, _native
+from .errors import LnError, make_error_classes
 
 SONAME = "libln.so.1"
 ENV_OVERRIDE = "LN_LIBRARY_PATH"  # a library file, or a directory holding libln.so.1
 
 
-def _candidates() -> Iterator[str]:
-    override = os.environ.get(ENV_OVERRIDE)
-    if override:
-        # An explicit choice is never silently replaced by another library.
-        yield str(Path(override) / SONAME) if Path(override).is_dir() else override
-        return
-    checkout = Path(__file__).resolve().parents[2]  # python/links_and_nodes/ -> checkout
-    in_tree = checkout / "build" / "release" / "libln" / SONAME
-    if in_tree.exists():
-        yield str(in_tree)
-    yield SONAME  # the system loader: ld.so.cache, LD_LIBRARY_PATH, /usr/lib, ...
-
-
-def _load() -> ctypes.CDLL:
-    failures = []
-    for candidate in _candidates():
-        try:
-            return ctypes.CDLL(candidate)
-        except OSError as exc:
-            failures.append(f"{candidate}: {exc}")
-    raise LibraryNotFoundError(
-        "cannot load libln (" + "; ".join(failures) + "); build it with `scons` or set "
-        + ENV_OVERRIDE)
-
-
-lib = _load()
+lib = _native.load(SONAME, ENV_OVERRIDE, "libln", "libln")
 
 
 def _check(result: int, func: Any, args: tuple[Any, ...]) -> int:

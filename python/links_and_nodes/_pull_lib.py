@@ -6,11 +6,9 @@ links_and_nodes.pull sits on top of this."""
 from __future__ import annotations
 
 import ctypes
-import os
-from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
+from . import _native
 from .errors import LibraryNotFoundError
 
 SONAME = "libln_pull.so.1"
@@ -23,30 +21,7 @@ SLOT_OFFSET, SKIP_OLD, NACK_JUMP, SYNC_QUARTER, KARN = 1, 2, 4, 8, 16
 EV_TIMEOUT, EV_NACK, EV_SYNC = 1, 2, 3
 
 
-def _candidates() -> Iterator[str]:
-    override = os.environ.get(ENV_OVERRIDE)
-    if override:
-        yield str(Path(override) / SONAME) if Path(override).is_dir() else override
-        return
-    checkout = Path(__file__).resolve().parents[2]  # python/links_and_nodes/ -> checkout
-    in_tree = checkout / "build" / "release" / "libln_pull" / SONAME
-    if in_tree.exists():
-        yield str(in_tree)
-    yield SONAME  # the system loader: installed next to libln
-
-
-def _load() -> ctypes.CDLL:
-    failures = []
-    for candidate in _candidates():
-        try:
-            return ctypes.CDLL(candidate)
-        except OSError as exc:
-            failures.append(f"{candidate}: {exc}")
-    raise LibraryNotFoundError("cannot load libln_pull (" + "; ".join(failures)
-                               + "); build it with `scons` or set " + ENV_OVERRIDE)
-
-
-lib = _load()
+lib = _native.load(SONAME, ENV_OVERRIDE, "libln_pull", "libln_pull")
 
 SendFn = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint8),
                           ctypes.c_size_t)

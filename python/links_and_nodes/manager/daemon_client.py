@@ -22,6 +22,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import daemon_pull
+from .daemon_payload import Malformed as _Malformed
+from .daemon_payload import PayloadReader as _Reader
+from .daemon_payload import encode_str as _str
 
 PROTOCOL_VERSION = 1
 MAGIC = b"LNDAEMON"
@@ -445,44 +448,6 @@ async def ensure_local_daemon(port: int, key_file: Path, log_file: Path | None =
 
 
 # ---- wire encoding ---------------------------------------------------------------------------
-
-
-def _str(s: str | bytes) -> bytes:
-    # surrogateescape: what os.environ, sys.argv and os.fsdecode make of bytes that are
-    # not UTF-8 goes back as those bytes
-    b = s.encode(errors="surrogateescape") if isinstance(s, str) else s
-    return struct.pack("<I", len(b)) + b
-
-
-class _Reader:
-    """Little-endian payload reader; any short read raises _Malformed."""
-
-    def __init__(self, data: bytes) -> None:
-        self.data = data
-        self.pos = 0
-
-    def take(self, fmt: str) -> tuple:
-        size = struct.calcsize(fmt)
-        if self.pos + size > len(self.data):
-            raise _Malformed("short payload")
-        values = struct.unpack_from(fmt, self.data, self.pos)
-        self.pos += size
-        return values
-
-    def bytes(self) -> bytes:
-        (n,) = self.take("<I")
-        if self.pos + n > len(self.data):
-            raise _Malformed("short payload")
-        out = self.data[self.pos:self.pos + n]
-        self.pos += n
-        return out
-
-    def text(self) -> str:
-        return self.bytes().decode(errors="replace")
-
-
-class _Malformed(Exception):
-    pass
 
 
 def _proofs(key: bytes, daemon_nonce: bytes, client_nonce: bytes,

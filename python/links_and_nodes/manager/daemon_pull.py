@@ -7,6 +7,9 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
+from .daemon_payload import PayloadReader
+from .daemon_payload import encode_str as _str
+
 SIG_DIGEST_SHA256 = 0
 SIG_HMAC_SHA256 = 4
 
@@ -57,11 +60,6 @@ class PullStatus:
     topics: list[PullTopicStatus]
 
 
-def _str(s: str | bytes) -> bytes:
-    b = s.encode(errors="surrogateescape") if isinstance(s, str) else s
-    return struct.pack("<I", len(b)) + b
-
-
 def encode_pull_topic(topic: str, ring: str, md_name: str, layout_hash: int,
                       message_size: int, address: str, port: int, name: str, history: int,
                       freshness_ms: int, key: bytes = b"") -> bytes:
@@ -74,33 +72,9 @@ def encode_pull_topic(topic: str, ring: str, md_name: str, layout_hash: int,
             + struct.pack("<IIB", history, freshness_ms, signature) + _str(key))
 
 
-class Reader:
-    """Little-endian payload reader; a short read raises ValueError."""
-
-    def __init__(self, data: bytes) -> None:
-        self.data = data
-        self.pos = 0
-
-    def take(self, fmt: str) -> tuple:
-        size = struct.calcsize(fmt)
-        if self.pos + size > len(self.data):
-            raise ValueError("short payload")
-        values = struct.unpack_from(fmt, self.data, self.pos)
-        self.pos += size
-        return values
-
-    def text(self) -> str:
-        (n,) = self.take("<I")
-        if self.pos + n > len(self.data):
-            raise ValueError("short payload")
-        out = self.data[self.pos:self.pos + n]
-        self.pos += n
-        return out.decode(errors="replace")
-
-
 def decode_pull_list(payload: bytes) -> PullStatus:
     """A PULL_LIST payload; ValueError if it is short or has bytes left over."""
-    r = Reader(payload)
+    r = PayloadReader(payload)
     ports = []
     for _ in range(r.take("<I")[0]):
         address = r.text()

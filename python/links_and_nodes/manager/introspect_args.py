@@ -9,6 +9,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from .commands.check import is_number
 from .introspect_stats import DEFAULT_WINDOW
 
 GROUPS = ("topic", "md", "service")
@@ -121,7 +122,7 @@ def parse(words: list[str]) -> tuple[tuple[str, str], dict[str, Any]]:
             except ValueError as exc:
                 what = str(exc) if str(exc).startswith("a ") else "a number"
                 raise UsageError(f"{option}: {value!r} is not {what}") from None
-        elif word.startswith("-") and len(word) > 1 and not _number(word) \
+        elif word.startswith("-") and len(word) > 1 and not is_number(word) \
                 and not (spec.rest and len(positionals) >= len(spec.positionals) - 1):
             raise UsageError(f"unknown option {word!r}")
         else:
@@ -137,9 +138,3 @@ def parse(words: list[str]) -> tuple[tuple[str, str], dict[str, Any]]:
     return key, args
 
 
-def _number(word: str) -> bool:
-    try:
-        float(word)
-    except ValueError:
-        return False
-    return True

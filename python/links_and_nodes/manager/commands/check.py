@@ -131,7 +131,8 @@ def from_texts(cmd: Command, given: dict[str, Any], where: str) -> dict[str, Any
     return args
 
 
-def _number(word: str) -> bool:
+def is_number(word: str) -> bool:
+    """Whether a console word is a number (so `-1` is a value, not an option)."""
     try:
         float(word)
     except ValueError:
@@ -160,7 +161,7 @@ def parse_words(cmd: Command, words: list[str], where: str = "console") -> dict[
             if value is None:
                 raise ArgError(f"{option} needs a value", cmd.code)
             given[arg.name] = value
-        elif word.startswith("-") and len(word) > 1 and not _number(word):
+        elif word.startswith("-") and len(word) > 1 and not is_number(word):
             raise ArgError(f"unknown option {word!r}", cmd.code)
         else:
             typed.append(word)
