@@ -2,10 +2,12 @@
  * dit_transport §1.3 defines it (flags 0, window 1, boot_after 1), the hardenings of §5.4
  * as options, and a fixed-rate polling baseline (poll_ms > 0).  No malloc, no system calls:
  * the caller passes the clock in ms (uint32, wrap-safe), a send function and the packets it
- * received.  docs/pull.md has the rules and formulas. */
+ * received.  docs/pull.md has the rules and formulas.  Interests are written here directly;
+ * with -DLN_NDN_CONSUMER (a device's build) replies are decoded here too (decode below). */
 #include <string.h>
 
 #include "ln/pull.h"
+#include "ndn_internal.h"
 
 #define BIG_MS 0x7fffffffu
 
@@ -54,29 +56,49 @@ static void event(ln_pull_sub* s, int ev, uint64_t seq)
         s->on_event(s->user, ev, seq, s->t_ms);
 }
 
-/* Sends an Interest for /<name>/seq=<seq>, or for /<name>/sync when seq is 0. */
+/* Sends an Interest for /<name>/seq=<seq>, or for /<name>/sync when seq is 0: the bytes
+ * ln_ndn_encode_interest would write, written here directly (every length fits one byte:
+ * the name is at most LN_PULL_MAX_NAME bytes, the Interest at most LN_PULL_TX_BYTES < 253),
+ * which keeps the generic encoder out of a device's consumer. */
+/* A TLV of `type` holding v big-endian in the fewest of 1, 2, 4, 8 bytes (at least `min`). */
+static uint8_t* put_number(uint8_t* p, uint8_t type, uint64_t v, uint8_t min)
+{
+    uint8_t len = min, i;
+    while (len < 8 && v >> (8 * len))
+        len *= 2;
+    *p++ = type;
+    *p++ = len;
+    for (i = len; i > 0; i--, v >>= 8)
+        p[i - 1] = (uint8_t)v;
+    return p + len;
+}
+
 static void send_interest(ln_pull_sub* s, uint64_t seq, uint32_t n, uint32_t lifetime)
 {
-    uint8_t name[LN_PULL_MAX_NAME + 16], packet[LN_PULL_TX_BYTES];
-    ln_ndn_interest in;
-    int size;
-    memcpy(name, s->name, s->name_size);
-    size = seq ? ln_ndn_name_append_seq(name, sizeof name, s->name_size, seq)
-               : ln_ndn_name_append(name, sizeof name, s->name_size, LN_NDN_T_GENERIC,
-                                    (const uint8_t*)"sync", 4);
-    memset(&in, 0, sizeof in);
-    in.name.data = name;
-    in.name.size = (size_t)size;
-    in.nonce = n;
-    in.lifetime_ms = lifetime;
-    in.can_be_prefix = in.must_be_fresh = seq == 0;
-    size = ln_ndn_encode_interest(packet, sizeof packet, &in);
-    if (size < 0) /* cannot happen: the name's size is bounded at start */
-        return;
+    uint8_t packet[LN_PULL_TX_BYTES], *p = packet + 4;
+    memcpy(p, s->name, s->name_size);
+    p += s->name_size;
+    if (seq) { /* SequenceNum component: a NonNegativeInteger of 1, 2, 4 or 8 bytes */
+        p = put_number(p, LN_NDN_T_SEQUENCE_NUM, seq, 1);
+    } else {
+        memcpy(p, "\x08\x04sync", 6);
+        p += 6;
+    }
+    packet[2] = LN_NDN_T_NAME;
+    packet[3] = (uint8_t)(p - packet - 4);
+    if (!seq) { /* CanBePrefix, MustBeFresh */
+        memcpy(p, "\x21\x00\x12\x00", 4);
+        p += 4;
+    }
+    p = put_number(p, LN_NDN_T_NONCE, n, 4);
+    if (lifetime != LN_NDN_DEFAULT_LIFETIME_MS)
+        p = put_number(p, LN_NDN_T_INTEREST_LIFETIME, lifetime, 1);
+    packet[0] = LN_NDN_T_INTEREST;
+    packet[1] = (uint8_t)(p - packet - 2);
     s->stats.interests++;
     if (!seq)
         s->stats.syncs++;
-    s->send(s->user, packet, (size_t)size);
+    s->send(s->user, packet, (size_t)(p - packet));
 }
 
 /* P̂ in ms, rounded */
@@ -416,6 +438,186 @@ static void on_nack(ln_pull_sub* s, uint64_t seq, uint64_t latest, uint32_t now)
     } /* latest == delivered: seq is beyond what the producer parks; the timer retries */
 }
 
+#ifdef LN_NDN_CONSUMER
+/* A device's consumer-only build decodes replies with this compact equivalent of
+ * ln_ndn_decode (same acceptance rules, same nesting bound, no callbacks): the LpPacket
+ * headers, then a Data packet (Name, MetaInfo, Content, SignatureInfo with its type,
+ * SignatureValue: the signature itself is not verified, as in the full build) or the Name
+ * and Nonce of an Interest (what an NDNLPv2 Nack carries). */
+
+/* A TLV type in 32 bits (no 64-bit compares on small cores): one above 2^32 becomes one
+ * that is no known type and critical exactly when it is (odd). */
+static uint32_t type32(uint64_t type)
+{
+    return type > 0xffffffffu ? 0xfffffffeu | (uint32_t)(type & 1u) : (uint32_t)type;
+}
+
+/* The elements of `v` in the grammar's order `order[n]` into f[n] (absent: data NULL); one
+ * out of order or unknown follows the evolvability rule. */
+static int fields(ln_ndn_bytes v, const uint8_t* order, size_t n, ln_ndn_bytes* f)
+{
+    ln_ndn_i_tlv t;
+    size_t next = 0, i;
+    uint32_t type;
+    int r;
+    memset(f, 0, n * sizeof *f);
+    while ((r = ln_ndn_i_next(&v, &t)) > 0) {
+        type = type32(t.type);
+        for (i = next; i < n && order[i] != type; i++) {
+        }
+        if (i == n) {
+            if (type < 32 || (type & 1u))
+                return LN_NDN_ECRITICAL;
+            continue;
+        }
+        next = i + 1;
+        f[i] = t.value;
+    }
+    return r;
+}
+
+/* A name value of at least `min` components (each a TLV of a type in 1..65535). */
+static int check_name(ln_ndn_bytes name, int min)
+{
+    ln_ndn_component c;
+    int r;
+    while ((r = ln_ndn_name_next(&name, &c)) > 0)
+        min--;
+    return r < 0 ? r : min > 0 ? LN_NDN_EMALFORMED : LN_NDN_OK;
+}
+
+/* A NonNegativeInteger, clamped to 32 bits. */
+static int nonneg32(ln_ndn_bytes v, uint32_t* out)
+{
+    uint64_t x;
+    int r = ln_ndn_read_nonneg(v, &x);
+    *out = x > 0xffffffffu ? 0xffffffffu : (uint32_t)x;
+    return r;
+}
+
+static int decode(const uint8_t* buf, size_t size, ln_ndn_packet* out)
+{
+    static const uint8_t interest_order[] = {LN_NDN_T_NAME, LN_NDN_T_CAN_BE_PREFIX,
+        LN_NDN_T_MUST_BE_FRESH, LN_NDN_T_FORWARDING_HINT, LN_NDN_T_NONCE,
+        LN_NDN_T_INTEREST_LIFETIME, LN_NDN_T_HOP_LIMIT, LN_NDN_T_APP_PARAMETERS, 0x2c, 0x2e};
+    static const uint8_t data_order[] = {LN_NDN_T_NAME, LN_NDN_T_META_INFO, LN_NDN_T_CONTENT,
+        LN_NDN_T_SIGNATURE_INFO, LN_NDN_T_SIGNATURE_VALUE, LN_NDN_T_CONTENT_TYPE,
+        LN_NDN_T_FRESHNESS_PERIOD, LN_NDN_T_FINAL_BLOCK_ID, LN_NDN_T_SIGNATURE_TYPE,
+        LN_NDN_T_KEY_LOCATOR};
+    ln_ndn_bytes rest, f[10], sub;
+    ln_ndn_i_tlv t, n;
+    ln_ndn_component c;
+    uint32_t v, ty;
+    int r, lp = 0, nack = 0;
+    memset(out, 0, sizeof *out);
+    rest.data = buf;
+    rest.size = size;
+    for (;;) { /* one LpPacket level per turn (ln_ndn_decode's depth: 2 per level) */
+        if ((r = ln_ndn_i_next(&rest, &t)) <= 0)
+            return r < 0 ? r : LN_NDN_ETRUNCATED;
+        if (rest.size != 0)
+            return LN_NDN_EMALFORMED;
+        if ((ty = type32(t.type)) != LN_NDN_T_LP_PACKET)
+            break;
+        lp++;
+        rest.size = 0;
+        sub = t.value;
+        while ((r = ln_ndn_i_next(&sub, &t)) > 0) {
+            ty = type32(t.type);
+            if (rest.size) /* nothing may follow the fragment */
+                return LN_NDN_EMALFORMED;
+            if (ty == LN_NDN_T_LP_FRAGMENT) {
+                rest = t.value;
+                if (!rest.size)
+                    return LN_NDN_EMALFORMED;
+            } else if (ty == LN_NDN_T_LP_PIT_TOKEN) {
+                if (t.value.size < 1 || t.value.size > 32)
+                    return LN_NDN_EMALFORMED;
+            } else if (ty == LN_NDN_T_LP_NACK) {
+                nack = 1;
+                while ((r = ln_ndn_i_next(&t.value, &n)) > 0) {
+                    if (type32(n.type) == LN_NDN_T_LP_NACK_REASON) {
+                        if ((r = nonneg32(n.value, &v)) < 0)
+                            return r;
+                    } else if (ln_ndn_i_critical(n.type)) {
+                        return LN_NDN_ECRITICAL;
+                    }
+                }
+                if (r < 0)
+                    return r;
+            } else if (ty == 0x52 || ty == 0x53) { /* FragIndex 0, FragCount 1 only */
+                if ((r = nonneg32(t.value, &v)) < 0)
+                    return r;
+                if (v != (ty == 0x53))
+                    return LN_NDN_EUNSUPPORTED;
+            } else if (ty != 0x51 && /* Sequence; else only ignorable LP headers */
+                       !(ty >= 800 && ty <= 959 && (ty & 3u) == 0)) {
+                return LN_NDN_ECRITICAL;
+            }
+        }
+        if (r < 0)
+            return r;
+        if (!rest.size) /* an IDLE packet */
+            return LN_NDN_EUNSUPPORTED;
+        if (lp == 4) /* the packet in the fourth LpPacket is nested too deep */
+            return LN_NDN_EDEPTH;
+    }
+    if (ty == LN_NDN_T_INTEREST) {
+        out->type = LN_NDN_T_INTEREST;
+        if ((r = fields(t.value, interest_order, 10, f)) < 0 ||
+            (f[0].data && (r = check_name(f[0], 1)) < 0))
+            return r;
+        if (f[4].data) {
+            if (f[4].size != 4)
+                return LN_NDN_EMALFORMED;
+            out->interest.nonce = (uint32_t)f[4].data[0] << 24 | (uint32_t)f[4].data[1] << 16 |
+                                  (uint32_t)f[4].data[2] << 8 | f[4].data[3];
+            out->interest.has_nonce = 1;
+        }
+        if (!f[0].data)
+            return LN_NDN_EMALFORMED;
+        out->interest.name = f[0];
+        out->lp_nack = (uint8_t)nack;
+        return LN_NDN_OK;
+    }
+    if (ty != LN_NDN_T_DATA)
+        return LN_NDN_EUNSUPPORTED;
+    if (nack)
+        return LN_NDN_EMALFORMED;
+    out->type = LN_NDN_T_DATA;
+    if ((r = fields(t.value, data_order, 5, f)) < 0 || (f[0].data && (r = check_name(f[0], 0)) < 0))
+        return r;
+    if (f[1].data) { /* MetaInfo */
+        if (lp == 3)
+            return LN_NDN_EDEPTH;
+        if ((r = fields(f[1], data_order + 5, 3, f + 5)) < 0 ||
+            (f[5].data && (r = nonneg32(f[5], &out->data.content_type)) < 0) ||
+            (f[6].data && (r = nonneg32(f[6], &v)) < 0))
+            return r;
+        if (f[7].data) { /* FinalBlockId: exactly one name component */
+            if ((r = ln_ndn_name_next(&f[7], &c)) < 0)
+                return r;
+            if (r != 1 || f[7].size)
+                return LN_NDN_EMALFORMED;
+        }
+    }
+    if (!f[3].data || !f[0].data || !f[4].data) /* SignatureInfo, Name, SignatureValue */
+        return LN_NDN_EMALFORMED;
+    if (lp == 3)
+        return LN_NDN_EDEPTH;
+    if ((r = fields(f[3], data_order + 8, 2, f + 8)) < 0 ||
+        (f[8].data && (r = nonneg32(f[8], &v)) < 0))
+        return r;
+    if (!f[8].data) /* SignatureType */
+        return LN_NDN_EMALFORMED;
+    out->data.name = f[0];
+    out->data.content = f[2];
+    return LN_NDN_OK;
+}
+#else
+#define decode ln_ndn_decode
+#endif
+
 LN_NDN_EXPORT int ln_pull_receive(ln_pull_sub* s, const uint8_t* packet, size_t size,
                                   uint32_t now_ms)
 {
@@ -427,16 +629,15 @@ LN_NDN_EXPORT int ln_pull_receive(ln_pull_sub* s, const uint8_t* packet, size_t 
     int sync_name = 0, r;
     if (!s || (!packet && size))
         return LN_NDN_EINVAL;
-    if ((r = ln_ndn_decode(packet, size, &p)) < 0)
+    if ((r = decode(packet, size, &p)) < 0)
         goto bad;
     if (p.type == LN_NDN_T_INTEREST && !p.lp_nack) {
         r = LN_NDN_EUNSUPPORTED;
         goto bad;
     }
     name = p.type == LN_NDN_T_DATA ? p.data.name : p.interest.name;
-    rest.data = s->name;
-    rest.size = s->name_size;
-    if (!ln_ndn_name_has_prefix(name, rest))
+    /* s->name is whole components (checked at start): a byte prefix is a name prefix */
+    if (name.size < s->name_size || memcmp(name.data, s->name, s->name_size) != 0)
         return 0;
     rest.data = name.data + s->name_size;
     rest.size = name.size - s->name_size;

@@ -12,6 +12,22 @@
 
 #define TOPIC "/ln/robot/arm.state"
 
+#ifdef LN_PULL_NO_URI
+/* The device build (no URI parser in the consumer): the name is encoded here, as a device's
+ * build does, and the same checks apply. */
+static int start_uri(ln_pull_sub* s, const char* uri, const ln_pull_options* o,
+                     ln_pull_send_fn send, ln_pull_data_fn on_data, ln_pull_event_fn on_event,
+                     void* user, uint32_t now, uint32_t seed)
+{
+    uint8_t name[LN_PULL_MAX_NAME];
+    int size = uri ? ln_ndn_name_from_uri(name, sizeof name, uri) : LN_NDN_EINVAL;
+    return size < 0 ? size
+                    : ln_pull_start_name(s, name, (size_t)size, o, send, on_data, on_event, user,
+                                         now, seed);
+}
+#define ln_pull_start start_uri
+#endif
+
 /* ---- what the consumer sent, delivered and reported ---------------------------------------- */
 typedef struct sent {
     int sync;
