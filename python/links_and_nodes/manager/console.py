@@ -12,7 +12,7 @@ import threading
 from collections.abc import Callable
 from typing import Any, TextIO
 
-from .commands import ArgError, Verb, console_entry, parse_words, to_request
+from .commands import ArgError, Verb, console_entry, parse_words, phrases, to_request
 from .commands.help import complete, help_command, help_text
 from .commands.views import format_network, format_status, json_lines, table
 from .control import Control, ControlError
@@ -68,9 +68,13 @@ class Console:
         """Run a command of the table (commands/): its words checked by the table, then
         Control.handle, then its console view."""
         if word in ("help", "?"):
-            self.say(help_command(words[0]) if words else help_text())
+            self.say(help_command(" ".join(words)) if words else help_text())
             return False
-        entry = console_entry(word)
+        entry: Any = None
+        if word in phrases.families():  # `logger NAME add ...`: a command of a family
+            entry, words = phrases.match([word, *words])
+        else:
+            entry = console_entry(word)
         if entry is None:
             raise ControlError(f"unknown command {word!r} (try help)")
         if isinstance(entry, Verb):

@@ -1,68 +1,9 @@
-"""The `logger` command line, shared by the console and `ln_manager logger ...`
-(docs/logging.md): the words after `logger` become one control command, and its answer
-becomes text.
-
-    logger                                   every logger
-    logger NAME add TOPIC [DEPTH] [--divisor K] [--span S]
-    logger NAME remove [TOPIC]               a topic pattern, or the whole logger
-    logger NAME enable [--keep] | disable | status
-    logger NAME save FILE                    .mcap or .npz
-"""
+"""The text of the `logger ...` commands' answers in the console and `ln_manager logger ...`
+(docs/logging.md); their words come from the command table (logger_control.py)."""
 
 from __future__ import annotations
 
-import argparse
 from typing import Any
-
-
-USAGE = ("usage: logger [NAME add TOPIC [DEPTH] [--divisor K] [--span S] | NAME remove [TOPIC]"
-         " | NAME enable [--keep] | NAME disable | NAME status | NAME save FILE]")
-DEFAULT_DEPTH = 1000
-
-
-class UsageError(Exception):
-    """Words that are no logger command; the text says what is expected."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> Any:  # never exit from inside the console
-        raise UsageError(f"logger: {message}\n{USAGE}")
-
-
-def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="logger", add_help=False)
-    p.add_argument("name")
-    sub = p.add_subparsers(dest="action", required=True, parser_class=_Parser)
-    add = sub.add_parser("add", add_help=False)
-    add.add_argument("topic")
-    add.add_argument("depth", nargs="?", type=int, default=DEFAULT_DEPTH)
-    add.add_argument("--divisor", type=int, default=1)
-    add.add_argument("--span", type=float, default=0.0)
-    sub.add_parser("remove", add_help=False).add_argument("topic", nargs="?", default="")
-    sub.add_parser("enable", add_help=False).add_argument("--keep", action="store_true")
-    sub.add_parser("disable", add_help=False)
-    sub.add_parser("status", add_help=False)
-    sub.add_parser("save", add_help=False).add_argument("file")
-    return p
-
-
-def parse(words: list[str]) -> tuple[str, dict[str, Any]]:
-    """(op, arguments) of a control command; `save` gives the file as written (the caller
-    decides where it is written)."""
-    if not words:
-        return "logger_list", {}
-    args = _parser().parse_args(words)
-    name = {"name": args.name}
-    if args.action == "add":
-        return "logger_add", {**name, "topic": args.topic, "depth": args.depth,
-                              "divisor": args.divisor, "span": args.span}
-    if args.action == "remove":
-        return "logger_remove", {**name, "topic": args.topic}
-    if args.action == "enable":
-        return "logger_enable", {**name, "keep": args.keep}
-    if args.action == "save":
-        return "logger_save", {**name, "path": args.file}
-    return f"logger_{args.action}", name
 
 
 def table(rows: list[list[str]]) -> list[str]:

@@ -1,6 +1,7 @@
 """The commands of topic loggers (docs/logging.md, "Control commands"): their table entries
-and handlers around loggers.Loggers, and the console's and CLI's `logger ...` words
-(logger_cli.py).  `logger_fetch` carries samples as base64 of packed (u64 seq, i64 publish
+and handlers around loggers.Loggers.  They are a family of phrases (commands/phrases.py):
+`logger NAME add TOPIC` in the console and in `ln_manager`; their text views are in
+logger_cli.py.  `logger_fetch` carries samples as base64 of packed (u64 seq, i64 publish
 time ns, message bytes) records, at most FETCH_MAX bytes of them per answer, so an answer
 stays within the protocol's 1 MiB frame.  Light to import: loggers.py (libln) and
 logger_files.py (numpy) are loaded when a command runs."""
@@ -11,7 +12,7 @@ import base64
 from pathlib import Path
 from typing import Any
 
-from .commands import Arg, ArgError, Command, Verb, register
+from .commands import Arg, ArgError, Command, Verb, register, to_request
 
 FETCH_MAX = 512 * 1024  # logger_files.FETCH_MAX (checked in tests/python/loggers)
 
@@ -102,41 +103,76 @@ async def logger_save(control: Any, c: dict[str, Any]) -> dict[str, Any]:
     return dict(await control._save_logger(c["name"], path))
 
 
-# ---- the console's and the CLI's `logger ...` ------------------------------------------------
-async def _console(console: Any, words: list[str]) -> None:
+# ---- the console's and the CLI's views --------------------------------------------------------
+def _lines(op: str) -> Any:
+    def view(result: dict[str, Any], args: dict[str, Any]) -> list[str]:
+        from . import logger_cli
+
+        return logger_cli.format_result(op, args, result)
+    return view
+
+
+async def _console_save(console: Any, args: dict[str, Any]) -> None:
+    """`logger NAME save FILE`: a file name as typed is relative to the manager's
+    directory."""
     import os
 
-    from . import logger_cli
-
-    try:
-        op, command = logger_cli.parse(words)
-    except logger_cli.UsageError as exc:
-        raise ArgError(str(exc)) from None
-    if op == "logger_save":  # a file name as typed: relative to the manager's directory
-        command["path"] = os.path.abspath(command["path"])
-    result = await console.control.handle({"op": op, **command})
-    for text in logger_cli.format_result(op, command, result):
+    args = {**args, "path": os.path.abspath(args["path"])}
+    result = await console.control.handle(to_request(_SAVE, args))
+    for text in _lines("logger_save")(result, args):
         console.say(text)
 
 
-def _cli(argv: list[str]) -> int:
-    from .remote_cli import logger_main
+def _cli_save(mgr: Any, args: dict[str, Any]) -> list[str]:
+    """`ln_manager logger NAME save FILE`: downloaded and written here, where the user is
+    (--on-manager: by the manager, on its host; a relative FILE from this directory)."""
+    import json
 
-    return logger_main(argv)
+    from .. import logger_files
+    from .scripting import ManagerError
+
+    path = Path(args["path"])
+    if args["on_manager"]:
+        result = mgr.command("logger_save", name=args["name"], path=str(path.absolute()))
+    else:
+        data = logger_files.download(lambda o, **a: mgr.command(o, name=args["name"], **a))
+        try:
+            result = logger_files.save(data, path)
+        except (OSError, ValueError) as exc:
+            raise ManagerError(f"cannot save {args['path']}: {exc}") from None
+    if args.get("json"):
+        return json.dumps(result, indent=2).splitlines()
+    return _lines("logger_save")(result, args)
 
 
 # ---- the table -----------------------------------------------------------------------------
-_NAME = Arg("name", "str", "the logger", required=True, check=_name)
+_NAME = Arg("name", "str", "the logger", required=True, check=_name, positional=True)
 _STATUS = ("name, enabled, patterns: [{pattern, depth, divisor, span}], topics: [{topic, "
            "host, stored, received, missed, skipped, dropped, error}]")
 _TOPIC = Arg("topic", "str", "a topic name or pattern (* ? [])", required=True, nonempty=True,
-             error="a logged topic needs a name or pattern", check=_pattern)
+             error="a logged topic needs a name or pattern", check=_pattern, positional=True)
 
 
 def _logger(name: str, help_text: str, handler: Any, *args: Arg, result: str = "{}",
-            changes: bool = True) -> Command:
+            changes: bool = True, phrase: str = "", **more: Any) -> Command:
+    """A logger command; with a phrase also the console's and CLI's `logger ...` words, the
+    answer as logger_cli's text (--json: the answer as it came)."""
+    if not phrase:
+        return Command(name, help_text, "loggers", handler, args, result=result,
+                       changes_state=changes, code="EINVAL", console=False, cli=False)
     return Command(name, help_text, "loggers", handler, args, result=result,
-                   changes_state=changes, code="EINVAL", console=False, cli=False)
+                   changes_state=changes, code="EINVAL", phrase=phrase,
+                   console_format=_lines(name), json_view=lambda r: r, **more)
+
+
+_SAVE = _logger(
+    "logger_save", "write what a logger holds to a file on the manager's host", logger_save,
+    _NAME, Arg("path", "str", "an absolute path, .mcap or .npz", required=True, nonempty=True,
+               positional=True, metavar="FILE"),
+    Arg("on_manager", "bool", "write the file on the manager's host instead of here",
+        where="cli"),
+    result="path, topics: {TOPIC: {samples, md_name, missed, dropped, gaps}}",
+    phrase="logger NAME save", console_run=_console_save, cli_run=_cli_save)
 
 
 register(
@@ -144,22 +180,26 @@ register(
             result="name"),
     _logger("logger_add", "log the topics of a name or pattern", logger_add, _NAME, _TOPIC,
             Arg("depth", "int", "samples kept per topic", default=1000, low=1,
-                check=_depth),
-            Arg("divisor", "int", "keep every K-th sample", default=1, low=1),
+                check=_depth, positional=True),
+            Arg("divisor", "int", "keep every K-th sample", default=1, low=1, metavar="K"),
             Arg("span", "float", "keep the last S seconds (0: by depth only)", default=0.0,
                 low=0, high=1e9, finite=True,
                 error='"span" must be a finite number of seconds >= 0', metavar="S"),
-            result=_STATUS),
+            result=_STATUS, phrase="logger NAME add"),
     _logger("logger_remove", "remove a topic pattern, or the whole logger", logger_remove,
-            _NAME, Arg("topic", "str", "the pattern (none: the whole logger)", default="")),
+            _NAME, Arg("topic", "str", "the pattern (none: the whole logger)", default="",
+                       positional=True),
+            phrase="logger NAME remove"),
     _logger("logger_enable", "start logging", logger_enable, _NAME,
-            Arg("keep", "bool", "keep what was logged before", default=False)),
+            Arg("keep", "bool", "keep what was logged before", default=False),
+            phrase="logger NAME enable"),
     _logger("logger_disable", "stop logging (what was logged stays)", logger_disable,
-            _NAME),
+            _NAME, phrase="logger NAME disable"),
     _logger("logger_status", "a logger's patterns and topics with their counters",
-            logger_status, _NAME, result=_STATUS, changes=False),
+            logger_status, _NAME, result=_STATUS, changes=False, phrase="logger NAME status"),
     _logger("logger_list", "every logger", logger_list,
-            result="loggers: [{name, enabled, patterns, topics}]", changes=False),
+            result="loggers: [{name, enabled, patterns, topics}]", changes=False,
+            phrase="logger"),
     _logger("logger_fetch", "logged samples of one topic on one host", logger_fetch, _NAME,
             Arg("topic", "str", "the topic", required=True, nonempty=True),
             Arg("host", "str", "the host", required=True, nonempty=True),
@@ -170,15 +210,6 @@ register(
             result="md_name, layout_hash, message_size, enabled, received, stored, missed, "
                    "skipped, dropped, first_seq, last_seq, start_seq, count, samples "
                    "(base64)", changes=False),
-    _logger("logger_save", "write what a logger holds to a file on the manager's host",
-            logger_save, _NAME,
-            Arg("path", "str", "an absolute path, .mcap or .npz", required=True,
-                nonempty=True),
-            result="path, topics: {TOPIC: {samples, md_name, missed, dropped, gaps}}"),
-    Verb("logger", "topic loggers (docs/logging.md)", "loggers",
-         ("logger [NAME ...]",
-          "    topic loggers: NAME add TOPIC [DEPTH] [--divisor K] [--span S],",
-          "    NAME remove [TOPIC], NAME enable [--keep]|disable|status,",
-          "    NAME save FILE (.mcap or .npz)"),
-         _console, _cli, ("add", "remove", "enable", "disable", "status", "save")),
+    _SAVE,
+    Verb("logger", "topic loggers (docs/logging.md)", "loggers", ("logger ...",), None, None),
 )

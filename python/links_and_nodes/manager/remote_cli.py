@@ -1,8 +1,9 @@
 """`ln_manager COMMAND ...`: the commands of the table (commands/) as subcommands talking to a
 running manager through the scripting API (scripting.py).  The argparse parser is built from
 the table: positional arguments, options, help, `--json`; a command's arguments are checked
-by the table like a console line's.  Verbs with words of their own (`logger`, `topic`,
-`param`, ...) run their own main.  Exit status 0 on success, 1 when the manager refuses or
+by the table like a console line's; a family of commands named by phrases (`ln_manager
+logger NAME add TOPIC`) takes its words as the console does.  Verbs with words of their own
+(`topic`, `param`, ...) run their own main.  Exit status 0 on success, 1 when the manager refuses or
 cannot be reached, 2 for usage."""
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import json
 import sys
 from typing import Any
 
-from .commands import SAME, ArgError, Command, commands, to_request, verbs
+from .commands import SAME, ArgError, Command, commands, parse_words, phrases, to_request, verbs
 from .commands.check import from_texts
 from .commands.views import json_lines
 from .scripting import ManagerError, connect
@@ -51,8 +52,12 @@ def build_parser() -> argparse.ArgumentParser:
     _add_manager(parser)
     sub = parser.add_subparsers(dest="command", required=True)
     for cmd in commands():
-        if cmd.cli_word:
+        if cmd.cli_word and not cmd.phrase:
             _add_command(sub, cmd)
+    about = {v.name: v.help for v in verbs()}
+    for word in phrases.families("cli"):
+        text = about.get(word, word)
+        sub.add_parser(word, help=text, description=text, add_help=False)
     for verb in verbs():
         if verb.cli is not None:
             sub.add_parser(verb.name, help=verb.help, description=verb.help, add_help=False)
@@ -61,8 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def names() -> list[str]:
     """Every `ln_manager` subcommand of the table."""
-    return [c.cli_word for c in commands() if c.cli_word] + \
-        [v.name for v in verbs() if v.cli is not None]
+    return [c.cli_word for c in commands() if c.cli_word and not c.phrase] + \
+        phrases.families("cli") + [v.name for v in verbs() if v.cli is not None]
 
 
 def _json_view(cmd: Command, result: dict[str, Any]) -> Any:
@@ -74,7 +79,7 @@ def _json_view(cmd: Command, result: dict[str, Any]) -> Any:
 def run(cmd: Command, mgr: Any, args: dict[str, Any], as_json: bool) -> list[str]:
     """The lines `ln_manager COMMAND` prints for checked arguments."""
     if cmd.cli_run is not None:
-        return cmd.cli_run(mgr, args)
+        return cmd.cli_run(mgr, {**args, "json": as_json})
     request = to_request(cmd, args)
     del request["op"]
     wait = args.get(cmd.script_wait) if cmd.script_wait else None
@@ -84,7 +89,46 @@ def run(cmd: Command, mgr: Any, args: dict[str, Any], as_json: bool) -> list[str
     return (cmd.cli_format or cmd.console_format or json_lines)(result, args)
 
 
+def family_main(argv: list[str]) -> int:
+    """`ln_manager logger NAME add TOPIC ...`: a command of a family (argv: the family's word
+    first); --json and --manager HOST:PORT anywhere."""
+    prog = f"ln_manager {argv[0]}"
+    words, address, as_json = [argv[0]], None, False
+    it = iter(argv[1:])
+    for word in it:
+        if word == "--json":
+            as_json = True
+        elif word == "--manager":
+            address = next(it, None)
+        elif word.startswith("--manager="):
+            address = word.split("=", 1)[1]
+        elif word in ("-h", "--help"):
+            about = {v.name: v.help for v in verbs()}.get(argv[0], "")
+            print(phrases.usage(argv[0], "cli") + "\n  [--json] [--manager HOST:PORT]"
+                  + (f"\n\n{about}" if about else ""))
+            return 0
+        else:
+            words.append(word)
+    try:
+        cmd, rest = phrases.match(words, "cli")
+        args = parse_words(cmd, rest, "cli")
+    except ArgError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        with connect(address) as mgr:
+            lines = run(cmd, mgr, args, as_json)
+    except ManagerError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 1
+    if lines:
+        print("\n".join(lines))
+    return 0
+
+
 def main(argv: list[str]) -> int:
+    if argv and argv[0] in phrases.families("cli"):
+        return family_main(argv)
     for verb in verbs():
         if argv and argv[0] == verb.name and verb.cli is not None:
             return verb.cli(argv)
@@ -106,63 +150,4 @@ def main(argv: list[str]) -> int:
         return 1
     if lines:
         print("\n".join(lines))
-    return 0
-
-
-# ---- `ln_manager logger ...` (docs/logging.md) ------------------------------------------------
-def logger_main(argv: list[str]) -> int:
-    """argv: `logger` and its words; --json, --on-manager and --manager anywhere."""
-    from pathlib import Path
-
-    from .. import logger_files
-    from . import logger_cli
-
-    parser = argparse.ArgumentParser(
-        prog="ln_manager logger", description="topic loggers: list, add, remove, enable, "
-        "disable, status, save (docs/logging.md)")
-    _add_manager(parser)
-    parser.add_argument("--json", action="store_true", help="the answer as JSON")
-    parser.add_argument("--on-manager", action="store_true",
-                        help="save: write the file on the manager's host instead of here")
-    parser.add_argument("words", nargs=argparse.REMAINDER,
-                        help="NAME add TOPIC [DEPTH] [--divisor K] [--span S] | NAME remove "
-                             "[TOPIC] | NAME enable [--keep] | NAME disable | NAME status | "
-                             "NAME save FILE")
-    args = parser.parse_args(argv[1:])
-    words = []
-    it = iter(args.words)
-    for word in it:  # the options may also come after the words
-        if word in ("--json", "--on-manager"):
-            setattr(args, word[2:].replace("-", "_"), True)
-        elif word == "--manager":
-            args.manager = next(it, None)
-        else:
-            words.append(word)
-    try:
-        op, command = logger_cli.parse(words)
-    except logger_cli.UsageError as exc:
-        print(exc, file=sys.stderr)
-        return 2
-    try:
-        with connect(args.manager) as mgr:
-            if op == "logger_save" and not args.on_manager:  # written here, where the user is
-                data = logger_files.download(
-                    lambda o, **a: mgr.command(o, name=command["name"], **a))
-                try:
-                    result = logger_files.save(data, Path(command["path"]))
-                except (OSError, ValueError) as exc:
-                    print(f"ln_manager logger: error: cannot save {command['path']}: {exc}",
-                          file=sys.stderr)
-                    return 1
-            else:
-                if op == "logger_save":
-                    command["path"] = str(Path(command["path"]).absolute())
-                result = mgr.command(op, **command)
-    except ManagerError as exc:
-        print(f"ln_manager logger: error: {exc}", file=sys.stderr)
-        return 1
-    if args.json:
-        print(json.dumps(result, indent=2))
-    else:
-        print("\n".join(logger_cli.format_result(op, command, result)))
     return 0

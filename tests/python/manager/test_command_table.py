@@ -27,7 +27,7 @@ import pytest
 from buildtree import missing_test_tool
 from links_and_nodes.manager import commands as table
 from links_and_nodes.manager import remote_cli
-from links_and_nodes.manager.commands import ArgError, check_args, parse_words
+from links_and_nodes.manager.commands import ArgError, check_args, parse_words, to_request
 from links_and_nodes.manager.commands.check import error_text
 from links_and_nodes.manager.commands.help import complete, help_command, help_text
 from links_and_nodes.manager.commands.spec import TYPES
@@ -60,7 +60,7 @@ def test_every_entry_has_help_typed_args_and_every_front_end() -> None:
             assert f"  {cmd.console_word}" in console_help, cmd.name
             assert help_command(cmd.console_word).startswith("usage: " + cmd.console_word)
         if cmd.cli_word:
-            assert cmd.cli_word in cli_help, cmd.name
+            assert (cmd.family or cmd.cli_word) in cli_help, cmd.name
         if cmd.script_name:
             method = getattr(Manager, cmd.script_name)
             assert method.__doc__, cmd.name
@@ -69,8 +69,36 @@ def test_every_entry_has_help_typed_args_and_every_front_end() -> None:
         assert cmd.script_name and (cmd.console_word or cmd.name == "wait_ready")
         assert cmd.cli_word, cmd.name
     for verb in table.verbs():
-        assert verb.usage and verb.help
-        assert f"  {verb.usage[0]}" in console_help and verb.name in cli_help
+        assert verb.usage and verb.help and verb.name in cli_help
+        if verb.console is not None:
+            assert f"  {verb.usage[0]}" in console_help
+
+
+def test_a_family_of_phrases_is_table_commands(capsys: pytest.CaptureFixture[str]) -> None:
+    """`logger NAME add TOPIC`: each command of the family is an entry of the table whose
+    words the console and `ln_manager logger` take from it."""
+    family = table.phrases.family("logger")
+    assert {c.name for c in family} == {"logger_add", "logger_remove", "logger_enable",
+                                        "logger_disable", "logger_status", "logger_list",
+                                        "logger_save"}
+    assert remote_cli.main(["logger", "--help"]) == 0
+    cli_help = capsys.readouterr().out
+    for cmd in family:
+        assert cmd.script_name == cmd.name and getattr(Manager, cmd.name).__doc__
+        assert cmd.usage("cli") in cli_help
+        assert help_command(cmd.phrase.replace(" NAME", "")).startswith(
+            "usage: " + cmd.usage("console"))
+    assert "--on-manager" in cli_help and "--on-manager" not in help_text()
+    cmd, words = table.phrases.match(["logger", "arm", "add", "a.*", "50", "--span", "2"])
+    assert (cmd.name, to_request(cmd, parse_words(cmd, words))) == (
+        "logger_add", {"op": "logger_add", "name": "arm", "topic": "a.*", "depth": 50,
+                       "divisor": 1, "span": 2.0})
+    cmd, words = table.phrases.match(["logger"])
+    assert cmd.name == "logger_list" and words == []
+    for bad in (["logger", "arm"], ["logger", "arm", "frobnicate"]):
+        with pytest.raises(ArgError, match="^usage: logger NAME add TOPIC"):
+            table.phrases.match(bad)
+    assert complete("logger arm e") == ["enable"]
 
 
 def test_describe_is_json_and_lists_every_command() -> None:
@@ -374,6 +402,44 @@ def test_a_bad_argument_is_the_same_text_everywhere(fronts: Fronts, line: str,
     done = fronts.cli(*words)
     assert done.returncode in (1, 2)
     assert done.stderr.splitlines() == [f"ln_manager {words[0]}: error: {text}"]
+
+
+def test_logger_words_answer_the_same_everywhere(fronts: Fronts) -> None:
+    """The `logger` family: words in the console and `ln_manager logger`, JSON over CONTROL
+    and the WebSocket, the scripting API: one table entry each, the same answers."""
+    from links_and_nodes.manager.logger_cli import format_result
+
+    mgr = fronts.mgr
+    assert fronts.console("logger ctlog add 'ctl.*' 50 --divisor 2") == \
+        format_result("logger_add", {}, mgr.command("logger_status", name="ctlog"))
+    status = mgr.command("logger_status", name="ctlog")
+    assert status["patterns"] == [{"pattern": "ctl.*", "depth": 50, "divisor": 2, "span": 0}]
+    if WEBSOCKETS:
+        assert fronts.websocket({"op": "logger_status", "name": "ctlog"}) == status
+    assert mgr.logger_status("ctlog") == {k: v for k, v in status.items() if k != "ok"}
+    expected = format_result("logger_status", {}, status)
+    assert fronts.console("logger ctlog status") == expected
+    done = fronts.cli("logger", "ctlog", "status")
+    assert done.returncode == 0 and done.stdout.splitlines() == expected, done.stderr
+    assert json.loads(fronts.cli("logger", "ctlog", "status", "--json").stdout) == status
+    listing = mgr.command("logger_list")
+    assert fronts.console("logger") == format_result("logger_list", {}, listing)
+    assert fronts.cli("logger").stdout.splitlines() == format_result("logger_list", {}, listing)
+    assert fronts.cli("logger", "ctlog", "enable", "--keep").stdout.splitlines() == \
+        ["enabled: logger ctlog"]
+    assert fronts.console("logger ctlog disable") == ["disabled: logger ctlog"]
+    assert fronts.console("logger ctlog remove 'ctl.*'") == \
+        ["removed: 'ctl.*' of logger ctlog"]
+    text = '"depth" must be an integer >= 1'
+    with pytest.raises(ManagerError, match=text):
+        mgr.command("logger_add", name="ctlog", topic="x", depth=0)
+    if WEBSOCKETS:
+        assert fronts.websocket({"op": "logger_add", "name": "ctlog", "topic": "x",
+                                 "depth": 0}) == {"ok": False, "error": text, "code": "EINVAL"}
+    assert fronts.console("logger ctlog add x 0") == [f"error: {text}"]
+    done = fronts.cli("logger", "ctlog", "add", "x", "0")
+    assert done.returncode == 2 and done.stderr.splitlines() == \
+        [f"ln_manager logger: error: {text}"]
 
 
 def test_console_on_a_terminal_completes_with_tab(tmp_path: Path) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import textwrap
 
+from . import phrases
 from .spec import SAME, Command, Verb
 from .table import commands, console_entry, verbs
 
@@ -45,8 +46,18 @@ def _arg_line(cmd: Command, name: str) -> str:
 
 
 def help_command(word: str) -> str:
-    """`help COMMAND`: its usage, text and arguments."""
-    entry = console_entry(word)
+    """`help COMMAND`: its usage, text and arguments (`help logger`: the family's usage,
+    `help logger add`: that command of the family)."""
+    words = word.split() or [""]
+    if words[0] in phrases.families():
+        named = [c for c in phrases.family(words[0])
+                 if len(words) > 1 and (c.phrase == word or phrases.said(c) == words)]
+        if len(named) != 1:
+            return phrases.usage(words[0])
+        entry: Command | Verb | None = named[0]
+    else:
+        word = words[0]
+        entry = console_entry(word)
     if entry is None:
         return f"unknown command {word!r} (try help)"
     if isinstance(entry, Verb):
@@ -66,9 +77,15 @@ def complete(line: str) -> list[str]:
         names = [c.console_word for c in commands() if c.console_word]
         names += [a for c in commands() if c.console_word for a in c.aliases]
         names += [v.name for v in verbs() if v.console is not None] + ["help"]
+        names = [n.split()[0] for n in names]
         return sorted(n for n in set(names) if n.startswith(last))
     if before[0] == "help" and len(before) == 1:
         return complete(last)
+    if before[0] in phrases.families():
+        said = [w for c in phrases.family(before[0]) for w in phrases.said(c)[1:]]
+        options = [a.option for c in phrases.family(before[0]) for a in c.args
+                   if not a.positional and a.where in ("", "console")]
+        return sorted(w for w in set(said + options) if w.startswith(last))
     entry = console_entry(before[0])
     if isinstance(entry, Verb):
         return sorted(w for w in entry.words if w.startswith(last))

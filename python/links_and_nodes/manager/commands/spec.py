@@ -104,6 +104,9 @@ class Command:
     command where a front end does more than ask and print (return True from console_run
     to end the console).  json_view(result): what `--json` prints (default: the result
     without "ok").
+    phrase: the words that name it in the console and the CLI when it is one of a family of
+    commands (`logger NAME add`, `logger`): the family's word, then literal words and, in
+    capitals, the values of its first positional arguments (commands/phrases.py).
     script: the scripting API method (True: the name; "" for none); script_result(result)
     -> what it returns (default the result); script_wait: the argument that says how
     long the answer may take."""
@@ -131,14 +134,29 @@ class Command:
     script_result: Callable[[dict[str, Any]], Any] | None = None
     script_wait: str = ""
     script_doc: str = ""
+    phrase: str = ""
 
     @property
     def console_word(self) -> str:
+        if self.phrase:
+            return self.phrase if self.console else ""
         return self.name if self.console is True else (self.console or "")
 
     @property
     def cli_word(self) -> str:
+        if self.phrase:
+            return self.phrase if self.cli else ""
         return self.name.replace("_", "-") if self.cli is True else (self.cli or "")
+
+    @property
+    def family(self) -> str:
+        """The first word of its phrase ("" for a command of its own)."""
+        return self.phrase.split()[0] if self.phrase else ""
+
+    @property
+    def placed(self) -> tuple[str, ...]:
+        """The positional arguments whose values stand inside its phrase."""
+        return tuple(w for w in self.phrase.split()[1:] if w.isupper())
 
     @property
     def script_name(self) -> str:
@@ -155,7 +173,7 @@ class Command:
         word = self.console_word if where == "console" else self.cli_word
         parts = [word]
         for a in self.args:
-            if a.where not in ("", where):
+            if a.where not in ("", where) or (a.positional and a.word in self.placed):
                 continue
             if a.positional:
                 needed = a.required or (where == "console" and a.console_required)
