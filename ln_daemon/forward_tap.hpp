@@ -9,6 +9,7 @@
 #include <thread>
 
 #include <ln/ln.h>
+#include <ln_admin.h>
 
 #include "forward_net.hpp"
 

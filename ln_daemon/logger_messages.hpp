@@ -1,7 +1,8 @@
-// Payloads of the topic logging messages (docs/daemon.md, "Topic logging"): decoding the
-// LOGGER_* requests, encoding the LOGGER_LIST reply and the head of LOGGER_DATA (its samples
-// come straight out of the logger's buffer).  Decoders check structure only (lengths, flags,
-// nothing left over); what the values mean is checked by the logger table.
+// Payloads of the topic logging messages (docs/daemon.md, "Topic logging") through the
+// generated codec (daemon_wire.hpp): the LOGGER_* requests, the LOGGER_LIST reply and the
+// head of LOGGER_DATA (its samples come straight out of the logger's buffer).  Decoders
+// check structure only (lengths, flags, nothing left over); what the values mean is checked
+// by the logger table.
 #pragma once
 
 #include <cstdint>
@@ -12,37 +13,11 @@
 
 namespace lnd {
 
-// LOGGER_TOPIC: create or update one topic of a logger.
-struct LoggerTopicRequest {
-    std::string logger;
-    std::string topic;
-    std::string ring; // shm name of the topic's ring on this host
-    std::string md_name;
-    uint64_t layout_hash = 0;
-    uint64_t message_size = 0;
-    uint32_t depth = 0;   // samples kept, >= 1
-    uint32_t divisor = 0; // keep a sample iff seq % divisor == 0, >= 1
-    double span_s = 0;    // 0: none; else drop samples older than newest - span
-};
-
-// LOGGER_REMOVE: one topic, or with topic "" the whole logger.
-struct LoggerRemoveRequest {
-    std::string logger;
-    std::string topic;
-};
-
-struct LoggerEnableRequest {
-    std::string logger;
-    bool enable = false;
-    bool clear = false;
-};
-
-struct LoggerFetchRequest {
-    std::string logger;
-    std::string topic;
-    uint64_t after_seq = 0;
-    uint32_t max_bytes = 0;
-};
+// The requests as they arrive: the generated structs of daemon.schema.
+using LoggerTopicRequest = wire::LoggerTopic;   // create or update one topic of a logger
+using LoggerRemoveRequest = wire::LoggerRemove; // one topic, or with topic "" the logger
+using LoggerEnableRequest = wire::LoggerEnable;
+using LoggerFetchRequest = wire::LoggerFetch;
 
 // Each is false if the payload is malformed (short, trailing bytes, a flag not 0 or 1, a
 // string longer than proto::kMaxName).
@@ -53,44 +28,15 @@ bool decode_logger_fetch(proto::Reader &r, LoggerFetchRequest &out);
 // LOGGER_STATUS: just the logger ("" = every logger of the instance).
 bool decode_logger_status(proto::Reader &r, std::string &logger);
 
-// What a logger topic counted; see docs/daemon.md for each.
-struct LoggerCounters {
-    uint64_t received = 0; // samples the tap delivered while enabled
-    uint64_t stored = 0;   // samples in the buffer now
-    uint64_t missed = 0;   // sequence numbers the tap never delivered while enabled
-    uint64_t skipped = 0;  // not kept because of the divisor
-    uint64_t dropped = 0;  // evicted by depth or span (or by a restarted numbering)
-};
-
-// The fields of LOGGER_DATA before its samples.
-struct LoggerDataHead {
-    uint64_t message_size = 0;
-    uint64_t layout_hash = 0;
-    std::string md_name;
-    bool enabled = false;
-    LoggerCounters counters;
-    uint64_t first_seq = 0; // of the buffer; 0 if it is empty
-    uint64_t last_seq = 0;
-    uint64_t start_seq = 0; // the ring's newest seq when the capture began reading it
-};
-
-// One entry of LOGGER_LIST.
-struct LoggerTopicStatus {
-    std::string logger;
-    std::string topic;
-    std::string ring;
-    std::string md_name;
-    bool enabled = false;
-    uint32_t depth = 0;
-    uint32_t divisor = 0;
-    double span_s = 0;
-    uint64_t message_size = 0;
-    LoggerCounters counters;
-    std::string last_error; // the current problem, "" if none (cut to kMaxLoggerErrorText)
-};
+// What a logger topic counted (see docs/daemon.md for each), the fields of LOGGER_DATA
+// before its samples (its `samples` stay empty: the buffer appends them) and one entry of
+// LOGGER_LIST: the generated structs.
+using LoggerCounters = wire::LoggerCounters;
+using LoggerDataHead = wire::LoggerData;
+using LoggerTopicStatus = wire::LoggerTopicStatus;
 
 // Longest last_error text in LOGGER_LIST; a longer one is cut.
-constexpr size_t kMaxLoggerErrorText = 256;
+constexpr size_t kMaxLoggerErrorText = wire::kMaxStatText;
 // Bytes of LOGGER_DATA before its samples, at most (the md name at its longest).
 constexpr size_t kLoggerDataHeadBytes = 8 + 8 + 4 + proto::kMaxName + 1 + 8 * 8 + 4;
 // Payload bytes a LOGGER_DATA reply may have: the frame minus its header and tag.

@@ -55,7 +55,7 @@ bool Loggers::handles(uint8_t type) noexcept { return logger_msg_name(type) != n
 
 NetOutcome Loggers::handle(const std::string &instance, uint8_t type, proto::Reader &r)
 {
-    try {
+    return outcome::guarded(instance, Err::logger_failed, [&]() -> NetOutcome {
         switch (static_cast<Msg>(type)) {
         case Msg::logger_topic: {
             LoggerTopicRequest req;
@@ -80,12 +80,7 @@ NetOutcome Loggers::handle(const std::string &instance, uint8_t type, proto::Rea
         default:
             return malformed(); // not reached: handles() admits only the types above
         }
-    } catch (const std::bad_alloc &) {
-        throw; // the connection is dropped (Server::on_readable)
-    } catch (const std::exception &e) { // a thread or an eventfd that could not be made
-        logf("instance %s: %s", instance.c_str(), e.what());
-        return error(Err::logger_failed, e.what());
-    }
+    });
 }
 
 void Loggers::shutdown() noexcept

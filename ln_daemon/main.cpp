@@ -13,6 +13,7 @@
 #include <fcntl.h>
 #include <getopt.h>
 #include <ln/ln.h>
+#include <ln_admin.h>
 #include <memory>
 #include <netdb.h>
 #include <string>
@@ -32,9 +33,11 @@
 #include "os_linux.hpp"
 #include "server.hpp"
 
+#include <default_ports.h>
+
 namespace {
 
-constexpr unsigned kDefaultPort = 54376; // the LN "arbiter" port
+constexpr unsigned kDefaultPort = LN_DEFAULT_DAEMON_PORT;
 
 constexpr size_t kMinFragment = 256, kMaxFragment = 65000; // --udp-fragment-size
 
@@ -46,7 +49,8 @@ const char kUsage[] =
     "Supervises processes for ln_manager instances on this host and forwards topics\n"
     "between hosts (docs/daemon.md).\n"
     "\n"
-    "  --port P        TCP port (default: $LN_ARBITER_PORT, else 54376; 0 picks a free one)\n"
+    "  --port P        TCP port (default: $" LN_DAEMON_PORT_ENV ", else "
+    LN_PORT_TEXT(LN_DEFAULT_DAEMON_PORT) "; 0 picks a free one)\n"
     "  --bind ADDR     address to listen on (default 0.0.0.0), also for the data port\n"
     "  --key-file FILE the shared key: 64 hex digits, mode 0600, owned by this user\n"
     "  --log FILE      append the log here (default: stderr; discarded when detached)\n"
@@ -210,9 +214,9 @@ void redirect_stdio_to_null()
 int main(int argc, char **argv)
 {
     unsigned port = kDefaultPort;
-    if (const char *env = std::getenv("LN_ARBITER_PORT"); env && *env) {
+    if (const char *env = std::getenv(LN_DAEMON_PORT_ENV); env && *env) {
         if (!parse_port(env, port))
-            return fail(std::string("LN_ARBITER_PORT is not a port number: ") + env);
+            return fail(std::string(LN_DAEMON_PORT_ENV " is not a port number: ") + env);
     }
     std::string bind = "0.0.0.0", key_file, log_file;
     bool foreground = false;
@@ -293,7 +297,7 @@ int main(int argc, char **argv)
         if (port == 65535)
             return usage_error("the default data port (--port + 1) would be 65536; give "
                                "--data-port");
-        data_port = port == 0 ? 0 : port + 1;
+        data_port = port == 0 ? 0 : port + LN_DATA_PORT_OFFSET;
     }
     if (port != 0 && data_port == static_cast<long>(port))
         return usage_error("--data-port must differ from --port");

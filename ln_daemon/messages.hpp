@@ -1,5 +1,6 @@
-// Payloads of the protocol's messages (docs/daemon.md lists them field by field): decoding
-// SPAWN, encoding process records, output lines and events.
+// Payloads of the process messages (docs/daemon.md lists them field by field): SPAWN is
+// decoded by the generated codec (daemon_wire.hpp); here the process records, output lines
+// and events are filled from a Process and encoded.
 #pragma once
 
 #include <cstdint>
@@ -10,13 +11,14 @@
 
 namespace lnd {
 
-// SPAWN flags
-constexpr uint8_t kSpawnShell = 1;
-constexpr uint8_t kSpawnPty = 2;
+// SPAWN flags (daemon.schema, SpawnFlags)
+constexpr uint8_t kSpawnShell = wire::SpawnFlags::shell;
+constexpr uint8_t kSpawnPty = wire::SpawnFlags::use_pty;
 
 // False if the payload is malformed (short, trailing bytes, unknown flags).
-bool decode_spawn(proto::Reader &r, SpawnRequest &out);
+inline bool decode_spawn(proto::Reader &r, SpawnRequest &out) { return wire::decode(r, out); }
 
+wire::ProcessInfo process_info(const Process &p);
 void encode_info(proto::Writer &w, const Process &p);
 // The last `n` lines of `p`, oldest first, at most `budget` bytes of payload.
 void encode_lines(proto::Writer &w, const Process &p, uint32_t n, size_t budget);

@@ -7,11 +7,14 @@
 #pragma once
 
 #include <cstdint>
+#include <exception>
+#include <new>
 #include <string>
 #include <unordered_map>
 #include <utility>
 
 #include "forward.hpp"
+#include "log.hpp"
 #include "protocol.hpp"
 #include "rings.hpp"
 
@@ -52,6 +55,21 @@ inline NetOutcome malformed()
     NetOutcome o;
     o.kind = NetOutcome::Kind::malformed;
     return o;
+}
+// The daemon's one convention for a request handler's exceptions: run `dispatch`; bad_alloc
+// propagates (the connection is dropped, Server::on_readable); any other exception (a thread
+// or an eventfd that could not be made) is logged for `instance` and answered as error `code`.
+template <typename Dispatch>
+NetOutcome guarded(const std::string &instance, proto::Err code, Dispatch &&dispatch)
+{
+    try {
+        return dispatch();
+    } catch (const std::bad_alloc &) {
+        throw;
+    } catch (const std::exception &e) {
+        logf("instance %s: %s", instance.c_str(), e.what());
+        return error(code, e.what());
+    }
 }
 } // namespace outcome
 

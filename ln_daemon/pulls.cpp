@@ -47,7 +47,7 @@ bool Pulls::handles(uint8_t type) noexcept { return pull_msg_name(type) != nullp
 
 NetOutcome Pulls::handle(const std::string &instance, uint8_t type, proto::Reader &r)
 {
-    try {
+    return outcome::guarded(instance, Err::pull_failed, [&]() -> NetOutcome {
         switch (static_cast<Msg>(type)) {
         case Msg::pull_topic: {
             PullTopicRequest req;
@@ -64,12 +64,7 @@ NetOutcome Pulls::handle(const std::string &instance, uint8_t type, proto::Reade
         default:
             return malformed(); // not reached: handles() admits only the types above
         }
-    } catch (const std::bad_alloc &) {
-        throw; // the connection is dropped (Server::on_readable)
-    } catch (const std::exception &e) { // a thread or an eventfd that could not be made
-        logf("instance %s: %s", instance.c_str(), e.what());
-        return error(Err::pull_failed, e.what());
-    }
+    });
 }
 
 void Pulls::shutdown() noexcept

@@ -5,8 +5,11 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fcntl.h>
 #include <ln/ln.h>
+#include <ln_admin.h>
+#include <naming.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 
@@ -53,20 +56,18 @@ bool check_geometry(const RingCreateRequest &req, std::string &error)
 
 std::string sanitize_instance(const std::string &instance)
 {
-    std::string out;
-    for (unsigned char c : instance) {
-        if ((c & 0xc0) == 0x80)
-            continue; // continuation byte: its character has its '_' already
-        bool safe = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') ||
-                    (c >= '0' && c <= '9') || c == '_' || c == '-';
-        out += safe ? static_cast<char>(c) : '_';
-    }
+    std::string out(instance.size() + 1, '\0');
+    out.resize(ln_name_instance(instance.c_str(), out.data(), out.size()));
     return out;
 }
 
 std::string ring_prefix(const std::string &instance)
 {
-    return "/ln." + sanitize_instance(instance) + ".";
+    std::string out(instance.size() + 8, '\0');
+    if (ln_name_segment_prefix(instance.c_str(), out.data(), out.size()) != LN_OK)
+        return {};
+    out.resize(std::strlen(out.c_str()));
+    return out;
 }
 
 bool ring_in_namespace(const std::string &instance, const std::string &name,

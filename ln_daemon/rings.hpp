@@ -21,8 +21,8 @@ namespace lnd {
 constexpr size_t kMaxRings = 16384;     // handles per daemon, all instances
 constexpr double kMaxRetireTimeout = 10.0; // RING_RETIRE blocks the poll loop that long at most
 
-// The instance name as segment names carry it: every character other than A-Z a-z 0-9 _ -
-// becomes '_' (one '_' per UTF-8 character), as segments.sanitize_instance does.
+// The instance name as segment names carry it (libln's ln_name_instance, naming.h: every
+// character other than A-Z a-z 0-9 _ - becomes one '_').
 std::string sanitize_instance(const std::string &instance);
 // "/ln.<sanitized instance>."
 std::string ring_prefix(const std::string &instance);

@@ -76,30 +76,8 @@ std::string peer_name(const sockaddr_storage &sa)
 
 const char *msg_name(uint8_t type) noexcept
 {
-    switch (static_cast<Msg>(type)) {
-    case Msg::spawn:
-        return "SPAWN";
-    case Msg::stop:
-        return "STOP";
-    case Msg::signal:
-        return "SIGNAL";
-    case Msg::list:
-        return "LIST";
-    case Msg::output:
-        return "OUTPUT";
-    case Msg::forget:
-        return "FORGET";
-    case Msg::ping:
-        return "PING";
-    case Msg::client_hello:
-        return "CLIENT_HELLO";
-    default: {
-        const char *net = net_msg_name(type);
-        const char *logger = logger_msg_name(type);
-        const char *pull = pull_msg_name(type);
-        return net ? net : logger ? logger : pull ? pull : "unknown";
-    }
-    }
+    const char *name = wire::name(static_cast<Msg>(type));
+    return name ? name : "unknown";
 }
 
 } // namespace
@@ -151,10 +129,12 @@ void Server::accept_all()
         c->peer = std::move(peer);
         c->deadline = os_.monotonic() + kHandshakeTimeout;
         random_bytes(c->nonce, sizeof c->nonce);
+        wire::DaemonHello hello;
+        std::memcpy(hello.magic.data(), proto::kMagic, sizeof proto::kMagic);
+        hello.version = proto::kVersion;
+        std::memcpy(hello.nonce.data(), c->nonce, sizeof c->nonce);
         proto::Writer w;
-        w.raw(proto::kMagic, sizeof proto::kMagic);
-        w.u16(proto::kVersion);
-        w.raw(c->nonce, sizeof c->nonce);
+        wire::encode(w, hello);
         send(*c, Msg::daemon_hello, 0, w.buffer());
         conns_.emplace(c->id, std::move(c));
     }
@@ -215,8 +195,7 @@ void Server::send(Connection &c, Msg type, uint32_t req, const std::string &payl
 void Server::send_error(Connection &c, uint32_t req, Err code, const std::string &text)
 {
     proto::Writer w;
-    w.u16(static_cast<uint16_t>(code));
-    w.str(text);
+    wire::encode(w, wire::Error{static_cast<uint16_t>(code), text});
     send(c, Msg::error, req, w.buffer());
 }
 
@@ -353,39 +332,37 @@ void Server::handle_hello(Connection &c, uint8_t type, proto::Reader &r)
                    " refused before the handshake");
         return;
     }
-    char magic[sizeof proto::kMagic];
-    r.raw(magic, sizeof magic);
-    uint16_t version = r.u16();
-    uint8_t nonce[proto::kNonceBytes];
-    r.raw(nonce, sizeof nonce);
-    std::string instance = r.str(proto::kMaxName);
-    Tag proof;
-    r.raw(proof, sizeof proof);
-    if (!r.done() || std::memcmp(magic, proto::kMagic, sizeof magic) != 0) {
+    wire::ClientHello hello;
+    if (!wire::decode(r, hello) ||
+        std::memcmp(hello.magic.data(), proto::kMagic, sizeof proto::kMagic) != 0) {
         refuse(c, 0, Err::bad_request, "malformed CLIENT_HELLO");
         return;
     }
-    if (version != proto::kVersion) {
+    if (hello.version != proto::kVersion) {
         refuse(c, 0, Err::version,
-               "unsupported protocol version " + std::to_string(version) +
+               "unsupported protocol version " + std::to_string(hello.version) +
                    "; this daemon speaks version " + std::to_string(proto::kVersion));
         return;
     }
+    std::string &instance = hello.instance;
     if (!valid_name(instance)) {
         refuse(c, 0, Err::bad_request, "invalid instance name");
         return;
     }
     Session s;
-    derive_session(key_, c.nonce, nonce, instance, s);
-    if (!tag_equal(s.client_proof, proof)) {
-        refuse(c, 0, Err::auth_failed, "authentication failed (wrong key) for instance " + instance);
+    derive_session(key_, c.nonce, hello.nonce.data(), instance, s);
+    if (!tag_equal(s.client_proof, hello.proof.data())) {
+        refuse(c, 0, Err::auth_failed,
+               "authentication failed (wrong key) for instance " + instance);
         return;
     }
     c.instance = std::move(instance);
     c.to_daemon = s.to_daemon;
     c.to_client = s.to_client;
+    wire::AuthOk ok;
+    std::memcpy(ok.proof.data(), s.daemon_proof, sizeof s.daemon_proof);
     proto::Writer w;
-    w.raw(s.daemon_proof, sizeof s.daemon_proof);
+    wire::encode(w, ok);
     send(c, Msg::auth_ok, 0, w.buffer()); // the last untagged frame
     c.phase = Connection::Phase::ready;
     logf("connection %s authenticated for instance %s", c.peer.c_str(), c.instance.c_str());
@@ -423,20 +400,29 @@ void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Re
     case Msg::forget:
     case Msg::output:
     case Msg::signal: {
-        std::string name = r.str(proto::kMaxName);
+        // STOP and FORGET are just the name; OUTPUT adds a line count, SIGNAL a signal.
+        std::string name;
         uint32_t n = 0;
         int32_t sig = 0;
         bool group = false;
-        if (type == static_cast<uint8_t>(Msg::output))
-            n = r.u32();
-        if (type == static_cast<uint8_t>(Msg::signal)) {
-            sig = r.i32();
-            uint8_t g = r.u8();
-            if (g > 1)
-                return malformed();
-            group = g;
+        bool ok = false;
+        if (type == static_cast<uint8_t>(Msg::output)) {
+            wire::Output q;
+            ok = wire::decode(r, q);
+            name = std::move(q.name);
+            n = q.lines;
+        } else if (type == static_cast<uint8_t>(Msg::signal)) {
+            wire::Signal q;
+            ok = wire::decode(r, q);
+            name = std::move(q.name);
+            sig = q.signal;
+            group = q.group;
+        } else {
+            wire::Stop q; // the same layout as FORGET
+            ok = wire::decode(r, q);
+            name = std::move(q.name);
         }
-        if (!r.done())
+        if (!ok)
             return malformed();
         if (type == static_cast<uint8_t>(Msg::forget)) {
             if (!supervisor_.forget(c.instance, name, code, error))
@@ -450,9 +436,10 @@ void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Re
             encode_lines(w, *p, n, proto::kMaxFrame - 64);
             return send(c, Msg::output_lines, req, w.buffer());
         }
-        bool ok = type == static_cast<uint8_t>(Msg::stop) ? p->stop(code, error)
-                                                          : p->send_signal(sig, group, code, error);
-        if (!ok)
+        bool done = type == static_cast<uint8_t>(Msg::stop)
+                        ? p->stop(code, error)
+                        : p->send_signal(sig, group, code, error);
+        if (!done)
             return send_error(c, req, code, error);
         if (type == static_cast<uint8_t>(Msg::stop))
             logf("instance %s: stopping %s (pid %d)", c.instance.c_str(), name.c_str(),
@@ -460,12 +447,13 @@ void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Re
         return send(c, Msg::ok, req, {});
     }
     case Msg::list: {
-        if (!r.done())
+        wire::List empty;
+        if (!wire::decode(r, empty))
             return malformed();
-        auto procs = supervisor_.list(c.instance);
-        w.u32(static_cast<uint32_t>(procs.size()));
-        for (const Process *p : procs)
-            encode_info(w, *p);
+        wire::ProcessList list;
+        for (const Process *p : supervisor_.list(c.instance))
+            list.processes.push_back(process_info(*p));
+        wire::encode(w, list);
         return send(c, Msg::process_list, req, w.buffer());
     }
     case Msg::ping:

@@ -7,33 +7,14 @@
 #include <vector>
 
 #include "os.hpp"
+#include "protocol.hpp"
 
 namespace lnd {
 
-struct RlimitRequest {
-    std::string name;
-    int64_t soft; // -1: unlimited
-    int64_t hard;
-};
-
-struct SpawnRequest {
-    std::string name;
-    bool shell = false;
-    bool use_pty = true;
-    std::vector<std::string> argv; // shell: exactly one element, the command line
-    std::vector<std::string> env;
-    std::string cwd; // empty: "/"
-    std::vector<RlimitRequest> rlimits;
-    std::string policy = "SCHED_OTHER";
-    int32_t priority = 0;
-    std::vector<uint32_t> affinity;
-    uint32_t max_output_lines = 1000;
-    std::string log_path; // empty: no log file
-    uint64_t log_limit = 0;
-    uint32_t log_keep = 0;
-    int32_t term_signal = 15;
-    double term_timeout = 5.0;
-};
+// A SPAWN request as it arrives: the generated struct of daemon.schema's SPAWN message (its
+// fields and defaults are the schema's).
+using RlimitRequest = wire::RlimitRequest;
+using SpawnRequest = wire::Spawn;
 
 // What the process record keeps besides the launch itself.
 struct ProcessConfig {

@@ -38,8 +38,11 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 sys.path.insert(0, str(REPO / "python"))  # measure this checkout, not an installed one
 
-from links_and_nodes.manager import daemon_client as dc  # noqa: E402
-from links_and_nodes.manager.launch import ManagerProcess, segments, start_manager  # noqa: E402
+from links_and_nodes.manager.processes import daemon_client as dc  # noqa: E402
+from links_and_nodes.manager.processes import daemon_keys as dk  # noqa: E402
+from links_and_nodes.manager.processes import daemon_launch as dl  # noqa: E402
+from links_and_nodes.manager.processes import daemon_wire as dw  # noqa: E402
+from links_and_nodes.manager.frontends.launch import ManagerProcess, segments, start_manager  # noqa: E402
 
 PUBLISHER = REPO / "build" / "release" / "bench" / "logging" / "bench_logger_pub"
 GOAL_COST_RATIO = 1.05
@@ -63,8 +66,8 @@ class Daemon:
     @classmethod
     def start(cls, tmp: Path, memory: str) -> Daemon:
         key_file = tmp / "daemon.key"
-        key = dc.create_key_file(key_file)
-        proc = subprocess.Popen([dc.daemon_executable(), "--port", "0", "--bind", "127.0.0.1",
+        key = dk.create_key_file(key_file)
+        proc = subprocess.Popen([dl.daemon_executable(), "--port", "0", "--bind", "127.0.0.1",
                                  "--key-file", str(key_file), "--log", str(tmp / "daemon.log"),
                                  "--foreground", "--logger-memory", memory],
                                 stdout=subprocess.PIPE, stdin=subprocess.DEVNULL)
@@ -125,7 +128,7 @@ class Publisher:
 
 
 async def caught_up(client: dc.DaemonClient, logger: str, topic: str,
-                    published: int) -> dc.LoggerTopicStatus:
+                    published: int) -> dw.LoggerTopicStatus:
     """The logger's status once every sample published is received or counted missed."""
     deadline = time.monotonic() + WAIT
     while True:

@@ -77,7 +77,7 @@ class Lab:
                  host_args: dict[str, tuple[str, ...]] | None = None) -> None:
         """`host_args`: further daemon options of one host (e.g. bench/pull's
         --advertise-data-port on b, whose data port sits behind a relay)."""
-        from links_and_nodes.manager.daemon_client import daemon_executable
+        from links_and_nodes.manager.processes.daemon_launch import daemon_executable
 
         self.lab = lab
         self.a, self.b = lab["a"], lab["b"]

@@ -26,7 +26,7 @@ REPO = HERE.parents[1]
 sys.path.insert(0, str(REPO / "python"))
 sys.path.insert(0, str(REPO))
 
-from links_and_nodes.manager.launch import start_manager  # noqa: E402
+from links_and_nodes.manager.frontends.launch import start_manager  # noqa: E402
 
 GOAL_NS = 50.0  # update() with no pending change
 FULL = {"calls": 10_000_000, "rounds": 7, "sets": 1000}

@@ -26,8 +26,9 @@ sys.path.insert(0, str(REPO / "bench" / "startup"))  # its process plumbing
 import soak_report as report  # noqa: E402
 import startup_run as run  # noqa: E402
 
-from links_and_nodes.manager import daemon_client as dc  # noqa: E402
-from links_and_nodes.manager.scripting import ManagerError, connect  # noqa: E402
+from links_and_nodes.manager.processes import daemon_keys as dk  # noqa: E402
+from links_and_nodes.manager.processes import daemon_launch as dl  # noqa: E402
+from links_and_nodes.manager.frontends.scripting import ManagerError, connect  # noqa: E402
 
 DURATION, QUICK_DURATION, INTERVAL = 600.0, 30.0, 5.0
 TOPICS, PUBLISHERS, PROCESSES, RATE = 200, 4, 50, 1000.0
@@ -108,8 +109,8 @@ def soak(args: argparse.Namespace, tmp: Path, prog: Path) -> dict[str, Any]:
     procs = plan(args, token, prog, out)
     daemon_port = run.free_port()
     key_file = tmp / "daemon.key"
-    dc.create_key_file(key_file)
-    daemon_argv = [dc.daemon_executable(), "--port", str(daemon_port), "--bind", "127.0.0.1",
+    dk.create_key_file(key_file)
+    daemon_argv = [dl.daemon_executable(), "--port", str(daemon_port), "--bind", "127.0.0.1",
                    "--key-file", str(key_file), "--log", str(tmp / "ln_daemon.log"),
                    "--foreground"]
     daemon = run.Child(daemon_argv, dict(os.environ), tmp / "ln_daemon.stderr")
@@ -195,7 +196,7 @@ def main() -> int:
     if args.processes < needed or args.topics < args.publishers:
         parser.error(f"--processes must be at least {needed}, --topics at least --publishers")
     prog = args.build_dir / "bench" / "soak" / "soak_client"
-    missing = [str(p) for p in (prog, Path(dc.daemon_executable())) if not os.access(p, os.X_OK)]
+    missing = [str(p) for p in (prog, Path(dl.daemon_executable())) if not os.access(p, os.X_OK)]
     if missing:
         print(f"bench_soak: {', '.join(missing)} missing: build first with `scons -j2`",
               file=sys.stderr)

@@ -27,16 +27,18 @@ sys.path.insert(0, str(REPO / "python"))  # measure this checkout's manager, not
 
 import startup_run as run  # noqa: E402
 
-from links_and_nodes.manager import daemon_client as dc  # noqa: E402
-from links_and_nodes.manager.scripting import ManagerError, connect  # noqa: E402
+from links_and_nodes.manager.processes import daemon_keys as dk  # noqa: E402
+from links_and_nodes.manager.processes import daemon_launch as dl  # noqa: E402
+from links_and_nodes.manager.processes import daemon_wire as dw  # noqa: E402
+from links_and_nodes.manager.frontends.scripting import ManagerError, connect  # noqa: E402
 
 PROCESSES, ROUNDS, QUICK_ROUNDS = 50, 11, 2
 GOAL_SECONDS, GOAL_RATIO = 1.5, 3.0  # all-ready (warm daemon); and over the shell floor
 READY_LINE = r"all (\d+) processes ready"
 NOT_READY_LINE = r"not all processes ready|failed"
 Record = dict[str, Any]
-IMPORTS = ("import links_and_nodes.manager.cli, links_and_nodes.manager.core, "
-           "links_and_nodes.manager.server, links_and_nodes.manager.runner")
+IMPORTS = ("import links_and_nodes.manager.frontends.cli, links_and_nodes.manager.registry.core, "
+           "links_and_nodes.manager.registry.server, links_and_nodes.manager.runner")
 
 # measurement -> (label, what it is); the order of the table
 MEASURES = {
@@ -220,9 +222,9 @@ class Daemon:
         self.port = run.free_port()
         self.key_file = tmp / "warm" / "daemon.key"
         self.key_file.parent.mkdir()
-        dc.create_key_file(self.key_file)
+        dk.create_key_file(self.key_file)
         self.log = tmp / "warm" / "ln_daemon.log"
-        self.argv = [dc.daemon_executable(), "--port", str(self.port), "--bind", "127.0.0.1",
+        self.argv = [dl.daemon_executable(), "--port", str(self.port), "--bind", "127.0.0.1",
                      "--key-file", str(self.key_file), "--log", str(self.log), "--foreground"]
         self.proc = subprocess.Popen(self.argv, stdin=subprocess.DEVNULL,
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
@@ -359,7 +361,7 @@ def main() -> int:
     if args.processes < 1:
         parser.error("--processes must be at least 1")
     prog = args.build_dir / "bench" / "startup" / "ready_proc"
-    daemon_exe = dc.daemon_executable()
+    daemon_exe = dl.daemon_executable()
     missing = [str(p) for p in (prog, Path(daemon_exe)) if not os.access(p, os.X_OK)]
     if missing:
         print(f"bench_startup: {', '.join(missing)} missing: build first with `scons -j2`",
@@ -377,7 +379,7 @@ def main() -> int:
     try:
         try:
             daemon = Daemon(tmp)
-        except (run.CaseError, dc.DaemonError, OSError) as exc:
+        except (run.CaseError, dw.DaemonError, OSError) as exc:
             print(f"bench_startup: cannot start the warm ln_daemon: {exc}", file=sys.stderr)
             return 1
         daemon_pids.append(daemon.proc.pid)

@@ -14,7 +14,7 @@ from typing import Any
 from dataclasses import dataclass
 from pathlib import Path
 
-from links_and_nodes.manager.launch import ManagerProcess, segments, start_manager
+from links_and_nodes.manager.frontends.launch import ManagerProcess, segments, start_manager
 
 CHILD_TIMEOUT = 600.0  # seconds for one child; a stuck case is killed and reported
 SAMPLE_PERIOD = 0.02  # seconds between looks at which CPU each side of a pair last ran on
@@ -26,7 +26,7 @@ class CaseError(Exception):
 
 @dataclass
 class Manager:
-    """The benchmark's private manager (a thin layer over links_and_nodes.manager.launch)."""
+    """The benchmark's private manager (a thin layer over links_and_nodes.manager.frontends.launch)."""
 
     process: ManagerProcess
 

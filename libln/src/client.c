@@ -183,7 +183,8 @@ static int find_manager(const ln_client_options* opts, const char** text, const 
                         "-ln_manager HOST:PORT on the command line or set LN_MANAGER=HOST:PORT");
 }
 
-/* Splits "HOST:PORT", "[V6HOST]:PORT" or ":PORT" (localhost) into host[] and port[]. */
+/* Splits "HOST:PORT", "[V6HOST]:PORT" or ":PORT" (localhost) into host[] and port[]: the
+ * rules and texts of Python's links_and_nodes.addresses.parse_manager_address. */
 static int parse_address(const char* text, const char* from, char* host, char* port)
 {
     size_t len = strlen(text);
@@ -198,12 +199,18 @@ static int parse_address(const char* text, const char* from, char* host, char* p
     const char* p = colon != NULL ? colon + 1 : "";
     size_t plen = strlen(p);
     long value = plen > 0 && plen <= 5 && strspn(p, "0123456789") == plen ? atol(p) : 0;
-    if (len > MAX_ADDRESS || colon == NULL || (!bracketed && memchr(h, ':', hlen) != NULL)
-        || value < 1 || value > 65535)
-        return ln_set_error(NULL, LN_EINVAL,
-                            "bad manager address \"%.300s\"%s: expected HOST:PORT or :PORT "
-                            "with a port 1..65535",
-                            text, from);
+    const char* why = NULL;
+    if (bracketed && (hlen == 0 || memchr(h, ':', hlen) == NULL))
+        why = "brackets are for IPv6 addresses";
+    else if (!bracketed && memchr(h, ':', hlen) != NULL)
+        why = "an IPv6 address needs brackets, e.g. [::1]:5000";
+    else if (strcspn(h, " \t\n\r\v\f") < hlen)
+        why = "blanks in the host name";
+    else if (len > MAX_ADDRESS || colon == NULL || value < 1 || value > 65535)
+        why = "expected HOST:PORT, :PORT or [V6HOST]:PORT with a port 1..65535";
+    if (why != NULL)
+        return ln_set_error(NULL, LN_EINVAL, "bad manager address \"%.300s\"%s: %s", text, from,
+                            why);
     if (hlen == 0) {
         strcpy(host, "localhost");
     } else {

@@ -129,13 +129,14 @@ static int read_frame(ln_client* c, struct ln_conn* k, const char* request,
  * `prefix` and returns its code. */
 static int take_error(ln_client* c, const char* request, ln_rbuf* r, const char* prefix)
 {
-    int32_t code = ln_rbuf_i32(r);
-    char text[LN_PROTO_MAX_STR + 1];
-    ln_rbuf_str(r, text, sizeof text);
+    ln_msg_error e = {0};
+    ln_msg_error_read_after_id(r, &e); /* read_frame checked it */
+    int32_t code = e.code;
+    int len = (int)e.text.len;
     if (code >= 0 || code < -LN_ERROR_COUNT) /* well-formed, so the connection stays */
-        return ln_set_error(c, LN_EPROTOCOL, "manager %s answered %s with unknown code %d: %s",
-                            c->address, request, (int)code, text);
-    return ln_set_error(c, code, "%s%s", prefix, text);
+        return ln_set_error(c, LN_EPROTOCOL, "manager %s answered %s with unknown code %d: %.*s",
+                            c->address, request, (int)code, len, e.text.s);
+    return ln_set_error(c, code, "%s%.*s", prefix, len, e.text.s);
 }
 
 /* ---- handshake ------------------------------------------------------------------------- */
@@ -147,17 +148,13 @@ static int handshake(ln_client* c, struct ln_conn* k, const char* name, uint32_t
                      const struct timespec* deadline)
 {
     ln_wbuf_reset(&k->tx);
-    size_t start = ln_proto_frame_begin(&k->tx, LN_MSG_HELLO);
-    ln_wbuf_u32(&k->tx, LN_PROTO_MAGIC);
-    ln_wbuf_u16(&k->tx, LN_PROTO_VERSION);
-    ln_wbuf_u32(&k->tx, (uint32_t)c->pid);
-    ln_wbuf_str(&k->tx, name);
-    ln_wbuf_str(&k->tx, ln_version());
     char host_id[LN_HOST_ID_MAX];
     ln_host_id(host_id, sizeof host_id); /* the manager finds this host's ln_daemon by it */
-    ln_wbuf_str(&k->tx, host_id);
-    ln_wbuf_u32(&k->tx, flags);
-    int rc = ln_proto_frame_end(&k->tx, start);
+    ln_msg_hello hello = {.magic = LN_PROTO_MAGIC, .version = LN_PROTO_VERSION,
+                          .pid = (uint32_t)c->pid, .client_name = ln_strv_of(name),
+                          .libln_version = ln_strv_of(ln_version()),
+                          .host_id = ln_strv_of(host_id), .flags = flags};
+    int rc = ln_msg_hello_frame(&k->tx, &hello);
     if (rc != LN_OK)
         return ln_set_error(c, rc, "cannot encode HELLO: %s", ln_strerror(rc));
     rc = send_tx(c, k, "HELLO", deadline);
@@ -176,18 +173,21 @@ static int handshake(ln_client* c, struct ln_conn* k, const char* name, uint32_t
     }
     if (type != LN_MSG_WELCOME)
         return unexpected(c, k, "HELLO", type);
-    uint16_t version = ln_rbuf_u16(&r);
+    ln_rbuf peek = r; /* a WELCOME of another version may have other fields */
+    uint16_t version = ln_rbuf_u16(&peek);
     if (version != LN_PROTO_VERSION)
         return ln_set_error(c, LN_EVERSION,
                             "manager %s: client speaks protocol %d, manager speaks %u",
                             c->address, LN_PROTO_VERSION, (unsigned)version);
-    uint32_t id = ln_rbuf_u32(&r);
+    ln_msg_welcome welcome = {0};
+    ln_msg_welcome_read(&r, &welcome); /* read_frame checked it */
+    uint32_t id = welcome.client_id;
     char given[LN_PROTO_MAX_STR + 1], instance[LN_PROTO_MAX_STR + 1];
-    ln_rbuf_str(&r, given, sizeof given);
-    ln_rbuf_str(&r, instance, sizeof instance);
+    ln_strv_copy(welcome.client_name, given, sizeof given);
+    ln_strv_copy(welcome.instance_name, instance, sizeof instance);
     if (given[0] == '\0')
         return malformed(c, k, "HELLO", "WELCOME with an empty client name");
-    if (flags & LN_HELLO_RECONNECT) {
+    if (flags & LN_PROTO_HELLO_RECONNECT) {
         if (strcmp(instance, c->instance) != 0)
             return ln_set_error(c, LN_ECONNECTION,
                                 "manager %s now serves instance \"%s\", not \"%s\"",
@@ -207,14 +207,13 @@ static int handshake(ln_client* c, struct ln_conn* k, const char* name, uint32_t
 static int release_stale_port(ln_client* c, struct ln_conn* k, ln_rbuf* r,
                               const struct timespec* deadline)
 {
-    uint32_t port_id = ln_rbuf_u32(r); /* right after the request id */
+    ln_msg_port_ok ok = {0};
+    ln_msg_port_ok_read_after_id(r, &ok); /* read_frame checked it */
     if (++k->last_request_id == 0)
         k->last_request_id = 1;
     ln_wbuf_reset(&k->tx);
-    size_t start = ln_proto_frame_begin(&k->tx, LN_MSG_CLOSE_PORT);
-    ln_wbuf_u32(&k->tx, k->last_request_id);
-    ln_wbuf_u32(&k->tx, port_id);
-    int rc = ln_proto_frame_end(&k->tx, start);
+    ln_msg_close_port close = {.request_id = k->last_request_id, .port_id = ok.port_id};
+    int rc = ln_msg_close_port_frame(&k->tx, &close);
     if (rc == LN_OK)
         rc = send_tx(c, k, "CLOSE_PORT", deadline);
     if (rc == LN_OK)
@@ -499,7 +498,7 @@ static int reconnect_once(ln_client* c)
     conn_init(&fresh);
     int rc = connect_manager(c, "", deadline, &fresh.fd);
     if (rc == LN_OK)
-        rc = handshake(c, &fresh, c->name, LN_HELLO_RECONNECT, deadline);
+        rc = handshake(c, &fresh, c->name, LN_PROTO_HELLO_RECONNECT, deadline);
     if (rc != LN_OK) {
         conn_free(&fresh);
         return rc;

@@ -29,20 +29,21 @@ int ln_control(ln_client* clnt, const char* command, char** result)
         return ln_set_error(clnt, LN_EINVAL, "ln_control: command is NULL");
     ln_wbuf body;
     ln_wbuf_init(&body);
-    ln_wbuf_text(&body, command);
+    ln_msg_control request = {.command = ln_strv_of(command)};
+    ln_msg_control_write_after_id(&body, &request);
     uint16_t type;
     ln_rbuf reply;
     rc = ln_client_request(clnt, LN_MSG_CONTROL, &body, &type, &reply);
     ln_wbuf_free(&body);
     if (rc != LN_OK)
         return ln_set_error(clnt, rc, "control command: %s", ln_last_error());
-    size_t len;
-    const char* text = ln_rbuf_text(&reply, &len);
-    char* copy = malloc(len + 1);
+    ln_msg_control_result answer;
+    if (ln_msg_control_result_read_after_id(&reply, &answer) != LN_OK)
+        return ln_set_error(clnt, LN_EPROTOCOL, "control command: malformed CONTROL_RESULT");
+    char* copy = malloc(answer.result.len + 1);
     if (copy == NULL)
         return ln_set_error(clnt, LN_ENOMEM, "control command: out of memory");
-    memcpy(copy, text, len);
-    copy[len] = '\0';
+    ln_strv_copy(answer.result, copy, answer.result.len + 1);
     int ok = ln_json_bool(copy, "ok");
     if (ok != 1) {
         char reason[LN_ERROR_TEXT_MAX];

@@ -142,16 +142,17 @@ static int reclaim_handler(ln_client* clnt, void* handler)
     ln_event_handler* h = handler;
     ln_wbuf body;
     ln_wbuf_init(&body);
-    ln_wbuf_text(&body, h->command);
+    ln_msg_control request = {.command = ln_strv_of(h->command)};
+    ln_msg_control_write_after_id(&body, &request);
     uint16_t type;
     ln_rbuf reply;
     int rc = ln_client_request_locked(clnt, LN_MSG_CONTROL, &body, &type, &reply);
     ln_wbuf_free(&body);
     char answer[512] = "";
     if (rc == LN_OK) {
-        size_t len;
-        const char* text = ln_rbuf_text(&reply, &len);
-        snprintf(answer, sizeof answer, "%.*s", (int)len, text);
+        ln_msg_control_result result = {0};
+        ln_msg_control_result_read_after_id(&reply, &result); /* checked by the request */
+        snprintf(answer, sizeof answer, "%.*s", (int)result.result.len, result.result.s);
         /* An answer cut short reads as refused, with the start of it in the text. */
         if (ln_json_bool(answer, "ok") != 1)
             rc = LN_EREFUSED;

@@ -6,7 +6,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "ln/ln.h"
+#include "ln_admin.h"
 #include "proto.h"
 
 /* Cut s (a string of len bytes that was truncated) back to a UTF-8 character boundary, so

@@ -1,10 +1,11 @@
-/* ln_internal.h — shared by every libln source file and never installed.
- * Includes the public header first, so each source sees exactly the API it implements,
- * and holds the macros that are not part of the contract. */
+/* ln_internal.h — shared by libln source files and never installed.
+ * Includes the public header and the internal API of ln_admin.h, so each source sees exactly
+ * the API it implements, and holds the macros that are not part of the contract. */
 #ifndef LN_INTERNAL_H
 #define LN_INTERNAL_H
 
 #include "ln/ln.h"
+#include "ln_admin.h"
 
 /* Number of entries in a true array (not a pointer). */
 #define LN_ARRAY_SIZE(a) (sizeof(a) / sizeof((a)[0]))

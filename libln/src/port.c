@@ -25,7 +25,7 @@ typedef struct ln_port_common {
     /* Registration, for RECLAIM_PORT; changed only under the client's ports lock once the
      * port is on its client.  `segment` is the generation the manager last named (the port
      * may have followed it to newer ones), `reader` the reader slot (subscribers). */
-    uint16_t kind; /* LN_RECLAIM_PUBLISHER or LN_RECLAIM_SUBSCRIBER */
+    uint16_t kind; /* LN_PROTO_RECLAIM_PUBLISHER or LN_PROTO_RECLAIM_SUBSCRIBER */
     uint32_t port_id;
     int registered; /* the manager knows port_id (not after a refused re-registration) */
     uint32_t buffers, flags, reader;
@@ -72,12 +72,6 @@ static int on_client(ln_port_common* p, int rc)
     return rc;
 }
 
-/* Move one generation on, to the successor of the current (retired) ring. */
-static int follow_once(ln_port_common* p)
-{
-    return on_client(p, ln_ring_follow_once(&p->ring));
-}
-
 /* Move to the newest generation (publishers: they only ever write the newest ring). */
 static int follow(ln_port_common* p)
 {
@@ -100,7 +94,8 @@ static int close_remote(ln_port_common* p)
     ln_rbuf reply;
     uint16_t type = 0;
     ln_wbuf_init(&body);
-    ln_wbuf_u32(&body, p->port_id);
+    ln_msg_close_port close = {.port_id = p->port_id};
+    ln_msg_close_port_write_after_id(&body, &close);
     int rc = ln_client_request(p->clnt, LN_MSG_CLOSE_PORT, &body, &type, &reply);
     ln_wbuf_free(&body);
     if (rc == LN_OK && (type != LN_MSG_OK || ln_rbuf_end(&reply) != LN_OK))
@@ -151,27 +146,33 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
     uint16_t type = 0;
     char segment[LN_RING_NAME_MAX];
     ln_wbuf_init(&body);
-    ln_wbuf_str(&body, topic);
-    ln_wbuf_str(&body, md_name);
-    ln_wbuf_u64(&body, hash);
-    ln_wbuf_u32(&body, (uint32_t)size);
-    ln_wbuf_u32(&body, o->buffers);
-    ln_wbuf_u32(&body, o->flags);
+    if (msg == LN_MSG_PUBLISH) {
+        ln_msg_publish m = {.topic = ln_strv_of(topic), .md_name = ln_strv_of(md_name),
+                            .layout_hash = hash, .message_size = (uint32_t)size,
+                            .buffers = o->buffers, .flags = o->flags};
+        ln_msg_publish_write_after_id(&body, &m);
+    } else {
+        ln_msg_subscribe m = {.topic = ln_strv_of(topic), .md_name = ln_strv_of(md_name),
+                              .layout_hash = hash, .message_size = (uint32_t)size,
+                              .buffers = o->buffers, .flags = o->flags};
+        ln_msg_subscribe_write_after_id(&body, &m);
+    }
     rc = ln_client_request(clnt, msg, &body, &type, &reply);
     ln_wbuf_free(&body);
     if (rc != LN_OK)
         return rc;
     *gen = ln_client_request_gen();
-    p->port_id = ln_rbuf_u32(&reply);
-    ln_rbuf_str(&reply, segment, sizeof(segment));
-    *reader_index = ln_rbuf_u32(&reply);
-    if (type != LN_MSG_PORT_OK || ln_rbuf_end(&reply) != LN_OK)
+    ln_msg_port_ok ok;
+    if (type != LN_MSG_PORT_OK || ln_msg_port_ok_read_after_id(&reply, &ok) != LN_OK
+        || ln_strv_copy(ok.segment, segment, sizeof segment) != LN_OK)
         return ln_set_error(clnt, LN_EPROTOCOL, "unexpected answer %u to a port request", type);
+    p->port_id = ok.port_id;
+    *reader_index = ok.reader_index;
     p->clnt = clnt;
     p->layout_hash = hash;
     p->size = size;
     p->registered = 1;
-    p->kind = msg == LN_MSG_PUBLISH ? LN_RECLAIM_PUBLISHER : LN_RECLAIM_SUBSCRIBER;
+    p->kind = msg == LN_MSG_PUBLISH ? LN_PROTO_RECLAIM_PUBLISHER : LN_PROTO_RECLAIM_SUBSCRIBER;
     p->buffers = o->buffers;
     p->flags = o->flags;
     p->reader = *reader_index;
@@ -215,31 +216,29 @@ static int reclaim_port(ln_client* clnt, void* port)
     ln_rbuf reply;
     uint16_t type = 0;
     ln_wbuf_init(&body);
-    ln_wbuf_u16(&body, p->kind);
-    ln_wbuf_str(&body, p->topic);
-    ln_wbuf_str(&body, p->md_name);
-    ln_wbuf_u64(&body, p->layout_hash);
-    ln_wbuf_u32(&body, (uint32_t)p->size);
-    ln_wbuf_u32(&body, p->buffers);
-    ln_wbuf_u32(&body, p->flags);
-    ln_wbuf_str(&body, p->segment);
-    ln_wbuf_u32(&body, p->reader);
+    ln_msg_reclaim_port m = {.kind = p->kind, .topic = ln_strv_of(p->topic),
+                             .md_name = ln_strv_of(p->md_name), .layout_hash = p->layout_hash,
+                             .message_size = (uint32_t)p->size, .buffers = p->buffers,
+                             .flags = p->flags, .segment = ln_strv_of(p->segment),
+                             .reader_index = p->reader};
+    ln_msg_reclaim_port_write_after_id(&body, &m);
     int rc = ln_client_request_locked(clnt, LN_MSG_RECLAIM_PORT, &body, &type, &reply);
     ln_wbuf_free(&body);
-    const char* what = p->kind == LN_RECLAIM_PUBLISHER ? "publisher" : "subscriber";
+    const char* what = p->kind == LN_PROTO_RECLAIM_PUBLISHER ? "publisher" : "subscriber";
     p->registered = 0;
     if (rc != LN_OK)
         return ln_set_error(clnt, rc, "topic '%s': the manager refused to take back this "
                             "client's %s on %s (it keeps working on that ring, unknown to the "
                             "manager): %s", p->topic, what, p->segment, ln_last_error());
     char segment[LN_RING_NAME_MAX];
-    uint32_t port_id = ln_rbuf_u32(&reply);
-    ln_rbuf_str(&reply, segment, sizeof segment);
-    uint32_t reader = ln_rbuf_u32(&reply);
-    if (ln_rbuf_end(&reply) != LN_OK || reader != p->reader)
+    ln_msg_port_ok ok = {0};
+    if (ln_msg_port_ok_read_after_id(&reply, &ok) != LN_OK
+        || ln_strv_copy(ok.segment, segment, sizeof segment) != LN_OK
+        || ok.reader_index != p->reader)
         return ln_set_error(clnt, LN_EPROTOCOL, "topic '%s': the manager took back the %s with "
-                            "reader slot %u instead of %u", p->topic, what, reader, p->reader);
-    p->port_id = port_id;
+                            "reader slot %u instead of %u", p->topic, what, ok.reader_index,
+                            p->reader);
+    p->port_id = ok.port_id;
     p->registered = 1;
     memcpy(p->segment, segment, sizeof p->segment);
     return LN_OK;
@@ -466,41 +465,17 @@ int ln_write_abort(ln_outport* p)
     return ln_ring_unlock(&p->c.ring);
 }
 
-/* Find the next sample for this subscriber, waiting per timeout.  A retired ring is left only
- * once nothing more can come from it, one generation at a time, so queued readers lose
- * nothing across ring growth. */
+/* The next sample for this subscriber (ln_ring_next), with the port's wording of a timeout. */
 static int next_sample(ln_inport* p, double timeout, ln_ring_slot** slot, uint64_t* word)
 {
     int rc = check_timeout(p->c.clnt, timeout, "ln_read");
     if (rc != LN_OK)
         return rc;
-    ln_deadline d = ln_deadline_in(timeout);
-    int spun = 0;
-    for (;;) {
-        /* Read `retired` first: a sample committed before the retirement is then seen by the
-         * pick below. */
-        int retired = atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire);
-        rc = ln_ring_pick(&p->c.ring, &p->cur, slot, word);
-        if (rc != LN_EAGAIN)
-            return rc;
-        if (retired) {
-            if ((rc = follow_once(&p->c)) != LN_OK)
-                return rc;
-            ln_ring_publish_cursor(&p->c.ring, &p->cur); /* its progress, in the new ring */
-            continue;
-        }
-        if (timeout == 0)
-            return LN_EAGAIN;
-        if (!spun) {
-            spun = 1;
-            if (ln_ring_spin_data(&p->c.ring, p->cur.next, p->spin_us))
-                continue;
-        }
-        rc = ln_ring_wait_data(&p->c.ring, p->cur.next, &d);
-        if (rc == LN_ETIMEOUT)
-            return ln_set_error(p->c.clnt, LN_ETIMEOUT, "no sample on topic '%s' within %g s",
-                                p->c.topic, timeout);
-    }
+    rc = ln_ring_next(&p->c.ring, &p->cur, timeout, p->spin_us, slot, word);
+    if (rc == LN_ETIMEOUT)
+        return ln_set_error(p->c.clnt, LN_ETIMEOUT, "no sample on topic '%s' within %g s",
+                            p->c.topic, timeout);
+    return rc;
 }
 
 static void fill_info(ln_inport* p, uint64_t word, int64_t ts, ln_sample_info* info)
@@ -525,19 +500,18 @@ int ln_read(ln_inport* p, void* data, size_t size, double timeout, ln_sample_inf
     if (p->borrowed)
         return ln_set_error(p->c.clnt, LN_EBUSY, "ln_read on '%s': a borrowed sample is not "
                             "released", p->c.topic);
-    for (;;) {
-        ln_ring_slot* slot;
-        uint64_t word;
-        rc = next_sample(p, timeout, &slot, &word);
-        if (rc != LN_OK)
-            return on_client(&p->c, rc);
-        memcpy(data, ln_ring_payload(slot), size);
-        int64_t ts = slot->timestamp_ns;
-        if (ln_ring_finish(&p->c.ring, &p->cur, slot, word, 1) == LN_OK) {
-            fill_info(p, word, ts, info);
-            return LN_OK;
-        }
-    }
+    if ((rc = check_timeout(p->c.clnt, timeout, "ln_read")) != LN_OK)
+        return rc;
+    uint64_t word;
+    int64_t ts;
+    rc = ln_ring_read_copy(&p->c.ring, &p->cur, timeout, p->spin_us, data, &word, &ts);
+    if (rc == LN_ETIMEOUT)
+        rc = ln_set_error(p->c.clnt, LN_ETIMEOUT, "no sample on topic '%s' within %g s",
+                          p->c.topic, timeout);
+    if (rc != LN_OK)
+        return on_client(&p->c, rc);
+    fill_info(p, word, ts, info);
+    return LN_OK;
 }
 
 int ln_read_borrow(ln_inport* p, const void** data, double timeout, ln_sample_info* info)

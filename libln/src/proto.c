@@ -80,30 +80,57 @@ void ln_wbuf_bytes(ln_wbuf* b, const void* data, size_t n)
         memcpy(at, data, n);
 }
 
-void ln_wbuf_str(ln_wbuf* b, const char* s)
+ln_strv ln_strv_of(const char* s)
+{
+    ln_strv v = {s, s != NULL ? strlen(s) : 0};
+    return v;
+}
+
+int ln_strv_copy(ln_strv v, char* out, size_t size)
+{
+    assert(out != NULL && size > 0);
+    out[0] = '\0';
+    if (v.len >= size)
+        return LN_EPROTOCOL;
+    if (v.len > 0)
+        memcpy(out, v.s, v.len);
+    out[v.len] = '\0';
+    return LN_OK;
+}
+
+void ln_wbuf_strv(ln_wbuf* b, ln_strv v, size_t limit)
 {
     if (b->failed)
         return;
-    size_t n = s != NULL ? strnlen(s, LN_PROTO_MAX_STR + 1) : 0;
-    if (s == NULL || n > LN_PROTO_MAX_STR || !ln_utf8_valid(s, n)) {
+    if (v.s == NULL || v.len > limit || v.len > UINT16_MAX || !ln_utf8_valid(v.s, v.len)) {
         b->failed = LN_EINVAL;
         return;
     }
-    ln_wbuf_u16(b, (uint16_t)n);
-    ln_wbuf_bytes(b, s, n);
+    ln_wbuf_u16(b, (uint16_t)v.len);
+    ln_wbuf_bytes(b, v.s, v.len);
+}
+
+void ln_wbuf_str(ln_wbuf* b, const char* s)
+{
+    ln_strv v = {s, s != NULL ? strnlen(s, LN_PROTO_MAX_STR + 1) : 0};
+    ln_wbuf_strv(b, v, LN_PROTO_MAX_STR);
+}
+
+void ln_wbuf_textv(ln_wbuf* b, ln_strv v)
+{
+    if (b->failed)
+        return;
+    if (v.s == NULL || v.len > UINT32_MAX || !ln_utf8_valid(v.s, v.len)) {
+        b->failed = LN_EINVAL;
+        return;
+    }
+    ln_wbuf_u32(b, (uint32_t)v.len);
+    ln_wbuf_bytes(b, v.s, v.len);
 }
 
 void ln_wbuf_text(ln_wbuf* b, const char* s)
 {
-    if (b->failed)
-        return;
-    size_t n = s != NULL ? strlen(s) : 0;
-    if (s == NULL || n > UINT32_MAX || !ln_utf8_valid(s, n)) {
-        b->failed = LN_EINVAL;
-        return;
-    }
-    ln_wbuf_u32(b, (uint32_t)n);
-    ln_wbuf_bytes(b, s, n);
+    ln_wbuf_textv(b, ln_strv_of(s));
 }
 
 /* ---- reader -------------------------------------------------------------------------- */
@@ -142,36 +169,53 @@ uint32_t ln_rbuf_u32(ln_rbuf* r) { return (uint32_t)rbuf_le(r, 4); }
 uint64_t ln_rbuf_u64(ln_rbuf* r) { return rbuf_le(r, 8); }
 int32_t ln_rbuf_i32(ln_rbuf* r) { return (int32_t)(uint32_t)rbuf_le(r, 4); }
 
-void ln_rbuf_str(ln_rbuf* r, char* out, size_t outsize)
+void ln_rbuf_strv(ln_rbuf* r, ln_strv* v, size_t limit)
 {
-    assert(out != NULL && outsize > 0);
-    out[0] = '\0';
+    v->s = "";
+    v->len = 0;
     size_t n = ln_rbuf_u16(r);
     const char* s = (const char*)rbuf_take(r, n);
     if (s == NULL)
         return;
-    if (n > LN_PROTO_MAX_STR || n >= outsize || memchr(s, '\0', n) != NULL
-        || !ln_utf8_valid(s, n)) {
+    if (n > limit || memchr(s, '\0', n) != NULL || !ln_utf8_valid(s, n)) {
         r->failed = LN_EPROTOCOL;
         return;
     }
-    memcpy(out, s, n);
-    out[n] = '\0';
+    v->s = s;
+    v->len = n;
+}
+
+void ln_rbuf_str(ln_rbuf* r, char* out, size_t outsize)
+{
+    assert(out != NULL && outsize > 0);
+    ln_strv v;
+    ln_rbuf_strv(r, &v, LN_PROTO_MAX_STR);
+    if (ln_strv_copy(v, out, outsize) != LN_OK)
+        r->failed = LN_EPROTOCOL;
+}
+
+void ln_rbuf_textv(ln_rbuf* r, ln_strv* v)
+{
+    v->s = "";
+    v->len = 0;
+    size_t n = ln_rbuf_u32(r);
+    const char* s = (const char*)rbuf_take(r, n);
+    if (s == NULL)
+        return;
+    if (memchr(s, '\0', n) != NULL || !ln_utf8_valid(s, n)) {
+        r->failed = LN_EPROTOCOL;
+        return;
+    }
+    v->s = s;
+    v->len = n;
 }
 
 const char* ln_rbuf_text(ln_rbuf* r, size_t* len)
 {
-    *len = 0;
-    size_t n = ln_rbuf_u32(r);
-    const char* s = (const char*)rbuf_take(r, n);
-    if (s == NULL)
-        return NULL;
-    if (memchr(s, '\0', n) != NULL || !ln_utf8_valid(s, n)) {
-        r->failed = LN_EPROTOCOL;
-        return NULL;
-    }
-    *len = n;
-    return s;
+    ln_strv v;
+    ln_rbuf_textv(r, &v);
+    *len = r->failed ? 0 : v.len;
+    return r->failed ? NULL : v.s;
 }
 
 int ln_rbuf_end(const ln_rbuf* r)
@@ -237,10 +281,10 @@ int ln_proto_frame_end(ln_wbuf* b, size_t start)
     if (b->failed)
         return b->failed;
     assert(start + LN_PROTO_HEADER_SIZE <= b->len);
-    size_t length = b->len - start - 4;
+    size_t length = b->len - start - LN_PROTO_LENGTH_BYTES;
     if (length > LN_PROTO_MAX_FRAME)
         return LN_ETOOBIG;
-    put_le(b->data + start, length, 4);
+    put_le(b->data + start, length, LN_PROTO_LENGTH_BYTES);
     return LN_OK;
 }
 
@@ -251,9 +295,9 @@ int ln_proto_parse_header(const uint8_t header[LN_PROTO_HEADER_SIZE], uint32_t* 
     ln_rbuf_init(&r, header, LN_PROTO_HEADER_SIZE);
     uint32_t length = ln_rbuf_u32(&r);
     uint16_t t = ln_rbuf_u16(&r);
-    if (length < 2 || length > LN_PROTO_MAX_FRAME || !ln_proto_type_known(t))
+    if (length < LN_PROTO_MIN_FRAME || length > LN_PROTO_MAX_FRAME || !ln_proto_type_known(t))
         return LN_EPROTOCOL;
-    *body_len = length - 2;
+    *body_len = length - LN_PROTO_TYPE_BYTES;
     *type = t;
     return LN_OK;
 }
@@ -268,88 +312,47 @@ int ln_proto_decode_frame(const void* data, size_t len, uint16_t* type, ln_rbuf*
     return LN_OK;
 }
 
-/* ---- message types ------------------------------------------------------------------- */
+/* ---- message types ---------------------------------------------------------------------
+ * The table and the field checks are generated from the schema (client_wire.c). */
 
-/* Every message's fields in order, one letter each: w u16, d u32, q u64, i i32, s str, t text.  The
- * request id is the leading `d` of the types that carry one. */
-static const struct {
-    uint16_t type;
-    uint16_t answer; /* for requests with a request id: the type of a successful answer */
-    int to_client;   /* sent by the manager */
-    const char* fields;
-    const char* name;
-} msg_types[] = {
-    {LN_MSG_HELLO, 0, 0, "dwdsssd", "HELLO"},
-    {LN_MSG_WELCOME, 0, 1, "wdss", "WELCOME"},
-    {LN_MSG_ERROR, 0, 1, "dis", "ERROR"},
-    {LN_MSG_PUBLISH, LN_MSG_PORT_OK, 0, "dssqddd", "PUBLISH"},
-    {LN_MSG_SUBSCRIBE, LN_MSG_PORT_OK, 0, "dssqddd", "SUBSCRIBE"},
-    {LN_MSG_PORT_OK, 0, 1, "ddsd", "PORT_OK"},
-    {LN_MSG_CLOSE_PORT, LN_MSG_OK, 0, "dd", "CLOSE_PORT"},
-    {LN_MSG_OK, 0, 1, "d", "OK"},
-    {LN_MSG_TOPIC_INFO, LN_MSG_TOPIC_INFO_OK, 0, "ds", "TOPIC_INFO"},
-    {LN_MSG_TOPIC_INFO_OK, 0, 1, "dsqddd", "TOPIC_INFO_OK"},
-    {LN_MSG_RECLAIM_PORT, LN_MSG_PORT_OK, 0, "dwssqdddsd", "RECLAIM_PORT"},
-    {LN_MSG_REGISTER_SERVICE, LN_MSG_OK, 0, "dssqsssssw", "REGISTER_SERVICE"},
-    {LN_MSG_UNREGISTER_SERVICE, LN_MSG_OK, 0, "ds", "UNREGISTER_SERVICE"},
-    {LN_MSG_FIND_SERVICE, LN_MSG_SERVICE_INFO, 0, "dssq", "FIND_SERVICE"},
-    {LN_MSG_SERVICE_INFO, 0, 1, "dssssws", "SERVICE_INFO"},
-    {LN_MSG_SERVICE_CALLED, LN_MSG_OK, 0, "dsqq", "SERVICE_CALLED"},
-    {LN_MSG_CONTROL, LN_MSG_CONTROL_RESULT, 0, "dt", "CONTROL"},
-    {LN_MSG_CONTROL_RESULT, 0, 1, "dt", "CONTROL_RESULT"},
-};
+/* The flag bits the schema gives the wire are ln.h's option bits. */
+_Static_assert(LN_PROTO_PUBLISH_WAIT_FOR_SUBSCRIBERS == LN_PUBLISH_WAIT_FOR_SUBSCRIBERS,
+               "client.schema and ln.h disagree on PUBLISH_WAIT_FOR_SUBSCRIBERS");
+_Static_assert(LN_PROTO_SUBSCRIBE_UDP == LN_SUBSCRIBE_UDP, "client.schema and ln.h disagree");
+_Static_assert(LN_PROTO_SUBSCRIBE_TCP == LN_SUBSCRIBE_TCP, "client.schema and ln.h disagree");
 
-static int find_type(uint16_t type)
+static const ln_wire_msg_info* find_type(uint16_t type)
 {
-    for (size_t i = 0; i < LN_ARRAY_SIZE(msg_types); i++)
-        if (msg_types[i].type == type)
-            return (int)i;
-    return -1;
+    for (size_t i = 0; i < ln_client_wire_msg_count; i++)
+        if (ln_client_wire_msgs[i].type == type)
+            return &ln_client_wire_msgs[i];
+    return NULL;
 }
 
 int ln_proto_type_known(uint16_t type)
 {
-    return find_type(type) >= 0;
+    return find_type(type) != NULL;
 }
 
 int ln_proto_to_client(uint16_t type)
 {
-    int i = find_type(type);
-    return i >= 0 && msg_types[i].to_client;
+    const ln_wire_msg_info* m = find_type(type);
+    return m != NULL && m->to_client;
 }
 
 uint16_t ln_proto_answer_type(uint16_t request_type)
 {
-    int i = find_type(request_type);
-    return i >= 0 ? msg_types[i].answer : 0;
+    const ln_wire_msg_info* m = find_type(request_type);
+    return m != NULL ? m->answer : 0;
 }
 
 const char* ln_proto_type_name(uint16_t type)
 {
-    int i = find_type(type);
-    return i >= 0 ? msg_types[i].name : "UNKNOWN";
+    const ln_wire_msg_info* m = find_type(type);
+    return m != NULL ? m->name : "UNKNOWN";
 }
 
 int ln_proto_check_fields(uint16_t type, const ln_rbuf* body)
 {
-    int i = find_type(type);
-    if (i < 0)
-        return LN_EPROTOCOL;
-    ln_rbuf r = *body;
-    char text[LN_PROTO_MAX_STR + 1];
-    for (const char* f = msg_types[i].fields; *f != '\0'; f++) {
-        switch (*f) {
-        case 'w': ln_rbuf_u16(&r); break;
-        case 'd': ln_rbuf_u32(&r); break;
-        case 'q': ln_rbuf_u64(&r); break;
-        case 'i': ln_rbuf_i32(&r); break;
-        case 't': {
-            size_t n;
-            ln_rbuf_text(&r, &n);
-            break;
-        }
-        default: ln_rbuf_str(&r, text, sizeof text); break;
-        }
-    }
-    return ln_rbuf_end(&r);
+    return ln_client_wire_check(type, body);
 }

@@ -1,6 +1,8 @@
 /* proto.h — codec of the client <-> manager protocol (docs/protocol.md): a growable writer,
- * a bounds-checked reader and the frame header rules.  Pure functions: no I/O, no error
- * text, so the codec can be tested on byte strings alone. */
+ * a bounds-checked reader and the frame header rules, and (client_wire.h, generated at build
+ * time from python/links_and_nodes/wire/client.schema) the protocol's constants, message
+ * types and per-message write/read functions.  Pure functions: no I/O, no error text, so the
+ * codec can be tested on byte strings alone. */
 #ifndef LN_PROTO_H
 #define LN_PROTO_H
 
@@ -8,36 +10,6 @@
 #include <stdint.h>
 
 #include "ln_internal.h"
-
-#define LN_PROTO_VERSION 3
-#define LN_PROTO_MAGIC 0x504D4E4Cu     /* "LNMP" */
-#define LN_PROTO_MAX_FRAME (1u << 20)  /* max `length` (type + body) */
-#define LN_PROTO_MAX_STR 1024          /* max bytes of a str field */
-#define LN_PROTO_HEADER_SIZE 6         /* u32 length + u16 type */
-#define LN_HELLO_RECONNECT 0x1u        /* HELLO flags: the client had a connection before */
-#define LN_RECLAIM_PUBLISHER 0         /* RECLAIM_PORT kinds */
-#define LN_RECLAIM_SUBSCRIBER 1
-
-enum ln_msg_type {
-    LN_MSG_HELLO = 1,
-    LN_MSG_WELCOME = 2,
-    LN_MSG_ERROR = 3,
-    LN_MSG_PUBLISH = 10,
-    LN_MSG_SUBSCRIBE = 11,
-    LN_MSG_PORT_OK = 12,
-    LN_MSG_CLOSE_PORT = 13,
-    LN_MSG_OK = 14,
-    LN_MSG_TOPIC_INFO = 15,
-    LN_MSG_TOPIC_INFO_OK = 16,
-    LN_MSG_RECLAIM_PORT = 17,
-    LN_MSG_REGISTER_SERVICE = 20,
-    LN_MSG_UNREGISTER_SERVICE = 21,
-    LN_MSG_FIND_SERVICE = 22,
-    LN_MSG_SERVICE_INFO = 23,
-    LN_MSG_SERVICE_CALLED = 24,
-    LN_MSG_CONTROL = 30,
-    LN_MSG_CONTROL_RESULT = 31,
-};
 
 /* Growable writer.  `failed` is 0, or the LN_E* code of the first failure: LN_ENOMEM, or
  * LN_EINVAL for a str that is NULL, longer than LN_PROTO_MAX_STR or not valid UTF-8.  After
@@ -72,6 +44,25 @@ typedef struct ln_rbuf {
     int failed;
 } ln_rbuf;
 
+/* A view of a str or text field: `len` bytes at `s`, not NUL-terminated.  Encoding reads
+ * it (s NULL fails); decoding points it into the reader's memory, checked UTF-8 without NUL. */
+typedef struct ln_strv {
+    const char* s;
+    size_t len;
+} ln_strv;
+
+/* The view of a C string (NULL stays NULL, so that encoding it fails). */
+ln_strv ln_strv_of(const char* s);
+/* Copies v NUL-terminated into out[size]: LN_OK, or LN_EPROTOCOL (out = "") if it does not
+ * fit. */
+int ln_strv_copy(ln_strv v, char* out, size_t size);
+
+/* The generated part: constants LN_PROTO_*, enum ln_msg_type, ln_msg_* structs and
+ * functions. */
+#include "client_wire.h"
+
+#define LN_PROTO_HEADER_SIZE (LN_PROTO_LENGTH_BYTES + LN_PROTO_TYPE_BYTES) /* length + type */
+
 void ln_rbuf_init(ln_rbuf* r, const void* data, size_t len);
 uint16_t ln_rbuf_u16(ln_rbuf* r);
 uint32_t ln_rbuf_u32(ln_rbuf* r);
@@ -83,6 +74,12 @@ void ln_rbuf_str(ln_rbuf* r, char* out, size_t outsize);
 /* A `text` field: points *len bytes into the reader's memory (not NUL-terminated); sets
  * failed if it is truncated, not UTF-8 or contains NUL.  NULL (and *len 0) on failure. */
 const char* ln_rbuf_text(ln_rbuf* r, size_t* len);
+/* View forms of str (at most `limit` bytes) and text fields, as the generated codec uses
+ * them; the same checks as ln_wbuf_str/ln_wbuf_text and ln_rbuf_str/ln_rbuf_text. */
+void ln_wbuf_strv(ln_wbuf* b, ln_strv v, size_t limit);
+void ln_wbuf_textv(ln_wbuf* b, ln_strv v);
+void ln_rbuf_strv(ln_rbuf* r, ln_strv* v, size_t limit);
+void ln_rbuf_textv(ln_rbuf* r, ln_strv* v);
 /* LN_OK if nothing failed and every byte was consumed, else LN_EPROTOCOL. */
 int ln_rbuf_end(const ln_rbuf* r);
 

@@ -11,6 +11,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "naming.h"
 #include "net.h"
 #include "svc_internal.h"
 
@@ -97,15 +98,13 @@ static void registration(const ln_service_provider* p, ln_wbuf* body)
 {
     char host_id[LN_HOST_ID_MAX];
     ln_host_id(host_id, sizeof host_id);
-    ln_wbuf_str(body, p->name);
-    ln_wbuf_str(body, p->md_name);
-    ln_wbuf_u64(body, p->layout_hash);
-    ln_wbuf_str(body, p->signature);
-    ln_wbuf_str(body, p->group_name);
-    ln_wbuf_str(body, host_id);
-    ln_wbuf_str(body, p->unix_path);
-    ln_wbuf_str(body, p->tcp_port ? p->tcp_host : "");
-    ln_wbuf_u16(body, p->tcp_port);
+    ln_msg_register_service m = {
+        .name = ln_strv_of(p->name), .md_name = ln_strv_of(p->md_name),
+        .layout_hash = p->layout_hash, .signature = ln_strv_of(p->signature),
+        .group = ln_strv_of(p->group_name), .host_id = ln_strv_of(host_id),
+        .unix_path = ln_strv_of(p->unix_path),
+        .tcp_host = ln_strv_of(p->tcp_port ? p->tcp_host : ""), .tcp_port = p->tcp_port};
+    ln_msg_register_service_write_after_id(body, &m);
 }
 
 /* After a reconnect (ports and request locks held): register the same sockets again, which
@@ -209,9 +208,8 @@ static int open_listeners(ln_service_provider* p, int* ufd, int* tfd, char* host
     *ufd = *tfd = -1;
     char dir[512];
     if (ln_svc_socket_dir(ln_client_instance(p->clnt), dir, sizeof dir) == LN_OK) {
-        int n = snprintf(p->unix_path, sizeof p->unix_path, "%s/svc.%d.%u.sock", dir,
-                         (int)getpid(), atomic_fetch_add(&socket_counter, 1) + 1);
-        if (n < 0 || (size_t)n >= sizeof p->unix_path
+        if (ln_name_service_socket(dir, (long)getpid(), atomic_fetch_add(&socket_counter, 1) + 1,
+                                   p->unix_path, sizeof p->unix_path) != LN_OK
             || ln_svc_listen_unix(p->unix_path, ufd) != 0)
             p->unix_path[0] = '\0';
     }
@@ -310,7 +308,8 @@ int ln_unregister_service_provider(ln_service_provider* p)
         ln_client_remove_port(p->clnt, p);
         ln_wbuf body;
         ln_wbuf_init(&body);
-        ln_wbuf_str(&body, p->name);
+        ln_msg_unregister_service m = {.name = ln_strv_of(p->name)};
+        ln_msg_unregister_service_write_after_id(&body, &m);
         uint16_t reply_type;
         ln_rbuf reply;
         /* A lost manager connection forgets the service anyway. */
@@ -339,9 +338,9 @@ void ln_svc_report_calls(ln_service_provider* p, int force)
         atomic_store(&p->reported_calls, calls);
         ln_wbuf body;
         ln_wbuf_init(&body);
-        ln_wbuf_str(&body, p->name);
-        ln_wbuf_u64(&body, calls);
-        ln_wbuf_u64(&body, errors);
+        ln_msg_service_called m = {.name = ln_strv_of(p->name), .calls = calls,
+                                   .errors = errors};
+        ln_msg_service_called_write_after_id(&body, &m);
         uint16_t reply_type;
         ln_rbuf reply;
         ln_client_request(p->clnt, LN_MSG_SERVICE_CALLED, &body, &reply_type, &reply);

@@ -400,3 +400,51 @@ int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d)
         err = ln_futex_wait(&h->data_futex, v, d->forever ? NULL : &rel);
     return err == ETIMEDOUT ? LN_ETIMEOUT : LN_OK;
 }
+
+int ln_ring_next(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us,
+                 ln_ring_slot** slot, uint64_t* word)
+{
+    ln_deadline d = ln_deadline_in(timeout);
+    int spun = 0;
+    for (;;) {
+        /* Read `retired` first: a sample committed before the retirement is then seen by the
+         * pick below. */
+        int retired = atomic_load_explicit(&ring->hdr->retired, memory_order_acquire);
+        int rc = ln_ring_pick(ring, c, slot, word);
+        if (rc != LN_EAGAIN)
+            return rc;
+        if (retired) {
+            if ((rc = ln_ring_follow_once(ring)) != LN_OK)
+                return rc;
+            if (c->whole_ring)
+                c->buffers = ring->slot_count;
+            ln_ring_publish_cursor(ring, c); /* its progress, in the new ring */
+            continue;
+        }
+        if (timeout == 0)
+            return LN_EAGAIN;
+        if (!spun) {
+            spun = 1;
+            if (ln_ring_spin_data(ring, c->next, spin_us))
+                continue;
+        }
+        if (ln_ring_wait_data(ring, c->next, &d) == LN_ETIMEOUT)
+            return LN_ETIMEOUT;
+    }
+}
+
+int ln_ring_read_copy(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us,
+                      void* buf, uint64_t* word, int64_t* ts)
+{
+    for (;;) {
+        ln_ring_slot* slot;
+        int rc = ln_ring_next(ring, c, timeout, spin_us, &slot, word);
+        if (rc != LN_OK)
+            return rc;
+        memcpy(buf, ln_ring_payload(slot), ring->message_size);
+        *ts = slot->timestamp_ns;
+        if (ln_ring_finish(ring, c, slot, *word, 1) == LN_OK)
+            return LN_OK;
+        /* overwritten while copied: counted, take the next one */
+    }
+}

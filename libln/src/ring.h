@@ -39,6 +39,7 @@
 #include <time.h>
 
 #include "ln/ln.h"
+#include "ln_admin.h"
 #include "shm.h"
 
 #define LN_RING_MAGIC 0x31474e49524e4c00ull /* "\0LNRING1" little-endian */
@@ -184,6 +185,7 @@ typedef struct ln_ring_cursor {
     int reader;          /* reader slot index, -1 if none */
     uint64_t pending;    /* overruns not yet reported by a read */
     uint64_t total;      /* overruns since subscribing */
+    int whole_ring;      /* buffers follow the ring's slot count across growth (a tap, EVERY) */
 } ln_ring_cursor;
 
 /* Choose the sample to read now: LN_OK with *slot and *word (its seq word) set, LN_EAGAIN if
@@ -203,5 +205,19 @@ int ln_ring_spin_data(const ln_ring* ring, uint64_t seq, uint32_t spin_us);
 /* Sleep until a sample >= seq is committed, the ring is retired, or the deadline passes
  * (LN_ETIMEOUT).  May return LN_OK spuriously; callers pick again. */
 int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d);
+
+/* The read loop of every reader (subscriber ports and taps): find the next sample for cursor
+ * c, waiting up to timeout (< 0 forever) after spinning up to spin_us once.  A retired ring
+ * is left only once nothing more can come from it, one generation at a time, so queued
+ * readers lose nothing across ring growth.  LN_OK with *slot and *word set, LN_EAGAIN if
+ * timeout is 0 and there is none, LN_ETIMEOUT (no error text set: the caller words it), or
+ * the error of a corrupted or vanished ring. */
+int ln_ring_next(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us,
+                 ln_ring_slot** slot, uint64_t* word);
+/* ln_ring_next, then copy the payload (message_size bytes) to buf and finish; a sample
+ * overwritten while copied is counted and the next one taken.  On LN_OK *word and *ts hold
+ * the sample's seq word and timestamp. */
+int ln_ring_read_copy(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us,
+                      void* buf, uint64_t* word, int64_t* ts);
 
 #endif /* LN_RING_H */

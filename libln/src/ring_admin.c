@@ -9,6 +9,7 @@
 
 #include "client_internal.h"
 #include "futex.h"
+#include "naming.h"
 #include "ring.h"
 
 #define LN_ADMIN_MAGIC 0x4c4e5241u
@@ -269,19 +270,20 @@ int ln_ring_admin_retire(ln_ring_admin* a, ln_ring_admin* successor, const char*
 
 int ln_ring_admin_purge_instance(const char* instance)
 {
-    if (!instance || !*instance || strchr(instance, '/') || strchr(instance, '.'))
-        return ln_set_error(NULL, LN_EINVAL, "bad instance name for purging segments");
-    char prefix[LN_RING_NAME_MAX];
-    int plen = snprintf(prefix, sizeof(prefix), "ln.%s.", instance);
-    if (plen < 0 || (size_t)plen >= sizeof(prefix))
+    if (!instance || !*instance)
+        return ln_set_error(NULL, LN_EINVAL, "no instance name for purging segments");
+    char full[LN_RING_NAME_MAX];
+    if (ln_name_segment_prefix(instance, full, sizeof full) != LN_OK)
         return ln_set_error(NULL, LN_EINVAL, "instance name too long");
+    const char* prefix = full + 1; /* as /dev/shm lists it: without the leading '/' */
+    size_t plen = strlen(prefix);
     DIR* dir = opendir("/dev/shm");
     if (!dir)
         return ln_set_errno_error(NULL, errno, "cannot list /dev/shm");
     int removed = 0, rc = LN_OK;
     struct dirent* e;
     while ((e = readdir(dir)) != NULL) {
-        if (strncmp(e->d_name, prefix, (size_t)plen) != 0)
+        if (strncmp(e->d_name, prefix, plen) != 0)
             continue;
         char name[LN_RING_NAME_MAX + 2];
         snprintf(name, sizeof(name), "/%s", e->d_name);

@@ -65,6 +65,7 @@ int ln_ring_tap_open(ln_ring_tap** out, const char* shm_name, uint64_t layout_ha
     }
     t->mode = mode;
     t->cur.reader = -1;
+    t->cur.whole_ring = mode == LN_TAP_EVERY;
     fit_cursor(t);
     uint64_t newest = atomic_load_explicit(&t->ring.hdr->write_seq, memory_order_acquire);
     t->cur.next = from_newest && newest > 0 ? newest : newest + 1;
@@ -82,29 +83,6 @@ void ln_ring_tap_close(ln_ring_tap* t)
     free(t);
 }
 
-/* Find the next sample per mode, waiting per the deadline.  A retired ring is left only once
- * nothing more can come from it, so EVERY loses nothing across ring growth. */
-static int next_sample(ln_ring_tap* t, double timeout, ln_ring_slot** slot, uint64_t* word)
-{
-    ln_deadline d = ln_deadline_in(timeout);
-    for (;;) {
-        /* `retired` first: a sample committed before the retirement is then seen by pick. */
-        int retired = atomic_load_explicit(&t->ring.hdr->retired, memory_order_acquire);
-        int rc = ln_ring_pick(&t->ring, &t->cur, slot, word);
-        if (rc != LN_EAGAIN)
-            return rc;
-        if (retired) {
-            if ((rc = ln_ring_follow_once(&t->ring)) != LN_OK)
-                return rc;
-            fit_cursor(t);
-            continue;
-        }
-        if (timeout == 0 || ln_ring_wait_data(&t->ring, t->cur.next, &d) == LN_ETIMEOUT)
-            return ln_set_error(NULL, LN_ETIMEOUT, "tap on '%s': no sample within %g s",
-                                t->ring.name, timeout);
-    }
-}
-
 int ln_ring_tap_read(ln_ring_tap* t, void* buf, ln_sample_info* info, double timeout)
 {
     int rc = bad_tap(t, "ln_ring_tap_read");
@@ -115,28 +93,25 @@ int ln_ring_tap_read(ln_ring_tap* t, void* buf, ln_sample_info* info, double tim
     if (isnan(timeout))
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_read: timeout is NaN");
     uint64_t expected = t->cur.next;
-    for (;;) {
-        ln_ring_slot* slot;
-        uint64_t word;
-        rc = next_sample(t, timeout, &slot, &word);
-        if (rc != LN_OK)
-            return rc;
-        memcpy(buf, ln_ring_payload(slot), t->ring.message_size);
-        int64_t ts = slot->timestamp_ns;
-        if (ln_ring_finish(&t->ring, &t->cur, slot, word, 1) != LN_OK)
-            continue; /* overwritten while copied: counted, take the next one */
-        uint64_t seq = LN_SLOT_SEQ(word);
-        if (info) {
-            info->seq = seq;
-            info->timestamp_ns = ts;
-            /* Every number between the previous sample and this one, in both modes: samples
-             * overwritten before the tap got to them, skipped for the newest, or never
-             * written here (lost on the network). */
-            info->overruns = seq - expected;
-        }
-        t->cur.pending = 0;
-        return LN_OK;
+    uint64_t word;
+    int64_t ts;
+    rc = ln_ring_read_copy(&t->ring, &t->cur, timeout, 0, buf, &word, &ts);
+    if (rc == LN_EAGAIN || rc == LN_ETIMEOUT)
+        return ln_set_error(NULL, LN_ETIMEOUT, "tap on '%s': no sample within %g s",
+                            t->ring.name, timeout);
+    if (rc != LN_OK)
+        return rc;
+    uint64_t seq = LN_SLOT_SEQ(word);
+    if (info) {
+        info->seq = seq;
+        info->timestamp_ns = ts;
+        /* Every number between the previous sample and this one, in both modes: samples
+         * overwritten before the tap got to them, skipped for the newest, or never written
+         * here (lost on the network). */
+        info->overruns = seq - expected;
     }
+    t->cur.pending = 0;
+    return LN_OK;
 }
 
 int ln_ring_tap_inject(ln_ring_tap* t, const void* data, uint64_t seq, int64_t timestamp_ns)

@@ -301,9 +301,9 @@ static int connect_service(ln_service* s, const struct timespec* deadline)
 {
     ln_wbuf body;
     ln_wbuf_init(&body);
-    ln_wbuf_str(&body, s->name);
-    ln_wbuf_str(&body, s->md_name);
-    ln_wbuf_u64(&body, s->layout_hash);
+    ln_msg_find_service find = {.name = ln_strv_of(s->name), .md_name = ln_strv_of(s->md_name),
+                                .layout_hash = s->layout_hash};
+    ln_msg_find_service_write_after_id(&body, &find);
     uint16_t reply_type;
     ln_rbuf reply;
     int rc = ln_client_request(s->clnt, LN_MSG_FIND_SERVICE, &body, &reply_type, &reply);
@@ -313,12 +313,16 @@ static int connect_service(ln_service* s, const struct timespec* deadline)
                             ln_last_error());
     char host_id[LN_PROTO_MAX_STR + 1], unix_path[LN_PROTO_MAX_STR + 1];
     char tcp_host[LN_PROTO_MAX_STR + 1], signature[LN_PROTO_MAX_STR + 1];
-    ln_rbuf_str(&reply, s->provider, sizeof s->provider);
-    ln_rbuf_str(&reply, host_id, sizeof host_id);
-    ln_rbuf_str(&reply, unix_path, sizeof unix_path);
-    ln_rbuf_str(&reply, tcp_host, sizeof tcp_host);
-    uint16_t tcp_port = ln_rbuf_u16(&reply);
-    ln_rbuf_str(&reply, signature, sizeof signature);
+    ln_msg_service_info info;
+    if (ln_msg_service_info_read_after_id(&reply, &info) != LN_OK
+        || ln_strv_copy(info.provider, s->provider, sizeof s->provider) != LN_OK
+        || ln_strv_copy(info.host_id, host_id, sizeof host_id) != LN_OK
+        || ln_strv_copy(info.unix_path, unix_path, sizeof unix_path) != LN_OK
+        || ln_strv_copy(info.tcp_host, tcp_host, sizeof tcp_host) != LN_OK
+        || ln_strv_copy(info.signature, signature, sizeof signature) != LN_OK)
+        return ln_set_error(s->clnt, LN_EPROTOCOL, "cannot call service \"%s\": malformed "
+                            "SERVICE_INFO", s->name);
+    uint16_t tcp_port = info.tcp_port;
     rc = open_connection(s, host_id, unix_path, tcp_host, tcp_port, deadline);
     if (rc != LN_OK)
         return rc;

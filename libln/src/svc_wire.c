@@ -15,6 +15,8 @@
 
 #include "svc_wire.h"
 
+#include "naming.h"
+
 int ln_svc_parse_header(const uint8_t header[LN_SVC_HEADER_SIZE], size_t max_payload,
                         uint32_t* body_len, uint16_t* type)
 {
@@ -76,33 +78,15 @@ static int private_dir(const char* path)
 
 int ln_svc_socket_dir(const char* instance, char* out, size_t size)
 {
-    char safe[LN_PROTO_MAX_STR + 1];
-    size_t n = 0;
-    for (const char* p = instance; *p != '\0' && n + 1 < sizeof safe; p++) {
-        char c = *p;
-        int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')
-                 || c == '_' || c == '-';
-        safe[n++] = ok ? c : '_';
-    }
-    safe[n] = '\0';
-    const char* env = getenv("LN_RUNTIME_DIR");
-    const char* xdg = getenv("XDG_RUNTIME_DIR");
-    int len, err = 0;
-    if (env != NULL && *env != '\0') {
-        len = snprintf(out, size, "%s", env);
-    } else if (xdg != NULL && *xdg != '\0') {
-        len = snprintf(out, size, "%s/ln", xdg);
-        if (len > 0 && (size_t)len < size)
-            err = private_dir(out);
-        len = snprintf(out, size, "%s/ln/%s", xdg, safe);
-    } else {
-        len = snprintf(out, size, "/tmp/ln-%u", (unsigned)getuid());
-        if (len > 0 && (size_t)len < size)
-            err = private_dir(out);
-        len = snprintf(out, size, "/tmp/ln-%u/%s", (unsigned)getuid(), safe);
-    }
-    if (len < 0 || (size_t)len >= size)
+    size_t parent = 0;
+    if (ln_name_runtime_dir(instance, out, size, &parent) != LN_OK)
         return ln_set_error(NULL, LN_ETOOBIG, "service socket directory name is too long");
+    int err = 0;
+    if (parent > 0) { /* the private parent first: /tmp/ln-<uid> or $XDG_RUNTIME_DIR/ln */
+        out[parent] = '\0';
+        err = private_dir(out);
+        out[parent] = '/';
+    }
     if (err == 0)
         err = private_dir(out);
     if (err != 0)

@@ -1,6 +1,6 @@
 /* svc_wire.h — the caller <-> provider protocol of services (docs/services.md, "Wire") and
  * the socket plumbing both sides share: frames, Unix/TCP listeners and connects and where a
- * provider's Unix socket lives (the host identity is ln.h's ln_host_id()).  Internal. */
+ * provider's Unix socket lives (the host identity is ln_admin.h's ln_host_id()).  Internal. */
 #ifndef LN_SVC_WIRE_H
 #define LN_SVC_WIRE_H
 

@@ -28,6 +28,7 @@ from typing import Any, NoReturn
 from . import _clientlib as C
 from . import _services
 from . import _waits as W
+from . import transports
 from ._libln import ERROR_CLASSES, ERRORS_BY_CODE, error_from_code
 from ._services import Handler, provided_service, service
 from .md_loader import message_class
@@ -285,7 +286,7 @@ _ln_write_commit = C.ln_write_commit
 _ln_write_abort = C.ln_write_abort
 _TimeoutError = ERRORS_BY_CODE[C.LN_ETIMEOUT]
 # subscribe(transport=...): the LN_SUBSCRIBE_* flag of each name
-_TRANSPORTS = {"udp": C.LN_SUBSCRIBE_UDP, "tcp": C.LN_SUBSCRIBE_TCP}
+_TRANSPORTS = {transports.UDP: C.LN_SUBSCRIBE_UDP, transports.TCP: C.LN_SUBSCRIBE_TCP}
 def _uint32(what: str, value: Any, low: int) -> int:
     """`value` as a whole number from `low` to 2**32 - 1, else TypeError / ValueError."""
     if isinstance(value, bool):
@@ -531,7 +532,8 @@ class subscriber(_Port):  # noqa: N801
     def __init__(self, clnt: client, topic_name: str, md_name: str, buffers: int = 1,
                  spin_us: int | None = None, transport: str | None = None) -> None:
         if transport is not None and transport not in _TRANSPORTS:
-            raise ValueError(f"transport must be None, 'udp' or 'tcp', not {transport!r}")
+            raise ValueError(f"transport must be None, {' or '.join(map(repr, _TRANSPORTS))}, "
+                             f"not {transport!r}")
         super().__init__(clnt, topic_name, md_name)
         self.buffers = buffers
         self.transport = transport

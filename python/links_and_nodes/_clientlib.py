@@ -58,7 +58,6 @@ ln_client_create = _declare("ln_client_create", c_int, [ctypes.POINTER(c_void_p)
 ln_client_destroy = _declare("ln_client_destroy", c_int, [c_void_p], _check)
 ln_client_name = _declare("ln_client_name", c_char_p, [c_void_p])
 ln_client_last_error = _declare("ln_client_last_error", c_int, [c_void_p, c_char_p, c_size_t])
-ln_host_id = _declare("ln_host_id", None, [c_char_p, c_size_t])
 ln_port_options_init = _declare("ln_port_options_init", None, [ctypes.POINTER(PortOptions)])
 _port_args = [c_void_p, ctypes.POINTER(c_void_p), c_char_p, c_char_p, c_uint64, c_size_t,
               ctypes.POINTER(PortOptions)]
@@ -80,20 +79,6 @@ ln_read_release = _declare("ln_read_release", c_int, [c_void_p])
 ln_outport_subscriber_count = _declare("ln_outport_subscriber_count", c_int, [c_void_p], _check)
 ln_inport_publisher_count = _declare("ln_inport_publisher_count", c_int, [c_void_p], _check)
 ln_inport_overruns = _declare("ln_inport_overruns", c_uint64, [c_void_p])
-
-# ---- topic forwarding between hosts (ln_daemon's taps; for tests and tools) -------------
-LN_TAP_EVERY = 0
-LN_TAP_NEWEST = 1
-ln_ring_tap_open = _declare("ln_ring_tap_open", c_int, [
-    ctypes.POINTER(c_void_p), c_char_p, c_uint64, c_uint64, ctypes.c_uint], _check)
-ln_ring_tap_close = _declare("ln_ring_tap_close", None, [c_void_p])
-ln_ring_tap_read = _declare("ln_ring_tap_read", c_int, [c_void_p, c_void_p,
-                                                        ctypes.POINTER(SampleInfo), c_double],
-                            _check)
-ln_ring_tap_inject = _declare("ln_ring_tap_inject", c_int, [c_void_p, c_void_p, c_uint64,
-                                                            ctypes.c_int64], _check)
-ln_ring_tap_write_seq = _declare("ln_ring_tap_write_seq", c_uint64, [c_void_p])
-ln_ring_tap_segment = _declare("ln_ring_tap_segment", c_char_p, [c_void_p])
 
 # ---- manager commands (ln_control; loggers use it) -----------------------------------------
 ln_control = _declare("ln_control", c_int, [c_void_p, c_char_p, ctypes.POINTER(c_void_p)],

@@ -14,14 +14,14 @@ from __future__ import annotations
 
 import ctypes
 import logging
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from . import _eventlib as E
 from ._libln import ERROR_CLASSES, ERRORS_BY_CODE
-from ._services import _local, _name_arg, _timeout, error_text
+from ._handles import CallerHandle, HandlerHandle, handling, keep_for_wait
+from ._services import _name_arg, _timeout, error_text
 from .md_loader import message_class
 from .md_types import LnStruct, own_dynamic_data
 
@@ -76,7 +76,7 @@ def _copy(cls: type[LnStruct], address: int) -> Any:
 
 
 # ---- handlers ----------------------------------------------------------------------------
-class event_handler:  # noqa: N801 - like provided_service
+class event_handler(HandlerHandle):  # noqa: N801 - like provided_service
     """A handler connected to event `name`; made by `client.connect_event`.
 
     `handler(call)` runs once per call of the event, in the thread that handles its group
@@ -88,10 +88,7 @@ class event_handler:  # noqa: N801 - like provided_service
     def __init__(self, clnt: client, name: str, md_name: str, handler: Handler,
                  connect: Any = None, group: str | None = None,
                  connect_fields: dict[str, Any] | None = None) -> None:
-        self.client = clnt
-        self.name = name
-        self.message_definition_name = md_name
-        self.group = group
+        super().__init__(clnt, name, md_name, group)
         self.handler = handler
         self.event_class, self.connect_class, self.call_class = _sections(md_name)
         self.connect = _struct(self.connect_class, connect, connect_fields or {},
@@ -103,29 +100,24 @@ class event_handler:  # noqa: N801 - like provided_service
         E.ln_event_connect(clnt.handle, ctypes.byref(handle), name.encode(), md_name.encode(),
                            self.event_class.LAYOUT_HASH, self.event_class.SIGNATURE.encode(),
                            ctypes.byref(self.connect), self._callback, None, _name_arg(group))
-        self._handle: int | None = handle.value
+        self._handle = handle.value
         #: the handler's service name, "ln_event/EVENT/CLIENT.N"
         self.service_name: str = E.ln_event_handler_name(handle).decode()
 
     def _on_call(self, _clnt: int | None, req: int | None, _user_data: int | None) -> int:
         # Runs under the GIL, called by libln; must never raise into ctypes.
-        handling = getattr(_local, "handling", None)
-        if handling is None:
-            handling = _local.handling = []
-        handling.append(self.client)
-        try:
-            call = self.call_class()
-            E.ln_event_request_get_data(req, ctypes.byref(call))
-            own_dynamic_data(call)
-            result = self.handler(call)
-            if result is not None:
-                reply = _struct(self.call_class, result, {},
-                                f"event '{self.name}': the handler's reply")
-                E.ln_event_request_reply(req, ctypes.byref(reply))
-        except BaseException as exc:  # noqa: BLE001 - becomes the error answer
-            self._failed(req, exc)
-        finally:
-            handling.pop()
+        with handling(self.client):
+            try:
+                call = self.call_class()
+                E.ln_event_request_get_data(req, ctypes.byref(call))
+                own_dynamic_data(call)
+                result = self.handler(call)
+                if result is not None:
+                    reply = _struct(self.call_class, result, {},
+                                    f"event '{self.name}': the handler's reply")
+                    E.ln_event_request_reply(req, ctypes.byref(reply))
+            except BaseException as exc:  # noqa: BLE001 - becomes the error answer
+                self._failed(req, exc)
         return 0
 
     def _failed(self, req: int | None, exc: BaseException) -> None:
@@ -135,31 +127,12 @@ class event_handler:  # noqa: N801 - like provided_service
             E.ln_event_request_reply_error(req, text.encode("utf-8", "replace"))
         except Exception:  # noqa: BLE001 - answered already, or nothing left to tell
             _log.info("event '%s': could not answer with an error", self.name, exc_info=True)
-        if not isinstance(exc, Exception):  # KeyboardInterrupt, SystemExit, ...
-            if getattr(_local, "waiting", False):
-                _local.pending = exc  # raised by wait_and_handle_service_group_requests
-            else:
-                _log.warning("event '%s': %s in a handler of a thread pool; it cannot be "
-                             "raised there", self.name, type(exc).__name__)
+        keep_for_wait(exc, f"event '{self.name}'")
 
-    def _forget(self) -> None:
-        self._handle = None
+    _what = "handler of event"
 
-    def close(self) -> None:
-        """Disconnect (idempotent).  Waits for a call of it running in another thread; from
-        inside its own handler it raises LnBusyError."""
-        if self._handle is None:
-            return
-        E.ln_event_disconnect(self._handle)
-        self._handle = None
-        if self in self.client._providers:
-            self.client._providers.remove(self)  # type: ignore[arg-type]
-
-    def __enter__(self) -> event_handler:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def _release(self, handle: int) -> None:
+        E.ln_event_disconnect(handle)
 
 
 # ---- callers -----------------------------------------------------------------------------
@@ -185,7 +158,7 @@ class EventResult:
         return "OK" if self.code == 0 else cls.name if cls is not None else str(self.code)
 
 
-class event:  # noqa: N801 - like service
+class event(CallerHandle):  # noqa: N801 - like service
     """A caller's handle of event `name`; made by `client.get_event`.
 
     `call(fields, timeout=None, **fields)` sends a call struct to every handler connected
@@ -193,26 +166,19 @@ class event:  # noqa: N801 - like service
     it; `results` then holds an EventResult per handler it went to.  The connections to the
     handlers stay open between calls.  Calls on one handle are serialized."""
 
+    _what = "event"
+
     def __init__(self, clnt: client, name: str, md_name: str) -> None:
-        self.client = clnt
-        self.name = name
-        self.message_definition_name = md_name
+        super().__init__(clnt, name, md_name)
         self.event_class, self.connect_class, self.call_class = _sections(md_name)
         self.results: list[EventResult] = []
         self._filter: Filter | None = None
         self._filter_error: BaseException | None = None
         self._filter_callback = E.EVENT_FILTER(self._on_filter)
-        self._lock = threading.Lock()
         handle = ctypes.c_void_p()
         E.ln_get_event(clnt.handle, ctypes.byref(handle), name.encode(), md_name.encode(),
                        self.event_class.LAYOUT_HASH, self.event_class.SIGNATURE.encode())
-        self._handle: int | None = handle.value
-
-    @property
-    def handle(self) -> int:
-        if self._handle is None:
-            raise ValueError(f"event '{self.name}' is closed")
-        return self._handle
+        self._handle = handle.value
 
     @property
     def filter(self) -> Filter | None:
@@ -269,25 +235,8 @@ class event:  # noqa: N801 - like service
                 _copy(self.call_class, r.reply) if r.reply else None))
         return results
 
-    def _forget(self) -> None:
-        with self._lock:
-            self._handle = None
-
-    def close(self) -> None:
-        """Release the handle (idempotent); `results` stay readable."""
-        with self._lock:
-            if self._handle is None:
-                return
-            handle, self._handle = self._handle, None
-        if self in self.client._services:
-            self.client._services.remove(self)  # type: ignore[arg-type]
-        E.ln_event_release(handle)
-
-    def __enter__(self) -> event:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def _release(self, handle: int) -> None:
+        E.ln_event_release(handle)  # `results` stay readable
 
 
 # ---- what client's methods do ----------------------------------------------------------

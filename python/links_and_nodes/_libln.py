@@ -41,63 +41,6 @@ ln_version_check = _declare("ln_version_check", ctypes.c_int, [ctypes.c_int, cty
                             _check)
 
 
-# ---- topic segment administration (ln_manager) ------------------------------------------
-# A handle from ln_ring_admin_create maps only the segment's header and is freed by
-# ln_ring_admin_close; the segment itself lives until ln_ring_admin_unlink.
-class RingAdmin(ctypes.Structure):
-    """Opaque struct ln_ring_admin; only pointers to it cross the boundary."""
-
-
-RingAdminHandle = ctypes.POINTER(RingAdmin)
-
-ln_ring_admin_create = _declare("ln_ring_admin_create", ctypes.c_int, [
-    ctypes.POINTER(RingAdminHandle), ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p,
-    ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint32], _check)
-ln_ring_admin_close = _declare("ln_ring_admin_close", None, [RingAdminHandle])
-ln_ring_admin_unlink = _declare("ln_ring_admin_unlink", ctypes.c_int, [ctypes.c_char_p],
-                                _check)
-ln_ring_admin_set_counts = _declare("ln_ring_admin_set_counts", ctypes.c_int, [
-    RingAdminHandle, ctypes.c_uint32, ctypes.c_uint32], _check)
-ln_ring_admin_write_seq = _declare("ln_ring_admin_write_seq", ctypes.c_int, [
-    RingAdminHandle, ctypes.POINTER(ctypes.c_uint64)], _check)
-ln_ring_admin_reserve_reader = _declare("ln_ring_admin_reserve_reader", ctypes.c_int, [
-    RingAdminHandle, ctypes.c_uint32, ctypes.c_int32, ctypes.c_uint32], _check)
-ln_ring_admin_release_reader = _declare("ln_ring_admin_release_reader", ctypes.c_int, [
-    RingAdminHandle, ctypes.c_uint32], _check)
-ln_ring_admin_retire = _declare("ln_ring_admin_retire", ctypes.c_int, [
-    RingAdminHandle, RingAdminHandle, ctypes.c_char_p, ctypes.c_double], _check)
-ln_ring_admin_purge_instance = _declare("ln_ring_admin_purge_instance", ctypes.c_int,
-                                        [ctypes.c_char_p], _check)
-ln_ring_admin_open = _declare("ln_ring_admin_open", ctypes.c_int, [
-    ctypes.POINTER(RingAdminHandle), ctypes.c_char_p], _check)
-
-
-class RingInfo(ctypes.Structure):
-    """struct ln_ring_info: what a segment's header says (ln_ring_admin_info)."""
-
-    _fields_ = [("topic", ctypes.c_char * 256), ("md_name", ctypes.c_char * 256),
-                ("successor", ctypes.c_char * 256), ("layout_hash", ctypes.c_uint64),
-                ("message_size", ctypes.c_uint64), ("write_seq", ctypes.c_uint64),
-                ("active_readers", ctypes.c_uint64), ("slot_count", ctypes.c_uint32),
-                ("retired", ctypes.c_uint32), ("publishers", ctypes.c_uint32),
-                ("subscribers", ctypes.c_uint32)]
-
-
-ln_ring_admin_info = _declare("ln_ring_admin_info", ctypes.c_int, [
-    RingAdminHandle, ctypes.POINTER(RingInfo)], _check)
-ln_ring_segment_size = _declare("ln_ring_segment_size", ctypes.c_uint64,
-                                [ctypes.c_uint64, ctypes.c_uint32])
-ln_host_id = _declare("ln_host_id", None, [ctypes.c_char_p, ctypes.c_size_t])
-
-
-def host_id() -> str:
-    """This host's identity as libln reports it to the manager ($LN_HOST_ID, else
-    hostname/boot_id)."""
-    buf = ctypes.create_string_buffer(256)
-    ln_host_id(buf, len(buf))
-    return buf.value.decode("utf-8", "replace")
-
-
 def _read_table() -> list[tuple[int, str, str]]:
     """(code, name, text) of every error entry; codes run from -1 to -ln_error_count()."""
     table = []

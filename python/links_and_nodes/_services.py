@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import ctypes
 import logging
-import threading
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from . import _clientlib as C
 from . import _waits as W
+from ._handles import CallerHandle, HandlerHandle, thread_state, handling, keep_for_wait
 from ._libln import ERROR_CLASSES, error_from_code
 from .md_loader import message_class
 from .md_types import LnStruct, own_dynamic_data
@@ -33,9 +33,6 @@ if TYPE_CHECKING:
 __all__ = ["provided_service", "service", "service_provider", "service_request"]
 
 _log = logging.getLogger("links_and_nodes.services")
-# Per thread: whether it is inside wait_and_handle_service_group_requests, and a
-# KeyboardInterrupt/SystemExit a handler raised there (re-raised once the wait returns).
-_local = threading.local()
 
 
 def _timeout(timeout: float | None) -> float:
@@ -69,7 +66,7 @@ def error_text(exc: BaseException) -> str:
 
 
 # ---- callers -------------------------------------------------------------------------------
-class service:  # noqa: N801 - the LN name
+class service(CallerHandle):  # noqa: N801 - the LN name
     """A caller's handle of service `name`; made by `client.get_service`.
 
     `req` and `resp` are structs of the md's request and response sections.  `call()` sends
@@ -78,25 +75,18 @@ class service:  # noqa: N801 - the LN name
     A failed call raises and leaves `resp` as it was.  Calls on one handle are serialized;
     use one handle per thread for parallel calls."""
 
+    _what = "service"
+
     def __init__(self, clnt: client, name: str, md_name: str) -> None:
-        self.client = clnt
-        self.name = name
-        self.message_definition_name = md_name
+        super().__init__(clnt, name, md_name)
         self.service_class, self.request_class, self.response_class = _sections(md_name)
         self.req: Any = self.request_class()
         self.resp: Any = self.response_class()
         self._raw = self.response_class()  # filled by libln, points into its memory
-        self._lock = threading.Lock()
         handle = ctypes.c_void_p()
         C.ln_get_service(clnt.handle, ctypes.byref(handle), name.encode(), md_name.encode(),
                          self.service_class.LAYOUT_HASH, self.service_class.SIGNATURE.encode())
-        self._handle: int | None = handle.value
-
-    @property
-    def handle(self) -> int:
-        if self._handle is None:
-            raise ValueError(f"service '{self.name}' is closed")
-        return self._handle
+        self._handle = handle.value
 
     def call(self, timeout: float | None = None) -> Any:
         """Send `req`, wait for the response and return `resp` (filled with it).
@@ -122,25 +112,8 @@ class service:  # noqa: N801 - the LN name
         """Largest response accepted (wire bytes plus decoded dynamic data)."""
         C.ln_service_set_max_size(self.handle, max_bytes)
 
-    def _forget(self) -> None:
-        with self._lock:
-            self._handle = None
-
-    def close(self) -> None:
-        """Release the handle (idempotent); `resp` stays readable."""
-        with self._lock:
-            if self._handle is None:
-                return
-            handle, self._handle = self._handle, None
-        if self in self.client._services:
-            self.client._services.remove(self)
-        C.ln_service_release(handle)
-
-    def __enter__(self) -> service:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def _release(self, handle: int) -> None:
+        C.ln_service_release(handle)  # `resp` stays readable
 
 
 # ---- providers -----------------------------------------------------------------------------
@@ -199,7 +172,7 @@ class service_request:  # noqa: N801
 Handler = Callable[[service_request], None]
 
 
-class provided_service:  # noqa: N801
+class provided_service(HandlerHandle):  # noqa: N801
     """A service this client provides; made (and registered) by `client.get_service_provider`.
 
     `handler(request)` runs once per call, in the thread that handles the group (see
@@ -210,10 +183,7 @@ class provided_service:  # noqa: N801
 
     def __init__(self, clnt: client, name: str, md_name: str, handler: Handler,
                  group: str | None = None, max_size: int | None = None) -> None:
-        self.client = clnt
-        self.name = name
-        self.message_definition_name = md_name
-        self.group = group
+        super().__init__(clnt, name, md_name, group)
         self.handler = handler
         self.service_class, self.request_class, self.response_class = _sections(md_name)
         # libln calls this from whichever thread handles the group; it must live as long as
@@ -223,7 +193,7 @@ class provided_service:  # noqa: N801
         C.ln_get_service_provider(clnt.handle, ctypes.byref(handle), name.encode(),
                                   md_name.encode(), self.service_class.LAYOUT_HASH,
                                   self.service_class.SIGNATURE.encode())
-        self._handle: int | None = handle.value
+        self._handle = handle.value
         try:
             C.ln_service_provider_set_handler(self._handle, self._callback, None)
             if max_size is not None:
@@ -234,12 +204,6 @@ class provided_service:  # noqa: N801
             C.ln_unregister_service_provider(handle_value)
             raise
 
-    @property
-    def handle(self) -> int:
-        if self._handle is None:
-            raise ValueError(f"provider of service '{self.name}' is closed")
-        return self._handle
-
     def _on_request(self, _clnt: int | None, req: int | None, _user_data: int | None) -> int:
         # Runs under the GIL, called by libln; must never raise into ctypes.
         try:
@@ -247,38 +211,20 @@ class provided_service:  # noqa: N801
         except BaseException as exc:  # noqa: BLE001 - e.g. MemoryError
             _answer_failure(None, req, self.name, exc)
             return 0
-        handling = getattr(_local, "handling", None)
-        if handling is None:
-            handling = _local.handling = []
-        handling.append(self.client)
-        try:  # the request's handle is valid only until this returns
-            request._read()
-            self.handler(request)
-        except BaseException as exc:  # noqa: BLE001 - becomes the error response
-            _answer_failure(request, req, self.name, exc)
-        finally:
-            request._handle = None
-            handling.pop()
+        with handling(self.client):
+            try:  # the request's handle is valid only until this returns
+                request._read()
+                self.handler(request)
+            except BaseException as exc:  # noqa: BLE001 - becomes the error response
+                _answer_failure(request, req, self.name, exc)
+            finally:
+                request._handle = None
         return 0
 
-    def _forget(self) -> None:
-        self._handle = None
+    _what = "provider of service"
 
-    def close(self) -> None:
-        """Unregister the service (idempotent).  Waits for a handler of it running in
-        another thread; from inside one of its own handlers it raises LnBusyError."""
-        if self._handle is None:
-            return
-        C.ln_unregister_service_provider(self._handle)
-        self._handle = None
-        if self in self.client._providers:
-            self.client._providers.remove(self)
-
-    def __enter__(self) -> provided_service:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def _release(self, handle: int) -> None:
+        C.ln_unregister_service_provider(handle)
 
 
 def _answer_failure(request: service_request | None, req: int | None, name: str,
@@ -293,12 +239,7 @@ def _answer_failure(request: service_request | None, req: int | None, name: str,
             C.ln_service_request_respond_error(req, text.encode("utf-8", "replace"))
         except Exception:  # noqa: BLE001 - nothing left to tell the caller
             _log.info("service '%s': could not answer with an error", name, exc_info=True)
-    if not isinstance(exc, Exception):  # KeyboardInterrupt, SystemExit, ...
-        if getattr(_local, "waiting", False):
-            _local.pending = exc  # raised by wait_and_handle_service_group_requests
-        else:
-            _log.warning("service '%s': %s in a handler of a thread pool; it cannot be "
-                         "raised there", name, type(exc).__name__)
+    keep_for_wait(exc, f"service '{name}'")
 
 
 def wait_and_handle(clnt: client, group: str | None, timeout: float | None) -> int:
@@ -308,9 +249,9 @@ def wait_and_handle(clnt: client, group: str | None, timeout: float | None) -> i
     thread need not wait longer than one of them."""
     name = _name_arg(group)
     handle = clnt._enter_wait()
-    previous = getattr(_local, "waiting", False)
-    _local.waiting = True
-    _local.pending = None
+    previous = getattr(thread_state, "waiting", False)
+    thread_state.waiting = True
+    thread_state.pending = None
     try:
         rc = C.ln_wait_and_handle_service_group_requests(handle, name, W.first_slice(timeout))
         if rc == 0 and W.waits_longer(timeout):
@@ -320,8 +261,8 @@ def wait_and_handle(clnt: client, group: str | None, timeout: float | None) -> i
                     raise ValueError("client is closed")
                 rc = C.ln_wait_and_handle_service_group_requests(handle, name, t)
     finally:
-        _local.waiting = previous
-        pending, _local.pending = _local.pending, None
+        thread_state.waiting = previous
+        pending, thread_state.pending = thread_state.pending, None
         clnt._leave_wait()
     if pending is not None:
         raise pending
@@ -334,7 +275,7 @@ def wait_and_handle(clnt: client, group: str | None, timeout: float | None) -> i
 
 def in_handler_of(clnt: client) -> bool:
     """Whether this thread runs a service handler of `clnt` (libln is below it)."""
-    return clnt in getattr(_local, "handling", ())
+    return clnt in getattr(thread_state, "handling", ())
 
 
 # ---- the LN wrapper ------------------------------------------------------------------------

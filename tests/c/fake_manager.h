@@ -18,9 +18,11 @@
 
 #include "../../libln/src/lasterror.c"
 #include "../../libln/src/proto.c"
+#include "client_wire.c" /* generated into the build tree from client.schema */
 #include "../../libln/src/net.c"
 #include "../../libln/src/client.c"
 #include "../../libln/src/client_conn.c"
+#include "../../libln/src/host_id.c" /* ln_host_id: not exported by libln.so */
 
 /* client.c stops and frees service groups on destroy; these tests link no service code and
  * create no groups. */

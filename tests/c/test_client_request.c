@@ -109,7 +109,7 @@ static void script_restart(struct fake* f, int fd)
 {
     if (!fake_hello(f, fd))
         return;
-    FAKE_CHECK(f, f->hello_flags == (f->session ? LN_HELLO_RECONNECT : 0u));
+    FAKE_CHECK(f, f->hello_flags == (f->session ? LN_PROTO_HELLO_RECONNECT : 0u));
     fake_welcome(f, fd, LN_PROTO_VERSION, "req");
     char topic[64];
     uint32_t id = fake_topic_info(f, fd, topic, sizeof topic);

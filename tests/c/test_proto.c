@@ -7,6 +7,7 @@
 
 /* The codec is internal (hidden in libln.so), so the test compiles it in. */
 #include "../../libln/src/proto.c"
+#include "client_wire.c" /* generated into the build tree from client.schema */
 
 #include "ln_test.h"
 
@@ -397,7 +398,7 @@ static const char hello_bytes[] =
     "\x39\x30\x00\x00"                     /* pid 12345 */
     "\x03\x00" "cam" "\x05\x00" "0.1.0"    /* client name, libln version */
     "\x03\x00" "h/1"                       /* host id */
-    "\x01\x00\x00\x00";                    /* flags: LN_HELLO_RECONNECT */
+    "\x01\x00\x00\x00";                    /* flags: LN_PROTO_HELLO_RECONNECT */
 #define HELLO_LEN (sizeof hello_bytes - 1)
 
 static void test_hello_has_host_id(void)
@@ -411,7 +412,7 @@ static void test_hello_has_host_id(void)
     ln_wbuf_str(&b, "cam");
     ln_wbuf_str(&b, "0.1.0");
     ln_wbuf_str(&b, "h/1");
-    ln_wbuf_u32(&b, LN_HELLO_RECONNECT);
+    ln_wbuf_u32(&b, LN_PROTO_HELLO_RECONNECT);
     LN_CHECK_EQ(ln_proto_frame_end(&b, start), LN_OK);
     LN_CHECK(bytes_equal(&b, hello_bytes, HELLO_LEN));
     uint16_t type = 0;

@@ -1,8 +1,8 @@
-// fuzz_daemon_msgs.cpp — fuzz target: ln_daemon's command codec (protocol.hpp Reader,
-// messages.cpp, net_messages.cpp, logger_messages.cpp, pull_messages.cpp, spec.cpp) on a
-// stream of manager frames, each decoded by its type's decoder; a decoded SPAWN goes through
-// check_spawn, and a decoded LOGGER_* or PULL_TOPIC request is encoded back and must decode to
-// the same.  (Frame HMAC tags are left out.)
+// fuzz_daemon_msgs.cpp — fuzz target: ln_daemon's command codec (the Reader of wire_io.hpp,
+// the generated daemon_wire.hpp behind messages.hpp, net_messages.cpp, logger_messages.cpp,
+// pull_messages.cpp; spec.cpp) on a stream of manager frames, each decoded by its type's
+// decoder; a decoded SPAWN goes through check_spawn, and a decoded request of the generated
+// codec is encoded back and must decode again.  (Frame HMAC tags are left out.)
 #include <cassert>
 #include <cstdint>
 #include <cstring>
@@ -44,15 +44,7 @@ void round_trip(const Request &req, Encode encode, Decode decode_again)
 
 void encode_logger_topic(proto::Writer &w, const LoggerTopicRequest &req)
 {
-    w.str(req.logger);
-    w.str(req.topic);
-    w.str(req.ring);
-    w.str(req.md_name);
-    w.u64(req.layout_hash);
-    w.u64(req.message_size);
-    w.u32(req.depth);
-    w.u32(req.divisor);
-    w.f64(req.span_s);
+    wire::encode(w, req);
 }
 
 // One request body, decoded as Server::handle_hello / handle_request, NetCommands and
@@ -61,15 +53,9 @@ void decode(uint8_t type, proto::Reader &r)
 {
     switch (static_cast<Msg>(type)) {
     case Msg::client_hello: {
-        char magic[sizeof proto::kMagic];
-        uint8_t nonce[proto::kNonceBytes], proof[32];
-        r.raw(magic, sizeof magic);
-        r.u16();
-        r.raw(nonce, sizeof nonce);
-        std::string instance = r.str(proto::kMaxName);
-        r.raw(proof, sizeof proof);
-        if (r.done())
-            valid_name(instance);
+        wire::ClientHello hello;
+        if (wire::decode(r, hello))
+            valid_name(hello.instance);
         break;
     }
     case Msg::spawn: {
@@ -81,22 +67,32 @@ void decode(uint8_t type, proto::Reader &r)
             std::string error;
             if (!check_spawn(req, launch, config, error))
                 assert(!error.empty());
+            round_trip(req, [](proto::Writer &w, const SpawnRequest &q) { wire::encode(w, q); },
+                       decode_spawn);
         }
         break;
     }
     case Msg::stop:
-    case Msg::forget:
-    case Msg::output:
+    case Msg::forget: {
+        wire::Stop req;
+        if (wire::decode(r, req))
+            valid_name(req.name);
+        break;
+    }
+    case Msg::output: {
+        wire::Output req;
+        auto encode = [](proto::Writer &w, const wire::Output &q) { wire::encode(w, q); };
+        auto decode_again = [](proto::Reader &again, wire::Output &q) {
+            return wire::decode(again, q);
+        };
+        if (wire::decode(r, req))
+            round_trip(req, encode, decode_again);
+        break;
+    }
     case Msg::signal: {
-        std::string name = r.str(proto::kMaxName);
-        if (type == static_cast<uint8_t>(Msg::output))
-            r.u32();
-        if (type == static_cast<uint8_t>(Msg::signal)) {
-            r.i32();
-            r.u8();
-        }
-        if (r.done())
-            valid_name(name);
+        wire::Signal req;
+        if (wire::decode(r, req))
+            valid_name(req.name);
         break;
     }
     case Msg::ring_create: {
@@ -158,11 +154,7 @@ void decode(uint8_t type, proto::Reader &r)
         LoggerEnableRequest req;
         if (decode_logger_enable(r, req))
             round_trip(req,
-                       [](proto::Writer &w, const LoggerEnableRequest &q) {
-                           w.str(q.logger);
-                           w.u8(q.enable);
-                           w.u8(q.clear);
-                       },
+                       [](proto::Writer &w, const LoggerEnableRequest &q) { wire::encode(w, q); },
                        decode_logger_enable);
         break;
     }

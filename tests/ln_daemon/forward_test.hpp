@@ -22,6 +22,7 @@
 #include <vector>
 
 #include <ln/ln.h>
+#include <ln_admin.h>
 
 #include "daemon_test.hpp"
 #include "forward.hpp"

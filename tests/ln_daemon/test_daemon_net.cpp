@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <ln/ln.h>
+#include <ln_admin.h>
 #include <string>
 #include <sys/stat.h>
 #include <unistd.h>

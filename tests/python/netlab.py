@@ -211,7 +211,7 @@ class DaemonProc:
         return f"{self.host.address}:{self.port}"
 
     def argv(self) -> list[str]:
-        from links_and_nodes.manager.daemon_client import daemon_executable
+        from links_and_nodes.manager.processes.daemon_launch import daemon_executable
 
         argv = [daemon_executable(), "--port", str(self.port), "--key-file",
                 str(self.key_file), "--foreground"]
@@ -457,7 +457,7 @@ class Host:
     def start_daemon(self, key_file: str | os.PathLike[str] | None = None, *,
                      port: int = DAEMON_PORT, data_port: int | None = None,
                      extra_args: Sequence[str] = ()) -> DaemonProc:
-        """Run the project's ln_daemon (daemon_client.daemon_executable()) here, listening on
+        """Run the project's ln_daemon (daemon_launch.daemon_executable()) here, listening on
         every interface at `port` (0: any free one), with `key_file` (default: the lab's);
         `data_port`, if given, is passed as --data-port.  Returns once it answers."""
         daemon = DaemonProc(self, Path(key_file) if key_file else self.lab.key_file, port,
@@ -531,7 +531,7 @@ class NetLab:
     def key_file(self) -> Path:
         """The ln_daemon key of the lab (one key for every host, as in a real setup)."""
         if self._key_file is None:
-            from links_and_nodes.manager.daemon_client import create_key_file
+            from links_and_nodes.manager.processes.daemon_keys import create_key_file
 
             self._key_file = self.directory / "daemon.key"
             create_key_file(self._key_file)

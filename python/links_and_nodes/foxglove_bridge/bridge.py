@@ -17,8 +17,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..manager.introspect_client import load_md
-from ..manager.introspect_commands import CommandError, topic_layout
+from ..manager.introspection.client import load_md
+from ..manager.introspection.commands import CommandError, topic_layout
 from .config import FoxgloveConfig
 from .front import LEGACY, SDK, Front
 from .link import ManagerLink

@@ -9,10 +9,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .. import default_ports
 from ..zenoh_bridge.config import ConfigError, ServiceRule, TopicRule, service_spec, topic_spec
 from ..zenoh_bridge.wire import matches
 
-DEFAULT_PORT = 8765  # the Foxglove WebSocket protocol's usual port
+DEFAULT_PORT = default_ports.FOXGLOVE_PORT
 DEFAULT_HOST = "127.0.0.1"
 
 __all__ = ["ConfigError", "FoxgloveConfig"]

@@ -17,9 +17,9 @@ from typing import Any
 
 from ln_generate import MessageDef
 
-from ..manager import introspect as fmt
-from ..manager.introspect_client import TopicReader
-from ..manager.introspect_commands import CommandError, Context, follow, topic_layout
+from ..manager.introspection import values as fmt
+from ..manager.introspection.client import TopicReader
+from ..manager.introspection.commands import CommandError, Context, follow, topic_layout
 from ..zenoh_bridge.config import TopicRule
 from .schema import SCHEMA_ENCODING, root_schema
 

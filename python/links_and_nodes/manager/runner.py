@@ -1,6 +1,8 @@
 """What `ln_manager -c FILE` adds to a plain manager: the daemons, the scheduler, the
-control commands and the console, set up in order and taken down in reverse
-(--start-all, --wait-ready, --exit-on-failure, reload)."""
+control commands and the console, started in order and taken down in reverse
+(--start-all, --wait-ready, --exit-on-failure, reload).  app.py builds the objects and
+gives them to Runner; ManagerAddresses and Reload are what it gives the scheduler and the
+control commands."""
 
 from __future__ import annotations
 
@@ -10,51 +12,93 @@ import contextlib
 import logging
 import sys
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-from . import routes
-from .config import ConfigError, load, model
-from .console import Console, stdin_reader
-from .control import Control, ControlError
-from .core import Core
-from .daemons import DaemonPool
-from .loggers import Loggers
-from .network import Network
-from .process_states import ProcState
-from .pull import PullTopics
-from .scheduler import Scheduler, StartError, Transition
+from ..addresses import format_address, is_loopback, parse_address
+from .config import ConfigError, load
+from .frontends.console import Console, stdin_reader
+from .frontends.control import Control, ControlError
+from .loggers.loggers import Loggers
+from .network import routes
+from .network.hosts import Network
+from .network.pull import PullTopics
+from .processes.daemons import DaemonPool
+from .processes.scheduler import Scheduler, StartError, Transition
+from .processes.states import ProcState
 
 log = logging.getLogger("ln_manager")
 
 
+class ManagerAddresses:
+    """LN_MANAGER for a process on a node (Scheduler's manager_address_for) of a
+    configuration spanning several hosts."""
+
+    def __init__(self, address: str, pool: DaemonPool, network: Network) -> None:
+        self.address = address
+        self.pool = pool
+        self.network = network
+
+    def __call__(self, node: str) -> str:
+        """The manager's own address unless that is a loopback or wildcard one that
+        another host cannot use; then the manager host's address as the network sections
+        say that host reaches it, or, where they give none (the manager's host is not in
+        the configuration), the address the manager's connection to that node's daemon
+        comes from."""
+        host, port = parse_address(self.address, default_host="")
+        if self.pool.is_local(node) or not is_loopback(host):
+            return self.address
+        config = self.network.config
+        node_host, local = config.node_map.get(node, node), self.network.local_name()
+        target = routes.host_address(config, node_host, local)
+        if node_host != local and (target is None or target in routes.LOCAL_NAMES):
+            target = self.pool.local_address(node)
+        if not target:
+            return self.address
+        return format_address((target, port))
+
+
+class Reload:
+    """The `reload` command: reads the configuration file again (with the command line's
+    defines) and hands it to whatever follows it."""
+
+    def __init__(self, args: argparse.Namespace, scheduler: Scheduler,
+                 network: Network | None, loggers: Loggers, pull: PullTopics) -> None:
+        self.args = args
+        self.scheduler = scheduler
+        self.network = network
+        self.loggers = loggers
+        self.pull = pull
+
+    async def __call__(self) -> dict[str, Any]:
+        defines = dict(item.partition("=")[::2] for item in self.args.define)
+        try:
+            config = load(self.args.config, defines=defines)
+        except ConfigError as exc:
+            raise ControlError(f"reload refused, the configuration is unchanged:\n{exc}") \
+                from None
+        result = self.scheduler.apply_config(config)
+        if self.network is not None:
+            self.network.configure(config)  # routes and topic transports of the new file
+        await self.loggers.configure(config)  # loggers and topics the new file adds
+        self.pull.configure(config)
+        return result
+
+
 class Runner:
-    def __init__(self, args: argparse.Namespace, config: model.Config, core: Core,
-                 runtime_dir: Path, address: str, shutdown: Callable[[bool], None],
+    def __init__(self, args: argparse.Namespace, *, pool: DaemonPool, scheduler: Scheduler,
+                 network: Network | None, loggers: Loggers, pull: PullTopics,
+                 control: Control, shutdown: Callable[[bool], None],
                  stopping: asyncio.Event) -> None:
         self.args = args
         self.shutdown = shutdown
         self.stopping = stopping  # set by SIGTERM/SIGINT/quit: no waiting beyond it
         self.exit_status = 0
-        self.pool = DaemonPool(config, args.instance, key_file=args.daemon_key_file,
-                               log_dir=runtime_dir)
-        self.scheduler = Scheduler(config, core, self.pool.backend(), manager_address=address,
-                                   extra_env={"LN_RUNTIME_DIR": str(runtime_dir)})
-        self.control = Control(core, self.scheduler, reload=self.reload, shutdown=shutdown)
-        self.control.manager_address = address  # the console's topic echo etc. connect here
-        self.network: Network | None = None
-        if routes.spans_hosts(config, self.pool.local_host):
-            self.network = Network(config, core, self.pool, args.instance)
-            self.control.network_view = self.network
-            self.scheduler.manager_address_for = self._manager_address_for
-        local_name = self.network.local_name if self.network is not None else \
-            (lambda: self.pool.local_host)
-        self.loggers = Loggers(core, lambda: self.pool.link(self.pool.local_host), local_name)
-        self.control.loggers = self.loggers
-        self.pull = PullTopics(core, config, lambda: self.pool.link(self.pool.local_host),
-                               local_name)
-        self.control.pull = self.pull
-        self.address = address
+        self.pool = pool
+        self.scheduler = scheduler
+        self.network = network
+        self.loggers = loggers
+        self.pull = pull
+        self.control = control
         self._console: asyncio.Task[None] | None = None
         if args.exit_on_failure:
             self.scheduler.transition_listeners.append(self._fail_fast)
@@ -79,26 +123,6 @@ class Runner:
             return False
         writer.close()
         return True
-
-    def _manager_address_for(self, node: str) -> str:
-        """LN_MANAGER for a process on `node`: the manager's own address unless that is a
-        loopback or wildcard one that another host cannot use; then the manager host's
-        address as the network sections say that host reaches it, or, where they give none
-        (the manager's host is not in the configuration), the address the manager's
-        connection to that node's daemon comes from."""
-        host, _, port = self.address.rpartition(":")
-        if self.pool.is_local(node) or host.strip("[]") not in ("127.0.0.1", "::1",
-                                                                "localhost"):
-            return self.address
-        assert self.network is not None
-        config = self.network.config
-        node_host, local = config.node_map.get(node, node), self.network.local_name()
-        target = routes.host_address(config, node_host, local)
-        if node_host != local and (target is None or target in routes.LOCAL_NAMES):
-            target = self.pool.local_address(node)
-        if not target:
-            return self.address
-        return f"[{target}]:{port}" if ":" in target else f"{target}:{port}"
 
     async def begin(self) -> int:
         """Start what was asked, open the console; non-zero if the manager must exit right
@@ -160,20 +184,6 @@ class Runner:
             await Console(self.control).run(await stdin_reader())
         except (OSError, ValueError) as exc:  # no usable stdin: run without a console
             log.info("no console: %s", exc)
-
-    async def reload(self) -> dict[str, Any]:
-        defines = dict(item.partition("=")[::2] for item in self.args.define)
-        try:
-            config = load(self.args.config, defines=defines)
-        except ConfigError as exc:
-            raise ControlError(f"reload refused, the configuration is unchanged:\n{exc}") \
-                from None
-        result = self.scheduler.apply_config(config)
-        if self.network is not None:
-            self.network.config = config  # routes and topic transports of the new file
-        await self.loggers.configure(config)  # loggers and topics the new file adds
-        self.pull.configure(config)
-        return result
 
     async def end(self, stop_processes: bool) -> None:
         if self._console is not None:

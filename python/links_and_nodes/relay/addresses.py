@@ -1,6 +1,5 @@
-"""Endpoints of ln_relay links: parsing `HOST:PORT` / `[V6HOST]:PORT`, the text form used
-in its output, and resolving and binding them when a link starts (RelayError if that
-fails)."""
+"""Endpoints of ln_relay links: resolving and binding them when a link starts (RelayError if
+that fails).  Parsing and writing `HOST:PORT` / `[V6HOST]:PORT` is links_and_nodes.addresses'."""
 
 from __future__ import annotations
 
@@ -8,34 +7,11 @@ import asyncio
 import socket
 from typing import Any
 
-Address = tuple[str, int]
+from ..addresses import Address, format_address, parse_address
+
+__all__ = ["Address", "RelayError", "bound_socket", "enlarge_buffers", "format_address",
+           "parse_address", "resolve"]
 SOCKET_BUFFER = 4 << 20  # bytes asked for; the kernel's limit applies
-
-
-def parse_address(text: str, *, allow_port_zero: bool = False) -> Address:
-    """(host, port) of `HOST:PORT` or `[V6HOST]:PORT`; ValueError saying what is wrong.
-    Port 0 (the kernel picks one) only where `allow_port_zero`, i.e. for LISTEN."""
-    host, colon, port = text.rpartition(":")
-    if host.startswith("[") and host.endswith("]") and len(host) >= 2:
-        host = host[1:-1]
-        if not host or ":" not in host:
-            raise ValueError(f"bad address {text!r}: brackets are for IPv6 addresses")
-    elif ":" in host:
-        raise ValueError(f"bad address {text!r}: an IPv6 address needs brackets, "
-                         "e.g. [::1]:5000")
-    if not colon or not host:
-        raise ValueError(f"bad address {text!r}: expected HOST:PORT or [V6HOST]:PORT")
-    low = 0 if allow_port_zero else 1
-    if not port.isascii() or not port.isdigit() or not low <= int(port) <= 65535:
-        raise ValueError(f"bad address {text!r}: the port must be a number "
-                         f"{low}..65535")
-    return host, int(port)
-
-
-def format_address(address: Address) -> str:
-    """`host:port`, with brackets around an IPv6 host."""
-    host, port = address
-    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
 class RelayError(Exception):

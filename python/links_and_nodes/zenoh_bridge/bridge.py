@@ -60,7 +60,7 @@ class Bridge:
     def start(self) -> bool:
         """Connect everything; False if stopped before the session opened."""
         import links_and_nodes as ln
-        from links_and_nodes.manager.scripting import connect
+        from links_and_nodes.manager.frontends.scripting import connect
 
         self.manager = connect(self.address)
         instance = self.manager.instance
@@ -181,7 +181,7 @@ class Bridge:
     # ---- outbound discovery ------------------------------------------------------------------------
     def poll(self) -> None:
         """Bridge the topics and services of the manager's lists that outbound rules select."""
-        from links_and_nodes.manager.scripting import connect
+        from links_and_nodes.manager.frontends.scripting import connect
 
         wants_topics = any(r.direction == "out" for r in self.config.topics)
         wants_services = any(r.direction == "out" for r in self.config.services)

@@ -15,7 +15,7 @@ from zenoh_sites import MD_CHANGED, MD_DIR, Site, log_text, received, start_mana
 from netlab import in_netns
 from polling import wait_for
 
-from links_and_nodes.manager.scripting import connect
+from links_and_nodes.manager.frontends.scripting import connect
 
 
 def _lnc(site: Site, bridge_args: list[str]) -> Path:

@@ -18,7 +18,10 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_keys as dk
+from links_and_nodes.wire import codec as wc
+from links_and_nodes.manager.processes import daemon_wire as dw
 from polling import free_port, wait_for  # noqa: F401  (the daemon tests import them from here)
 
 REPO = Path(__file__).resolve().parents[3]
@@ -108,7 +111,7 @@ def start_daemon(tmp: Path, *args: str, user: int | None = None, group: int | No
     user (and `group`), who then owns the key file.  `env` is added to the daemon's
     environment."""
     key_file = tmp / f"daemon-{uuid.uuid4().hex[:6]}.key"
-    key = dc.create_key_file(key_file)
+    key = dk.create_key_file(key_file)
     log = tmp / f"{key_file.stem}.log"
     as_user: dict[str, object] = {}
     if user is not None:
@@ -196,26 +199,26 @@ async def next_event(client: dc.DaemonClient, predicate: Callable[[object], bool
 
 
 async def exited(client: dc.DaemonClient, name: str,
-                 lines: list[str] | None = None) -> dc.Exited:
+                 lines: list[str] | None = None) -> dw.Exited:
     """Wait for the Exited event of `name`; its output lines before it go to `lines`."""
     seen: list[object] = []
-    event = await next_event(client, lambda e: isinstance(e, dc.Exited) and e.name == name,
+    event = await next_event(client, lambda e: isinstance(e, dw.Exited) and e.name == name,
                              f"exit of {name}", seen)
     if lines is not None:
-        lines += [e.text for e in seen if isinstance(e, dc.OutputLine) and e.name == name]
-    assert isinstance(event, dc.Exited)
+        lines += [e.text for e in seen if isinstance(e, dw.OutputLine) and e.name == name]
+    assert isinstance(event, dw.Exited)
     return event
 
 
-async def line(client: dc.DaemonClient, name: str, text: str) -> dc.OutputLine:
-    event = await next_event(client, lambda e: isinstance(e, dc.OutputLine)
+async def line(client: dc.DaemonClient, name: str, text: str) -> dw.OutputLine:
+    event = await next_event(client, lambda e: isinstance(e, dw.OutputLine)
                              and e.name == name and e.text == text, f"line {text!r} of {name}")
-    assert isinstance(event, dc.OutputLine)
+    assert isinstance(event, dw.OutputLine)
     return event
 
 
-def spec(name: str, command: str, *, shell: bool = True, **kw: object) -> dc.SpawnSpec:
-    return dc.SpawnSpec(name=name, command=command, shell=shell, env=dict(PATH_ENV),
+def spec(name: str, command: str, *, shell: bool = True, **kw: object) -> dw.SpawnSpec:
+    return dw.SpawnSpec(name=name, command=command, shell=shell, env=dict(PATH_ENV),
                         **kw)  # type: ignore[arg-type]
 
 
@@ -247,8 +250,8 @@ class RawConnection:
         (length,) = struct.unpack("<I", self.read_exact(4))
         body = self.read_exact(length)
         if self.keys is not None:
-            body, tag = body[:-dc.TAG_BYTES], body[-dc.TAG_BYTES:]
-            assert tag == dc._frame_tag(self.keys["to_client"], self.seq_in, body)
+            body, tag = body[:-dw.TAG_BYTES], body[-dw.TAG_BYTES:]
+            assert tag == dw.frame_tag(self.keys["to_client"], self.seq_in, body)
             self.seq_in += 1
         mtype, req = struct.unpack_from("<BI", body)
         return mtype, req, body[5:]
@@ -261,7 +264,7 @@ class RawConnection:
             use = self.seq_out if seq is None else seq
             if seq is None:
                 self.seq_out += 1
-            body += dc._frame_tag(self.keys["to_daemon"], use, body)
+            body += dw.frame_tag(self.keys["to_daemon"], use, body)
         return struct.pack("<I", len(body)) + body
 
     def send(self, data: bytes) -> None:
@@ -270,30 +273,30 @@ class RawConnection:
     def hello(self) -> bytes:
         """Reads DAEMON_HELLO; returns the daemon's nonce."""
         mtype, _, payload = self.read_frame()
-        assert mtype == dc.Msg.DAEMON_HELLO and payload[:8] == dc.MAGIC
+        assert mtype == dw.Msg.DAEMON_HELLO and payload[:8] == dw.MAGIC
         return payload[10:]
 
     def client_hello(self, key: bytes, instance: str, daemon_nonce: bytes) -> bytes:
         nonce = os.urandom(32)
-        keys = dc._proofs(key, daemon_nonce, nonce, instance.encode())
-        payload = dc.MAGIC + struct.pack("<H", dc.PROTOCOL_VERSION) + nonce \
-            + dc._str(instance) + keys["client"]
+        keys = dw.proofs(key, daemon_nonce, nonce, instance.encode())
+        payload = dw.MAGIC + struct.pack("<H", dw.PROTOCOL_VERSION) + nonce \
+            + wc.encode_str(instance) + keys["client"]
         self._pending_keys = keys
-        return self.frame(dc.Msg.CLIENT_HELLO, 0, payload, tagged=False)
+        return self.frame(dw.Msg.CLIENT_HELLO, 0, payload, tagged=False)
 
     def authenticate(self, key: bytes, instance: str) -> None:
         self.send(self.client_hello(key, instance, self.hello()))
         mtype, _, payload = self.read_frame()
-        assert mtype == dc.Msg.AUTH_OK, payload
+        assert mtype == dw.Msg.AUTH_OK, payload
         self.keys = self._pending_keys
 
     def expect_error_and_close(self) -> tuple[int, str]:
         """Reads frames up to an ERROR, then insists the daemon closes the connection."""
         while True:
             mtype, _, payload = self.read_frame()
-            if mtype == dc.Msg.ERROR:
+            if mtype == dw.Msg.ERROR:
                 break
-        code, text = dc._decode_error(payload)
+        code, text = dw.decode_error(payload)
         self.sock.settimeout(WAIT)
         rest = b""
         while True:

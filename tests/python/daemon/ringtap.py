@@ -8,10 +8,9 @@ import ctypes
 import os
 from pathlib import Path
 
-from links_and_nodes import _clientlib as C
-from links_and_nodes import _libln
+from links_and_nodes import _adminlib
 from links_and_nodes.errors import LnError
-from links_and_nodes.manager.segments import sanitize_instance
+from links_and_nodes.naming import sanitize_instance
 
 
 class Tap:
@@ -21,12 +20,12 @@ class Tap:
     def __init__(self, name: str, layout_hash: int, message_size: int) -> None:
         self.size = message_size
         self._handle = ctypes.c_void_p()
-        C.ln_ring_tap_open(ctypes.byref(self._handle), name.encode(), layout_hash,
-                           message_size, C.LN_TAP_EVERY)
+        _adminlib.ln_ring_tap_open(ctypes.byref(self._handle), name.encode(), layout_hash,
+                                   message_size, _adminlib.LN_TAP_EVERY)
 
     def close(self) -> None:
         if self._handle:
-            C.ln_ring_tap_close(self._handle)
+            _adminlib.ln_ring_tap_close(self._handle)
             self._handle = ctypes.c_void_p()
 
     def __enter__(self) -> Tap:
@@ -37,14 +36,14 @@ class Tap:
 
     def inject(self, data: bytes, seq: int, timestamp_ns: int = 0) -> None:
         buf = ctypes.create_string_buffer(data.ljust(self.size, b"\0"), self.size)
-        C.ln_ring_tap_inject(self._handle, buf, seq, timestamp_ns)
+        _adminlib.ln_ring_tap_inject(self._handle, buf, seq, timestamp_ns)
 
     def read(self, timeout: float) -> tuple[int, bytes] | None:
         """(seq, data) of the next sample, None if none came within `timeout` seconds."""
         buf = ctypes.create_string_buffer(self.size)
-        info = C.SampleInfo()
+        info = _adminlib.SampleInfo()
         try:
-            C.ln_ring_tap_read(self._handle, buf, ctypes.byref(info), timeout)
+            _adminlib.ln_ring_tap_read(self._handle, buf, ctypes.byref(info), timeout)
         except LnError as exc:
             if exc.name == "ETIMEOUT":
                 return None
@@ -52,7 +51,7 @@ class Tap:
         return int(info.seq), buf.raw
 
     def write_seq(self) -> int:
-        return int(C.ln_ring_tap_write_seq(self._handle))
+        return int(_adminlib.ln_ring_tap_write_seq(self._handle))
 
 
 def segment_size(name: str) -> int | None:
@@ -64,7 +63,7 @@ def segment_size(name: str) -> int | None:
 
 
 def ring_size(message_size: int, slots: int) -> int:
-    return int(_libln.ln_ring_segment_size(message_size, slots))
+    return int(_adminlib.ln_ring_segment_size(message_size, slots))
 
 
 def prefix(instance: str) -> str:
@@ -78,4 +77,4 @@ def segments_of(instance: str) -> list[str]:
 
 def purge(instance: str) -> None:
     """Remove whatever segments a test of `instance` left behind."""
-    _libln.ln_ring_admin_purge_instance(sanitize_instance(instance).encode())
+    _adminlib.ln_ring_admin_purge_instance(sanitize_instance(instance).encode())

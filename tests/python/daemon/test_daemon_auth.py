@@ -13,19 +13,21 @@ from pathlib import Path
 import pytest
 from daemonproc import Daemon, RawConnection, spec
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_client as dc
+from links_and_nodes.wire import codec as wc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 # One well-formed payload per command; the SPAWN would create a file if it ever ran.
-def payloads(marker: Path) -> dict[dc.Msg, bytes]:
-    name = dc._str("victim")
+def payloads(marker: Path) -> dict[dw.Msg, bytes]:
+    name = wc.encode_str("victim")
     return {
-        dc.Msg.SPAWN: dc._encode_spawn(spec("victim", f"touch {marker}")),
-        dc.Msg.STOP: name,
-        dc.Msg.SIGNAL: name + struct.pack("<iB", 9, 0),
-        dc.Msg.LIST: b"",
-        dc.Msg.OUTPUT: name + struct.pack("<I", 10),
-        dc.Msg.FORGET: name,
-        dc.Msg.PING: b"",
+        dw.Msg.SPAWN: dw.encode_spawn(spec("victim", f"touch {marker}")),
+        dw.Msg.STOP: name,
+        dw.Msg.SIGNAL: name + struct.pack("<iB", 9, 0),
+        dw.Msg.LIST: b"",
+        dw.Msg.OUTPUT: name + struct.pack("<I", 10),
+        dw.Msg.FORGET: name,
+        dw.Msg.PING: b"",
     }
 
 
@@ -40,9 +42,9 @@ def assert_nothing_ran(daemon: Daemon, marker: Path) -> None:
 
 def test_wrong_key_is_refused_at_connect(daemon: Daemon) -> None:
     async def main() -> None:
-        with pytest.raises(dc.DaemonAuthError) as e:
+        with pytest.raises(dw.DaemonAuthError) as e:
             await daemon.connect(key=os.urandom(32))
-        assert e.value.code == dc.ErrorCode.AUTH_FAILED
+        assert e.value.code == dw.ErrorCode.AUTH_FAILED
         assert "authentication failed" in str(e.value)
 
     asyncio.run(main())
@@ -58,7 +60,7 @@ def test_wrong_key_refuses_every_command(daemon: Daemon, tmp_path: Path) -> None
             # The command follows the hello at once, as a client that does not wait would.
             conn.send(hello + conn.frame(mtype, 1, payload, tagged=False))
             code, text = conn.expect_error_and_close()
-            assert code == dc.ErrorCode.AUTH_FAILED, (mtype, text)
+            assert code == dw.ErrorCode.AUTH_FAILED, (mtype, text)
         finally:
             conn.close()
     assert_nothing_ran(daemon, marker)
@@ -72,7 +74,7 @@ def test_unauthenticated_commands_are_refused(daemon: Daemon, tmp_path: Path) ->
             conn.hello()
             conn.send(conn.frame(mtype, 1, payload, tagged=False))
             code, text = conn.expect_error_and_close()
-            assert code == dc.ErrorCode.NOT_AUTHENTICATED, (mtype, text)
+            assert code == dw.ErrorCode.NOT_AUTHENTICATED, (mtype, text)
             assert text.startswith("not authenticated")
         finally:
             conn.close()
@@ -85,11 +87,11 @@ def test_proof_is_bound_to_the_instance(daemon: Daemon) -> None:
         nonce = conn.hello()
         # A proof computed for instance "a" but presented as instance "b".
         good = conn.client_hello(daemon.key, "a", nonce)
-        forged = good.replace(dc._str("a"), dc._str("b"))
+        forged = good.replace(wc.encode_str("a"), wc.encode_str("b"))
         forged = struct.pack("<I", len(forged) - 4) + forged[4:]
         conn.send(forged)
         code, _ = conn.expect_error_and_close()
-        assert code == dc.ErrorCode.AUTH_FAILED
+        assert code == dw.ErrorCode.AUTH_FAILED
     finally:
         conn.close()
 
@@ -99,14 +101,14 @@ def test_old_hello_cannot_be_replayed(daemon: Daemon) -> None:
     first = RawConnection(daemon.port)
     recorded = first.client_hello(daemon.key, daemon.instance, first.hello())
     first.send(recorded)
-    assert first.read_frame()[0] == dc.Msg.AUTH_OK
+    assert first.read_frame()[0] == dw.Msg.AUTH_OK
     first.close()
     second = RawConnection(daemon.port)
     try:
         second.hello()
         second.send(recorded)
         code, _ = second.expect_error_and_close()
-        assert code == dc.ErrorCode.AUTH_FAILED
+        assert code == dw.ErrorCode.AUTH_FAILED
     finally:
         second.close()
 
@@ -114,11 +116,11 @@ def test_old_hello_cannot_be_replayed(daemon: Daemon) -> None:
 def test_daemon_must_prove_the_key() -> None:
     # A fake daemon without the key: it cannot produce the proof, the client refuses it.
     async def fake(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        hello = dc.MAGIC + struct.pack("<H", 1) + os.urandom(32)
-        writer.write(struct.pack("<IBI", 5 + len(hello), dc.Msg.DAEMON_HELLO, 0) + hello)
+        hello = dw.MAGIC + struct.pack("<H", 1) + os.urandom(32)
+        writer.write(struct.pack("<IBI", 5 + len(hello), dw.Msg.DAEMON_HELLO, 0) + hello)
         (length,) = struct.unpack("<I", await reader.readexactly(4))
         await reader.readexactly(length)
-        writer.write(struct.pack("<IBI", 5 + 32, dc.Msg.AUTH_OK, 0) + os.urandom(32))
+        writer.write(struct.pack("<IBI", 5 + 32, dw.Msg.AUTH_OK, 0) + os.urandom(32))
         await writer.drain()
         await reader.read()
 
@@ -126,7 +128,7 @@ def test_daemon_must_prove_the_key() -> None:
         server = await asyncio.start_server(fake, "127.0.0.1", 0)
         port = server.sockets[0].getsockname()[1]
         async with server:
-            with pytest.raises(dc.DaemonAuthError) as e:
+            with pytest.raises(dw.DaemonAuthError) as e:
                 await dc.DaemonClient.connect("127.0.0.1", port, os.urandom(32), "x")
             assert "could not prove" in str(e.value)
 
@@ -135,9 +137,9 @@ def test_daemon_must_prove_the_key() -> None:
 
 def test_frames_need_their_tag(daemon: Daemon, tmp_path: Path) -> None:
     marker = tmp_path / "ran"
-    spawn = payloads(marker)[dc.Msg.SPAWN]
+    spawn = payloads(marker)[dw.Msg.SPAWN]
     cases = {
-        "untagged": lambda c: c.frame(dc.Msg.SPAWN, 1, spawn + b"\0" * 32, tagged=False),
+        "untagged": lambda c: c.frame(dw.Msg.SPAWN, 1, spawn + b"\0" * 32, tagged=False),
         "wrong key": lambda c: _with_key(c, os.urandom(32), spawn),
         "replayed": lambda c: _replayed(c),
         "altered": lambda c: _altered(c, spawn),
@@ -148,7 +150,7 @@ def test_frames_need_their_tag(daemon: Daemon, tmp_path: Path) -> None:
             conn.authenticate(daemon.key, daemon.instance)
             conn.send(make(conn))
             code, text = conn.expect_error_and_close()
-            assert code == dc.ErrorCode.BAD_REQUEST, what
+            assert code == dw.ErrorCode.BAD_REQUEST, what
             assert "wrong tag" in text, (what, text)
         finally:
             conn.close()
@@ -160,20 +162,20 @@ def _with_key(conn: RawConnection, key: bytes, payload: bytes) -> bytes:
     saved = conn.keys
     conn.keys = {**saved, "to_daemon": key}
     try:
-        return conn.frame(dc.Msg.SPAWN, 1, payload)
+        return conn.frame(dw.Msg.SPAWN, 1, payload)
     finally:
         conn.keys = saved
 
 
 def _replayed(conn: RawConnection) -> bytes:
-    ping = conn.frame(dc.Msg.PING, 1, b"")
+    ping = conn.frame(dw.Msg.PING, 1, b"")
     conn.send(ping)
-    assert conn.read_frame()[0] == dc.Msg.OK
+    assert conn.read_frame()[0] == dw.Msg.OK
     return ping  # the same bytes again: sequence number 0 is used up
 
 
 def _altered(conn: RawConnection, payload: bytes) -> bytes:
-    frame = bytearray(conn.frame(dc.Msg.SPAWN, 1, payload))
+    frame = bytearray(conn.frame(dw.Msg.SPAWN, 1, payload))
     frame[20] ^= 0x01
     return bytes(frame)
 
@@ -185,7 +187,7 @@ def test_version_mismatch_is_refused(daemon: Daemon) -> None:
         struct.pack_into("<H", hello, 4 + 5 + 8, 99)
         conn.send(bytes(hello))
         code, text = conn.expect_error_and_close()
-        assert code == dc.ErrorCode.VERSION
+        assert code == dw.ErrorCode.VERSION
         assert text == "unsupported protocol version 99; this daemon speaks version 1"
     finally:
         conn.close()

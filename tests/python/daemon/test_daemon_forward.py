@@ -15,7 +15,8 @@ import pytest
 from daemonproc import WAIT, Daemon, unique_instance
 from ringtap import Tap, prefix, purge
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 LAYOUT, SIZE, SLOTS = 0x5EED_0002, 3000, 256  # > one UDP fragment of 1400 bytes
 TOPIC, MD = "/arm/state", "lntest/pattern"
@@ -65,7 +66,7 @@ def deliver_udp(writer: Tap, reader: Tap, first: int, wanted: int) -> list[int]:
     pytest.fail(f"only {len(got)} of {wanted} samples arrived over UDP")
 
 
-async def one_stream(client: dc.DaemonClient) -> dc.StreamStat:
+async def one_stream(client: dc.DaemonClient) -> dw.StreamStat:
     streams, _ = await client.stream_stats()
     assert len(streams) == 1, streams
     return streams[0]
@@ -108,13 +109,13 @@ def test_forward_a_topic(pair: tuple[Daemon, Daemon], transport: str) -> None:
                 await b.connect(instance) as receiver:
             assert await receiver.ring_write_seq(dst) == last
 
-            async def counted(client: dc.DaemonClient) -> dc.StreamStat | None:
+            async def counted(client: dc.DaemonClient) -> dw.StreamStat | None:
                 s = await one_stream(client)
                 return s if s.samples >= (COUNT if transport == "tcp" else 5) else None
 
             out = await until(lambda: counted(sender), "the sender's count")
             into = await until(lambda: counted(receiver), "the receiver's count")
-            assert isinstance(out, dc.StreamStat) and isinstance(into, dc.StreamStat)
+            assert isinstance(out, dw.StreamStat) and isinstance(into, dw.StreamStat)
             assert (out.token, out.sending, out.transport, out.ring, out.peer) == \
                 (token, True, transport, src, f"127.0.0.1:{port}")
             assert (into.token, into.sending, into.transport, into.ring) == \
@@ -125,7 +126,7 @@ def test_forward_a_topic(pair: tuple[Daemon, Daemon], transport: str) -> None:
             if transport == "tcp":
                 assert (out.samples, into.samples, out.drops, into.drops) == (COUNT, COUNT, 0, 0)
             _, totals = await receiver.stream_stats()
-            assert totals == dc.StreamTotals(unknown_stream=0, malformed=0)
+            assert totals == dw.StreamTotals(unknown_stream=0, malformed=0)
 
             # Stopped at the sender: what is written afterwards does not reach `dst`.  A
             # second stream into `marker` shows when it would have arrived.
@@ -141,7 +142,7 @@ def test_forward_a_topic(pair: tuple[Daemon, Daemon], transport: str) -> None:
                 else:
                     deliver_udp(writer, reader, last + 1, 1)
             assert await receiver.ring_write_seq(dst) == last
-            await refused(sender.stream_remove(token), dc.ErrorCode.UNKNOWN_STREAM)
+            await refused(sender.stream_remove(token), dw.ErrorCode.UNKNOWN_STREAM)
             # A purge stops every stream of the instance (and, both "hosts" sharing
             # /dev/shm, the first one unlinks all three segments).
             assert await sender.ring_purge() == 3
@@ -182,8 +183,8 @@ def test_receiver_removal_makes_the_token_unknown(pair: tuple[Daemon, Daemon]) -
     asyncio.run(main())
 
 
-async def refused(call: Awaitable[object], code: dc.ErrorCode, *texts: str) -> None:
-    with pytest.raises(dc.DaemonError) as e:
+async def refused(call: Awaitable[object], code: dw.ErrorCode, *texts: str) -> None:
+    with pytest.raises(dw.DaemonError) as e:
         await call
     assert e.value.code == code, e.value
     for text in texts:
@@ -201,32 +202,32 @@ def test_stream_requests_are_checked(daemon: Daemon) -> None:
             await stranger.ring_create(theirs, TOPIC, MD, LAYOUT, SIZE, SLOTS)
             await client.stream_recv(token, mine, LAYOUT, SIZE, "tcp")
             # Another instance neither sees, removes nor takes over the stream.
-            assert await stranger.stream_stats() == ([], dc.StreamTotals(0, 0))
-            await refused(stranger.stream_remove(token), dc.ErrorCode.UNKNOWN_STREAM,
+            assert await stranger.stream_stats() == ([], dw.StreamTotals(0, 0))
+            await refused(stranger.stream_remove(token), dw.ErrorCode.UNKNOWN_STREAM,
                           f"no stream {token:016x} in instance {other}")
             await refused(stranger.stream_recv(token, theirs, LAYOUT, SIZE, "udp"),
-                          dc.ErrorCode.STREAM_FAILED, "in use by another instance")
+                          dw.ErrorCode.STREAM_FAILED, "in use by another instance")
             await refused(client.stream_recv(new_token(), theirs, LAYOUT, SIZE, "udp"),
-                          dc.ErrorCode.STREAM_FAILED, "not in the namespace")
+                          dw.ErrorCode.STREAM_FAILED, "not in the namespace")
             await refused(client.stream_send(new_token(), theirs, LAYOUT, SIZE, "udp",
                                              "127.0.0.1", 9),
-                          dc.ErrorCode.STREAM_FAILED, "not in the namespace")
+                          dw.ErrorCode.STREAM_FAILED, "not in the namespace")
             # The forwarder's own refusals come with its text.
             await refused(client.stream_recv(0, mine, LAYOUT, SIZE, "udp"),
-                          dc.ErrorCode.STREAM_FAILED, "token 0")
+                          dw.ErrorCode.STREAM_FAILED, "token 0")
             await refused(client.stream_send(new_token(), mine, LAYOUT + 1, SIZE, "udp",
                                              "127.0.0.1", 9),
-                          dc.ErrorCode.STREAM_FAILED)
+                          dw.ErrorCode.STREAM_FAILED)
             await refused(client.stream_send(new_token(), prefix(daemon.instance) + "9.9",
                                              LAYOUT, SIZE, "tcp", "127.0.0.1", 9),
-                          dc.ErrorCode.STREAM_FAILED)
-            with pytest.raises(dc.DaemonError) as e:
+                          dw.ErrorCode.STREAM_FAILED)
+            with pytest.raises(dw.DaemonError) as e:
                 await client.stream_recv(new_token(), mine, LAYOUT, SIZE, "sctp")
             assert e.value.code is None and "unknown transport" in str(e.value)
             (stat,) = (await client.stream_stats())[0]
             assert (stat.token, stat.sending, stat.transport) == (token, False, "tcp")
             await client.stream_remove(token)
-            await refused(client.stream_remove(token), dc.ErrorCode.UNKNOWN_STREAM)
+            await refused(client.stream_remove(token), dw.ErrorCode.UNKNOWN_STREAM)
             await client.ping()
 
     try:

@@ -21,7 +21,10 @@ import pytest
 from daemonproc import WAIT, Daemon, RawConnection, daemon_exe, stop_daemon, unique_instance
 from ringtap import Tap, prefix, purge
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_keys as dk
+from links_and_nodes.wire import codec as wc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 LAYOUT, SIZE, SLOTS = 0x5EED_0003, 64, 256
 TOPIC, MD = "/arm/state", "lntest/pattern"
@@ -61,23 +64,23 @@ async def until(check: Callable[[], Awaitable[object]], what: str) -> object:
 
 
 async def topic_status(client: dc.DaemonClient, logger: str,
-                       topic: str = TOPIC) -> dc.LoggerTopicStatus:
+                       topic: str = TOPIC) -> dw.LoggerTopicStatus:
     (found,) = [t for t in (await client.logger_status(logger)).topics if t.topic == topic]
     return found
 
 
 async def received(client: dc.DaemonClient, logger: str, count: int,
-                   topic: str = TOPIC) -> dc.LoggerTopicStatus:
+                   topic: str = TOPIC) -> dw.LoggerTopicStatus:
     """Waits until the logger has taken `count` samples out of the ring (plus any it
     missed)."""
 
-    async def check() -> dc.LoggerTopicStatus | None:
+    async def check() -> dw.LoggerTopicStatus | None:
         s = await topic_status(client, logger, topic)
         assert s.received + s.missed <= count, s
         return s if s.received + s.missed == count else None
 
     status = await until(check, f"{count} samples to reach logger {logger}")
-    assert isinstance(status, dc.LoggerTopicStatus)
+    assert isinstance(status, dw.LoggerTopicStatus)
     return status
 
 
@@ -88,8 +91,8 @@ def inject(tap: Tap, seqs: range | list[int], ts: Callable[[int], int] = lambda 
 
 
 async def refused(call: Awaitable[object], *texts: str,
-                  code: dc.ErrorCode = dc.ErrorCode.LOGGER_FAILED) -> str:
-    with pytest.raises(dc.DaemonError) as e:
+                  code: dw.ErrorCode = dw.ErrorCode.LOGGER_FAILED) -> str:
+    with pytest.raises(dw.DaemonError) as e:
         await call
     assert e.value.code == code, e.value
     for text in texts:
@@ -97,7 +100,7 @@ async def refused(call: Awaitable[object], *texts: str,
     return str(e.value)
 
 
-def counts(chunk: dc.LoggerChunk | dc.LoggerTopicStatus) -> tuple[int, int, int, int, int]:
+def counts(chunk: dw.LoggerChunk | dw.LoggerTopicStatus) -> tuple[int, int, int, int, int]:
     return chunk.received, chunk.stored, chunk.missed, chunk.skipped, chunk.dropped
 
 
@@ -110,7 +113,7 @@ def test_logs_exactly_what_is_published_while_enabled(logged: Daemon) -> None:
             await client.logger_topic("box", TOPIC, ring, MD, LAYOUT, SIZE, 100)
             status = await client.logger_status()
             assert status.memory_used == memory(100) and status.memory_limit == 256 << 20
-            assert status.topics == [dc.LoggerTopicStatus(
+            assert status.topics == [dw.LoggerTopicStatus(
                 logger="box", topic=TOPIC, ring=ring, md_name=MD, enabled=False, depth=100,
                 divisor=1, span=0.0, message_size=SIZE, received=0, stored=0, missed=0,
                 skipped=0, dropped=0, last_error="")]
@@ -327,7 +330,7 @@ def test_logger_memory_zero_disables_logging(start: Callable[..., Daemon]) -> No
             await refused(client.logger_topic("box", TOPIC, prefix(daemon.instance) + "1.1", MD,
                                               LAYOUT, SIZE, 10),
                           "topic logging is disabled on this daemon", "--logger-memory 0")
-            assert await client.logger_status() == dc.LoggerStatus(0, 0, [])
+            assert await client.logger_status() == dw.LoggerStatus(0, 0, [])
 
     asyncio.run(main())
 
@@ -348,7 +351,7 @@ def test_logger_memory_takes_suffixes(start: Callable[..., Daemon], value: str,
                                    "99999999999999999999", "17179869184G"])
 def test_bad_logger_memory_is_a_usage_error(tmp_path: Path, value: str) -> None:
     key = tmp_path / "key"
-    dc.create_key_file(key)
+    dk.create_key_file(key)
     result = subprocess.run([daemon_exe(), "--port", "0", "--bind", "127.0.0.1", "--key-file",
                              str(key), "--foreground", "--logger-memory", value],
                             capture_output=True, text=True, timeout=WAIT)
@@ -519,7 +522,7 @@ def test_remove_and_unknown_loggers(logged: Daemon) -> None:
             await refused(client.logger_status("box"), missing)
             await refused(client.logger_fetch("other", "/b"), "logger 'other' has no topic '/b'")
             await client.logger_remove("other", "/a")  # its last topic: the logger goes
-            assert await client.logger_status() == dc.LoggerStatus(256 << 20, 0, [])
+            assert await client.logger_status() == dw.LoggerStatus(256 << 20, 0, [])
 
     asyncio.run(main())
 
@@ -589,24 +592,24 @@ def test_instances_are_separate(logged: Daemon) -> None:
 
 
 def _topic_payload(ring: str, tail: bytes = b"") -> bytes:
-    return (dc._str("box") + dc._str(TOPIC) + dc._str(ring) + dc._str(MD)
+    return (wc.encode_str("box") + wc.encode_str(TOPIC) + wc.encode_str(ring) + wc.encode_str(MD)
             + struct.pack("<QQIId", LAYOUT, SIZE, 10, 1, 0.0) + tail)
 
 
 MALFORMED = {
-    "truncated LOGGER_TOPIC": (dc.Msg.LOGGER_TOPIC, lambda n: _topic_payload(n)[:-1]),
-    "LOGGER_TOPIC with trailing bytes": (dc.Msg.LOGGER_TOPIC, lambda n: _topic_payload(n, b"\0")),
-    "LOGGER_TOPIC with an overlong ring": (dc.Msg.LOGGER_TOPIC,
+    "truncated LOGGER_TOPIC": (dw.Msg.LOGGER_TOPIC, lambda n: _topic_payload(n)[:-1]),
+    "LOGGER_TOPIC with trailing bytes": (dw.Msg.LOGGER_TOPIC, lambda n: _topic_payload(n, b"\0")),
+    "LOGGER_TOPIC with an overlong ring": (dw.Msg.LOGGER_TOPIC,
                                            lambda n: _topic_payload(n + "x" * 300)),
-    "LOGGER_REMOVE without a topic": (dc.Msg.LOGGER_REMOVE, lambda n: dc._str("box")),
-    "LOGGER_ENABLE with enable 2": (dc.Msg.LOGGER_ENABLE,
-                                    lambda n: dc._str("box") + struct.pack("<BB", 2, 0)),
-    "LOGGER_ENABLE with clear 7": (dc.Msg.LOGGER_ENABLE,
-                                   lambda n: dc._str("box") + struct.pack("<BB", 1, 7)),
-    "LOGGER_FETCH without max_bytes": (dc.Msg.LOGGER_FETCH, lambda n: dc._str("box")
-                                       + dc._str(TOPIC) + struct.pack("<Q", 0)),
-    "LOGGER_STATUS of an overlong name": (dc.Msg.LOGGER_STATUS, lambda n: dc._str("x" * 256)),
-    "LOGGER_STATUS with a huge length": (dc.Msg.LOGGER_STATUS,
+    "LOGGER_REMOVE without a topic": (dw.Msg.LOGGER_REMOVE, lambda n: wc.encode_str("box")),
+    "LOGGER_ENABLE with enable 2": (dw.Msg.LOGGER_ENABLE,
+                                    lambda n: wc.encode_str("box") + struct.pack("<BB", 2, 0)),
+    "LOGGER_ENABLE with clear 7": (dw.Msg.LOGGER_ENABLE,
+                                   lambda n: wc.encode_str("box") + struct.pack("<BB", 1, 7)),
+    "LOGGER_FETCH without max_bytes": (dw.Msg.LOGGER_FETCH, lambda n: wc.encode_str("box")
+                                       + wc.encode_str(TOPIC) + struct.pack("<Q", 0)),
+    "LOGGER_STATUS of an overlong name": (dw.Msg.LOGGER_STATUS, lambda n: wc.encode_str("x" * 256)),
+    "LOGGER_STATUS with a huge length": (dw.Msg.LOGGER_STATUS,
                                          lambda n: struct.pack("<I", 0xFFFFFFFF)),
 }
 
@@ -628,7 +631,7 @@ def test_malformed_requests_close_only_their_connection(logged: Daemon, case: st
                 code, text = await asyncio.to_thread(raw.expect_error_and_close)
             finally:
                 raw.close()
-            assert code == dc.ErrorCode.BAD_REQUEST
+            assert code == dw.ErrorCode.BAD_REQUEST
             assert text == f"malformed {mtype.name} request"
             # The other connection and the logger carry on, unchanged.
             with Tap(ring, LAYOUT, SIZE) as publisher:

@@ -12,11 +12,11 @@ from pathlib import Path
 
 from daemonproc import Daemon, exited, spec
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 
-def net_info(daemon: Daemon) -> dc.NetInfo:
-    async def main() -> dc.NetInfo:
+def net_info(daemon: Daemon) -> dw.NetInfo:
+    async def main() -> dw.NetInfo:
         async with await daemon.connect() as client:
             return await client.net_info()
 
@@ -26,7 +26,7 @@ def net_info(daemon: Daemon) -> dc.NetInfo:
 def test_host_id_from_the_environment(start: Callable[..., Daemon]) -> None:
     host_id = f"robot-{uuid.uuid4().hex[:8]}"
     daemon = start(env={"LN_HOST_ID": host_id})
-    assert net_info(daemon) == dc.NetInfo(host_id=host_id, data_port=daemon.data_port)
+    assert net_info(daemon) == dw.NetInfo(host_id=host_id, data_port=daemon.data_port)
     assert f"host id {host_id}" in daemon.log_text()
 
 

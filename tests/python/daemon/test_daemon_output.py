@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from daemonproc import WAIT, Daemon, exited, line, next_event, spec
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 PY = sys.executable
 
@@ -71,14 +71,14 @@ def test_pty_and_pipes(daemon: Daemon) -> None:
         async with await daemon.connect() as client:
             await client.spawn(spec("pty", f"{PY} -c \"{code}\""))
             seen: list[object] = []
-            await next_event(client, lambda e: isinstance(e, dc.Exited), "exit", seen)
-            assert [(e.stream, e.text) for e in seen if isinstance(e, dc.OutputLine)] == \
+            await next_event(client, lambda e: isinstance(e, dw.Exited), "exit", seen)
+            assert [(e.stream, e.text) for e in seen if isinstance(e, dw.OutputLine)] == \
                 [("pty", "True True"), ("pty", "to stderr")]
 
             await client.spawn(spec("pipes", f"{PY} -c \"{code}\"", use_pty=False))
             seen = []
-            await next_event(client, lambda e: isinstance(e, dc.Exited), "exit", seen)
-            assert sorted((e.stream, e.text) for e in seen if isinstance(e, dc.OutputLine)) == \
+            await next_event(client, lambda e: isinstance(e, dw.Exited), "exit", seen)
+            assert sorted((e.stream, e.text) for e in seen if isinstance(e, dw.OutputLine)) == \
                 [("stderr", "to stderr"), ("stdout", "False False")]
 
     asyncio.run(main())
@@ -168,10 +168,10 @@ def test_output_log_must_be_a_regular_file(daemon: Daemon, tmp_path: Path) -> No
     async def main() -> None:
         async with await daemon.connect() as client:
             for path in (str(fifo), "/dev/null"):
-                with pytest.raises(dc.DaemonError) as refused:
+                with pytest.raises(dw.DaemonError) as refused:
                     await asyncio.wait_for(
                         client.spawn(spec("f", "echo hi", output_log=(path, 10, 1))), WAIT)
-                assert refused.value.code == dc.ErrorCode.SPAWN_FAILED
+                assert refused.value.code == dw.ErrorCode.SPAWN_FAILED
                 assert str(refused.value) == f"output log '{path}' is not a regular file"
             assert await client.list() == []
             await client.ping()

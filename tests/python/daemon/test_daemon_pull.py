@@ -15,7 +15,8 @@ import pytest
 from daemonproc import WAIT, Daemon
 from ringtap import Tap, prefix, purge
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 ndn_encoding = pytest.importorskip("ndn.encoding")
 
@@ -105,12 +106,12 @@ def test_serves_a_topic_over_udp(served: Daemon) -> None:
             await client.ring_create(ring, TOPIC, MD, LAYOUT, SIZE, SLOTS)
             await client.pull_topic(TOPIC, ring, MD, LAYOUT, SIZE, "127.0.0.1", port, NAME,
                                     16, 700)
-            with pytest.raises(dc.DaemonError) as e:
+            with pytest.raises(dw.DaemonError) as e:
                 await client.pull_topic("/other", ring, MD, LAYOUT, SIZE, "127.0.0.1", port,
                                         NAME, 16, 700)
-            assert e.value.code == dc.ErrorCode.LOGGER_FAILED
+            assert e.value.code == dw.ErrorCode.LOGGER_FAILED
             assert f"name '{NAME}' is served already on 127.0.0.1:{port}" in str(e.value)
-            with pytest.raises(dc.DaemonError) as e:
+            with pytest.raises(dw.DaemonError) as e:
                 await client.pull_topic("/big", ring, MD, LAYOUT, 8001, "127.0.0.1", port,
                                         NAME + "2", 16, 700)
             assert "message size 8001 out of range 1..8000" in str(e.value)

@@ -17,19 +17,20 @@ from pathlib import Path
 import pytest
 from daemonproc import REPO, WAIT, Daemon, alive, descendants, exited, line, spec, wait_for
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 # A throw-away "manager": connects, starts two processes, says so, then waits to be killed.
 MANAGER = """
 import asyncio, sys
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 async def main():
     port, key, instance, gate = int(sys.argv[1]), bytes.fromhex(sys.argv[2]), sys.argv[3], sys.argv[4]
     client = await dc.DaemonClient.connect("127.0.0.1", port, key, instance)
     env = {"PATH": "/usr/bin:/bin"}
-    await client.spawn(dc.SpawnSpec("long", "echo long-start; exec sleep 600", True, env))
+    await client.spawn(dw.SpawnSpec("long", "echo long-start; exec sleep 600", True, env))
     # "short" ends once the gate file exists, i.e. while nobody is connected.
-    await client.spawn(dc.SpawnSpec(
+    await client.spawn(dw.SpawnSpec(
         "short", f"echo short-start; while [ ! -e {gate} ]; do sleep 0.02; done; "
                  "echo short-end; exit 3", True, env))
     started = set()
@@ -120,9 +121,9 @@ def test_instances_are_separate(daemon: Daemon) -> None:
             assert await b.list() == []
             for call in (b.output("same"), b.stop("same"), b.signal("same", 9),
                          b.forget("same")):
-                with pytest.raises(dc.DaemonError) as e:
+                with pytest.raises(dw.DaemonError) as e:
                     await call
-                assert e.value.code == dc.ErrorCode.UNKNOWN_PROCESS
+                assert e.value.code == dw.ErrorCode.UNKNOWN_PROCESS
             # The same name in the other instance is another process.
             await b.spawn(spec("same", "echo from-b; exec sleep 600"))
             await line(b, "same", "from-b")
@@ -173,7 +174,7 @@ def test_connection_loss_ends_events_and_calls(daemon: Daemon) -> None:
         assert not pending.done()
         daemon.proc.send_signal(signal.SIGKILL)  # the daemon itself goes away
         daemon.proc.wait()
-        with pytest.raises(dc.DaemonConnectionError):
+        with pytest.raises(dw.DaemonConnectionError):
             await pending
         for pid in tree:  # nobody supervises them any more
             with contextlib.suppress(ProcessLookupError):
@@ -182,7 +183,7 @@ def test_connection_loss_ends_events_and_calls(daemon: Daemon) -> None:
         while await asyncio.wait_for(queue.get(), 30) is not None:
             pass
         assert client.closed
-        with pytest.raises(dc.DaemonConnectionError):
+        with pytest.raises(dw.DaemonConnectionError):
             await client.list()
         with pytest.raises(ConnectionError):
             await client.ping()
@@ -200,7 +201,7 @@ def test_close_right_after_connect(daemon: Daemon) -> None:
             await client.close()  # in this task: its reader has not run yet
         assert client.closed
         assert await asyncio.wait_for(client.events().get(), WAIT) is None
-        with pytest.raises(dc.DaemonConnectionError):
+        with pytest.raises(dw.DaemonConnectionError):
             await client.ping()
 
     asyncio.run(main())

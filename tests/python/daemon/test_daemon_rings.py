@@ -17,8 +17,9 @@ import pytest
 from daemonproc import WAIT, Daemon, RawConnection, unique_instance
 from ringtap import Tap, prefix, purge, ring_size, segment_size, segments_of
 
-from links_and_nodes import _libln
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes import _adminlib
+from links_and_nodes.wire import codec as wc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 LAYOUT, SIZE, SLOTS = 0x5EED_0001, 64, 8
 TOPIC, MD = "/arm/state", "lntest/pattern"
@@ -35,8 +36,8 @@ def sample(seq: int) -> bytes:
     return struct.pack("<Q", seq).ljust(SIZE, b"\xab")
 
 
-async def refused(call: object, code: dc.ErrorCode, *texts: str) -> str:
-    with pytest.raises(dc.DaemonError) as e:
+async def refused(call: object, code: dw.ErrorCode, *texts: str) -> str:
+    with pytest.raises(dw.DaemonError) as e:
         await call  # type: ignore[misc]
     assert e.value.code == code, e.value
     for text in texts:
@@ -61,18 +62,18 @@ def test_ring_lifecycle(rings: Daemon) -> None:
                 assert reader.read(WAIT) == (2, sample(2))
             assert await client.ring_write_seq(first) == 2
             await refused(client.ring_create(first, TOPIC, MD, LAYOUT, SIZE, SLOTS),
-                          dc.ErrorCode.RING_FAILED, f"ring {first} exists already")
+                          dw.ErrorCode.RING_FAILED, f"ring {first} exists already")
 
             await client.ring_set_counts(first, 1, 2)
             await client.ring_reserve_reader(first, 0, os.getpid(), 2)
             await refused(client.ring_reserve_reader(first, 64, os.getpid(), 2),
-                          dc.ErrorCode.RING_FAILED, "reserving reader slot 64 of", "EINVAL")
+                          dw.ErrorCode.RING_FAILED, "reserving reader slot 64 of", "EINVAL")
             await client.ring_release_reader(first, 0)
 
             await client.ring_create(second, TOPIC, MD, LAYOUT, SIZE, 2 * SLOTS)
-            await refused(client.ring_retire(first, second, -1.0), dc.ErrorCode.RING_FAILED,
+            await refused(client.ring_retire(first, second, -1.0), dw.ErrorCode.RING_FAILED,
                           "retire timeout")
-            await refused(client.ring_retire(first, first), dc.ErrorCode.RING_FAILED,
+            await refused(client.ring_retire(first, first), dw.ErrorCode.RING_FAILED,
                           "its own successor")
             await client.ring_retire(first, second, 1.0)
             assert await client.ring_write_seq(second) == 2  # carried over
@@ -83,7 +84,7 @@ def test_ring_lifecycle(rings: Daemon) -> None:
             await client.ring_remove(first)
             assert segment_size(first) is None
             await client.ring_remove(first)  # gone already: fine
-            await refused(client.ring_write_seq(first), dc.ErrorCode.RING_FAILED,
+            await refused(client.ring_write_seq(first), dw.ErrorCode.RING_FAILED,
                           f"holds no ring {first}")
             await client.ring_remove(second)
             assert segments_of(rings.instance) == []
@@ -105,14 +106,14 @@ def test_purge(rings: Daemon) -> None:
                                        SIZE, SLOTS)
             await theirs.ring_create(prefix(other) + "1.1", TOPIC, MD, LAYOUT, SIZE, SLOTS)
             # A segment the daemon never held (an earlier manager's) goes too.
-            handle = _libln.RingAdminHandle()
-            _libln.ln_ring_admin_create(ctypes.byref(handle), leftover.encode(), TOPIC.encode(),
-                                        MD.encode(), LAYOUT, SIZE, SLOTS)
-            _libln.ln_ring_admin_close(handle)
+            handle = _adminlib.RingAdminHandle()
+            _adminlib.ln_ring_admin_create(ctypes.byref(handle), leftover.encode(), TOPIC.encode(),
+                                           MD.encode(), LAYOUT, SIZE, SLOTS)
+            _adminlib.ln_ring_admin_close(handle)
             assert await mine.ring_purge() == 4
             assert segments_of(rings.instance) == []
             await refused(mine.ring_write_seq(prefix(rings.instance) + "0.1"),
-                          dc.ErrorCode.RING_FAILED, "holds no ring")
+                          dw.ErrorCode.RING_FAILED, "holds no ring")
             assert segments_of(other) == [prefix(other) + "1.1"]
             assert await theirs.ring_write_seq(prefix(other) + "1.1") == 0
             assert await mine.ring_purge() == 0
@@ -140,10 +141,10 @@ def test_names_outside_the_namespace_are_refused(rings: Daemon) -> None:
                          client.ring_reserve_reader(theirs_name, 0, 1, 1),
                          client.ring_retire(theirs_name, theirs_name),
                          client.ring_remove(theirs_name)):
-                await refused(call, dc.ErrorCode.RING_FAILED, outside)
+                await refused(call, dw.ErrorCode.RING_FAILED, outside)
             for bad in (mine, mine[:-1], mine + "a/b", mine[1:] + "1.1", mine[:-1] + "x.1"):
                 await refused(client.ring_create(bad, TOPIC, MD, LAYOUT, SIZE, SLOTS),
-                              dc.ErrorCode.RING_FAILED, outside)
+                              dw.ErrorCode.RING_FAILED, outside)
             assert segment_size(theirs_name) == ring_size(SIZE, SLOTS)
             assert await theirs.ring_write_seq(theirs_name) == 0
             await theirs.ring_remove(theirs_name)
@@ -184,7 +185,7 @@ def test_rings_outlive_the_connection(rings: Daemon) -> None:
             await client.ring_create(name, TOPIC, MD, LAYOUT, SIZE, SLOTS, adopt=True)
             await refused(client.ring_create(name, TOPIC, MD, LAYOUT, SIZE, 2 * SLOTS,
                                              adopt=True),
-                          dc.ErrorCode.RING_FAILED, "exists with")
+                          dw.ErrorCode.RING_FAILED, "exists with")
             await client.ring_release_reader(name, 3)
 
     asyncio.run(first())
@@ -206,13 +207,13 @@ def test_adopt_after_a_daemon_restart(start: Callable[..., Daemon]) -> None:
 
     async def after(new: Daemon) -> None:
         async with await new.connect(instance) as client:
-            await refused(client.ring_write_seq(name), dc.ErrorCode.RING_FAILED,
+            await refused(client.ring_write_seq(name), dw.ErrorCode.RING_FAILED,
                           "holds no ring")
             await refused(client.ring_create(name, TOPIC, MD, LAYOUT, SIZE, SLOTS),
-                          dc.ErrorCode.RING_FAILED, f"creating segment {name}", "File exists")
+                          dw.ErrorCode.RING_FAILED, f"creating segment {name}", "File exists")
             await refused(client.ring_create(name, TOPIC, MD, LAYOUT + 1, SIZE, SLOTS,
                                              adopt=True),
-                          dc.ErrorCode.RING_FAILED, f"adopting segment {name}", "ELAYOUT")
+                          dw.ErrorCode.RING_FAILED, f"adopting segment {name}", "ELAYOUT")
             await client.ring_create(name, TOPIC, MD, LAYOUT, SIZE, SLOTS, adopt=True)
             assert await client.ring_write_seq(name) == 7
             # adopt of a segment that is not there creates it
@@ -235,24 +236,24 @@ def test_adopt_after_a_daemon_restart(start: Callable[..., Daemon]) -> None:
 
 
 def _create(name: str, adopt: int) -> bytes:
-    return (dc._str(name) + dc._str(TOPIC) + dc._str(MD)
+    return (wc.encode_str(name) + wc.encode_str(TOPIC) + wc.encode_str(MD)
             + struct.pack("<QQIB", LAYOUT, SIZE, SLOTS, adopt))
 
 
 MALFORMED = {
-    "truncated RING_CREATE": (dc.Msg.RING_CREATE, lambda n: _create(n, 0)[:-1]),
-    "RING_CREATE with trailing bytes": (dc.Msg.RING_CREATE, lambda n: _create(n, 0) + b"\0"),
-    "RING_CREATE with adopt 2": (dc.Msg.RING_CREATE, lambda n: _create(n, 2)),
-    "RING_READER with reserve 2": (dc.Msg.RING_READER,
-                                   lambda n: dc._str(n) + struct.pack("<IiIB", 0, 1, 1, 2)),
-    "RING_RETIRE without timeout": (dc.Msg.RING_RETIRE, lambda n: dc._str(n) + dc._str(n)),
-    "RING_PURGE with a payload": (dc.Msg.RING_PURGE, lambda n: b"\0"),
-    "NET_INFO with a payload": (dc.Msg.NET_INFO, lambda n: b"\0"),
+    "truncated RING_CREATE": (dw.Msg.RING_CREATE, lambda n: _create(n, 0)[:-1]),
+    "RING_CREATE with trailing bytes": (dw.Msg.RING_CREATE, lambda n: _create(n, 0) + b"\0"),
+    "RING_CREATE with adopt 2": (dw.Msg.RING_CREATE, lambda n: _create(n, 2)),
+    "RING_READER with reserve 2": (dw.Msg.RING_READER,
+                                   lambda n: wc.encode_str(n) + struct.pack("<IiIB", 0, 1, 1, 2)),
+    "RING_RETIRE without timeout": (dw.Msg.RING_RETIRE, lambda n: wc.encode_str(n) + wc.encode_str(n)),
+    "RING_PURGE with a payload": (dw.Msg.RING_PURGE, lambda n: b"\0"),
+    "NET_INFO with a payload": (dw.Msg.NET_INFO, lambda n: b"\0"),
     "STREAM_SEND with transport 2": (
-        dc.Msg.STREAM_SEND, lambda n: struct.pack("<Q", 1) + dc._str(n)
-        + struct.pack("<QQB", LAYOUT, SIZE, 2) + dc._str("127.0.0.1") + struct.pack("<H", 1)),
-    "STREAM_REMOVE of four bytes": (dc.Msg.STREAM_REMOVE, lambda n: b"\0" * 4),
-    "RING_SEQ of an overlong name": (dc.Msg.RING_SEQ, lambda n: dc._str(n + "x" * 300)),
+        dw.Msg.STREAM_SEND, lambda n: struct.pack("<Q", 1) + wc.encode_str(n)
+        + struct.pack("<QQB", LAYOUT, SIZE, 2) + wc.encode_str("127.0.0.1") + struct.pack("<H", 1)),
+    "STREAM_REMOVE of four bytes": (dw.Msg.STREAM_REMOVE, lambda n: b"\0" * 4),
+    "RING_SEQ of an overlong name": (dw.Msg.RING_SEQ, lambda n: wc.encode_str(n + "x" * 300)),
 }
 
 
@@ -266,7 +267,7 @@ def test_malformed_requests_close_the_connection(rings: Daemon, case: str) -> No
         code, text = raw.expect_error_and_close()
     finally:
         raw.close()
-    assert code == dc.ErrorCode.BAD_REQUEST
+    assert code == dw.ErrorCode.BAD_REQUEST
     assert text == f"malformed {mtype.name} request"
     assert segments_of(rings.instance) == []
 
@@ -275,11 +276,11 @@ def test_ring_requests_before_the_handshake_are_refused(rings: Daemon) -> None:
     raw = RawConnection(rings.port)
     try:
         raw.hello()
-        raw.send(raw.frame(dc.Msg.RING_CREATE, 1, _create(prefix(rings.instance) + "1.1", 0),
+        raw.send(raw.frame(dw.Msg.RING_CREATE, 1, _create(prefix(rings.instance) + "1.1", 0),
                            tagged=False))
         code, text = raw.expect_error_and_close()
     finally:
         raw.close()
-    assert code == dc.ErrorCode.NOT_AUTHENTICATED
+    assert code == dw.ErrorCode.NOT_AUTHENTICATED
     assert text == "not authenticated: RING_CREATE refused before the handshake"
     assert segments_of(rings.instance) == []

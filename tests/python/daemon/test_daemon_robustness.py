@@ -10,7 +10,7 @@ import struct
 
 from daemonproc import Daemon, RawConnection, alive, line, spec
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 
 def garbage_connections(port: int) -> list[str]:
@@ -64,9 +64,9 @@ def test_malformed_request_after_auth(daemon: Daemon) -> None:
     conn = RawConnection(daemon.port)
     try:
         conn.authenticate(daemon.key, daemon.instance)
-        conn.send(conn.frame(dc.Msg.SPAWN, 5, b"\x05\x00\x00"))  # a truncated payload
+        conn.send(conn.frame(dw.Msg.SPAWN, 5, b"\x05\x00\x00"))  # a truncated payload
         code, text = conn.expect_error_and_close()
-        assert (code, text) == (dc.ErrorCode.BAD_REQUEST, "malformed SPAWN request")
+        assert (code, text) == (dw.ErrorCode.BAD_REQUEST, "malformed SPAWN request")
     finally:
         conn.close()
     conn = RawConnection(daemon.port)
@@ -95,7 +95,7 @@ def test_oversized_frame_before_authentication_is_refused_at_once(daemon: Daemon
             conn.hello()
             conn.send(struct.pack("<I", length))
             code, text = conn.expect_error_and_close()
-            assert code == dc.ErrorCode.BAD_REQUEST, text
+            assert code == dw.ErrorCode.BAD_REQUEST, text
             assert text == f"frame of {length} bytes exceeds the limit of 338 before the handshake"
         finally:
             conn.close()
@@ -133,7 +133,7 @@ def test_client_refuses_oversized_requests(daemon: Daemon) -> None:
             huge.env = {"BIG": "x" * (5 << 20)}
             try:
                 await client.spawn(huge)
-            except dc.DaemonError as e:
+            except dw.DaemonError as e:
                 assert "exceeds the frame limit" in str(e)
             else:
                 raise AssertionError("an oversized request was sent")
@@ -160,11 +160,11 @@ def test_unauthenticated_connections_cannot_lock_out_a_manager(daemon: Daemon) -
         asyncio.run(main())
         # The oldest unauthenticated ones made room; the newest are still served.
         code, text = idle[0].expect_error_and_close()
-        assert (code, text) == (dc.ErrorCode.NOT_AUTHENTICATED,
+        assert (code, text) == (dw.ErrorCode.NOT_AUTHENTICATED,
                                 "connection slot needed by a newer connection")
         newest = idle[-1]
         newest.send(newest.client_hello(daemon.key, daemon.instance, nonce))
-        assert newest.read_frame()[0] == dc.Msg.AUTH_OK
+        assert newest.read_frame()[0] == dw.Msg.AUTH_OK
     finally:
         for conn in idle:
             conn.close()

@@ -17,13 +17,13 @@ from pathlib import Path
 import pytest
 from daemonproc import PATH_ENV, Daemon, exited, spec, start_daemon, stop_daemon
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 PY = sys.executable
 
 
-def output_of(daemon: Daemon, s: dc.SpawnSpec) -> tuple[list[str], dc.Exited]:
-    async def main() -> tuple[list[str], dc.Exited]:
+def output_of(daemon: Daemon, s: dw.SpawnSpec) -> tuple[list[str], dw.Exited]:
+    async def main() -> tuple[list[str], dw.Exited]:
         async with await daemon.connect() as client:
             await client.spawn(s)
             lines: list[str] = []
@@ -35,7 +35,7 @@ def output_of(daemon: Daemon, s: dc.SpawnSpec) -> tuple[list[str], dc.Exited]:
 def test_environment_is_exactly_the_given_one(daemon: Daemon) -> None:
     """... and LN_HOST_ID, the daemon's host id, unless the environment has one."""
     env = {**PATH_ENV, "FOO": "bar baz", "EMPTY": ""}
-    s = dc.SpawnSpec("env", "env", False, env, use_pty=False)
+    s = dw.SpawnSpec("env", "env", False, env, use_pty=False)
     lines, ex = output_of(daemon, s)
     assert ex.exit_code == 0
 
@@ -52,7 +52,7 @@ def test_environment_bytes_that_are_not_utf8_pass_unchanged(daemon: Daemon) -> N
     original bytes, as from a shell."""
     raw = os.fsdecode(b"a\xffb")
     code = "import os; print(os.environb[b'RAW'].hex())"
-    s = dc.SpawnSpec("raw", f"{PY} -c \"{code}\"", False, {**PATH_ENV, "RAW": raw},
+    s = dw.SpawnSpec("raw", f"{PY} -c \"{code}\"", False, {**PATH_ENV, "RAW": raw},
                      use_pty=False)
     lines, ex = output_of(daemon, s)
     assert ex.exit_code == 0
@@ -105,10 +105,10 @@ def test_nice_value(daemon: Daemon) -> None:
     assert lines == ["7"]
 
 
-def spawn_error(daemon: Daemon, s: dc.SpawnSpec) -> dc.DaemonError:
-    async def main() -> dc.DaemonError:
+def spawn_error(daemon: Daemon, s: dw.SpawnSpec) -> dw.DaemonError:
+    async def main() -> dw.DaemonError:
         async with await daemon.connect() as client:
-            with pytest.raises(dc.DaemonError) as info:
+            with pytest.raises(dw.DaemonError) as info:
                 await client.spawn(s)
             assert [p.name for p in await client.list()] == []  # nothing left of it
             await client.ping()  # the connection stays usable
@@ -119,7 +119,7 @@ def spawn_error(daemon: Daemon, s: dc.SpawnSpec) -> dc.DaemonError:
 
 def test_priority_out_of_range_is_refused(daemon: Daemon) -> None:
     err = spawn_error(daemon, spec("hi", "true", policy="SCHED_FIFO", priority=150))
-    assert err.code == dc.ErrorCode.INVALID_SPEC
+    assert err.code == dw.ErrorCode.INVALID_SPEC
     assert str(err) == "priority 150 is out of range for SCHED_FIFO (1..99)"
     err = spawn_error(daemon, spec("nice", "true", priority=40))
     assert str(err) == "nice value 40 is out of range for SCHED_OTHER (-20..19)"
@@ -129,7 +129,7 @@ def test_priority_out_of_range_is_refused(daemon: Daemon) -> None:
 
 def test_nonexistent_cpu_is_refused_by_the_kernel(daemon: Daemon) -> None:
     err = spawn_error(daemon, spec("cpu", "true", affinity=[1000]))
-    assert err.code == dc.ErrorCode.SPAWN_FAILED
+    assert err.code == dw.ErrorCode.SPAWN_FAILED
     assert str(err) == "cannot set CPU affinity to [1000]: Invalid argument"
 
 
@@ -145,7 +145,7 @@ def test_not_permitted_policy_is_a_clear_error() -> None:
         daemon = start_daemon(tmp, user=nobody.pw_uid, group=nobody.pw_gid)
         try:
             err = spawn_error(daemon, spec("rt", "true", policy="SCHED_FIFO", priority=10))
-            assert err.code == dc.ErrorCode.SPAWN_FAILED
+            assert err.code == dw.ErrorCode.SPAWN_FAILED
             assert str(err).startswith("cannot set scheduling policy SCHED_FIFO with priority "
                                        "10: Operation not permitted (needs root")
             err = spawn_error(daemon, spec("neg", "true", priority=-5))
@@ -159,10 +159,10 @@ def test_not_permitted_policy_is_a_clear_error() -> None:
 
 def test_command_not_found_is_a_spawn_error(daemon: Daemon, tmp_path: Path) -> None:
     err = spawn_error(daemon, spec("nf", "no-such-command-here --flag", shell=False))
-    assert err.code == dc.ErrorCode.SPAWN_FAILED
+    assert err.code == dw.ErrorCode.SPAWN_FAILED
     assert str(err) == "command not found: no-such-command-here"
     # The command is looked up in the PATH of the given environment, not the daemon's.
-    err = spawn_error(daemon, dc.SpawnSpec("nopath", "ls", False, {"PATH": str(tmp_path)}))
+    err = spawn_error(daemon, dw.SpawnSpec("nopath", "ls", False, {"PATH": str(tmp_path)}))
     assert str(err) == "command not found: ls"
 
 
@@ -175,7 +175,7 @@ def test_exec_and_setup_failures(daemon: Daemon, tmp_path: Path) -> None:
     assert str(err) == f"cannot change directory to '{tmp_path / 'missing'}': " \
                        "No such file or directory"
     err = spawn_error(daemon, spec("rel", "true", cwd="relative"))
-    assert err.code == dc.ErrorCode.INVALID_SPEC
+    assert err.code == dw.ErrorCode.INVALID_SPEC
     err = spawn_error(daemon, spec("lim", "true", rlimits=[("nofile", 10, 5)]))
     assert str(err) == "resource limit nofile: soft limit 10 is above the hard limit 5"
     err = spawn_error(daemon, spec("log", "true",
@@ -197,9 +197,9 @@ def test_spawned_info_and_name_in_use(daemon: Daemon) -> None:
             assert info.state == "running" and info.pid > 0
             assert info.exit_code is None and info.signal is None
             assert info.started <= time.time()
-            with pytest.raises(dc.DaemonError) as e:
+            with pytest.raises(dw.DaemonError) as e:
                 await client.spawn(spec("s", "true"))
-            assert e.value.code == dc.ErrorCode.ALREADY_RUNNING
+            assert e.value.code == dw.ErrorCode.ALREADY_RUNNING
             assert str(e.value) == f"process s is already running (pid {info.pid})"
             await client.stop("s")
             await exited(client, "s")

@@ -18,7 +18,10 @@ import pytest
 from daemonproc import DAEMON, WAIT, alive, daemon_exe, free_port, wait_for
 from polling import free_daemon_port
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_keys as dk
+from links_and_nodes.manager.processes import daemon_launch as dl
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 HEX = "ab" * 32
 
@@ -43,8 +46,8 @@ def test_key_file_open_to_others_is_refused(tmp_path: Path, mode: int) -> None:
     assert result.stderr == (f"ln_daemon: error: key file '{path}' is accessible by group or "
                              f"others (mode {mode:04o}); it must be private: "
                              f"chmod 600 '{path}'\n")
-    with pytest.raises(dc.KeyFileError) as e:
-        dc.read_key_file(path)
+    with pytest.raises(dk.KeyFileError) as e:
+        dk.read_key_file(path)
     assert f"(mode {mode:04o})" in str(e.value)
 
 
@@ -55,8 +58,8 @@ def test_key_file_without_a_key_is_refused(tmp_path: Path, text: str) -> None:
     result = run_daemon("--key-file", str(path), "--foreground")
     assert result.returncode == 1
     assert "holds no valid key: it must contain exactly 64 hex digits" in result.stderr
-    with pytest.raises(dc.KeyFileError):
-        dc.read_key_file(path)
+    with pytest.raises(dk.KeyFileError):
+        dk.read_key_file(path)
 
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="only root can give a file to another user")
@@ -66,8 +69,8 @@ def test_key_file_of_another_user_is_refused(tmp_path: Path) -> None:
     result = run_daemon("--key-file", str(path), "--foreground")
     assert result.returncode == 1
     assert "is owned by uid 65534, not by this daemon's uid 0" in result.stderr
-    with pytest.raises(dc.KeyFileError):
-        dc.read_key_file(path)
+    with pytest.raises(dk.KeyFileError):
+        dk.read_key_file(path)
 
 
 def test_usage_errors(tmp_path: Path) -> None:
@@ -183,40 +186,40 @@ def test_data_port_in_use(tmp_path: Path, foreground: bool) -> None:
 
 def test_key_file_helpers(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     path = tmp_path / "a" / "b" / "daemon.key"
-    key = dc.create_key_file(path)
-    assert len(key) == 32 and dc.read_key_file(path) == key
+    key = dk.create_key_file(path)
+    assert len(key) == 32 and dk.read_key_file(path) == key
     assert stat.S_IMODE(path.stat().st_mode) == 0o600
     assert stat.S_IMODE(path.parent.stat().st_mode) == 0o700
     assert stat.S_IMODE(path.parent.parent.stat().st_mode) == 0o700
     assert path.read_text() == key.hex() + "\n"
     with pytest.raises(FileExistsError):
-        dc.create_key_file(path)  # never overwritten
+        dk.create_key_file(path)  # never overwritten
     monkeypatch.setenv("LN_DAEMON_KEY_FILE", str(path))
-    assert dc.default_key_file() == path
+    assert dk.default_key_file() == path
     monkeypatch.delenv("LN_DAEMON_KEY_FILE")
-    assert dc.default_key_file() == Path.home() / ".config/links_and_nodes/daemon.key"
+    assert dk.default_key_file() == Path.home() / ".config/links_and_nodes/daemon.key"
     monkeypatch.setenv("LN_ARBITER_PORT", "60001")
-    assert dc.default_port() == 60001
+    assert dk.default_port() == 60001
     monkeypatch.setenv("LN_ARBITER_PORT", "nope")
-    with pytest.raises(dc.DaemonError):
-        dc.default_port()
+    with pytest.raises(dw.DaemonError):
+        dk.default_port()
     monkeypatch.delenv("LN_ARBITER_PORT")
-    assert dc.default_port() == 54376
+    assert dk.default_port() == 54376
     monkeypatch.setenv("LN_DAEMON", "/opt/ln/bin/ln_daemon")
-    assert dc.daemon_executable() == "/opt/ln/bin/ln_daemon"
+    assert dl.daemon_executable() == "/opt/ln/bin/ln_daemon"
     monkeypatch.delenv("LN_DAEMON")
-    assert dc.daemon_executable() == str(DAEMON)  # the in-tree release build
+    assert dl.daemon_executable() == str(DAEMON)  # the in-tree release build
 
 
 def test_ensure_local_daemon(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("LN_DAEMON", daemon_exe())
     key_path = tmp_path / "daemon.key"
-    key = dc.create_key_file(key_path)
+    key = dk.create_key_file(key_path)
     log = tmp_path / "daemon.log"
     port = free_port()
     pid = None
     try:
-        asyncio.run(dc.ensure_local_daemon(port, key_path, log, data_port=0))
+        asyncio.run(dl.ensure_local_daemon(port, key_path, log, data_port=0))
         text = wait_for(lambda: log.exists() and re.search(r"ln_daemon\[(\d+)\]: listening",
                                                            log.read_text()),
                         "the daemon's log line")
@@ -231,7 +234,7 @@ def test_ensure_local_daemon(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) ->
             assert (await client.net_info()).data_port not in (0, port)
             await client.close()
             # A second call finds it answering and starts nothing.
-            await dc.ensure_local_daemon(port, key_path, log)
+            await dl.ensure_local_daemon(port, key_path, log)
 
         asyncio.run(use())
         assert log.read_text().count("listening on") == 1
@@ -245,8 +248,8 @@ def test_ensure_local_daemon_reports_start_errors(tmp_path: Path,
                                                   monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("LN_DAEMON", daemon_exe())
     bad = key_file(tmp_path, HEX, 0o644)
-    with pytest.raises(dc.DaemonError) as e:
-        asyncio.run(dc.ensure_local_daemon(free_port(), bad, timeout=WAIT))
+    with pytest.raises(dw.DaemonError) as e:
+        asyncio.run(dl.ensure_local_daemon(free_port(), bad, timeout=WAIT))
     assert "ln_daemon did not start: ln_daemon: error: key file" in str(e.value)
 
 
@@ -260,8 +263,8 @@ def test_ensure_local_daemon_refuses_a_foreign_port(tmp_path: Path) -> None:
         server = await asyncio.start_server(other, "127.0.0.1", 0)
         port = server.sockets[0].getsockname()[1]
         async with server:
-            with pytest.raises(dc.DaemonError) as e:
-                await dc.ensure_local_daemon(port, tmp_path / "unused.key", timeout=WAIT)
+            with pytest.raises(dw.DaemonError) as e:
+                await dl.ensure_local_daemon(port, tmp_path / "unused.key", timeout=WAIT)
             assert "is in use by something that is not ln_daemon" in str(e.value)
 
     asyncio.run(main())

@@ -15,7 +15,7 @@ import pytest
 from daemonproc import (Daemon, alive, descendants, exited, line, next_event, proc_stat, spec,
                         wait_for)
 
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 PY = sys.executable
 
@@ -190,9 +190,9 @@ def test_signal_command(daemon: Daemon) -> None:
             await client.signal("sig", signal.SIGKILL)
             ex = await exited(client, "sig")
             assert ex.signal == signal.SIGKILL
-            with pytest.raises(dc.DaemonError) as e:
+            with pytest.raises(dw.DaemonError) as e:
                 await client.signal("sig", signal.SIGUSR1)
-            assert e.value.code == dc.ErrorCode.NOT_RUNNING
+            assert e.value.code == dw.ErrorCode.NOT_RUNNING
 
     asyncio.run(main())
 
@@ -201,21 +201,21 @@ def test_stop_forget_errors(daemon: Daemon) -> None:
     async def main() -> None:
         async with await daemon.connect() as client:
             await client.spawn(spec("f", "sleep 600"))
-            with pytest.raises(dc.DaemonError) as e:
+            with pytest.raises(dw.DaemonError) as e:
                 await client.forget("f")
-            assert e.value.code == dc.ErrorCode.STILL_RUNNING
+            assert e.value.code == dw.ErrorCode.STILL_RUNNING
             assert str(e.value) == "process f is running; stop it first"
             await client.stop("f")
             await exited(client, "f")
-            with pytest.raises(dc.DaemonError) as e:
+            with pytest.raises(dw.DaemonError) as e:
                 await client.stop("f")
-            assert e.value.code == dc.ErrorCode.NOT_RUNNING
+            assert e.value.code == dw.ErrorCode.NOT_RUNNING
             await client.forget("f")
             assert await client.list() == []
             for call in (client.stop("nope"), client.forget("nope"), client.output("nope")):
-                with pytest.raises(dc.DaemonError) as e:
+                with pytest.raises(dw.DaemonError) as e:
                     await call
-                assert e.value.code == dc.ErrorCode.UNKNOWN_PROCESS
+                assert e.value.code == dw.ErrorCode.UNKNOWN_PROCESS
 
     asyncio.run(main())
 
@@ -226,8 +226,8 @@ def test_state_events(daemon: Daemon) -> None:
             await client.spawn(spec("st", "sleep 600"))
             await client.stop("st")
             seen: list[object] = []
-            await next_event(client, lambda e: isinstance(e, dc.Exited), "exit", seen)
-            states = [e.state for e in seen if isinstance(e, dc.StateChanged)]
+            await next_event(client, lambda e: isinstance(e, dw.Exited), "exit", seen)
+            states = [e.state for e in seen if isinstance(e, dw.StateChanged)]
             assert states == ["running", "stopping", "exited"]
 
     asyncio.run(main())

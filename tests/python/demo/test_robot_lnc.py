@@ -23,8 +23,8 @@ from pathlib import Path
 import pytest
 
 from links_and_nodes.manager.config import load, model
-from links_and_nodes.manager.launch import segments
-from links_and_nodes.manager.scripting import Manager, connect
+from links_and_nodes.manager.frontends.launch import segments
+from links_and_nodes.manager.frontends.scripting import Manager, connect
 from polling import free_daemon_port, free_port, wait_for
 
 REPO = Path(__file__).resolve().parents[3]

@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 
 from buildtree import build_dir, missing_test_tool
-from links_and_nodes.manager import scripting
+from links_and_nodes.manager.frontends import scripting
 from polling import free_daemon_port, free_port, pids_with, wait_for
 
 HERE = Path(__file__).resolve().parent

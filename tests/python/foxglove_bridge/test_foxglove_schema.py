@@ -15,8 +15,8 @@ import pytest
 
 from links_and_nodes.foxglove_bridge.schema import root_schema
 from links_and_nodes.foxglove_bridge.topics import encode
-from links_and_nodes.manager import introspect
-from links_and_nodes.manager.introspect_client import load_md, md_class
+from links_and_nodes.manager.introspection import values as introspect
+from links_and_nodes.manager.introspection.client import load_md, md_class
 
 from .schema_check import conforms
 

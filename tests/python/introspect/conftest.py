@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager import launch
-from links_and_nodes.manager.launch import ManagerProcess, segments
+from links_and_nodes.manager.frontends import launch
+from links_and_nodes.manager.frontends.launch import ManagerProcess, segments
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[2]

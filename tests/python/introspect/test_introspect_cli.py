@@ -15,7 +15,7 @@ import pytest
 from polling import wait_for
 
 import links_and_nodes as ln
-from links_and_nodes.manager.introspect_client import load_md
+from links_and_nodes.manager.introspection.client import load_md
 
 from .adjust_provider import adjust
 from .conftest import MDS, OTHER_MDS, Lab
@@ -144,7 +144,7 @@ def test_echo_json_prints_one_object_per_line_with_full_values(lab: Lab) -> None
 def test_echo_and_hz_attach_without_making_a_waiting_publisher_wait(lab: Lab) -> None:
     """A publisher that waits for its subscribers keeps writing with timeout 0 while an
     introspection subscriber is attached and does not read: it is in latest mode."""
-    from links_and_nodes.manager.introspect_client import TopicReader
+    from links_and_nodes.manager.introspection.client import TopicReader
 
     clnt = ln.client("waiter", lab.address)
     ln.add_message_definition_dir(MDS)

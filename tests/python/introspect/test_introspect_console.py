@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager.launch import segments
+from links_and_nodes.manager.frontends.launch import segments
 from polling import free_daemon_port, free_port, pids_with
 
 from .conftest import LIMIT, MDS, PERIOD, spawn, stop

@@ -11,9 +11,9 @@ from typing import Any
 
 import pytest
 
-from links_and_nodes.manager import protocol as p
-from links_and_nodes.manager.control import Control, ControlError
-from links_and_nodes.manager.registry import Client, PortKind, PortRequest, Registry
+from links_and_nodes.manager.registry import protocol as p
+from links_and_nodes.manager.frontends.control import Control, ControlError
+from links_and_nodes.manager.registry.model import Client, PortKind, PortRequest, Registry
 
 from .conftest import MDS, OTHER_MDS
 
@@ -71,9 +71,8 @@ def control_with_topic(streams: list[dict[str, Any]], config: Any = None) -> Con
                            segments=SimpleNamespace(names=lambda topic_id: local.names),
                            topic_published=published, services=lambda: [])
     view = SimpleNamespace(stream_listing=lambda: {"streams": streams})
-    control = Control(core, SimpleNamespace(config=config) if config else None)  # type: ignore[arg-type]
-    control.network_view = view
-    return control
+    return Control(core, SimpleNamespace(config=config) if config else None,  # type: ignore[arg-type]
+                   network_view=view)  # type: ignore[arg-type]
 
 
 STREAM = {"topic": "arm.state", "src": "robot_pc", "dst": "vision_pc", "transport": "tcp",
@@ -97,7 +96,7 @@ def test_topic_info_of_a_topic_over_two_hosts() -> None:
     assert (far["client"], far["mode"], far["buffers"], far["reader"], far["transport"],
             far["asks"]) == ("far", "queued", 8, 1, "forwarded tcp", "tcp")
     assert info["streams"] == [{k: v for k, v in STREAM.items() if k not in ("topic", "sent")}]
-    from links_and_nodes.manager.introspect import info_lines
+    from links_and_nodes.manager.introspection.values import info_lines
 
     lines = info_lines(info)
     assert "  far (pid 102, host vision_pc): port 3, queued, 8 buffers, reader 1, forwarded " \

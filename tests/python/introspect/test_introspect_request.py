@@ -8,9 +8,9 @@ import math
 
 import pytest
 
-from links_and_nodes.manager.introspect_args import UsageError, parse as parse_words
-from links_and_nodes.manager.introspect_client import load_md
-from links_and_nodes.manager.introspect_request import RequestTextError, conform, parse
+from links_and_nodes.manager.introspection.args import UsageError, parse as parse_words
+from links_and_nodes.manager.introspection.client import load_md
+from links_and_nodes.manager.introspection.request import RequestTextError, conform, parse
 
 from .conftest import MDS
 

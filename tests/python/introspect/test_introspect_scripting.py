@@ -8,7 +8,7 @@ import pytest
 
 import links_and_nodes as ln
 from links_and_nodes.manager import connect
-from links_and_nodes.manager.scripting import ManagerError
+from links_and_nodes.manager.frontends.scripting import ManagerError
 
 from .adjust_provider import adjust
 from .conftest import LIMIT, MDS, Lab

@@ -9,7 +9,7 @@ import statistics
 
 import pytest
 
-from links_and_nodes.manager.introspect_stats import (
+from links_and_nodes.manager.introspection.stats import (
     PeriodStats,
     Window,
     bandwidth,

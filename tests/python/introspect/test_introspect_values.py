@@ -12,9 +12,9 @@ import struct
 import pytest
 
 import links_and_nodes as ln
-from links_and_nodes.manager import introspect as fmt
-from links_and_nodes.manager.introspect import IntrospectError
-from links_and_nodes.manager.introspect_client import load_md
+from links_and_nodes.manager.introspection import values as fmt
+from links_and_nodes.manager.introspection.values import IntrospectError
+from links_and_nodes.manager.introspection.client import load_md
 
 from .conftest import MDS, REPO
 

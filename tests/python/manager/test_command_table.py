@@ -1,4 +1,4 @@
-"""The command table (manager/commands/) and the front ends derived from it: every command
+"""The command table (manager/frontends/commands/) and the front ends derived from it: every command
 answers the same through a JSON request over the manager's CONTROL connection, the web UI's
 WebSocket, the scripting API, the console on the manager's stdin and `ln_manager COMMAND`;
 a bad argument is refused with the same text by each of them; every entry has help and typed arguments and shows up in
@@ -25,14 +25,14 @@ from typing import Any
 import pytest
 
 from buildtree import missing_test_tool
-from links_and_nodes.manager import commands as table
-from links_and_nodes.manager import remote_cli
-from links_and_nodes.manager.commands import ArgError, check_args, parse_words, to_request
-from links_and_nodes.manager.commands.check import error_text
-from links_and_nodes.manager.commands.help import complete, help_command, help_text
-from links_and_nodes.manager.commands.spec import TYPES
-from links_and_nodes.manager.commands.views import json_lines
-from links_and_nodes.manager.scripting import Manager, ManagerError
+from links_and_nodes.manager.frontends import commands as table
+from links_and_nodes.manager.frontends import remote_cli
+from links_and_nodes.manager.frontends.commands import ArgError, check_args, parse_words, to_request
+from links_and_nodes.manager.frontends.commands.check import error_text
+from links_and_nodes.manager.frontends.commands.help import complete, help_command, help_text
+from links_and_nodes.manager.frontends.commands.spec import TYPES
+from links_and_nodes.manager.frontends.commands.views import json_lines
+from links_and_nodes.manager.frontends.scripting import Manager, ManagerError
 from process_management import conftest as pm
 
 CHILD = Path(pm.__file__).with_name("child.py")
@@ -160,9 +160,9 @@ async def test_a_new_command_is_one_entry_and_its_handler(
     import io
     from types import SimpleNamespace
 
-    from links_and_nodes.manager.commands import Arg, Command, register, table as registry
-    from links_and_nodes.manager.console import Console
-    from links_and_nodes.manager.control import Control
+    from links_and_nodes.manager.frontends.commands import Arg, Command, register, table as registry
+    from links_and_nodes.manager.frontends.console import Console
+    from links_and_nodes.manager.frontends.control import Control
 
     async def handler(control: Any, args: dict[str, Any]) -> dict[str, Any]:
         return {"said": args["text"] * args["times"]}
@@ -203,7 +203,7 @@ def test_completion_from_the_table() -> None:
 
 def test_fetch_max_is_the_logger_files_one() -> None:
     from links_and_nodes import logger_files
-    from links_and_nodes.manager import logger_control
+    from links_and_nodes.manager.loggers import commands as logger_control
 
     assert logger_control.FETCH_MAX == logger_files.FETCH_MAX
 
@@ -407,7 +407,7 @@ def test_a_bad_argument_is_the_same_text_everywhere(fronts: Fronts, line: str,
 def test_logger_words_answer_the_same_everywhere(fronts: Fronts) -> None:
     """The `logger` family: words in the console and `ln_manager logger`, JSON over CONTROL
     and the WebSocket, the scripting API: one table entry each, the same answers."""
-    from links_and_nodes.manager.logger_cli import format_result
+    from links_and_nodes.manager.loggers.views import format_result
 
     mgr = fronts.mgr
     assert fronts.console("logger ctlog add 'ctl.*' 50 --divisor 2") == \

@@ -20,7 +20,8 @@ import lnwire
 import pytest
 from mgrproc import REPO, WAIT, Manager, require_manager_library
 
-from links_and_nodes.manager import listing
+from links_and_nodes.addresses import parse_manager_address
+from links_and_nodes.manager.frontends import listing
 
 require_manager_library()
 
@@ -32,11 +33,11 @@ SIG = "robot/move_request|robot/move_response"
 
 def ln_services(*args: str,
                 env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    """Run `python -m links_and_nodes.manager.listing ARGS` (what the ln_services script
+    """Run `python -m links_and_nodes.manager.frontends.listing ARGS` (what the ln_services script
     runs) in the source tree."""
     path = [str(REPO / "python"), *filter(None, [os.environ.get("PYTHONPATH")])]
     full_env = dict(os.environ if env is None else env, PYTHONPATH=os.pathsep.join(path))
-    return subprocess.run([sys.executable, "-m", "links_and_nodes.manager.listing", *args],
+    return subprocess.run([sys.executable, "-m", "links_and_nodes.manager.frontends.listing", *args],
                           capture_output=True, text=True, env=full_env, timeout=WAIT,
                           cwd=REPO)
 
@@ -137,7 +138,7 @@ def test_bad_addresses(args: list[str], env: dict[str, str], text: str) -> None:
     ("10.0.0.1:65535", ("10.0.0.1", 65535)),
 ])
 def test_parse_address(text: str, address: tuple[str, int]) -> None:
-    assert listing.parse_address(text) == address
+    assert parse_manager_address(text) == address
 
 
 class FakeManager:
@@ -223,13 +224,13 @@ def test_a_cut_list_says_so() -> None:
 
 def test_console_script_is_declared_for_pip_and_scons() -> None:
     scripts = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["scripts"]
-    assert scripts["ln_services"] == "links_and_nodes.manager.listing:main"
+    assert scripts["ln_services"] == "links_and_nodes.manager.frontends.listing:main"
     sconscript = (REPO / "python" / "SConscript").read_text()
-    assert "('ln_services', 'links_and_nodes.manager.listing')" in sconscript
+    assert "('ln_services', 'links_and_nodes.manager.frontends.listing')" in sconscript
 
 
 def test_table_cells_are_one_line() -> None:
-    from links_and_nodes.manager import protocol as p
+    from links_and_nodes.manager.registry import protocol as p
 
     entry = p.ServiceEntry("s", "m", 1, "a b", "g\nh\t", "", "/x", "::1", 9, 0, 0)
     [header, row] = listing.table((entry,))

@@ -13,7 +13,7 @@ from mgrproc import SHM, Manager, require_manager_library, segments, unique_inst
 require_manager_library()
 
 import links_and_nodes as ln  # noqa: E402  (after the skip check)
-from links_and_nodes.manager.segments import ring_segment_size  # noqa: E402
+from links_and_nodes.manager.registry.segments import ring_segment_size  # noqa: E402
 
 Start = Callable[..., Manager]
 MIB = 1 << 20

@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 
-from links_and_nodes.manager.registry import (
+from links_and_nodes.manager.registry.model import (
     Limits,
     Port,
     PortKind,

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager.runtime import InstanceLock, RuntimeDirError, prepare, runtime_dir
+from links_and_nodes.manager.registry.runtime import InstanceLock, RuntimeDirError, prepare
+from links_and_nodes.naming import runtime_dir
 
 
 def test_runtime_dir_precedence() -> None:

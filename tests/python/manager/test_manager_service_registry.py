@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from links_and_nodes.manager.registry import Registry, RequestError
-from links_and_nodes.manager.services import ServiceOffer, Services
+from links_and_nodes.manager.registry.model import Registry, RequestError
+from links_and_nodes.manager.registry.services import ServiceOffer, Services
 
 HASH = 0x0123456789ABCDEF
 SIG = "robot/move_request|robot/move_response"

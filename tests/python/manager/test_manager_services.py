@@ -21,10 +21,10 @@ from mgrproc import Manager, require_manager_library
 require_manager_library()
 
 import links_and_nodes as ln  # noqa: E402  (after the skip check)
-from links_and_nodes.manager import protocol as p  # noqa: E402
-from links_and_nodes.manager.core import Core, Session  # noqa: E402
-from links_and_nodes.manager.registry import Registry  # noqa: E402
-from links_and_nodes.manager.services import Services  # noqa: E402
+from links_and_nodes.manager.registry import protocol as p  # noqa: E402
+from links_and_nodes.manager.registry.core import Core, Session  # noqa: E402
+from links_and_nodes.manager.registry.model import Registry  # noqa: E402
+from links_and_nodes.manager.registry.services import Services  # noqa: E402
 
 Start = Callable[..., Manager]
 MD = "robot/move"
@@ -279,8 +279,8 @@ async def test_only_local_providers_sockets_are_removed(tmp_path: Path) -> None:
     """A provider on another host named a socket path on its host; the same path here may
     be a live socket of a local provider (pids repeat across hosts): it must stay."""
     registry = Registry(lambda size, slots: size * slots)
-    core = Core("inst", registry, _NoSegments(), Services())  # type: ignore[arg-type]
-    core.hosts = _TwoHosts(core)  # type: ignore[assignment]
+    core = Core("inst", registry, _NoSegments(), Services(),  # type: ignore[arg-type]
+                hosts=_TwoHosts)  # type: ignore[arg-type]
     paths = {name: str(tmp_path / f"svc.4242.{i}.sock") for i, name in enumerate(
         ("local", "remote"))}
     sockets = []

@@ -16,6 +16,7 @@ from mgrproc import Manager, require_manager_library, segments, wait_for
 require_manager_library()
 
 import links_and_nodes as ln  # noqa: E402  (after the skip check)
+from links_and_nodes import _adminlib  # noqa: E402
 from links_and_nodes import _clientlib as C  # noqa: E402
 
 SIZE = 16
@@ -113,7 +114,7 @@ def test_refusals_arrive_as_errors_with_the_managers_text(manager: Manager) -> N
 def test_hello_tells_the_host_id(manager: Manager) -> None:
     client = Client(manager, "hosted")
     host = ctypes.create_string_buffer(256)
-    C.ln_host_id(host, len(host))
+    _adminlib.ln_host_id(host, len(host))
     assert host.value  # $LN_HOST_ID or hostname/boot_id, never empty
     manager.wait_log(rf"client hosted \(127\.0\.0\.1:\d+\): connected \(pid \d+, library "
                      rf"[0-9.]+, host {re.escape(host.value.decode())}\)")

@@ -1,4 +1,4 @@
-"""RemoteRings (manager/rings.py) when its daemon dies under a removal: a segment whose
+"""RemoteRings (manager/registry/rings.py) when its daemon dies under a removal: a segment whose
 removal fails because the connection is gone, before the host is marked unreachable, is
 removed at the next resync instead of being forgotten in that host's /dev/shm (found by
 the crash-injection driver, tests/python/robustness)."""
@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import asyncio
 
-from links_and_nodes.manager.rings import RemoteRings
+from links_and_nodes.manager.registry.rings import RemoteRings
 
 
 class Link:

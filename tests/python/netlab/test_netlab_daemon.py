@@ -15,20 +15,22 @@ REPO = Path(__file__).resolve().parents[3]
 # Connect to a daemon, ping it, let it run a shell command and print the command's output.
 CLIENT = """
 import asyncio, sys
-from links_and_nodes.manager import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_client as dc
+from links_and_nodes.manager.processes import daemon_keys as dk
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 async def main(host, port, key_file, command):
-    client = await dc.DaemonClient.connect(host, int(port), dc.read_key_file(key_file),
+    client = await dc.DaemonClient.connect(host, int(port), dk.read_key_file(key_file),
                                            "netlab-test")
     await client.ping()
     print("pong", flush=True)
-    await client.spawn(dc.SpawnSpec(name="where", command=command, shell=True,
+    await client.spawn(dw.SpawnSpec(name="where", command=command, shell=True,
                                     env={"PATH": "/usr/bin:/bin"}, use_pty=False))
     events = client.events()
     while (event := await events.get()) is not None:
-        if isinstance(event, dc.OutputLine):
+        if isinstance(event, dw.OutputLine):
             print(event.text, flush=True)
-        elif isinstance(event, dc.Exited):
+        elif isinstance(event, dw.Exited):
             print("exit", event.exit_code, flush=True)
             break
     await client.close()

@@ -16,15 +16,15 @@ import itertools
 from dataclasses import dataclass, field
 from typing import Any
 
-from links_and_nodes import _libln
-from links_and_nodes.manager import daemon_client as dc
-from links_and_nodes.manager import network
-from links_and_nodes.manager import protocol as p
+from links_and_nodes import _adminlib
+from links_and_nodes.manager.processes import daemon_wire as dw
+from links_and_nodes.manager.network import hosts as network
+from links_and_nodes.manager.registry import protocol as p
 from links_and_nodes.manager.config import parse_text
-from links_and_nodes.manager.core import Core, Session
-from links_and_nodes.manager.network import Network
-from links_and_nodes.manager.registry import Registry
-from links_and_nodes.manager.services import Services
+from links_and_nodes.manager.registry.core import Core, Session
+from links_and_nodes.manager.network.hosts import Network
+from links_and_nodes.manager.registry.model import Registry
+from links_and_nodes.manager.registry.services import Services
 
 _serial = itertools.count(1)
 MD = "nettest/sample"
@@ -107,7 +107,7 @@ class FakeDaemon:
     def _ring(self, name: str) -> Seg:
         seg = self.held.get(name)
         if seg is None:
-            raise dc.DaemonError(f"no ring {name} held", dc.ErrorCode.RING_FAILED)
+            raise dw.DaemonError(f"no ring {name} held", dw.ErrorCode.RING_FAILED)
         return seg
 
     def _unlink(self, name: str) -> None:
@@ -116,8 +116,8 @@ class FakeDaemon:
             seg.linked = False
 
     # ---- the requests -------------------------------------------------------------------
-    async def net_info(self) -> dc.NetInfo:
-        return dc.NetInfo(self.host_id, self.data_port)
+    async def net_info(self) -> dw.NetInfo:
+        return dw.NetInfo(self.host_id, self.data_port)
 
     async def ping(self) -> None:
         await self._reply("ping")
@@ -135,10 +135,10 @@ class FakeDaemon:
         held = self.held.get(name)
         if held is not None and held.linked:
             if not adopt:
-                raise dc.DaemonError(f"{name} exists", dc.ErrorCode.RING_FAILED)
+                raise dw.DaemonError(f"{name} exists", dw.ErrorCode.RING_FAILED)
         elif name in self.shm:
             if not adopt:
-                raise dc.DaemonError(f"{name} exists", dc.ErrorCode.RING_FAILED)
+                raise dw.DaemonError(f"{name} exists", dw.ErrorCode.RING_FAILED)
             self.held[name] = self.shm[name]
         else:
             seg = Seg(name, slots)
@@ -176,7 +176,7 @@ class FakeDaemon:
     def _tap(self, ring: str) -> Seg:
         seg = self.shm.get(ring)
         if seg is None:
-            raise dc.DaemonError(f"cannot open {ring}", dc.ErrorCode.STREAM_FAILED)
+            raise dw.DaemonError(f"cannot open {ring}", dw.ErrorCode.STREAM_FAILED)
         return seg
 
     async def stream_send(self, token: int, ring: str, layout_hash: int, message_size: int,
@@ -192,14 +192,14 @@ class FakeDaemon:
 
     async def stream_remove(self, token: int) -> None:
         if self.streams.pop(token, None) is None:
-            raise dc.DaemonError(f"no stream {token:016x}", dc.ErrorCode.UNKNOWN_STREAM)
+            raise dw.DaemonError(f"no stream {token:016x}", dw.ErrorCode.UNKNOWN_STREAM)
         await self._reply("stream_remove")
 
-    async def stream_stats(self) -> tuple[list[dc.StreamStat], dc.StreamTotals]:
-        stats = [dc.StreamStat(s.token, s.sending, s.transport, s.ring, s.peer, 0, 0, 0, 0, 0,
+    async def stream_stats(self) -> tuple[list[dw.StreamStat], dw.StreamTotals]:
+        stats = [dw.StreamStat(s.token, s.sending, s.transport, s.ring, s.peer, 0, 0, 0, 0, 0,
                                True, "") for s in self.streams.values()]
         await self._reply("stream_stats")
-        return stats, dc.StreamTotals(0, 0)
+        return stats, dw.StreamTotals(0, 0)
 
 
 class FakeLink:
@@ -215,7 +215,7 @@ class FakeLink:
 
         async def forward(*args: Any, **kwargs: Any) -> Any:
             if self.closed or not self.daemon.reachable:
-                raise dc.DaemonConnectionError("connection to the daemon lost")
+                raise dw.DaemonConnectionError("connection to the daemon lost")
             return await call(*args, **kwargs)
 
         return forward
@@ -331,16 +331,18 @@ class World:
         text = (f"instance\nname: {self.instance}\nmanager: :54999\n\n{HOSTS}\n{extra}\n"
                 "process p\nnode: a\ncommand: true\n")
         self.config = parse_text(text, "fake.lnc")
-        local_id = _libln.host_id()
+        local_id = _adminlib.host_id()
         self.daemons = {h: FakeDaemon(local_id if h == local else f"id-{h}") for h in "abc"}
         self.pool = FakePool(self.daemons, local)
         prefix = self.instance
         self.local_shm = self.daemons[local].shm if local else {}
         self.segments = FakeSegments(prefix, self.local_shm)
         self.core = Core(self.instance, Registry(lambda size, slots: size * slots),
-                         self.segments, Services())  # type: ignore[arg-type]
-        self.net = Network(self.config, self.core, self.pool, self.instance)  # type: ignore
-        self.core.hosts = self.net
+                         self.segments, Services(),  # type: ignore[arg-type]
+                         hosts=lambda core: Network(self.config, core, self.pool,
+                                                    self.instance))  # type: ignore
+        assert isinstance(self.core.hosts, Network)
+        self.net = self.core.hosts
         self._request = itertools.count(1)
         self._pid = itertools.count(1000)
 

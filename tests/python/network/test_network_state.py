@@ -10,7 +10,7 @@ import asyncio
 
 import pytest
 
-from links_and_nodes.manager import network
+from links_and_nodes.manager.network import hosts as network
 
 from .fakenet import GATEWAY, World
 
@@ -214,7 +214,7 @@ def test_a_local_ring_made_again_gets_a_new_name() -> None:
     """The manager's own host (segments.Segments, libln): the same rule as on the others."""
     import os
 
-    from links_and_nodes.manager.segments import Segments
+    from links_and_nodes.manager.registry.segments import Segments
 
     segments = Segments(f"segnames{os.getpid()}")
     try:

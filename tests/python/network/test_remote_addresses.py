@@ -10,7 +10,7 @@ from pathlib import Path
 from scheduler.fake_daemon import FakeDaemon, FakeRegistry, backend  # tests/python/scheduler
 
 from links_and_nodes.manager.config import model
-from links_and_nodes.manager.scheduler import Scheduler
+from links_and_nodes.manager.processes.scheduler import Scheduler
 
 HERE = model.Location("test.lnc", 1, 1)
 LOOPBACK = "127.0.0.1:54414"
@@ -25,8 +25,8 @@ async def test_a_state_on_another_node_is_checked_with_the_managers_address_ther
     cfg = model.Config(files=["test.lnc"], instance=model.Instance("t", ":54414", HERE),
                        processes={"user": user}, states={"net": state})
     daemon = FakeDaemon()
-    sched = Scheduler(cfg, FakeRegistry(), backend(daemon), manager_address=LOOPBACK)
-    sched.manager_address_for = lambda node: FROM_B if node == "b" else LOOPBACK
+    sched = Scheduler(cfg, FakeRegistry(), backend(daemon), manager_address=LOOPBACK,
+                      manager_address_for=lambda node: FROM_B if node == "b" else LOOPBACK)
     try:
         sched.start("user")
         await sched.wait_ready("user", 60)

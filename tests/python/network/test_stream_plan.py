@@ -8,10 +8,10 @@ from __future__ import annotations
 from typing import Any
 
 from links_and_nodes.manager.config import parse_text
-from links_and_nodes.manager.core import Core
-from links_and_nodes.manager.network import SUBSCRIBE_TCP, SUBSCRIBE_UDP, Network
-from links_and_nodes.manager.registry import PortKind, PortRequest, Registry
-from links_and_nodes.manager.services import Services
+from links_and_nodes.manager.registry.core import Core
+from links_and_nodes.manager.network.hosts import SUBSCRIBE_TCP, SUBSCRIBE_UDP, Network
+from links_and_nodes.manager.registry.model import PortKind, PortRequest, Registry
+from links_and_nodes.manager.registry.services import Services
 
 LNC = """instance
 name: plan
@@ -124,7 +124,7 @@ def test_unroutable_pair_is_a_problem_not_a_stream() -> None:
 async def test_console_shows_streams_and_pairs() -> None:
     import io
 
-    from links_and_nodes.manager.console import Console
+    from links_and_nodes.manager.frontends.console import Console
 
     class _Control:
         async def handle(self, command: dict[str, Any]) -> dict[str, Any]:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager import scripting
+from links_and_nodes.manager.frontends import scripting
 from polling import (  # noqa: F401  (shared with the tests of this package)
     free_daemon_port,
     free_port,

@@ -12,8 +12,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-from links_and_nodes.manager import daemon_client as dc
-from links_and_nodes.manager.scripting import Manager
+from links_and_nodes.manager.processes import daemon_keys as dk
+from links_and_nodes.manager.processes import daemon_launch as dl
+from links_and_nodes.manager.frontends.scripting import Manager
 
 from .conftest import REPO, LIMIT, Lab, free_daemon_port, parent, pids_with, wait_for
 
@@ -325,9 +326,9 @@ def test_processes_on_two_nodes_go_to_their_daemons(lab: Lab) -> None:
     """A second daemon stands in for another host: node_map + hosts route `node: arm` to
     it (its port, its address), `localhost` stays on the manager's own daemon."""
     key_file = Path(lab.env["LN_DAEMON_KEY_FILE"])
-    dc.create_key_file(key_file)
+    dk.create_key_file(key_file)
     other_port = free_daemon_port()
-    daemon = subprocess.run([dc.daemon_executable(), "--port", str(other_port), "--key-file",
+    daemon = subprocess.run([dl.daemon_executable(), "--port", str(other_port), "--key-file",
                              str(key_file), "--log", str(lab.tmp / "other-daemon.log")],
                             capture_output=True, text=True, env=lab.env, timeout=LIMIT)
     assert daemon.returncode == 0, daemon.stderr

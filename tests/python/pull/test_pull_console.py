@@ -7,7 +7,7 @@ from __future__ import annotations
 import io
 from typing import Any
 
-from links_and_nodes.manager.console import Console
+from links_and_nodes.manager.frontends.console import Console
 
 PORT = {"address": "127.0.0.1", "port": 6363, "packets": 1041, "bad": 3, "unknown": 1,
         "other": 2, "last_error": ""}

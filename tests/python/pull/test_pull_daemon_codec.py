@@ -7,8 +7,8 @@ import struct
 
 import pytest
 
-from links_and_nodes.manager import daemon_pull as dp
-from links_and_nodes.manager.daemon_client import Msg
+from links_and_nodes.manager.network import daemon_pull as dp
+from links_and_nodes.manager.processes.daemon_wire import Msg
 
 
 def s(text: bytes) -> bytes:

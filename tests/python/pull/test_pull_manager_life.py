@@ -1,4 +1,4 @@
-"""The manager's side of a pull topic's life (manager/pull.py): a daemon's refusal (the
+"""The manager's side of a pull topic's life (manager/network/pull.py): a daemon's refusal (the
 port taken by another program) shown with its text in `pull` and `network` and retried until
 the port is free; a detached manager leaving the topic served, and the next manager of the
 instance removing what its configuration no longer serves."""

@@ -1,4 +1,4 @@
-"""The manager's placement of pull topics (manager/pull.py) against a fake registry and a
+"""The manager's placement of pull topics (manager/network/pull.py) against a fake registry and a
 fake daemon link: which topics go to the daemon with which settings, a refusal kept in the
 status and retried, re-placement on a new ring or a reloaded setting, removal when the
 publisher leaves, and the removal of everything on close."""
@@ -10,11 +10,11 @@ from pathlib import Path
 from typing import Any
 
 
-from links_and_nodes.manager import daemon_client as dc
-from links_and_nodes.manager import daemon_pull as dp
+from links_and_nodes.manager.processes import daemon_wire as dw
+from links_and_nodes.manager.network import daemon_pull as dp
 from links_and_nodes.manager.config import load
-from links_and_nodes.manager.pull import PullTopics
-from links_and_nodes.manager.registry import Client, Port, PortKind, Topic
+from links_and_nodes.manager.network.pull import PullTopics
+from links_and_nodes.manager.registry.model import Client, Port, PortKind, Topic
 
 
 class FakeRings:
@@ -57,7 +57,7 @@ class FakeLink:
     async def pull_topic(self, *args: Any) -> None:
         self.calls.append(("topic", args))
         if self.refuse:
-            raise dc.DaemonError(self.refuse.pop(0), dc.ErrorCode.LOGGER_FAILED)
+            raise dw.DaemonError(self.refuse.pop(0), dw.ErrorCode.LOGGER_FAILED)
 
     async def pull_remove(self, topic: str) -> None:
         self.calls.append(("remove", (topic,)))

@@ -25,8 +25,9 @@ from polling import wait_for  # noqa: E402
 from topics.conftest import TOOLS, wait_ready  # noqa: E402
 
 import links_and_nodes as ln  # noqa: E402
-from links_and_nodes.manager import launch, scripting  # noqa: E402
-from links_and_nodes.manager.launch import ManagerProcess, segments  # noqa: E402
+from links_and_nodes.manager.frontends import launch  # noqa: E402
+from links_and_nodes.manager.frontends import scripting  # noqa: E402
+from links_and_nodes.manager.frontends.launch import ManagerProcess, segments  # noqa: E402
 
 LIMIT = 60.0  # seconds: an upper bound against hangs, never a pass criterion
 

@@ -10,7 +10,7 @@ from polling import wait_for
 from services.conftest import GOAL, plan
 
 import links_and_nodes as ln
-from links_and_nodes.manager.launch import segments
+from links_and_nodes.manager.frontends.launch import segments
 
 from .conftest import LIMIT, Restarts, read_until
 

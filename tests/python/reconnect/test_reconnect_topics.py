@@ -12,8 +12,8 @@ import pytest
 from polling import wait_for
 
 import links_and_nodes as ln
-from links_and_nodes import _libln
-from links_and_nodes.manager.launch import segments
+from links_and_nodes import _adminlib
+from links_and_nodes.manager.frontends.launch import segments
 
 from .conftest import LIMIT, Restarts, read_until
 
@@ -80,11 +80,11 @@ def test_what_nobody_takes_back_goes_after_the_window(restarts: Restarts) -> Non
     kept = segments(restarts.instance)  # rc.kept's generations (it grew for the subscriber)
     assert kept and all(n.startswith(f"ln.{restarts.instance}.1.") for n in kept)
     newest = max(kept, key=lambda n: int(n.rsplit(".", 1)[1]))
-    handle = _libln.RingAdminHandle()
-    _libln.ln_ring_admin_open(ctypes.byref(handle), f"/{newest}".encode())
-    info = _libln.RingInfo()
-    _libln.ln_ring_admin_info(handle, ctypes.byref(info))
-    _libln.ln_ring_admin_close(handle)
+    handle = _adminlib.RingAdminHandle()
+    _adminlib.ln_ring_admin_open(ctypes.byref(handle), f"/{newest}".encode())
+    info = _adminlib.RingInfo()
+    _adminlib.ln_ring_admin_info(handle, ctypes.byref(info))
+    _adminlib.ln_ring_admin_close(handle)
     assert info.topic == b"rc.kept"
     assert info.active_readers == 0  # the dead subscriber's slot is free again
     assert (info.publishers, info.subscribers) == (1, 0)

@@ -16,8 +16,8 @@ from typing import Any
 import pytest
 
 import links_and_nodes as ln
-from links_and_nodes.manager import launch
-from links_and_nodes.manager.launch import ManagerProcess, segments
+from links_and_nodes.manager.frontends import launch
+from links_and_nodes.manager.frontends.launch import ManagerProcess, segments
 from buildtree import missing_test_tool
 from polling import wait_for
 

@@ -13,7 +13,7 @@ import uuid
 from pathlib import Path
 
 import links_and_nodes as ln
-from links_and_nodes.manager import launch
+from links_and_nodes.manager.frontends import launch
 from links_and_nodes.mcap_format import McapReader
 
 from .conftest import Lab, pypi_messages, wait_subscribed

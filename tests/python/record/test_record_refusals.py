@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ln_generate import MdRegistry
 
-from links_and_nodes.manager.scripting import connect
+from links_and_nodes.manager.frontends.scripting import connect
 
 from .conftest import MD_CHANGED, Lab, wait_subscribed
 from .mcap_js import js_rejects

@@ -31,8 +31,8 @@ for _p in (REPO / "python", REPO, REPO / "tests" / "python"):
     if str(_p) not in sys.path:
         sys.path.insert(0, str(_p))
 
-from links_and_nodes.manager import scripting  # noqa: E402
-from links_and_nodes.manager.launch import segments  # noqa: E402
+from links_and_nodes.manager.frontends import scripting  # noqa: E402
+from links_and_nodes.manager.frontends.launch import segments  # noqa: E402
 from polling import free_daemon_port, free_port, pids_with  # noqa: E402
 
 if TYPE_CHECKING:

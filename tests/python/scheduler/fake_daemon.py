@@ -15,8 +15,8 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from links_and_nodes.manager import daemon_client as dc
-from links_and_nodes.manager.scheduler import Backend
+from links_and_nodes.manager.processes import daemon_wire as dw
+from links_and_nodes.manager.processes.scheduler import Backend
 
 
 class FakeError(Exception):
@@ -24,10 +24,10 @@ class FakeError(Exception):
 
 
 # The daemon client's own request and event types, so the fake speaks exactly its API.
-Spec = dc.SpawnSpec
-Info = dc.ProcessInfo
-Line = dc.OutputLine
-Exit = dc.Exited
+Spec = dw.SpawnSpec
+Info = dw.ProcessInfo
+Line = dw.OutputLine
+Exit = dw.Exited
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""The scheduler's change notification (manager/changes.py): one notify wakes every waiter
+"""The scheduler's change notification (manager/processes/changes.py): one notify wakes every waiter
 in the same turn of the event loop, waiters whose condition does not hold yet wait on, an
 exception of the condition ends the wait, and a cancelled or timed-out waiter is not kept."""
 
@@ -8,7 +8,7 @@ import asyncio
 
 import pytest
 
-from links_and_nodes.manager.changes import Changes
+from links_and_nodes.manager.processes.changes import Changes
 
 
 def test_one_notify_wakes_every_waiter_at_once() -> None:

@@ -11,12 +11,12 @@ from types import SimpleNamespace
 
 import pytest
 
-from links_and_nodes.manager import protocol as p
-from links_and_nodes.manager.console import Console
-from links_and_nodes.manager.control import Control
-from links_and_nodes.manager.process_states import ProcState as S
-from links_and_nodes.manager.scheduler import Scheduler
-from links_and_nodes.manager.scripting import Manager, ManagerError
+from links_and_nodes.manager.registry import protocol as p
+from links_and_nodes.manager.frontends.console import Console
+from links_and_nodes.manager.frontends.control import Control
+from links_and_nodes.manager.processes.states import ProcState as S
+from links_and_nodes.manager.processes.scheduler import Scheduler
+from links_and_nodes.manager.frontends.scripting import Manager, ManagerError
 
 from .fake_daemon import FakeDaemon, FakeRegistry, backend
 from .test_scheduler import LIMIT, config, proc
@@ -118,15 +118,19 @@ async def test_runner_starts_nothing_once_asked_to_stop(tmp_path: object) -> Non
     import argparse
     from pathlib import Path
 
-    from links_and_nodes.manager.runner import Runner
+    from links_and_nodes.manager.app import runner_for
+    from links_and_nodes.manager.processes.daemons import DaemonPool
 
     args = argparse.Namespace(instance="t", daemon_key_file=None, exit_on_failure=False,
                               start_all=True, no_console=True, wait_ready=True,
                               ready_timeout=None)
     stopping = asyncio.Event()
     daemon = FakeDaemon()
-    runner = Runner(args, config(proc("a")), FakeRegistry(), Path(str(tmp_path)),  # type: ignore[arg-type]
-                    "127.0.0.1:1", lambda processes: stopping.set(), stopping)
+    cfg = config(proc("a"))
+    pool = DaemonPool(cfg, "t", log_dir=Path(str(tmp_path)))
+    runner = runner_for(args, cfg, FakeRegistry(), pool, None,  # type: ignore[arg-type]
+                        Path(str(tmp_path)), "127.0.0.1:1", lambda processes: stopping.set(),
+                        stopping)
     runner.scheduler.backend = backend(daemon)
     stopping.set()
     try:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager.process_states import ProcState as S
+from links_and_nodes.manager.processes.states import ProcState as S
 
 from .test_scheduler import LIMIT, World, make, proc, until, world_factory  # noqa: F401
 

@@ -17,8 +17,8 @@ from types import SimpleNamespace
 import pytest
 
 from links_and_nodes.manager.config import model
-from links_and_nodes.manager.process_states import ProcState as S
-from links_and_nodes.manager.scheduler import Backend, Scheduler, StartError, Transition
+from links_and_nodes.manager.processes.states import ProcState as S
+from links_and_nodes.manager.processes.scheduler import Backend, Scheduler, StartError, Transition
 
 from .fake_daemon import (
     Exit,
@@ -267,7 +267,7 @@ async def test_groups_and_all(world_factory: list[World]) -> None:
 
 async def test_start_rate_limit_spaces_starts(monkeypatch: pytest.MonkeyPatch) -> None:
     """Five starts at 20/s on a frozen clock: each waits 50 ms longer than the one before."""
-    from links_and_nodes.manager import scheduler as sched_mod
+    from links_and_nodes.manager.processes import scheduler as sched_mod
 
     slept: list[float] = []
 
@@ -327,7 +327,7 @@ async def test_old_ready_period_does_not_reset_the_restart_count(
     """"Stayed ready for 10 s" is about the run that just ended: a process that was ready
     once and then keeps failing before it gets ready again still gives up.  The scheduler's
     monotonic clock is the test's: every failure advances it by 6 s."""
-    from links_and_nodes.manager import scheduler as sched_mod
+    from links_and_nodes.manager.processes import scheduler as sched_mod
 
     now = [0.0]
     monkeypatch.setattr(sched_mod, "time",
@@ -700,7 +700,7 @@ async def test_ready_time_does_not_depend_on_the_wall_clock(
         world_factory: list[World], monkeypatch: pytest.MonkeyPatch) -> None:
     """ready_time counts on the monotonic clock: a wall clock set back meanwhile (here: one
     that stands still) does not keep the process from getting ready."""
-    from links_and_nodes.manager import scheduler as sched_mod
+    from links_and_nodes.manager.processes import scheduler as sched_mod
 
     monkeypatch.setattr(sched_mod, "time",
                         SimpleNamespace(time=lambda: 1e9, monotonic=time.monotonic))

@@ -14,8 +14,8 @@ from typing import Any
 
 import pytest
 
-from links_and_nodes.manager import launch
-from links_and_nodes.manager.launch import ManagerProcess
+from links_and_nodes.manager.frontends import launch
+from links_and_nodes.manager.frontends.launch import ManagerProcess
 from buildtree import build_dir
 
 REPO = Path(__file__).resolve().parents[3]

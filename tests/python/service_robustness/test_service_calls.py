@@ -110,7 +110,7 @@ def test_socket_removed_when_provider_exits(setup: Setup) -> None:
 
 
 def listed(setup: Setup) -> list[dict[str, object]]:
-    out = subprocess.run([sys.executable, "-m", "links_and_nodes.manager.listing", "--json"],
+    out = subprocess.run([sys.executable, "-m", "links_and_nodes.manager.frontends.listing", "--json"],
                          capture_output=True, text=True, env=setup.manager.env,
                          timeout=LIMIT, check=True)
     return json.loads(out.stdout)

@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 import links_and_nodes as ln
-from links_and_nodes.manager import launch
-from links_and_nodes.manager.launch import ManagerProcess, segments
+from links_and_nodes.manager.frontends import launch
+from links_and_nodes.manager.frontends.launch import ManagerProcess, segments
 from buildtree import build_dir
 
 REPO = Path(__file__).resolve().parents[3]

@@ -11,7 +11,7 @@ import re
 import pytest
 
 import links_and_nodes as ln
-from links_and_nodes import _clientlib as C
+from links_and_nodes import _adminlib
 
 from .conftest import Manager, wait_ready
 
@@ -65,20 +65,20 @@ class Tap:
 
     def __init__(self, segment: str, layout_hash: int, size: int) -> None:
         handle = ctypes.c_void_p()
-        C.ln_ring_tap_open(ctypes.byref(handle), segment.encode(), layout_hash, size,
-                           C.LN_TAP_EVERY)
+        _adminlib.ln_ring_tap_open(ctypes.byref(handle), segment.encode(), layout_hash, size,
+                                   _adminlib.LN_TAP_EVERY)
         self.handle = handle
         self.size = size
 
     def inject(self, packet: ctypes.Structure, seq: int, timestamp_ns: int) -> None:
-        C.ln_ring_tap_inject(self.handle, ctypes.byref(packet), seq, timestamp_ns)
+        _adminlib.ln_ring_tap_inject(self.handle, ctypes.byref(packet), seq, timestamp_ns)
 
     @property
     def segment(self) -> str:
-        return C.ln_ring_tap_segment(self.handle).decode()
+        return _adminlib.ln_ring_tap_segment(self.handle).decode()
 
     def close(self) -> None:
-        C.ln_ring_tap_close(self.handle)
+        _adminlib.ln_ring_tap_close(self.handle)
 
 
 def test_injected_samples_reach_subscribers(manager: Manager) -> None:

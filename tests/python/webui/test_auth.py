@@ -1,5 +1,5 @@
 """The web UI's auth file, password hashes, sessions and `ln_manager webui-passwd`
-(python/links_and_nodes/manager/webui/auth.py)."""
+(python/links_and_nodes/manager/frontends/webui/auth.py)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager.webui.auth import (
+from links_and_nodes.manager.frontends.webui.auth import (
     AuthFileError,
     Sessions,
     basic_credentials,

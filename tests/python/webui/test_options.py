@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from links_and_nodes.manager.config import ConfigError, load
-from links_and_nodes.manager.webui import WebUIError, plan
-from links_and_nodes.manager.webui.auth import hash_password
+from links_and_nodes.manager.frontends.webui import WebUIError, plan
+from links_and_nodes.manager.frontends.webui.auth import hash_password
 
 LIMIT = 60.0
 
@@ -45,7 +45,7 @@ def test_instance_key_errors(tmp_path: Path, line: str, error: str) -> None:
 
 
 def _args(*argv: str) -> argparse.Namespace:
-    from links_and_nodes.manager.cli import build_parser
+    from links_and_nodes.manager.frontends.cli import build_parser
 
     return build_parser().parse_args(["--port", "1", "--instance", "x", *argv])
 

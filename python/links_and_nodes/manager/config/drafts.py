@@ -18,7 +18,7 @@ from .model import (
     State,
     TopicSetting,
 )
-from .text import Piece
+from .text import Piece, Value
 
 
 @dataclass(frozen=True)
@@ -69,6 +69,7 @@ class ProcessDraft:
     key_locs: dict[str, tuple[Location, str]] = field(default_factory=dict)  # (loc, note)
     failed: set[str] = field(default_factory=set)  # keys whose line had a problem
     has_command: bool = False
+    command_value: Value | None = None  # where `command` was written, for split problems
     log_path: str | None = None
     log_size: int | None = None
     log_keep: int | None = None

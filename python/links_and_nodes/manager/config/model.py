@@ -10,7 +10,9 @@ import ipaddress
 import signal
 from dataclasses import dataclass, field
 
-DEFAULT_ARBITER_PORT = 54376  # ln_daemon's TCP port, unless LN_ARBITER_PORT says otherwise
+from ... import default_ports, transports
+
+DEFAULT_ARBITER_PORT = default_ports.DAEMON_PORT  # unless LN_ARBITER_PORT says otherwise
 
 
 @dataclass(frozen=True)
@@ -134,7 +136,7 @@ class Network:
         return list(dict.fromkeys(i.host for i in self.interfaces))
 
 
-DEFAULT_PULL_PORT = 6363  # NDN's UDP port
+DEFAULT_PULL_PORT = default_ports.PULL_PORT
 
 
 @dataclass(frozen=True)
@@ -200,6 +202,8 @@ class Process:
     location: Location  # of the section header
     command: str
     node: str = "localhost"  # "localhost": the manager's host
+    # The command split into words (config/command.py), empty with start_in_shell.
+    argv: list[str] = field(default_factory=list, compare=False)  # derived: not compared
     environment: dict[str, str] = field(default_factory=dict)
     pass_environment: list[str] = field(default_factory=list)  # names copied from the manager
     change_directory: str | None = None
@@ -292,5 +296,5 @@ def topic_pull(config: Config, topic: str) -> PullSetting | None:
     sets `pull` and matches it; None if none does or that line says `pull:off`."""
     for setting in config.topic_settings:
         if setting.pull is not None and setting.matches(topic):
-            return setting.pull if setting.pull.transport != "off" else None
+            return setting.pull if setting.pull.transport != transports.PULL_OFF else None
     return None

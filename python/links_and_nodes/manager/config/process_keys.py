@@ -91,6 +91,7 @@ def _nonempty(v: Value, key: str) -> str:
 def _command(d: ProcessDraft, v: Value, p: Parser, kl: KeyLine) -> None:
     d.process.command = _nonempty(v, "command")
     d.has_command = True
+    d.command_value = v
 
 
 def _regex(d: ProcessDraft, v: Value, p: Parser, kl: KeyLine) -> None:

@@ -7,11 +7,12 @@ from __future__ import annotations
 import ipaddress
 import re
 
+from ... import transports
 from .model import PullSetting
 from .text import Value
 from .values import fail, parse_int
 
-PULL_TRANSPORTS = ("ndn-udp", "off")
+PULL_TRANSPORTS = transports.PULL
 PULL_KEYS = ("pull", "pull_port", "pull_prefix", "pull_history", "pull_freshness_ms",
              "pull_key", "pull_address")
 MAX_HISTORY = 65536
@@ -28,14 +29,14 @@ def parse_pull(found: dict[str, Value], pattern: str) -> PullSetting | None:
         return None
     if "pull" not in found:
         name, v = next(iter(found.items()))
-        raise fail(v, f"'{name}' needs 'pull:ndn-udp' on the same line (topic pattern "
+        raise fail(v, f"'{name}' needs 'pull:{transports.NDN_UDP}' on the same line (topic pattern "
                       f"'{pattern}')")
     word = found["pull"].text.strip().lower()
     if word not in PULL_TRANSPORTS:
         raise fail(found["pull"], f"unknown pull transport '{found['pull'].text}' "
-                                  "(known: ndn-udp, off)")
+                                  f"(known: {', '.join(PULL_TRANSPORTS)})")
     out = PullSetting(word)
-    if word == "off":
+    if word == transports.PULL_OFF:
         extra = next((n for n in found if n != "pull"), None)
         if extra is not None:
             raise fail(found[extra], f"'{extra}' has no effect with 'pull:off'")

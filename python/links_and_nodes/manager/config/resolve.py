@@ -11,6 +11,7 @@ from __future__ import annotations
 import fnmatch
 from collections.abc import Iterable, Mapping
 
+from .command import CommandSplitError, split_command
 from .drafts import Drafts, GroupDraft, MemberRef, NetworkDraft, ProcessDraft, Ref
 from .errors import Problem, did_you_mean
 from .model import Config, Instance, Interface, Location, OutputLog, Policy, Process
@@ -83,6 +84,11 @@ class _Resolver:
         p = d.process
         if not d.has_command and "command" not in d.failed:
             self.problem(p.location, f"process '{p.name}' has no 'command'")
+        elif d.command_value is not None and "start_in_shell" not in p.flags:
+            try:
+                p.argv = split_command(p.command)
+            except CommandSplitError as exc:
+                self.problem(d.command_value.at(exc.offset), f"process '{p.name}': {exc}")
         if d.log_path is not None:
             log = OutputLog(d.log_path)
             if d.log_size is not None:

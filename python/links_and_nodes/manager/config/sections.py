@@ -8,7 +8,8 @@ import re
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from ..registry import topic_name_problem
+from ... import transports
+from ...naming import topic_name_problem
 from .drafts import (
     GroupDraft,
     HostRef,
@@ -43,7 +44,7 @@ DEFINE_NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-/]*\Z")
 HOST_NAME_RE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*\Z")
 SETTING_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")  # host settings, interface labels
 NETWORK_NAME_RE = HOST_NAME_RE
-TRANSPORTS = ("udp", "tcp")
+TRANSPORTS = transports.FORWARD
 # Topic names (registry rules) and the fnmatch characters.
 _TOPIC_PATTERN_RE = re.compile(r"[A-Za-z0-9_.:/\-*?\[\]!]+\Z")
 GROUP_FLAGS = frozenset({"allow_empty", "show_opened", "show_closed", "sorted", "unsorted"})
@@ -346,7 +347,7 @@ class TopicsSection(Section):
             values = p.values(kl)
             raise LineError.at(values[0].loc if values else kl.block_loc or kl.loc,
                                f"topic pattern '{pattern}' needs settings like "
-                               "transport:udp or pull:ndn-udp")
+                               f"transport:{transports.UDP} or pull:{transports.NDN_UDP}")
         p.drafts.topic_settings.append(TopicSetting(pattern, found.get("transport"), kl.loc,
                                                     parse_pull(pull, pattern)))
 

@@ -8,7 +8,8 @@ import ipaddress
 import re
 import signal
 
-from ..registry import topic_name_problem
+from ... import addresses
+from ...naming import topic_name_problem
 from .errors import LineError, Problem, did_you_mean
 from .model import Policy, ResourceLimit, Restart, Watchdog
 from .text import Value, split_value
@@ -252,11 +253,13 @@ def parse_subnet(v: Value, where: str) -> str:
 
 
 def parse_address(v: Value, key: str) -> str:
-    """`HOST:PORT` or `:PORT`, port 1..65535; returned as written."""
-    host, colon, port = v.text.rpartition(":")
-    if not colon or not _INT_RE.match(port) or not 1 <= int(port) <= 65535:
-        raise fail(v, f"'{key}' must be HOST:PORT or :PORT with a port of 1..65535, "
-                      f"got '{v.text}'")
-    if any(c.isspace() for c in host):
-        raise fail(v, f"'{key}' has blanks in its host name: '{v.text}'")
+    """`HOST:PORT`, `:PORT` or `[V6HOST]:PORT` (addresses.parse_address), port 1..65535;
+    returned as written."""
+    try:
+        addresses.parse_address(v.text, default_host="")
+    except addresses.AddressError as exc:
+        if exc.kind in ("form", "port"):
+            raise fail(v, f"'{key}' must be HOST:PORT or :PORT with a port of 1..65535, "
+                          f"got '{v.text}'") from None
+        raise fail(v, f"'{key}': {exc}") from None
     return v.text

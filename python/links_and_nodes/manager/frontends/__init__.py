@@ -1,0 +1,1 @@
+"""The front ends: command table, console, CLI, CONTROL frames, scripting API, web UI."""

@@ -1,0 +1,1 @@
+"""Live introspection: topic echo/hz/bw, md show, service call (docs/introspection.md)."""

@@ -1,0 +1,1 @@
+"""Topic loggers in the daemons and their commands (docs/logging.md)."""

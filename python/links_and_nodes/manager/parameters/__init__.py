@@ -1,0 +1,1 @@
+"""Parameter blocks: tools, console and CLI words, scripting methods (docs/parameters.md)."""
