@@ -13,6 +13,16 @@ fwd::Transport transport(wire::Transport t)
 
 std::string cut(const std::string &s) { return s.substr(0, kMaxStatText); }
 
+// The fields STREAM_SEND and STREAM_RECV share.
+template <class Request, class Spec> void stream_fields(Request &req, Spec &out)
+{
+    out.token = req.token;
+    out.ring = std::move(req.ring);
+    out.layout_hash = req.layout_hash;
+    out.message_size = req.message_size;
+    out.transport = transport(req.transport);
+}
+
 } // namespace
 
 bool decode_ring_create(proto::Reader &r, RingCreateRequest &out) { return wire::decode(r, out); }
@@ -33,11 +43,7 @@ bool decode_stream_send(proto::Reader &r, fwd::SendSpec &out)
     wire::StreamSend req;
     if (!wire::decode(r, req))
         return false;
-    out.token = req.token;
-    out.ring = std::move(req.ring);
-    out.layout_hash = req.layout_hash;
-    out.message_size = req.message_size;
-    out.transport = transport(req.transport);
+    stream_fields(req, out);
     out.host = std::move(req.host);
     out.port = req.port;
     return true;
@@ -48,11 +54,7 @@ bool decode_stream_recv(proto::Reader &r, fwd::RecvSpec &out)
     wire::StreamRecv req;
     if (!wire::decode(r, req))
         return false;
-    out.token = req.token;
-    out.ring = std::move(req.ring);
-    out.layout_hash = req.layout_hash;
-    out.message_size = req.message_size;
-    out.transport = transport(req.transport);
+    stream_fields(req, out);
     return true;
 }
 

@@ -8,7 +8,7 @@ last_error() of this module as detail, and failures are explained by this last_e
 from __future__ import annotations
 
 import ctypes
-from collections.abc import Callable
+import functools
 from typing import Any
 
 from . import _libln, _native
@@ -41,14 +41,7 @@ def _check(result: int, func: Any, args: tuple[Any, ...]) -> int:
     return result
 
 
-def _declare(name: str, restype: Any, argtypes: list[Any],
-             errcheck: Callable[..., Any] | None = None) -> Any:
-    func = getattr(lib, name)
-    func.restype = restype
-    func.argtypes = argtypes
-    if errcheck is not None:
-        func.errcheck = errcheck
-    return func
+_declare = functools.partial(_native.declare, lib)
 
 
 # ---- topic segment administration (ln_manager) ------------------------------------------

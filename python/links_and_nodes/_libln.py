@@ -3,7 +3,7 @@ once (argtypes, restype, errcheck), checks the library version against the packa
 builds the exception classes from libln's error table.  Public modules sit on top of this."""
 
 import ctypes
-from collections.abc import Callable
+import functools
 from typing import Any
 
 from . import __version__, _native
@@ -23,14 +23,7 @@ def _check(result: int, func: Any, args: tuple[Any, ...]) -> int:
     return result
 
 
-def _declare(name: str, restype: Any, argtypes: list[Any],
-             errcheck: Callable[..., Any] | None = None) -> Any:
-    func = getattr(lib, name)
-    func.restype = restype
-    func.argtypes = argtypes
-    if errcheck is not None:
-        func.errcheck = errcheck
-    return func
+_declare = functools.partial(_native.declare, lib)
 
 
 ln_strerror = _declare("ln_strerror", ctypes.c_char_p, [ctypes.c_int])

@@ -80,3 +80,14 @@ def load_beside(owner: ctypes.CDLL, symbol: str, relative: str, label: str) -> c
         raise LibraryNotFoundError(f"cannot load {label} ({path}: {exc}); build it with "
                                    "`scons`, or install it with libln (`scons install`, "
                                    "Debian's libln1)") from exc
+
+
+def declare(lib: ctypes.CDLL, name: str, restype: Any, argtypes: list[Any],
+            errcheck: Any = None) -> Any:
+    """Function `name` of `lib` with its result and argument types (and errcheck) set."""
+    func = getattr(lib, name)
+    func.restype = restype
+    func.argtypes = argtypes
+    if errcheck is not None:
+        func.errcheck = errcheck
+    return func

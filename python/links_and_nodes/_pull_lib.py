@@ -6,7 +6,7 @@ links_and_nodes.pull sits on top of this."""
 from __future__ import annotations
 
 import ctypes
-from typing import Any
+import functools
 
 from . import _native
 from .errors import LibraryNotFoundError
@@ -65,11 +65,7 @@ class Sub(ctypes.Structure):
                 ("slots", Slot * MAX_WINDOW), ("stats", Stats)]
 
 
-def _declare(name: str, restype: Any, argtypes: list[Any]) -> Any:
-    func = getattr(lib, name)
-    func.restype = restype
-    func.argtypes = argtypes
-    return func
+_declare = functools.partial(_native.declare, lib)
 
 
 ln_ndn_strerror = _declare("ln_ndn_strerror", ctypes.c_char_p, [ctypes.c_int])

@@ -30,6 +30,24 @@ def const_name(name: str) -> str:
     return "k" + sch.camel(name)
 
 
+
+def cpp_type(t: sch.Type, scope: str = "") -> str:
+    """The C++ type of a schema type; `scope` ("lnd::wire::") prefixes record names."""
+    if t.kind == "int":
+        return _CTYPES[t.name]
+    if t.kind == "f64":
+        return "double"
+    if t.kind == "bool":
+        return "bool"
+    if t.kind in ("str", "bytes", "text", "tail"):
+        return "std::string"
+    if t.kind == "fixed":
+        return f"std::array<uint8_t, {t.size}>"
+    if t.kind == "list":
+        assert t.item is not None
+        return f"std::vector<{cpp_type(t.item, scope)}>"
+    return f"{scope}{t.ref}" if t.ref else ""
+
 class _Gen:
     def __init__(self, schema: sch.Schema, namespace: str, io: str, source: str) -> None:
         self.s = schema
@@ -44,20 +62,7 @@ class _Gen:
     # -- types --
 
     def ctype(self, t: sch.Type) -> str:
-        if t.kind == "int":
-            return _CTYPES[t.name]
-        if t.kind == "f64":
-            return "double"
-        if t.kind == "bool":
-            return "bool"
-        if t.kind in ("str", "bytes", "text", "tail"):
-            return "std::string"
-        if t.kind == "fixed":
-            return f"std::array<uint8_t, {t.size}>"
-        if t.kind == "list":
-            assert t.item is not None
-            return f"std::vector<{self.ctype(t.item)}>"
-        return t.ref or ""
+        return cpp_type(t)
 
     def init(self, f: sch.Field) -> str:
         t, d = f.type, f.default

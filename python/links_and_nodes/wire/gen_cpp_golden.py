@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from . import schema as sch
-from .gen_cpp import _CTYPES
+from .gen_cpp import _CTYPES, cpp_type
 
 
 def read_golden(path: str | Path) -> list[tuple[int, str, dict[str, Any], bytes]]:
@@ -42,20 +42,7 @@ class _Values:
         self.ns = ns
 
     def ctype(self, t: sch.Type) -> str:
-        if t.kind == "int":
-            return _CTYPES[t.name]
-        if t.kind == "f64":
-            return "double"
-        if t.kind == "bool":
-            return "bool"
-        if t.kind in ("str", "bytes", "text", "tail"):
-            return "std::string"
-        if t.kind == "fixed":
-            return f"std::array<uint8_t, {t.size}>"
-        if t.kind == "list":
-            assert t.item is not None
-            return f"std::vector<{self.ctype(t.item)}>"
-        return f"{self.ns}::{t.ref}"
+        return cpp_type(t, f"{self.ns}::")
 
     def struct(self, s: sch.Struct, obj: dict[str, Any]) -> str:
         parts: list[str] = []
