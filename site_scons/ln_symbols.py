@@ -15,8 +15,8 @@ _DIRECTIVE = re.compile(r'^[ \t]*#(?:[^\n]*\\\n)*[^\n]*', re.M)
 def declared(text, macro):
     """Sorted names of the functions `text` (a header) declares as `macro` ... name(...)."""
     code = _DIRECTIVE.sub('', _COMMENT.sub(' ', text))
-    return sorted(set(re.findall(r'\b%s\b[^;{}()]*?\b([A-Za-z_]\w*)\s*\(' % re.escape(macro),
-                                 code)))
+    pattern = r'\b' + re.escape(macro) + r'\b[^;{}()]*?\b([A-Za-z_]\w*)\s*\('
+    return sorted(set(re.findall(pattern, code)))
 
 
 def declared_in(paths, macro):
@@ -30,4 +30,5 @@ def declared_in(paths, macro):
 
 def version_script(names):
     """A GNU ld version script that exports `names` and hides everything else."""
-    return '{\n  global:\n%s  local: *;\n};\n' % ''.join('    %s;\n' % n for n in names)
+    exported = ''.join(f'    {n};\n' for n in names)
+    return '{\n  global:\n' + exported + '  local: *;\n};\n'

@@ -24,7 +24,6 @@ def wire_generate(env, targets, schema, module, args='', inputs=()):
     gen_env = env.Clone()
     gen_env['ENV']['PYTHONPATH'] = os.path.dirname(os.path.dirname(_WIRE))
     gen_env['WIRE_PYTHON'] = sys.executable
-    named = ''.join(' ${SOURCES[%d]}' % (i + 1) for i in range(len(inputs)))
-    command = '$WIRE_PYTHON -m links_and_nodes.wire.%s ${SOURCES[0]}%s $TARGETS %s' % (
-        module, named, args)
+    named = ''.join(f' ${{SOURCES[{i + 1}]}}' for i in range(len(inputs)))
+    command = f'$WIRE_PYTHON -m links_and_nodes.wire.{module} ${{SOURCES[0]}}{named} $TARGETS {args}'
     return gen_env.Command(targets, deps, command)
