@@ -56,27 +56,24 @@ bool Loggers::handles(uint8_t type) noexcept { return logger_msg_name(type) != n
 NetOutcome Loggers::handle(const std::string &instance, uint8_t type, proto::Reader &r)
 {
     return outcome::guarded(instance, Err::logger_failed, [&]() -> NetOutcome {
+        using outcome::decoded;
+        const auto &in = instance;
         switch (static_cast<Msg>(type)) {
-        case Msg::logger_topic: {
-            LoggerTopicRequest req;
-            return decode_logger_topic(r, req) ? configure(instance, req) : malformed();
-        }
-        case Msg::logger_remove: {
-            LoggerRemoveRequest req;
-            return decode_logger_remove(r, req) ? remove(instance, req) : malformed();
-        }
-        case Msg::logger_enable: {
-            LoggerEnableRequest req;
-            return decode_logger_enable(r, req) ? enable(instance, req) : malformed();
-        }
-        case Msg::logger_fetch: {
-            LoggerFetchRequest req;
-            return decode_logger_fetch(r, req) ? fetch(instance, req) : malformed();
-        }
-        case Msg::logger_status: {
-            std::string logger;
-            return decode_logger_status(r, logger) ? status(instance, logger) : malformed();
-        }
+        case Msg::logger_topic:
+            return decoded<LoggerTopicRequest>(r, decode_logger_topic,
+                                               [&](auto &q) { return configure(in, q); });
+        case Msg::logger_remove:
+            return decoded<LoggerRemoveRequest>(r, decode_logger_remove,
+                                                [&](auto &q) { return remove(in, q); });
+        case Msg::logger_enable:
+            return decoded<LoggerEnableRequest>(r, decode_logger_enable,
+                                                [&](auto &q) { return enable(in, q); });
+        case Msg::logger_fetch:
+            return decoded<LoggerFetchRequest>(r, decode_logger_fetch,
+                                               [&](auto &q) { return fetch(in, q); });
+        case Msg::logger_status:
+            return decoded<std::string>(r, decode_logger_status,
+                                        [&](auto &q) { return status(in, q); });
         default:
             return malformed(); // not reached: handles() admits only the types above
         }

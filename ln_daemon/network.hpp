@@ -71,6 +71,14 @@ NetOutcome guarded(const std::string &instance, proto::Err code, Dispatch &&disp
         return error(code, e.what());
     }
 }
+// A request decoded with `decode` into a `Request` and handed to `run`; one that does not
+// decode is malformed.
+template <typename Request, typename Decode, typename Run>
+NetOutcome decoded(proto::Reader &r, Decode &&decode, Run &&run)
+{
+    Request req{};
+    return decode(r, req) ? run(req) : malformed();
+}
 } // namespace outcome
 
 class NetCommands {

@@ -48,19 +48,18 @@ bool Pulls::handles(uint8_t type) noexcept { return pull_msg_name(type) != nullp
 NetOutcome Pulls::handle(const std::string &instance, uint8_t type, proto::Reader &r)
 {
     return outcome::guarded(instance, Err::pull_failed, [&]() -> NetOutcome {
+        using outcome::decoded;
+        const auto &in = instance;
         switch (static_cast<Msg>(type)) {
-        case Msg::pull_topic: {
-            PullTopicRequest req;
-            return decode_pull_topic(r, req) ? configure(instance, req) : malformed();
-        }
-        case Msg::pull_remove: {
-            std::string topic;
-            return decode_pull_topic_name(r, topic) ? remove(instance, topic) : malformed();
-        }
-        case Msg::pull_status: {
-            std::string topic;
-            return decode_pull_topic_name(r, topic) ? status(instance, topic) : malformed();
-        }
+        case Msg::pull_topic:
+            return decoded<PullTopicRequest>(r, decode_pull_topic,
+                                             [&](auto &q) { return configure(in, q); });
+        case Msg::pull_remove:
+            return decoded<std::string>(r, decode_pull_topic_name,
+                                        [&](auto &q) { return remove(in, q); });
+        case Msg::pull_status:
+            return decoded<std::string>(r, decode_pull_topic_name,
+                                        [&](auto &q) { return status(in, q); });
         default:
             return malformed(); // not reached: handles() admits only the types above
         }

@@ -248,23 +248,17 @@ class _Reader:
         return values
 
     def str(self, name: str) -> str:
-        where = f"{self.type_name}.{name}"
-        (count,) = self.fixed("<H", f"the length of {name}")
-        if count > MAX_STR:
-            raise ProtocolError(f"{where}: str of {count} bytes, at most {MAX_STR}")
-        if self.offset + count > len(self.body):
-            raise self.too_short(f"{name} needs {count} bytes at offset {self.offset}")
-        raw = self.body[self.offset:self.offset + count]
-        self.offset += count
-        try:
-            return raw.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise ProtocolError(f"{where}: not valid UTF-8 (byte {exc.start})") from None
-
+        return self._utf8(name, "<H", MAX_STR)
 
     def text(self, name: str) -> str:
+        return self._utf8(name, "<I", None)
+
+    def _utf8(self, name: str, length: str, limit: int | None) -> str:
+        """A length-prefixed UTF-8 field: `str` (u16 length, at most MAX_STR) or `text`."""
         where = f"{self.type_name}.{name}"
-        (count,) = self.fixed("<I", f"the length of {name}")
+        (count,) = self.fixed(length, f"the length of {name}")
+        if limit is not None and count > limit:
+            raise ProtocolError(f"{where}: str of {count} bytes, at most {limit}")
         if self.offset + count > len(self.body):
             raise self.too_short(f"{name} needs {count} bytes at offset {self.offset}")
         raw = self.body[self.offset:self.offset + count]
