@@ -61,14 +61,15 @@ class PullLab(LogLab):
             return mgr.command("pull")["topics"]
 
     def served(self, topic: str) -> dict[str, Any]:
-        """Wait until the daemon serves `topic` without a refusal; its network entry."""
+        """Wait until the daemon serves `topic` without a refusal and holds a sample of it
+        (before that, a sync is answered with a NACK); its network entry."""
         def entry() -> dict[str, Any] | None:
             for host in self.network()["pull"]:
                 for t in host["topics"]:
-                    if t["topic"] == topic and not t["error"]:
+                    if t["topic"] == topic and not t["error"] and t["latest_seq"] > 0:
                         return t
             return None
-        return wait_for(entry, f"pull topic {topic} served")  # type: ignore[return-value]
+        return wait_for(entry, f"pull topic {topic} served with a sample")  # type: ignore[return-value]
 
     def counters(self) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
         """(the port's counters, topic -> counters) of the only host."""
