@@ -51,13 +51,15 @@ def bad(args: argparse.Namespace) -> None:
         (bytes(size), other_hash),                             # another layout
     ]
     with session(args.connect) as s:
-        publisher = s.declare_publisher(args.key)
+        # block, not drop: the 1 MiB case must not be dropped by a full queue under load
+        publisher = s.declare_publisher(args.key,
+                                        congestion_control=zenoh.CongestionControl.BLOCK)
         deadline = time.monotonic() + 30
         while not publisher.matching_status.matching and time.monotonic() < deadline:
             time.sleep(0.02)
         for payload, attachment in cases:
             publisher.put(payload, attachment=attachment)
-        time.sleep(0.5)  # let the last puts leave before the session closes
+        time.sleep(2.0)  # let the last puts leave before the session closes
         publisher.undeclare()
     print(f"sent {len(cases)}", flush=True)
 

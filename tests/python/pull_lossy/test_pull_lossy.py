@@ -114,7 +114,9 @@ def test_hardened_dit_through_loss(system: System, rate_hz: int) -> None:
         stuck = pm.runs_at_t_max(run, DEADLINE_MS, together_us=1e6 / rate_hz,
                                  since_us=windows[loss].start_us)
         assert stuck <= 3, f"{loss:.0%}: {stuck} timeouts in a row at t_max"
-        # no unbounded growth: in every second of the second half it catches up again
+        # no unbounded growth: in every second of the second half it catches up again, to
+        # within 40 ms of samples (80 ms under ASan/UBSan, which slow the relay and consumer)
         floors = pm.lag_floors(run, windows[loss])
-        assert max(floors) <= max(3, 40 * rate_hz // 1000), f"{loss:.0%}: lag floors {floors}"
+        bound = max(3, (80 if SANITIZED else 40) * rate_hz // 1000)
+        assert max(floors) <= bound, f"{loss:.0%}: lag floors {floors}"
         assert run["stats"]["bad"] == 0, run["stats"]
