@@ -465,17 +465,23 @@ int ln_write_abort(ln_outport* p)
     return ln_ring_unlock(&p->c.ring);
 }
 
-/* The next sample for this subscriber (ln_ring_next), with the port's wording of a timeout. */
+/* `rc` of a ring read, with the port's wording of a timeout. */
+static int read_result(ln_inport* p, int rc, double timeout)
+{
+    if (rc == LN_ETIMEOUT)
+        return ln_set_error(p->c.clnt, LN_ETIMEOUT, "no sample on topic '%s' within %g s",
+                            p->c.topic, timeout);
+    return rc;
+}
+
+/* The next sample for this subscriber (ln_ring_next). */
 static int next_sample(ln_inport* p, double timeout, ln_ring_slot** slot, uint64_t* word)
 {
     int rc = check_timeout(p->c.clnt, timeout, "ln_read");
     if (rc != LN_OK)
         return rc;
-    rc = ln_ring_next(&p->c.ring, &p->cur, timeout, p->spin_us, slot, word);
-    if (rc == LN_ETIMEOUT)
-        return ln_set_error(p->c.clnt, LN_ETIMEOUT, "no sample on topic '%s' within %g s",
-                            p->c.topic, timeout);
-    return rc;
+    return read_result(p, ln_ring_next(&p->c.ring, &p->cur, timeout, p->spin_us, slot, word),
+                       timeout);
 }
 
 static void fill_info(ln_inport* p, uint64_t word, int64_t ts, ln_sample_info* info)
@@ -504,10 +510,8 @@ int ln_read(ln_inport* p, void* data, size_t size, double timeout, ln_sample_inf
         return rc;
     uint64_t word;
     int64_t ts;
-    rc = ln_ring_read_copy(&p->c.ring, &p->cur, timeout, p->spin_us, data, &word, &ts);
-    if (rc == LN_ETIMEOUT)
-        rc = ln_set_error(p->c.clnt, LN_ETIMEOUT, "no sample on topic '%s' within %g s",
-                          p->c.topic, timeout);
+    rc = read_result(p, ln_ring_read_copy(&p->c.ring, &p->cur, timeout, p->spin_us, data,
+                                          &word, &ts), timeout);
     if (rc != LN_OK)
         return on_client(&p->c, rc);
     fill_info(p, word, ts, info);

@@ -51,6 +51,27 @@ class ControlError(Exception):
         self.code = code
 
 
+
+CONTROL_WAIT = 60.0  # seconds a worker thread waits for the loop to answer a CONTROL command
+
+
+def loop_control(control: Any, loop: asyncio.AbstractEventLoop,
+                 error: type[Exception]) -> Callable[..., dict[str, Any]]:
+    """control(op, **fields) for a worker thread (the web UI's, the console's introspection):
+    Control.handle run on `loop`; a refusal or no answer in time raises `error`."""
+
+    def call(op: str, **fields: Any) -> dict[str, Any]:
+        future = asyncio.run_coroutine_threadsafe(control.handle({"op": op, **fields}), loop)
+        try:
+            return future.result(CONTROL_WAIT)
+        except ControlError as exc:
+            raise error(str(exc)) from None
+        except TimeoutError:
+            future.cancel()
+            raise error(f"no answer to {op} from the manager in time") from None
+
+    return call
+
 class Control:
     def __init__(self, core: Core, scheduler: Scheduler | None,
                  reload: Callable[[], Awaitable[dict[str, Any]]] | None = None,

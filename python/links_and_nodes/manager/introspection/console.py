@@ -12,12 +12,9 @@ import threading
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from ..frontends.control import Control, ControlError
+from ..frontends.control import Control, ControlError, loop_control
 from .args import UsageError, parse
 from .commands import FOLLOWING, CommandError, Context, run
-
-CONTROL_WAIT = 60.0  # seconds a worker waits for the loop to answer a CONTROL command
-
 
 class _Console(Protocol):
     control: Control
@@ -39,6 +36,7 @@ class Watch:
         self.lock = threading.Lock()
         self.stop_event = threading.Event()
         self.done = asyncio.Event()
+        self._control = loop_control(console.control, loop, CommandError)
         address = getattr(console.control, "manager_address", None) or ""
         self.context = Context(self.control, address, self.say, self.stop_event,
                                client_prefix="ln_console")
@@ -49,15 +47,7 @@ class Watch:
                 self.console.say(text)
 
     def control(self, op: str, **fields: Any) -> dict[str, Any]:
-        future = asyncio.run_coroutine_threadsafe(
-            self.console.control.handle({"op": op, **fields}), self.loop)
-        try:
-            return future.result(CONTROL_WAIT)
-        except ControlError as exc:
-            raise CommandError(str(exc)) from None
-        except TimeoutError:
-            future.cancel()
-            raise CommandError(f"no answer to {op} from the manager in time") from None
+        return self._control(op, **fields)
 
     def stop(self) -> None:
         with self.lock:  # after this, nothing more of it is printed

@@ -17,7 +17,7 @@ from typing import Any, Protocol
 
 from ... import _libln
 from . import protocol as p
-from .model import Client, Port, PortKind, PortRequest, Registry, RequestError, Topic
+from .model import Client, Port, PortKind, PortPlan, PortRequest, Registry, RequestError, Topic
 from .rings import LocalRings, Rings
 from .runtime import purge_service_sockets, remove_service_socket
 from .segments import AdoptedRing, Segments
@@ -436,18 +436,24 @@ class Core:
         except RequestError:
             await self._drop_unused_rings(topic)
             raise
-        port = self.registry.add_port(plan, topic)
-        try:
-            await self._set_counts(topic)
-        except RequestError:
-            await self._close_port(port)
-            raise
+        port = await self._add_port(plan, topic)
         segment = rings.current(topic.id)
         log.info("%s: %s %r -> port %d, %s%s%s", session.label, kind.value, topic.name, port.id,
                  segment, "" if port.reader_index is None else f" reader {port.reader_index}",
                  _transport_note(port.flags))
         reader = p.NO_READER if port.reader_index is None else port.reader_index
         return p.PortOk(msg.request_id, port.id, segment, reader)
+
+    async def _add_port(self, plan: PortPlan, topic: Topic) -> Port:
+        """The planned port in the registry and the ring's counts updated; undone if the
+        counts cannot be set."""
+        port = self.registry.add_port(plan, topic)
+        try:
+            await self._set_counts(topic)
+        except RequestError:
+            await self._close_port(port)
+            raise
+        return port
 
     async def _reclaim_port(self, session: Session, msg: p.ReclaimPort) -> p.PortOk:
         """A reconnecting client's port on a ring it has mapped: take it back as it is."""
@@ -477,12 +483,7 @@ class Core:
         if plan.reader_index is not None and plan.reserve_reader:
             await rings.reserve_reader(topic.id, plan.reader_index, client.pid,
                                        request.buffers)
-        port = self.registry.add_port(plan, topic)
-        try:
-            await self._set_counts(topic)
-        except RequestError:
-            await self._close_port(port)
-            raise
+        port = await self._add_port(plan, topic)
         segment = rings.current(topic.id)
         log.info("%s: took back %s %r -> port %d, %s%s", session.label, kind.value,
                  topic.name, port.id, segment,

@@ -9,7 +9,8 @@ import asyncio
 from typing import TYPE_CHECKING, Any
 
 from .fields import numeric_fields
-from .worker import in_thread, loop_control
+from ..control import loop_control
+from .worker import in_thread
 
 if TYPE_CHECKING:
     from ..control import Control

@@ -169,7 +169,7 @@ class Subscriptions:
         if not address:
             raise _error("this manager has no address for its own clients")
         loop = asyncio.get_running_loop()
-        from .worker import loop_control
+        from ..control import loop_control
 
         stop = threading.Event()
         ctx = Context(loop_control(self.control, loop, CommandError), address,
