@@ -2,8 +2,11 @@
 64 B and 1 MiB samples between lab hosts a and b (network namespaces on a bridge,
 tests/python/netlab.py), for
 
-    bridge   ln topics at site a -> ln_zenoh (a) -> Zenoh TCP -> ln_zenoh (b) -> ln topics at b
-    zenoh    plain Zenoh pub/sub between two Python processes on a and b (the floor)
+    bridge     ln topics at site a -> ln_zenoh (a) -> Zenoh TCP -> ln_zenoh (b) -> ln topics at b,
+               topic samples through the bridges' native core (--native on)
+    bridge_py  the same with the samples through Python (--native off): the bridge before
+               its native core, measured in the same run
+    zenoh      plain Zenoh pub/sub between two Python processes on a and b (the floor)
     daemons  the same ln programs with one manager, the ln_daemons forwarding over UDP
 
 All measuring programs are Python (zb_bench_peer.py), so the three differ only in the path.
@@ -44,6 +47,10 @@ GOAL = 1.3
 SITE_PORT = 54500  # the bridge case's managers (one per host)
 ZENOH_PORT = 7447
 PLAIN_PORT = 7450
+SYSTEMS = ("zenoh", "bridge", "bridge_py", "daemons")
+# the two bridge pairs: topic-name prefix, key prefix of site a's bridge, Zenoh port, --native
+PAIRS = {"bridge": ("b", "ln/a", "ln/b", ZENOH_PORT, "on"),
+         "bridge_py": ("p", "ln/pa", "ln/pb", ZENOH_PORT + 1, "off")}
 TIMEOUT = 600.0
 
 
@@ -74,7 +81,8 @@ class Bench:
         self.a, self.b = self.lab.a, self.lab.b
         self.scale = 10 if quick else 1
         self.procs: list[subprocess.Popen[Any]] = []
-        self._bridges_up = False
+        self._managers_up = False
+        self._pairs_up: set[str] = set()
 
     def close(self) -> None:
         for proc in self.procs:
@@ -106,34 +114,40 @@ class Bench:
         return json_line(proc.log_path.read_text(errors="replace"), what)  # type: ignore
 
     # ---- the bridge ----------------------------------------------------------------------------
-    def bridges(self) -> None:
-        if self._bridges_up:
+    def bridges(self, system: str) -> None:
+        """The site managers (once) and the bridge pair of `system`."""
+        if not self._managers_up:
+            for host, name in ((self.a, "a"), (self.b, "b")):
+                mgr = self.spawn(host, [sys.executable, "-m", "links_and_nodes.manager",
+                                        "--port", str(SITE_PORT), "--instance",
+                                        f"zbench{name}{uuid.uuid4().hex[:6]}", "--no-console",
+                                        "--log-level", "warning"], f"site-{name}.manager.log")
+                wait_line(mgr.log_path, "listening on", mgr)  # type: ignore[attr-defined]
+            self._managers_up = True
+        if system in self._pairs_up:
             return
-        for host, name in ((self.a, "a"), (self.b, "b")):
-            mgr = self.spawn(host, [sys.executable, "-m", "links_and_nodes.manager", "--port",
-                                    str(SITE_PORT), "--instance",
-                                    f"zbench{name}{uuid.uuid4().hex[:6]}", "--no-console",
-                                    "--log-level", "warning"], f"site-{name}.manager.log")
-            wait_line(mgr.log_path, "listening on", mgr)  # type: ignore[attr-defined]
+        tag, prefix_a, prefix_b, port, native = PAIRS[system]
         manager = f"127.0.0.1:{SITE_PORT}"
-        names = [f"b{size}" for size in SIZES]
+        names = [f"{tag}{size}" for size in SIZES]
         # queued depth of the data topics: 1024 samples of 64 B, 32 of 1 MiB (ring memory)
-        data = {f"b{size}": f"b{size}.data,queued={1024 if size == 64 else 32}"
+        data = {f"{tag}{size}": f"{tag}{size}.data,queued={1024 if size == 64 else 32}"
                 for size in SIZES}
         out_a = [x for n in names for x in ("--out", f"{n}.ping", "--out", data[n])]
         in_a = [x for n in names for x in ("--in", f"{n}.pong")]
         out_b = [x for n in names for x in ("--out", f"{n}.pong")]
         in_b = [x for n in names for x in ("--in", f"{n}.ping", "--in", data[n])]
-        cli = [sys.executable, "-m", "links_and_nodes.zenoh_bridge.cli", "--poll", "0.2"]
-        bridge_a = self.spawn(self.a, [*cli, "--prefix", "ln/a", "--remote", "ln/b", "--listen",
-                                       f"tcp/{self.a.address}:{ZENOH_PORT}", *out_a, *in_a],
-                              "bridge-a.log", manager)
-        bridge_b = self.spawn(self.b, [*cli, "--prefix", "ln/b", "--remote", "ln/a", "--connect",
-                                       f"tcp/{self.a.address}:{ZENOH_PORT}", *out_b, *in_b],
-                              "bridge-b.log", manager)
+        cli = [sys.executable, "-m", "links_and_nodes.zenoh_bridge.cli", "--poll", "0.2",
+               "--native", native]
+        endpoint = f"tcp/{self.a.address}:{port}"
+        bridge_a = self.spawn(self.a, [*cli, "--prefix", prefix_a, "--remote", prefix_b,
+                                       "--listen", endpoint, *out_a, *in_a],
+                              f"{system}-a.log", manager)
+        bridge_b = self.spawn(self.b, [*cli, "--prefix", prefix_b, "--remote", prefix_a,
+                                       "--connect", endpoint, *out_b, *in_b],
+                              f"{system}-b.log", manager)
         for proc in (bridge_a, bridge_b):
             wait_line(proc.log_path, "remote bridge", proc)  # type: ignore[attr-defined]
-        self._bridges_up = True
+        self._pairs_up.add(system)
 
     # ---- cases ---------------------------------------------------------------------------------
     def latency(self, size: int, system: str) -> dict[str, Any]:
@@ -156,12 +170,13 @@ class Bench:
             result = self.finish(ping, system)
             pong.terminate()
             return result
-        self.bridges()
+        self.bridges(system)
         manager = f"127.0.0.1:{SITE_PORT}"
-        pong = self.peer(self.b, ["ln-pong", str(size), "--name", f"b{size}"],
-                         f"bpong{size}.log", manager)
+        name = f"{PAIRS[system][0]}{size}"
+        pong = self.peer(self.b, ["ln-pong", str(size), "--name", name],
+                         f"{name}pong.log", manager)
         wait_line(pong.log_path, "ready", pong)  # type: ignore[attr-defined]
-        ping = self.peer(self.a, ["ln-ping", *tail, "--name", f"b{size}"], f"bping{size}.log",
+        ping = self.peer(self.a, ["ln-ping", *tail, "--name", name], f"{name}ping.log",
                          manager)
         result = self.finish(ping, system)
         pong.terminate()
@@ -184,13 +199,14 @@ class Bench:
             self.peer(self.a, ["z-source", str(size), count, "--connect", endpoint,
                                "--name", f"z{size}"], f"zsource{size}.log")
             return self.finish(sink, system)
-        self.bridges()
+        self.bridges(system)
         manager = f"127.0.0.1:{SITE_PORT}"
-        sink = self.peer(self.b, ["ln-sink", str(size), count, "--name", f"b{size}"],
-                         f"bsink{size}.log", manager)
+        name = f"{PAIRS[system][0]}{size}"
+        sink = self.peer(self.b, ["ln-sink", str(size), count, "--name", name],
+                         f"{name}sink.log", manager)
         wait_line(sink.log_path, "ready", sink)  # type: ignore[attr-defined]
-        self.peer(self.a, ["ln-source", str(size), count, "--wait", "--name", f"b{size}"],
-                  f"bsource{size}.log", manager)
+        self.peer(self.a, ["ln-source", str(size), count, "--wait", "--name", name],
+                  f"{name}source.log", manager)
         return self.finish(sink, system)
 
     @staticmethod
@@ -201,30 +217,31 @@ class Bench:
 
 
 def table(results: dict[str, Any]) -> list[str]:
-    lines = ["", f"{'case':<28}{'zenoh':>14}{'bridge':>14}{'daemons':>14}{'bridge/zenoh':>14}"]
+    lines = ["", f"{'case':<28}" + "".join(f"{s:>12}" for s in SYSTEMS)
+             + f"{'bridge/zenoh':>14}"]
     verdicts = []
     for size in SIZES:
         label = "64 B" if size == 64 else "1 MiB"
         lat = results["latency"][str(size)]
         for q in ("p50_us", "p99_us"):
-            vals = [lat.get(s, {}).get(q) for s in ("zenoh", "bridge", "daemons")]
+            vals = [lat.get(s, {}).get(q) for s in SYSTEMS]
             ratio = vals[1] / vals[0] if vals[0] and vals[1] else None
             lines.append(f"{label + ' one-way ' + q[:3] + ' (µs)':<28}"
-                         + "".join(f"{v:>14.1f}" if v else f"{'-':>14}" for v in vals)
+                         + "".join(f"{v:>12.1f}" if v else f"{'-':>12}" for v in vals)
                          + (f"{ratio:>13.2f}x" if ratio else f"{'-':>14}"))
             if q == "p50_us" and ratio:
                 verdicts.append((f"{label} p50 latency bridge/zenoh {ratio:.2f}x <= {GOAL}x",
                                  ratio <= GOAL))
         thr = results["throughput"][str(size)]
-        vals = [thr.get(s, {}).get("msgs_per_s") for s in ("zenoh", "bridge", "daemons")]
-        got = [thr.get(s, {}).get("received") for s in ("zenoh", "bridge", "daemons")]
+        vals = [thr.get(s, {}).get("msgs_per_s") for s in SYSTEMS]
+        got = [thr.get(s, {}).get("received") for s in SYSTEMS]
         sent = thr.get("zenoh", {}).get("sent")
         ratio = vals[0] / vals[1] if vals[0] and vals[1] else None
-        lines.append(f"{label + ' msgs/s':<28}" + "".join(f"{v:>14.0f}" if v else f"{'-':>14}"
+        lines.append(f"{label + ' msgs/s':<28}" + "".join(f"{v:>12.0f}" if v else f"{'-':>12}"
                                                           for v in vals)
                      + (f"{1 / ratio:>13.2f}x" if ratio else f"{'-':>14}"))
         lines.append(f"{label + ' received of ' + str(sent):<28}"
-                     + "".join(f"{g:>14}" if g is not None else f"{'-':>14}" for g in got))
+                     + "".join(f"{g:>12}" if g is not None else f"{'-':>12}" for g in got))
         if ratio:
             verdicts.append((f"{label} throughput zenoh/bridge {ratio:.2f}x <= {GOAL}x",
                              ratio <= GOAL))
@@ -253,7 +270,7 @@ def main() -> int:
             for size in SIZES:
                 for kind in ("latency", "throughput"):
                     slot = results[kind].setdefault(str(size), {})
-                    for system in ("zenoh", "bridge", "daemons"):
+                    for system in SYSTEMS:
                         log(f"{kind} {size} B {system} ...")
                         try:
                             slot[system] = getattr(bench, kind)(size, system)

@@ -39,6 +39,7 @@ class Bridge:
         self.stats = Stats()
         self.prefix = config.prefix or ""
         self.session: Any = None
+        self.core: Any = None  # native.Core: the session topic samples go through, or None
         self.client: Any = None
         self.manager: Any = None
         self.md_server: Any = None
@@ -62,6 +63,7 @@ class Bridge:
         import links_and_nodes as ln
         from links_and_nodes.manager.frontends.scripting import connect
 
+        native = self._wants_core()
         self.manager = connect(self.address)
         instance = self.manager.instance
         if not self.prefix:
@@ -70,9 +72,10 @@ class Bridge:
                 raise ValueError(f"default prefix {self.prefix!r} does not work ({why}): "
                                  "give --prefix")
         self.client = ln.client(self.config.name, self.address)
-        self.session = open_session(self.config, self.say, self.stop)
-        if self.session is None:
+        opened = open_session(self.config, self.say, self.stop, native)
+        if opened is None:
             return False
+        self.session, self.core = opened
         self.mds = MdResolver(self.session)
         self.md_server = MdServer(self.session, self.prefix)
         liveliness = self.session.liveliness()
@@ -93,8 +96,29 @@ class Bridge:
         self._closers.append(liveliness.declare_token(live_key(self.prefix, "bridge")))
         endpoints = ", ".join([f"listening on {e}" for e in self.config.listen]
                               + [f"connecting to {e}" for e in self.config.connect])
+        zid = self.core.zid() if self.core is not None else self.session.zid()
+        path = "native core" if self.core is not None else "Python"
         self.say(f"bridge {self.prefix} up: instance '{instance}', Zenoh {self.config.mode} "
-                 f"{self.session.zid()}{', ' + endpoints if endpoints else ''}")
+                 f"{zid}{', ' + endpoints if endpoints else ''}; topic samples through the "
+                 f"{path}")
+        return True
+
+    def _wants_core(self) -> bool:
+        """Whether topic samples go through the native core (native.py): `native` on needs
+        it, auto takes it if it loads and says so if not."""
+        if self.config.native == "off":
+            return False
+        from .native import CoreUnavailable, library
+
+        try:
+            library()
+        except CoreUnavailable as exc:
+            if self.config.native == "on":
+                raise RuntimeError(f"native on, but the native core cannot be loaded: {exc}; "
+                                   "build it with `scons` (needs cargo)") from None
+            self.say("the native core is not built: topic samples go through Python (slower; "
+                     "`scons` builds it when cargo is installed)")
+            return False
         return True
 
     def close(self) -> None:
@@ -116,6 +140,8 @@ class Bridge:
             self.md_server.close()
         if self.session is not None:
             self.session.close()
+        if self.core is not None:
+            self.core.close()
         if self.client is not None:
             self.client.close()
         if self.manager is not None:

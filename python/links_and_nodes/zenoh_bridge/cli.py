@@ -4,6 +4,7 @@
              [--listen EP]... [--connect EP]... [--zenoh-config FILE] [--remote PREFIX]
              [--out SPEC]... [--in SPEC]... [--service-out SPEC]... [--service-in SPEC]...
              [--ros2 [--ros2-domain N]] [--stats-file PATH] [--stats-interval S] [-v]
+             [--native auto|on|off]
 
 SPEC: `PATTERN[,queued[=N]][,latest][,rate=HZ][,remote=PREFIX]` for topics,
 `PATTERN[,remote=PREFIX][,timeout=S]` for services.  SIGINT/SIGTERM end it, SIGUSR1 prints the
@@ -64,6 +65,9 @@ def parser() -> argparse.ArgumentParser:
                     help=f"print statistics every S seconds (-v: {VERBOSE_STATS_INTERVAL:g})")
     ap.add_argument("--poll", type=float, metavar="S",
                     help="look for new topics and services every S seconds (default 1)")
+    ap.add_argument("--native", choices=("auto", "on", "off"),
+                    help="topic samples through the native core: auto (default: if it is "
+                    "built), on (an error if not), off (through Python)")
     ap.add_argument("-v", "--verbose", action="store_true",
                     help="print statistics periodically")
     return ap
@@ -72,7 +76,7 @@ def parser() -> argparse.ArgumentParser:
 def build_config(args: argparse.Namespace) -> BridgeConfig:
     config = load_file(args.config) if args.config else BridgeConfig()
     for key in ("prefix", "mode", "zenoh_config", "remote", "ros2", "ros2_domain", "name",
-                "manager", "stats_file", "stats_interval", "poll"):
+                "manager", "stats_file", "stats_interval", "poll", "native"):
         value = getattr(args, key)
         if value is not None:
             setattr(config, key, value)

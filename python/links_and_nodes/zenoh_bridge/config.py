@@ -18,6 +18,7 @@ MAX_BUFFERS = 1024  # libln's limit per port
 DEFAULT_BUFFERS = 64
 DIRECTIONS = ("out", "in")
 MODES = ("peer", "client")
+NATIVE = ("auto", "on", "off")
 
 
 class ConfigError(ValueError):
@@ -71,6 +72,7 @@ class BridgeConfig:
     stats_interval: float = 0.0  # seconds between statistics lines, 0: on SIGUSR1 and exit
     stats_file: str | None = None
     poll: float = 1.0  # seconds between looks at the manager's topic and service lists
+    native: str = "auto"  # the native core for topic samples: auto (if found), on, off
 
     def topic_rule(self, name: str, direction: str) -> TopicRule | None:
         for rule in self.topics:
@@ -86,6 +88,8 @@ class BridgeConfig:
 
     def check(self) -> None:
         """ConfigError for settings that cannot work together."""
+        if self.native not in NATIVE:
+            raise ConfigError(f"native must be one of {', '.join(NATIVE)}, not {self.native!r}")
         if self.mode not in MODES:
             raise ConfigError(f"mode must be one of {', '.join(MODES)}, not {self.mode!r}")
         if self.mode == "client" and not self.connect and not self.zenoh_config:

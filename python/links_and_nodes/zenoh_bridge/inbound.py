@@ -9,6 +9,11 @@ serves (mds.py).  A layout hash that differs from the local md, or a local topic
 with another layout, refuses the topic (one log line naming both hashes); the other topics go
 on.  Samples without a valid attachment, or whose size is not the md's, are dropped and
 counted, never published.
+
+With the native core (native.py) the rule's subscription is the core's: it hands samples of
+keys it does not know to `InRule._on_key` here, and once a topic is set up and its first
+sample after that was published inline (nothing of it left queued here), the topic is handed
+over with `ready` and the core checks and publishes its samples itself, in order.
 """
 
 from __future__ import annotations
@@ -27,14 +32,23 @@ from .wire import Attachment, AttachmentError, decode_attachment, matches, name_
 MD_RETRY = 2.0  # seconds before an md that could not be had is asked for again
 COMPLAIN_EVERY = 5.0  # seconds between log lines about the same kind of bad sample
 MAX_TOPICS = 1024  # topics one inbound rule takes; samples of further names are counted only
+# Seconds a write of a queued topic waits for a subscriber here that has no free buffer (the
+# topic is published with wait_for_subscribers): meanwhile the sender is held back.  After a
+# write that timed out the topic is congested and writes do not wait (the sample is dropped,
+# counted as `dropped`) until one succeeds, so a subscriber that stopped reading costs one
+# pause, not one per sample.  The native core does the same (ln_zenoh_core/src/inbound.rs).
+HOLD_S = 0.05
 
 
 class InTopic:
-    def __init__(self, bridge: Any, name: str, rule: TopicRule) -> None:
+    def __init__(self, bridge: Any, name: str, rule: TopicRule, native: Any = None) -> None:
         self.bridge = bridge
         self.name = name
         self.rule = rule
         self.remote = rule.remote or ""
+        self.native = native  # the rule's native.InRule, or None
+        self.handed_over = False
+        self._congested = False
         self.stats = bridge.stats.topic(name, "in")
         self.stats.state = "waiting for a sample"
         self.queue: deque[tuple[bytes, bytes | None]] = deque(maxlen=rule.depth)
@@ -63,6 +77,8 @@ class InTopic:
                     inline = not self.queue
                 if inline:
                     self._handle_safely(payload, attachment)
+                    if self.native is not None and self.port is not None:
+                        self._hand_over()
                     return
             finally:
                 self._handling.release()
@@ -71,6 +87,25 @@ class InTopic:
                 self.stats.superseded += 1
             self.queue.append((payload, attachment))
             self._cond.notify()
+
+    def _hand_over(self) -> None:
+        """Give the topic to the core; called in Zenoh's thread right after a sample was
+        published inline, so none is waiting here and the order is kept."""
+        from .native import Counters, CoreError
+
+        if self.handed_over or self.md is None:
+            return
+        counters = Counters(last_seq=self.stats.last_seq)
+        try:
+            self.native.ready(topic_key(self.remote, self.name), self.port, self.md[0],
+                              self.md[1], self.rule.queued, self.rule.rate, counters,
+                              f"topic '{self.name}' from {self.remote}")
+        except CoreError as exc:
+            self.native = None  # stays here, in Python
+            self.bridge.say(f"topic '{self.name}': stays in Python: {exc}")
+            return
+        self.bridge.stats.add_native(self.name, "in", counters)
+        self.handed_over = True
 
     def _run(self) -> None:
         while True:
@@ -135,7 +170,22 @@ class InTopic:
                 return
             self._next_ok = now + self._interval
         ctypes.memmove(self._address, payload, self._size)
-        self.port.write()
+        if self.rule.queued:
+            from .. import LnError
+
+            try:
+                self.port.write(timeout=0.0 if self._congested else HOLD_S)
+            except LnError as exc:
+                if type(exc).__name__ != "LnTimeoutError":
+                    raise
+                self._congested = True
+                stats.dropped += 1
+                self._complain("dropped", "a subscriber here has no free buffer: samples are "
+                               "dropped (counted as dropped) until it reads again")
+                return
+            self._congested = False
+        else:
+            self.port.write()
         stats.published += 1
         stats.bytes += self._size
 
@@ -161,7 +211,8 @@ class InTopic:
 
         self.bridge.on_inbound_published(self.name)  # never sent back out, also not meanwhile
         try:
-            port = self.bridge.client.publish(self.name, att.md_name)
+            port = self.bridge.client.publish(self.name, att.md_name,
+                                              wait_for_subscribers=self.rule.queued)
         except LnError as exc:
             if type(exc).__name__ == "LnLayoutError":
                 return self._refuse(att, f"the topic here has another layout than remote "
@@ -194,6 +245,8 @@ class InTopic:
             self._stop = True
             self._cond.notify()
         self._thread.join()
+        if self.handed_over and self.native is not None:
+            self.native.forget(topic_key(self.remote, self.name))
         if self.port is not None:
             self.port.close()
 
@@ -208,10 +261,20 @@ class InRule:
         self.topics: dict[str, InTopic] = {}
         self._lock = threading.Lock()
         self.key = topic_key(self.remote, pattern_key(rule.pattern))
-        self._subscriber = bridge.session.declare_subscriber(self.key, self._on_sample)
+        self._subscriber: Any = None
+        self.native: Any = None
+        if bridge.core is not None:
+            self.native = bridge.core.in_rule(self.key, self._on_key)
+        else:
+            self._subscriber = bridge.session.declare_subscriber(self.key, self._on_sample)
 
     def _on_sample(self, sample: Any) -> None:
-        name = name_in(str(sample.key_expr), self.remote, "topic")
+        attachment = sample.attachment
+        self._on_key(str(sample.key_expr), sample.payload.to_bytes(),
+                     attachment.to_bytes() if attachment is not None else None)
+
+    def _on_key(self, key: str, payload: bytes, attachment: bytes | None) -> None:
+        name = name_in(key, self.remote, "topic")
         if (name is None or not matches(name, self.rule.pattern)
                 or self.bridge.config.topic_rule(name, "in") is not self.rule):
             return
@@ -223,14 +286,16 @@ class InRule:
                     if len(self.topics) >= MAX_TOPICS:  # a flood of keys costs no threads
                         self.bridge.stats.unknown_keys += 1
                         return
-                    topic = self.topics[name] = InTopic(self.bridge, name, self.rule)
-        attachment = sample.attachment
-        topic.offer(sample.payload.to_bytes(),
-                    attachment.to_bytes() if attachment is not None else None)
+                    topic = self.topics[name] = InTopic(self.bridge, name, self.rule,
+                                                        self.native)
+        topic.offer(payload, attachment)
 
     def close(self) -> None:
+        if self.native is not None:
+            self.native.close()  # no sample reaches a topic or its port after this
         try:
-            self._subscriber.undeclare()
+            if self._subscriber is not None:
+                self._subscriber.undeclare()
         except Exception:  # noqa: BLE001 - the session may be closed already
             pass
         with self._lock:

@@ -5,6 +5,10 @@ one) and puts it on `P/topic/<name>` with the attachment (wire.py), but only whi
 subscriber matches (Zenoh's matching listener): samples read while none does are counted as
 `unmatched`, samples over the topic's rate limit as `rate_limited`.  With --ros2 each sample
 also goes, as JSON, under the topic's ROS 2 key while a subscriber matches that one.
+
+With the native core (native.py) and without ROS 2, the core declares the publisher and reads
+the subscription in its own thread, with the same rules and counters; this object keeps the
+liveliness token and the log lines.
 """
 
 from __future__ import annotations
@@ -42,8 +46,12 @@ class OutTopic:
         self._stop = threading.Event()
         self._closers: list[Any] = []
         self.port: Any = None
+        self.native: Any = None
+        self.key = topic_key(bridge.prefix, name)
+        if bridge.core is not None and not bridge.config.ros2:
+            self._open_native(cls.LAYOUT_HASH)
+            return
         try:
-            self.key = topic_key(bridge.prefix, name)
             congestion = (zenoh.CongestionControl.BLOCK if rule.queued
                           else zenoh.CongestionControl.DROP)
             self.publisher = bridge.session.declare_publisher(
@@ -71,6 +79,28 @@ class OutTopic:
         self._set_state()
         self._thread = threading.Thread(target=self._run, daemon=True, name=f"out {name}")
         self._thread.start()
+
+    def _open_native(self, layout_hash: int) -> None:
+        from .native import Counters
+
+        bridge, rule = self.bridge, self.rule
+        self.ros2 = None
+        self._thread = None
+        try:
+            self._closers.append(bridge.session.liveliness().declare_token(
+                live_key(bridge.prefix, "topic", self.name)))
+            self.port = bridge.client.subscribe(self.name, self.md_name, buffers=rule.depth)
+            counters = Counters()
+            self.native = bridge.core.out_topic(
+                key=self.key, port=self.port, md_name=self.md_name, layout_hash=layout_hash,
+                queued=rule.queued, rate=rule.rate, counters=counters,
+                label=f"topic '{self.name}'", on_match=self._on_matching)
+            bridge.stats.add_native(self.name, "out", counters)
+        except BaseException:
+            self.close()
+            raise
+        self.matching = self.native.matching
+        self._set_state()
 
     def _set_state(self) -> None:
         remote = self.matching or (self.ros2 is not None and self.ros2.matching)
@@ -139,6 +169,8 @@ class OutTopic:
         thread = getattr(self, "_thread", None)
         if thread is not None:
             thread.join()
+        if self.native is not None:
+            self.native.close()  # before the port closes: the core reads it until then
         for thing in reversed(self._closers):
             try:
                 thing.close() if isinstance(thing, Ros2Out) else thing.undeclare()

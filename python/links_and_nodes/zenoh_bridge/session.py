@@ -3,7 +3,8 @@
 The settings go into a Zenoh config: the file given with --zenoh-config (JSON5: TLS, access
 control, ... docs/zenoh.md "Security") or Zenoh's defaults, then mode, listen and connect
 endpoints, no multicast scouting (endpoints are explicit) and a connect retry that keeps
-trying while the other side is away."""
+trying while the other side is away.  With the native core (native.py) that configuration is
+the core's session, and the Python session is a client of it."""
 
 from __future__ import annotations
 
@@ -45,15 +46,26 @@ def zenoh_config(config: BridgeConfig) -> Any:
     return zc
 
 
-def open_session(config: BridgeConfig, say: Any, stop: Any) -> Any:
-    """The session; in client mode it retries (every second, saying why) until a router
-    answers or `stop` (an Event) is set, then returns None."""
+def open_session(config: BridgeConfig, say: Any, stop: Any,
+                 native: bool) -> tuple[Any, Any] | None:
+    """The Python session and, if `native`, the core (native.Core) it is a client of; in
+    client mode it retries (every second, saying why) until a router answers or `stop` (an
+    Event) is set, then returns None."""
+    from .native import Core, CoreError
+
     zenoh = import_zenoh()
     zenoh.try_init_log_from_env()  # RUST_LOG=zenoh=info (or debug) shows Zenoh's own log
     while True:
+        core = None
         try:
-            return zenoh.open(zenoh_config(config))
-        except zenoh.ZError as exc:
+            zc = zenoh_config(config)
+            if native:
+                core = Core(zc, config.mode, say)
+                zc = core.client_config(zenoh_config(config))
+            return zenoh.open(zc), core
+        except (zenoh.ZError, CoreError) as exc:
+            if core is not None:
+                core.close()
             if config.mode != "client":
                 raise
             say(f"cannot open the Zenoh session (will retry): {exc}")

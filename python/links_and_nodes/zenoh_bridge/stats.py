@@ -18,7 +18,8 @@ class TopicStats:
     In: `received` from Zenoh, `published` here, `bad_attachment`, `bad_size`, `refused`
     (layout mismatch), `md_unavailable` (its md could not be had), `superseded` (a newer
     sample replaced it in the queue, or a queued topic's queue was full), `gaps` (sequence
-    numbers missing between received samples)."""
+    numbers missing between received samples), `dropped` (queued: a subscriber here had no free
+    buffer within HOLD_S, or the topic was congested: inbound.py)."""
 
     direction: str
     md_name: str = ""
@@ -39,6 +40,7 @@ class TopicStats:
     bytes: int = 0
     errors: int = 0
     last_seq: int = 0
+    dropped: int = 0
 
 
 @dataclass
@@ -57,6 +59,9 @@ class Stats:
     services: dict[str, ServiceStats] = field(default_factory=dict)
     unknown_keys: int = 0  # samples of topics past an inbound rule's limit of 1024 names
     lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
+    # counters the native core adds to (native.Counters), per topic key; shown summed with
+    # the topic's own (last_seq: the core's once it has one)
+    native: dict[str, list[Any]] = field(default_factory=dict, repr=False, compare=False)
 
     def topic(self, name: str, direction: str) -> TopicStats:
         key = f"{direction}:{name}"
@@ -65,6 +70,11 @@ class Stats:
             if stats is None:
                 stats = self.topics[key] = TopicStats(direction)
             return stats
+
+    def add_native(self, name: str, direction: str, counters: Any) -> None:
+        """Count what the native core counts in `counters` as the topic's too."""
+        with self.lock:
+            self.native.setdefault(f"{direction}:{name}", []).append(counters)
 
     def service(self, name: str, direction: str) -> ServiceStats:
         key = f"{direction}:{name}"
@@ -76,9 +86,19 @@ class Stats:
 
     def as_dict(self) -> dict[str, Any]:
         with self.lock:
-            return {"topics": {k: asdict(v) for k, v in self.topics.items()},
+            return {"topics": {k: self._merged(k, asdict(v)) for k, v in self.topics.items()},
                     "services": {k: asdict(v) for k, v in self.services.items()},
                     "unknown_keys": self.unknown_keys}
+
+    def _merged(self, key: str, topic: dict[str, Any]) -> dict[str, Any]:
+        for counters in self.native.get(key, ()):
+            for name, _ in counters._fields_:
+                value = getattr(counters, name)
+                if name == "last_seq":
+                    topic[name] = value or topic[name]
+                else:
+                    topic[name] += value
+        return topic
 
     def lines(self) -> list[str]:
         """The table: one line per topic and service."""
@@ -92,6 +112,7 @@ class Stats:
             else:
                 out.append(f"{key} [{t['state']}] received {t['received']} published "
                            f"{t['published']} gaps {t['gaps']} superseded {t['superseded']} "
+                           f"dropped {t['dropped']} "
                            f"rate_limited {t['rate_limited']} bad_attachment "
                            f"{t['bad_attachment']} bad_size {t['bad_size']} refused "
                            f"{t['refused']} md_unavailable {t['md_unavailable']}")

@@ -41,14 +41,26 @@ def require_zenoh() -> None:
         missing_test_tool("the Python package zenoh (eclipse-zenoh, requirements-dev.txt)")
 
 
+def require_native_core() -> None:
+    """ln_zenoh's native core (built by `scons` where cargo is installed: in CI always)."""
+    from links_and_nodes.zenoh_bridge.native import CoreUnavailable, library
+
+    try:
+        library()
+    except CoreUnavailable as exc:
+        missing_test_tool(f"ln_zenoh's native core (scons builds it with cargo): {exc}")
+
+
 class Site:
     """A links_and_nodes instance named `name` on lab host `host`; its bridge's prefix is
-    ln/<name>, its Zenoh endpoint (when it listens) tcp/<address>:7447."""
+    ln/<name>, its Zenoh endpoint (when it listens) tcp/<address>:7447; its bridges carry topic
+    samples through the native core if `native`, else through Python."""
 
-    def __init__(self, lab: NetLab, host: Host, name: str) -> None:
+    def __init__(self, lab: NetLab, host: Host, name: str, native: bool = False) -> None:
         self.lab = lab
         self.host = host
         self.name = name
+        self.native = native
         self.md_dirs = [MD_DIR]  # LN_MESSAGE_DEFINITION_DIRS of what runs here, first wins
         self.instance = f"zb{os.getpid()}{name}{uuid.uuid4().hex[:6]}"
         self.prefix = f"ln/{name}"
@@ -89,13 +101,17 @@ class Site:
 
     def bridge_argv(self, *args: str) -> list[str]:
         return [sys.executable, "-m", "links_and_nodes.zenoh_bridge.cli", "--prefix",
-                self.prefix, "--poll", "0.2", "--stats-file", str(self.stats_path()), *args]
+                self.prefix, "--poll", "0.2", "--stats-file", str(self.stats_path()),
+                "--native", "on" if self.native else "off", *args]
 
     def bridge(self, *args: str, ready: bool = True) -> HostProcess:
-        """ln_zenoh with `args`; returns once it says it is up."""
+        """ln_zenoh with `args`; returns once it says it is up (through the data path the site
+        is for)."""
         proc = self.popen(self.bridge_argv(*args), "ln_zenoh")
         if ready:
-            wait_log(proc, rf"bridge {re.escape(self.prefix)} up")
+            path = "native core" if self.native else "Python"
+            wait_log(proc, rf"bridge {re.escape(self.prefix)} up: .*; topic samples through "
+                     rf"the {path}$")
         return proc
 
     def peer(self, *args: str) -> HostProcess:

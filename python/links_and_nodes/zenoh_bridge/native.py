@@ -1,0 +1,307 @@
+"""The native core of ln_zenoh (ln_zenoh_core/, Rust): ctypes declarations of its C ABI and
+the objects the bridge uses when it is found (docs/zenoh.md "The native core").
+
+With the core the bridge's Zenoh session lives in it and the samples of topics never touch
+Python: `Core` opens that session from the bridge's configuration plus a Unix socket in a
+private directory, and the Python session connects to that socket as a client (Zenoh peers
+route for their clients), so services, mds, liveliness and ROS 2 go on as before.  `OutTopic`
+and `InRule` are the core's halves of outbound.py's and inbound.py's topics.
+
+The library is found as libln's are (_native.py): $LN_ZENOH_CORE (a file or a directory),
+build/release/ln_zenoh_core/ of the checkout, `links_and_nodes/` beside the libln.so.1 that was
+loaded (where `scons install` puts it), the system loader.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .. import _native
+
+SONAME = "libln_zenoh_core.so"
+ENV = "LN_ZENOH_CORE"
+ERR_SIZE = 1024
+DIR_PREFIX = "ln_zenoh."  # the socket directory: <tmp>/ln_zenoh.<pid>.<random>/session.sock
+
+c_char_p, c_double, c_int, c_size_t, c_uint64, c_void_p = (
+    ctypes.c_char_p, ctypes.c_double, ctypes.c_int, ctypes.c_size_t, ctypes.c_uint64,
+    ctypes.c_void_p)
+
+LOG_FN = ctypes.CFUNCTYPE(None, c_void_p, c_char_p)
+MATCH_FN = ctypes.CFUNCTYPE(None, c_void_p, c_int)
+SAMPLE_FN = ctypes.CFUNCTYPE(None, c_void_p, ctypes.POINTER(ctypes.c_ubyte), c_size_t,
+                             ctypes.POINTER(ctypes.c_ubyte), c_size_t,
+                             ctypes.POINTER(ctypes.c_ubyte), ctypes.c_ssize_t)
+
+# The counters the core adds to: the numbers of stats.TopicStats, in this order.
+COUNTER_FIELDS = ("read", "sent", "unmatched", "rate_limited", "overruns", "received",
+                  "published", "bad_attachment", "bad_size", "refused", "md_unavailable",
+                  "superseded", "gaps", "bytes", "errors", "last_seq", "dropped")
+
+
+class Counters(ctypes.Structure):
+    _fields_ = [(name, c_uint64) for name in COUNTER_FIELDS]
+
+
+class LnFns(ctypes.Structure):
+    """The libln functions the core calls (ln_zenoh_core/src/libln.rs)."""
+
+    _fields_ = [("read_borrow", c_void_p), ("read_release", c_void_p), ("write", c_void_p),
+                ("strerror", c_void_p), ("write_loan", c_void_p), ("write_commit", c_void_p),
+                ("write_abort", c_void_p)]
+
+
+class CoreUnavailable(RuntimeError):
+    """The core library cannot be loaded."""
+
+
+class CoreError(RuntimeError):
+    """A call of the core failed; the text says why."""
+
+
+_lib: ctypes.CDLL | None = None
+_why_not: str | None = None
+
+
+def _candidates() -> list[str]:
+    found = list(_native.candidates(SONAME, ENV, "ln_zenoh_core"))
+    if not os.environ.get(ENV):
+        try:
+            from .. import _libln
+
+            beside = _native.file_of(_libln.lib, "ln_version").parent / "links_and_nodes"
+            found.insert(len(found) - 1, str(beside / SONAME))
+        except Exception:  # noqa: BLE001 - libln itself missing: said when it is used
+            pass
+    return found
+
+
+def library() -> ctypes.CDLL:
+    """The loaded core; CoreUnavailable naming every place that was tried."""
+    global _lib, _why_not
+    if _lib is not None:
+        return _lib
+    if _why_not is not None:
+        raise CoreUnavailable(_why_not)
+    failures = []
+    for candidate in _candidates():
+        try:
+            lib = ctypes.CDLL(candidate)
+        except OSError as exc:
+            failures.append(f"{candidate}: {exc}")
+            continue
+        _declare_all(lib)
+        _lib = lib
+        return lib
+    _why_not = "; ".join(failures) or "nowhere to look"
+    raise CoreUnavailable(_why_not)
+
+
+def _declare_all(lib: ctypes.CDLL) -> None:
+    d = _native.declare
+    d(lib, "lnz_open", c_void_p, [c_char_p, ctypes.POINTER(LnFns), LOG_FN, c_void_p,
+                                  c_char_p, c_size_t])
+    d(lib, "lnz_zid", c_int, [c_void_p, c_char_p, c_size_t])
+    d(lib, "lnz_close", None, [c_void_p])
+    d(lib, "lnz_out_open", c_void_p, [c_void_p, c_char_p, c_void_p, c_size_t, c_char_p,
+                                      c_uint64, c_int, c_double, ctypes.POINTER(Counters),
+                                      c_char_p, MATCH_FN, c_void_p, c_char_p, c_size_t])
+    d(lib, "lnz_out_matching", c_int, [c_void_p])
+    d(lib, "lnz_out_close", None, [c_void_p])
+    d(lib, "lnz_in_open", c_void_p, [c_void_p, c_char_p, SAMPLE_FN, c_void_p, c_char_p,
+                                     c_size_t])
+    d(lib, "lnz_in_ready", c_int, [c_void_p, c_void_p, c_char_p, c_void_p, c_size_t, c_char_p,
+                                   c_uint64, c_int, c_double, ctypes.POINTER(Counters),
+                                   c_char_p, c_char_p, c_size_t])
+    d(lib, "lnz_in_forget", None, [c_void_p, c_char_p])
+    d(lib, "lnz_in_close", None, [c_void_p])
+
+
+def _ln_fns() -> LnFns:
+    from .. import _libln
+
+    addr = lambda name: ctypes.cast(getattr(_libln.lib, name), c_void_p).value  # noqa: E731
+    return LnFns(*(addr(f"ln_{name}") for name, _ in LnFns._fields_))
+
+
+def _err() -> ctypes.Array[ctypes.c_char]:
+    return ctypes.create_string_buffer(ERR_SIZE)
+
+
+def _text(err: ctypes.Array[ctypes.c_char]) -> str:
+    return err.value.decode("utf-8", "replace") or "unknown error"
+
+
+def remove_stale_dirs() -> None:
+    """Remove the socket directories of bridges that died without removing theirs."""
+    for path in Path(tempfile.gettempdir()).glob(f"{DIR_PREFIX}*.*"):
+        pid = path.name[len(DIR_PREFIX):].split(".", 1)[0]
+        if not pid.isdigit() or not path.is_dir() or path.stat().st_uid != os.getuid():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            shutil.rmtree(path, ignore_errors=True)
+        except PermissionError:  # alive, another user's
+            pass
+
+
+class Core:
+    """The core's Zenoh session.  `client_config(zc)` turns the Python side's configuration
+    into the one of a client of this session (peer mode), or leaves it (client mode: both
+    sessions are clients of the same routers)."""
+
+    def __init__(self, zenoh_config: Any, mode: str, say: Callable[[str], None]) -> None:
+        self.lib = library()
+        self.mode = mode
+        self._say = say
+        self._log = LOG_FN(lambda _ctx, text: say(text.decode("utf-8", "replace")))
+        self._fns = _ln_fns()
+        self._dir: str | None = None
+        self.socket: str | None = None
+        config = json.loads(str(zenoh_config))
+        if mode == "peer":
+            remove_stale_dirs()
+            # 0700: only this user connects; the pid lets a later bridge remove it if this
+            # process is killed before it can
+            self._dir = tempfile.mkdtemp(prefix=f"{DIR_PREFIX}{os.getpid()}.")
+            self.socket = os.path.join(self._dir, "session.sock")
+            listen = config.setdefault("listen", {})
+            endpoints = listen.get("endpoints") or []
+            if isinstance(endpoints, dict):  # per-mode endpoints: {"peer": [...], ...}
+                endpoints = endpoints.get("peer") or []
+            listen["endpoints"] = [*endpoints, f"unixsock-stream/{self.socket}"]
+        err = _err()
+        handle = self.lib.lnz_open(json.dumps(config).encode(), ctypes.byref(self._fns),
+                                   self._log, None, err, ERR_SIZE)
+        if not handle:
+            self._remove_dir()
+            raise CoreError(_text(err))
+        self.handle: int | None = handle
+
+    def client_config(self, zc: Any) -> Any:
+        """The Python session's configuration: a client of this session over its socket."""
+        if self.socket is None:
+            return zc
+        zc.insert_json5("mode", '"client"')
+        zc.insert_json5("connect/endpoints", json.dumps([f"unixsock-stream/{self.socket}"]))
+        zc.insert_json5("listen/endpoints", "[]")
+        zc.insert_json5("scouting/multicast/enabled", "false")
+        return zc
+
+    def zid(self) -> str:
+        out = ctypes.create_string_buffer(128)
+        self.lib.lnz_zid(self.handle, out, len(out))
+        return out.value.decode()
+
+    def out_topic(self, *, key: str, port: Any, md_name: str, layout_hash: int, queued: bool,
+                  rate: float | None, counters: Counters, label: str,
+                  on_match: Callable[[bool], None]) -> OutTopic:
+        return OutTopic(self, key, port, md_name, layout_hash, queued, rate, counters, label,
+                        on_match)
+
+    def in_rule(self, key_expr: str,
+                on_sample: Callable[[str, bytes, bytes | None], None]) -> InRule:
+        return InRule(self, key_expr, on_sample)
+
+    def close(self) -> None:
+        handle, self.handle = self.handle, None
+        if handle:
+            self.lib.lnz_close(handle)
+        self._remove_dir()
+
+    def _remove_dir(self) -> None:
+        if self._dir is not None:
+            shutil.rmtree(self._dir, ignore_errors=True)
+            self._dir = None
+
+
+class OutTopic:
+    """The core's reader of one outbound topic: it reads `port` (a subscriber; not used by
+    Python meanwhile) and puts the samples while a remote subscriber matches."""
+
+    def __init__(self, core: Core, key: str, port: Any, md_name: str, layout_hash: int,
+                 queued: bool, rate: float | None, counters: Counters, label: str,
+                 on_match: Callable[[bool], None]) -> None:
+        self.core = core
+        self.counters = counters  # kept alive while the core writes to it
+        self._match = MATCH_FN(lambda _ctx, matching: on_match(bool(matching)))
+        err = _err()
+        size = ctypes.sizeof(port.packet)
+        handle = core.lib.lnz_out_open(core.handle, key.encode(), port.handle, size,
+                                       md_name.encode(), layout_hash, int(queued),
+                                       float(rate or 0.0), ctypes.byref(counters),
+                                       label.encode(), self._match, None, err, ERR_SIZE)
+        if not handle:
+            raise CoreError(_text(err))
+        self.handle: int | None = handle
+
+    @property
+    def matching(self) -> bool:
+        return bool(self.handle) and bool(self.core.lib.lnz_out_matching(self.handle))
+
+    def close(self) -> None:
+        """Stops reading; the port may be closed once this returns."""
+        handle, self.handle = self.handle, None
+        if handle:
+            self.core.lib.lnz_out_close(handle)
+
+
+class InRule:
+    """The core's subscription of one inbound rule.  Samples of keys not handed over come to
+    `on_sample(key, payload, attachment)` in Zenoh's thread; `ready` hands a key over."""
+
+    def __init__(self, core: Core, key_expr: str,
+                 on_sample: Callable[[str, bytes, bytes | None], None]) -> None:
+        self.core = core
+        self._keep: dict[str, Counters] = {}  # counters of handed-over keys, kept alive
+
+        def deliver(_ctx: Any, key: Any, key_len: int, payload: Any, size: int, att: Any,
+                    att_len: int) -> None:
+            # An exception here is printed by ctypes (sys.unraisablehook) and goes no further.
+            on_sample(ctypes.string_at(key, key_len).decode("utf-8", "replace"),
+                      ctypes.string_at(payload, size),
+                      ctypes.string_at(att, att_len) if att_len >= 0 else None)
+
+        self._deliver = SAMPLE_FN(deliver)
+        err = _err()
+        handle = core.lib.lnz_in_open(core.handle, key_expr.encode(), self._deliver, None, err,
+                                      ERR_SIZE)
+        if not handle:
+            raise CoreError(_text(err))
+        self.handle: int | None = handle
+
+    def ready(self, key: str, port: Any, md_name: str, layout_hash: int, queued: bool,
+              rate: float | None, counters: Counters, label: str) -> None:
+        """From now on the core checks and publishes the samples of `key` on `port` (queued:
+        a publisher that waits for its subscribers, inbound.HOLD_S at most)."""
+        if not self.handle:
+            return
+        err = _err()
+        self._keep[key] = counters
+        if self.core.lib.lnz_in_ready(self.handle, self.core.handle, key.encode(), port.handle,
+                                      ctypes.sizeof(port.packet), md_name.encode(),
+                                      layout_hash, int(queued), float(rate or 0.0),
+                                      ctypes.byref(counters),
+                                      label.encode(), err, ERR_SIZE) < 0:
+            del self._keep[key]
+            raise CoreError(_text(err))
+
+    def forget(self, key: str) -> None:
+        """The core stops using the key's port and counters before this returns."""
+        if self.handle and key in self._keep:
+            self.core.lib.lnz_in_forget(self.handle, key.encode())
+            del self._keep[key]
+
+    def close(self) -> None:
+        handle, self.handle = self.handle, None
+        if handle:
+            self.core.lib.lnz_in_close(handle)
+        self._keep.clear()
