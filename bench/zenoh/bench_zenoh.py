@@ -42,7 +42,8 @@ PEER = HERE / "zb_bench_peer.py"
 MIB = 1 << 20
 SIZES = (64, MIB)
 LAT = {64: (2000, 200), MIB: (200, 20)}  # round trips, warm-up
-THR = {64: 20000, MIB: 400}  # samples of a throughput run
+THR = {64: 100000, MIB: 1000}  # samples of a throughput run: long enough for a steady state
+ROUNDS = 3  # each case runs this often, the systems in turn; the median round is reported
 GOAL = 1.3
 SITE_PORT = 54500  # the bridge case's managers (one per host)
 ZENOH_PORT = 7447
@@ -216,6 +217,13 @@ class Bench:
                 str(PEER), *args]
 
 
+def median_run(runs: list[dict[str, Any]], key: str) -> dict[str, Any]:
+    """The run whose `key` is the median of the runs (the lower middle one of an even
+    count)."""
+    ordered = sorted(runs, key=lambda r: r.get(key) or 0.0)
+    return dict(ordered[(len(ordered) - 1) // 2])
+
+
 def table(results: dict[str, Any]) -> list[str]:
     lines = ["", f"{'case':<28}" + "".join(f"{s:>12}" for s in SYSTEMS)
              + f"{'bridge/zenoh':>14}"]
@@ -266,17 +274,24 @@ def main() -> int:
     results: dict[str, Any] = {"latency": {}, "throughput": {}, "errors": []}
     with tempfile.TemporaryDirectory(prefix="bench_zenoh.") as tmp, NetLab(Path(tmp)) as nl:
         bench = Bench(nl, args.quick)
+        rounds = 1 if args.quick else ROUNDS
         try:
             for size in SIZES:
                 for kind in ("latency", "throughput"):
-                    slot = results[kind].setdefault(str(size), {})
-                    for system in SYSTEMS:
-                        log(f"{kind} {size} B {system} ...")
-                        try:
-                            slot[system] = getattr(bench, kind)(size, system)
-                        except CaseError as exc:
-                            results["errors"].append(str(exc))
-                            log(f"  failed: {exc}")
+                    runs: dict[str, list[dict[str, Any]]] = {s: [] for s in SYSTEMS}
+                    for r in range(rounds):
+                        # the systems in turn, starting with another one each round
+                        for system in SYSTEMS[r % len(SYSTEMS):] + SYSTEMS[:r % len(SYSTEMS)]:
+                            log(f"{kind} {size} B {system} (round {r + 1}/{rounds}) ...")
+                            try:
+                                runs[system].append(getattr(bench, kind)(size, system))
+                            except CaseError as exc:
+                                results["errors"].append(str(exc))
+                                log(f"  failed: {exc}")
+                    key = "p50_us" if kind == "latency" else "msgs_per_s"
+                    results[kind][str(size)] = {
+                        system: {**median_run(got, key), "rounds": got}
+                        for system, got in runs.items() if got}
         finally:
             bench.close()
     results.update(machine=platform.machine(), cpus=os.cpu_count(), quick=args.quick,

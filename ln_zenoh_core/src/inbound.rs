@@ -112,6 +112,9 @@ fn on_sample_of(state: &RuleState, sample: &Sample) {
             return;
         }
     }
+    if state.closed.load(SeqCst) {
+        return;
+    }
     let payload = sample.payload().to_bytes();
     let (att_ptr, att_len) = match &att {
         Some(a) => (a.as_ptr(), a.len() as isize),

@@ -97,10 +97,9 @@ class Bridge:
         endpoints = ", ".join([f"listening on {e}" for e in self.config.listen]
                               + [f"connecting to {e}" for e in self.config.connect])
         zid = self.core.zid() if self.core is not None else self.session.zid()
-        path = "native core" if self.core is not None else "Python"
+        path = "the native core" if self.core is not None else "Python"
         self.say(f"bridge {self.prefix} up: instance '{instance}', Zenoh {self.config.mode} "
-                 f"{zid}{', ' + endpoints if endpoints else ''}; topic samples through the "
-                 f"{path}")
+                 f"{zid}{', ' + endpoints if endpoints else ''}; topic samples through {path}")
         return True
 
     def _wants_core(self) -> bool:

@@ -260,6 +260,7 @@ class InRule:
         self.remote = rule.remote or ""
         self.topics: dict[str, InTopic] = {}
         self._lock = threading.Lock()
+        self._closed = False
         self.key = topic_key(self.remote, pattern_key(rule.pattern))
         self._subscriber: Any = None
         self.native: Any = None
@@ -274,6 +275,8 @@ class InRule:
                      attachment.to_bytes() if attachment is not None else None)
 
     def _on_key(self, key: str, payload: bytes, attachment: bytes | None) -> None:
+        if self._closed:  # a sample Zenoh delivered while the rule closed
+            return
         name = name_in(key, self.remote, "topic")
         if (name is None or not matches(name, self.rule.pattern)
                 or self.bridge.config.topic_rule(name, "in") is not self.rule):
@@ -291,6 +294,7 @@ class InRule:
         topic.offer(payload, attachment)
 
     def close(self) -> None:
+        self._closed = True
         if self.native is not None:
             self.native.close()  # no sample reaches a topic or its port after this
         try:

@@ -109,9 +109,9 @@ class Site:
         is for)."""
         proc = self.popen(self.bridge_argv(*args), "ln_zenoh")
         if ready:
-            path = "native core" if self.native else "Python"
+            path = "the native core" if self.native else "Python"
             wait_log(proc, rf"bridge {re.escape(self.prefix)} up: .*; topic samples through "
-                     rf"the {path}$")
+                     rf"{path}$")
         return proc
 
     def peer(self, *args: str) -> HostProcess:
