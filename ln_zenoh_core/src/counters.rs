@@ -22,7 +22,7 @@ pub struct Counters {
     pub bytes: AtomicU64,
     pub errors: AtomicU64,
     pub last_seq: AtomicU64,
-    pub dropped: AtomicU64,
+    pub forced: AtomicU64,
 }
 
 /// A pointer to the Python side's counters, valid until the object using it is closed.

@@ -17,7 +17,7 @@ use zenoh::{Session, Wait};
 
 use crate::attachment;
 use crate::counters::{add, get, set, Shared};
-use crate::libln::{LnFns, Port, LN_ETIMEOUT};
+use crate::libln::{LnFns, Port, LN_EAGAIN, LN_ETIMEOUT};
 use crate::log::Complainer;
 use crate::rate::RateLimit;
 
@@ -27,17 +27,18 @@ pub type SampleFn = unsafe extern "C" fn(ctx: *mut c_void, key: *const u8, key_l
                                          payload: *const u8, len: usize, att: *const u8,
                                          att_len: isize);
 
-/// Seconds a write of a queued topic waits for a local subscriber with no free buffer (its
-/// port publishes with LN_PUBLISH_WAIT_FOR_SUBSCRIBERS): meanwhile Zenoh holds the sender
-/// back.  After a write that timed out the topic is `congested` and writes do not wait (the
-/// sample is dropped and counted) until one succeeds again, so a subscriber that stopped
-/// reading costs the link one pause, not one per sample.
+/// Seconds a write of a queued topic waits for a local subscriber with no free buffer (through
+/// `wait_port`, which publishes with LN_PUBLISH_WAIT_FOR_SUBSCRIBERS): meanwhile Zenoh holds
+/// the sender back.  When that times out the sample is written through `port`, which does not
+/// wait (that subscriber loses its oldest sample, the others get it: counted as `forced`), and
+/// the topic is `congested`: writes do not wait until one finds room again, so a subscriber
+/// that stopped reading costs the link one pause, not one per sample.
 pub const HOLD_S: f64 = 0.05;
 
 pub struct InTopic {
     pub port: Port,
-    pub writing: Mutex<()>, // one writer of the port at a time, as libln wants
-    pub queued: bool,
+    pub wait_port: Option<Port>, // queued topics
+    pub writing: Mutex<()>, // one writer of the ports at a time, as libln wants
     pub congested: AtomicBool,
     pub size: usize,
     pub md_name: String,
@@ -166,26 +167,37 @@ fn handle(fns: &LnFns, topic: &InTopic, payload: &ZBytes, att: Option<&[u8]>) {
         add(&c.rate_limited, 1);
         return;
     }
-    let hold = if topic.queued && !topic.congested.load(Relaxed) { HOLD_S } else { 0.0 };
     let rc = {
         let _one = topic.writing.lock().unwrap_or_else(|e| e.into_inner());
-        write(fns, topic.port, payload, hold)
+        match topic.wait_port {
+            None => write(fns, topic.port, payload, 0.0),
+            Some(wait_port) => {
+                let congested = topic.congested.load(Relaxed);
+                let rc = write(fns, wait_port, payload, if congested { 0.0 } else { HOLD_S });
+                if rc == LN_ETIMEOUT || rc == LN_EAGAIN {
+                    if !congested {
+                        topic.congested.store(true, Relaxed);
+                        topic.complainer.complain("forced", || {
+                            format!("a subscriber here took no sample for {HOLD_S} s: it loses \
+                                     its oldest ones (counted as forced) until it reads again")
+                        });
+                    }
+                    add(&c.forced, 1);
+                    write(fns, topic.port, payload, 0.0)
+                } else {
+                    if rc >= 0 {
+                        topic.congested.store(false, Relaxed);
+                    }
+                    rc
+                }
+            }
+        }
     };
-    if rc == LN_ETIMEOUT && topic.queued {
-        topic.congested.store(true, Relaxed);
-        add(&c.dropped, 1);
-        topic.complainer.complain("dropped", || {
-            "a subscriber here has no free buffer: samples are dropped (counted as dropped) \
-             until it reads again".to_string()
-        });
-        return;
-    }
     if rc < 0 {
         add(&c.errors, 1);
         topic.complainer.complain("error", || format!("publishing failed: {}", fns.error_text(rc)));
         return;
     }
-    topic.congested.store(false, Relaxed);
     add(&c.published, 1);
     add(&c.bytes, topic.size as u64);
 }

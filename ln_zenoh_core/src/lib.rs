@@ -180,13 +180,15 @@ pub unsafe extern "C" fn lnz_in_open(core: *const Core, key_expr: *const c_char,
 }
 
 /// Hands the topic of `key` over: its samples are checked against md_name, layout_hash and
-/// size and written to `port` (an ln_outport; of a queued topic with
-/// LN_PUBLISH_WAIT_FOR_SUBSCRIBERS, see inbound::HOLD_S) here.  0, or -1 with err.
+/// size and written to `port` (an ln_outport) here; for a queued topic first through
+/// `wait_port` (one with LN_PUBLISH_WAIT_FOR_SUBSCRIBERS, see inbound::HOLD_S), NULL for a
+/// latest one; `congested` as the Python side left the topic.  0, or -1 with err.
 #[no_mangle]
 pub unsafe extern "C" fn lnz_in_ready(rule: *const InRule, core: *const Core, key: *const c_char,
-                               port: *mut c_void, size: usize, md_name: *const c_char,
-                               layout_hash: u64, queued: c_int, rate_hz: f64,
-                               counters: *const Counters, label: *const c_char,
+                               port: *mut c_void, wait_port: *mut c_void, size: usize,
+                               md_name: *const c_char, layout_hash: u64, rate_hz: f64,
+                               congested: c_int, counters: *const Counters,
+                               label: *const c_char,
                                err: *mut c_char, errlen: usize) -> c_int {
     guarded(err, errlen, || {
         if rule.is_null() || core.is_null() || port.is_null() || counters.is_null() {
@@ -195,8 +197,9 @@ pub unsafe extern "C" fn lnz_in_ready(rule: *const InRule, core: *const Core, ke
         // SAFETY: handles from lnz_in_open and lnz_open not yet closed.
         let (rule, core) = unsafe { (&*rule, &*core) };
         let topic = InTopic { port: Port(port), writing: std::sync::Mutex::new(()),
-                              queued: queued != 0,
-                              congested: std::sync::atomic::AtomicBool::new(false), size,
+                              wait_port: (!wait_port.is_null()).then_some(Port(wait_port)),
+                              congested: std::sync::atomic::AtomicBool::new(congested != 0),
+                              size,
                               md_name: text_arg(md_name, "the md name")?.to_string(),
                               layout_hash, rate: RateLimit::new(rate_hz),
                               counters: Shared(counters),

@@ -32,11 +32,12 @@ from .wire import Attachment, AttachmentError, decode_attachment, matches, name_
 MD_RETRY = 2.0  # seconds before an md that could not be had is asked for again
 COMPLAIN_EVERY = 5.0  # seconds between log lines about the same kind of bad sample
 MAX_TOPICS = 1024  # topics one inbound rule takes; samples of further names are counted only
-# Seconds a write of a queued topic waits for a subscriber here that has no free buffer (the
-# topic is published with wait_for_subscribers): meanwhile the sender is held back.  After a
-# write that timed out the topic is congested and writes do not wait (the sample is dropped,
-# counted as `dropped`) until one succeeds, so a subscriber that stopped reading costs one
-# pause, not one per sample.  The native core does the same (ln_zenoh_core/src/inbound.rs).
+# Seconds a write of a queued topic waits for a subscriber here that has no free buffer
+# (through a publisher with wait_for_subscribers): meanwhile the sender is held back.  Then the
+# sample is written through a second publisher that does not wait (that subscriber loses its
+# oldest sample, the others get it: `forced`) and the topic is congested: writes do not wait
+# until one finds room again, so a subscriber that stopped reading costs one pause, not one
+# per sample.  The native core does the same (ln_zenoh_core/src/inbound.rs).
 HOLD_S = 0.05
 
 
@@ -55,7 +56,8 @@ class InTopic:
         self._cond = threading.Condition()
         self._handling = threading.Lock()  # held while a sample is handled (see offer)
         self._stop = False
-        self.port: Any = None
+        self.port: Any = None  # publishes without waiting
+        self.wait_port: Any = None  # queued: publishes with wait_for_subscribers
         self.md: tuple[str, int] | None = None
         self.refused: tuple[str, int] | None = None
         self._size = 0
@@ -97,8 +99,9 @@ class InTopic:
             return
         counters = Counters(last_seq=self.stats.last_seq)
         try:
-            self.native.ready(topic_key(self.remote, self.name), self.port, self.md[0],
-                              self.md[1], self.rule.queued, self.rule.rate, counters,
+            self.native.ready(topic_key(self.remote, self.name), self.port, self.wait_port,
+                              self.md[0], self.md[1], self.rule.rate, self._congested,
+                              counters,
                               f"topic '{self.name}' from {self.remote}")
         except CoreError as exc:
             self.native = None  # stays here, in Python
@@ -170,24 +173,30 @@ class InTopic:
                 return
             self._next_ok = now + self._interval
         ctypes.memmove(self._address, payload, self._size)
-        if self.rule.queued:
-            from .. import LnError
-
-            try:
-                self.port.write(timeout=0.0 if self._congested else HOLD_S)
-            except LnError as exc:
-                if type(exc).__name__ != "LnTimeoutError":
-                    raise
-                self._congested = True
-                stats.dropped += 1
-                self._complain("dropped", "a subscriber here has no free buffer: samples are "
-                               "dropped (counted as dropped) until it reads again")
-                return
-            self._congested = False
-        else:
-            self.port.write()
+        self._write()
         stats.published += 1
         stats.bytes += self._size
+
+    def _write(self) -> None:
+        """Publish the sample in self.port.packet (queued: see HOLD_S)."""
+        if self.wait_port is None:
+            self.port.write()
+            return
+        from .. import LnError
+
+        try:
+            self.wait_port.write(self.port.packet, timeout=0.0 if self._congested else HOLD_S)
+            self._congested = False
+            return
+        except LnError as exc:
+            if type(exc).__name__ not in ("LnTimeoutError", "LnAgainError"):
+                raise
+        if not self._congested:
+            self._congested = True
+            self._complain("forced", f"a subscriber here took no sample for {HOLD_S} s: it "
+                           "loses its oldest ones (counted as forced) until it reads again")
+        self.stats.forced += 1
+        self.port.write()
 
     def _setup(self, att: Attachment) -> bool:
         """Find the md of the topic's first good sample and publish the topic here; False if
@@ -210,10 +219,15 @@ class InTopic:
         from .. import LnError
 
         self.bridge.on_inbound_published(self.name)  # never sent back out, also not meanwhile
+        port = None
         try:
-            port = self.bridge.client.publish(self.name, att.md_name,
-                                              wait_for_subscribers=self.rule.queued)
+            port = self.bridge.client.publish(self.name, att.md_name)
+            if self.rule.queued:
+                self.wait_port = self.bridge.client.publish(self.name, att.md_name,
+                                                            wait_for_subscribers=True)
         except LnError as exc:
+            if port is not None:
+                port.close()
             if type(exc).__name__ == "LnLayoutError":
                 return self._refuse(att, f"the topic here has another layout than remote "
                                     f"0x{att.layout_hash:016x}: {exc}")
@@ -247,8 +261,9 @@ class InTopic:
         self._thread.join()
         if self.handed_over and self.native is not None:
             self.native.forget(topic_key(self.remote, self.name))
-        if self.port is not None:
-            self.port.close()
+        for port in (self.wait_port, self.port):
+            if port is not None:
+                port.close()
 
 
 class InRule:

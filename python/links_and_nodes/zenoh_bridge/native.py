@@ -43,7 +43,7 @@ SAMPLE_FN = ctypes.CFUNCTYPE(None, c_void_p, ctypes.POINTER(ctypes.c_ubyte), c_s
 # The counters the core adds to: the numbers of stats.TopicStats, in this order.
 COUNTER_FIELDS = ("read", "sent", "unmatched", "rate_limited", "overruns", "received",
                   "published", "bad_attachment", "bad_size", "refused", "md_unavailable",
-                  "superseded", "gaps", "bytes", "errors", "last_seq", "dropped")
+                  "superseded", "gaps", "bytes", "errors", "last_seq", "forced")
 
 
 class Counters(ctypes.Structure):
@@ -68,6 +68,10 @@ class CoreError(RuntimeError):
 
 _lib: ctypes.CDLL | None = None
 _why_not: str | None = None
+# Callbacks handed to the core are never freed: one the core is still running when its object
+# closes (Zenoh may finish a delivery after an undeclare) must stay callable.  A few per
+# topic, and topics are closed only when the bridge stops.
+_RETIRED: list[Any] = []
 
 
 def _candidates() -> list[str]:
@@ -117,9 +121,9 @@ def _declare_all(lib: ctypes.CDLL) -> None:
     d(lib, "lnz_out_close", None, [c_void_p])
     d(lib, "lnz_in_open", c_void_p, [c_void_p, c_char_p, SAMPLE_FN, c_void_p, c_char_p,
                                      c_size_t])
-    d(lib, "lnz_in_ready", c_int, [c_void_p, c_void_p, c_char_p, c_void_p, c_size_t, c_char_p,
-                                   c_uint64, c_int, c_double, ctypes.POINTER(Counters),
-                                   c_char_p, c_char_p, c_size_t])
+    d(lib, "lnz_in_ready", c_int, [c_void_p, c_void_p, c_char_p, c_void_p, c_void_p, c_size_t,
+                                   c_char_p, c_uint64, c_double, c_int,
+                                   ctypes.POINTER(Counters), c_char_p, c_char_p, c_size_t])
     d(lib, "lnz_in_forget", None, [c_void_p, c_char_p])
     d(lib, "lnz_in_close", None, [c_void_p])
 
@@ -215,6 +219,7 @@ class Core:
         handle, self.handle = self.handle, None
         if handle:
             self.lib.lnz_close(handle)
+            _RETIRED.append(self._log)
         self._remove_dir()
 
     def _remove_dir(self) -> None:
@@ -252,6 +257,7 @@ class OutTopic:
         handle, self.handle = self.handle, None
         if handle:
             self.core.lib.lnz_out_close(handle)
+            _RETIRED.append(self._match)
 
 
 class InRule:
@@ -278,17 +284,19 @@ class InRule:
             raise CoreError(_text(err))
         self.handle: int | None = handle
 
-    def ready(self, key: str, port: Any, md_name: str, layout_hash: int, queued: bool,
-              rate: float | None, counters: Counters, label: str) -> None:
-        """From now on the core checks and publishes the samples of `key` on `port` (queued:
-        a publisher that waits for its subscribers, inbound.HOLD_S at most)."""
+    def ready(self, key: str, port: Any, wait_port: Any, md_name: str, layout_hash: int,
+              rate: float | None, congested: bool, counters: Counters, label: str) -> None:
+        """From now on the core checks and publishes the samples of `key` on `port`; a queued
+        topic's first through `wait_port`, a publisher that waits for its subscribers
+        (inbound.HOLD_S at most; not while `congested`), None for a latest one."""
         if not self.handle:
             return
         err = _err()
         self._keep[key] = counters
         if self.core.lib.lnz_in_ready(self.handle, self.core.handle, key.encode(), port.handle,
+                                      wait_port.handle if wait_port is not None else None,
                                       ctypes.sizeof(port.packet), md_name.encode(),
-                                      layout_hash, int(queued), float(rate or 0.0),
+                                      layout_hash, float(rate or 0.0), int(congested),
                                       ctypes.byref(counters),
                                       label.encode(), err, ERR_SIZE) < 0:
             del self._keep[key]
@@ -304,4 +312,5 @@ class InRule:
         handle, self.handle = self.handle, None
         if handle:
             self.core.lib.lnz_in_close(handle)
+            _RETIRED.append(self._deliver)
         self._keep.clear()

@@ -18,8 +18,8 @@ class TopicStats:
     In: `received` from Zenoh, `published` here, `bad_attachment`, `bad_size`, `refused`
     (layout mismatch), `md_unavailable` (its md could not be had), `superseded` (a newer
     sample replaced it in the queue, or a queued topic's queue was full), `gaps` (sequence
-    numbers missing between received samples), `dropped` (queued: a subscriber here had no free
-    buffer within HOLD_S, or the topic was congested: inbound.py)."""
+    numbers missing between received samples), `forced` (queued: written although a subscriber
+    here had no free buffer for HOLD_S, which lost its oldest sample: inbound.py)."""
 
     direction: str
     md_name: str = ""
@@ -40,7 +40,7 @@ class TopicStats:
     bytes: int = 0
     errors: int = 0
     last_seq: int = 0
-    dropped: int = 0
+    forced: int = 0
 
 
 @dataclass
@@ -112,7 +112,7 @@ class Stats:
             else:
                 out.append(f"{key} [{t['state']}] received {t['received']} published "
                            f"{t['published']} gaps {t['gaps']} superseded {t['superseded']} "
-                           f"dropped {t['dropped']} "
+                           f"forced {t['forced']} "
                            f"rate_limited {t['rate_limited']} bad_attachment "
                            f"{t['bad_attachment']} bad_size {t['bad_size']} refused "
                            f"{t['refused']} md_unavailable {t['md_unavailable']}")

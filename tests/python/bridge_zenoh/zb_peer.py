@@ -2,7 +2,8 @@
 
     zb_peer.py pub TOPIC MD [--count N] [--rate HZ]   publish counter 1..N (0: forever),
                [--wait-subscribers N]             once N subscribers are there
-    zb_peer.py sub TOPIC MD [--buffers N]             print "got SEQ COUNTER" per sample
+    zb_peer.py sub TOPIC MD [--buffers N] [--stall]   print "got SEQ COUNTER" per sample
+                                                      (--stall: subscribe, never read)
     zb_peer.py provide NAME                           provide zbtest/echo
     zb_peer.py call NAME TEXT [--deadline S]          call zbtest/echo until it is there
 
@@ -41,9 +42,11 @@ def pub(args: argparse.Namespace) -> None:
 
 
 def sub(args: argparse.Namespace) -> None:
-    clnt = ln.client(f"zb_sub_{args.topic}")
+    clnt = ln.client(f"zb_sub_{args.topic}" + ("_stalled" if args.stall else ""))
     port = clnt.subscribe(args.topic, args.md, buffers=args.buffers)
     print("subscribed", flush=True)
+    while args.stall:
+        time.sleep(3600)
     while True:
         msg = port.read(timeout=1.0)
         if msg is not None:
@@ -104,6 +107,7 @@ def main() -> None:
     p.add_argument("topic")
     p.add_argument("md")
     p.add_argument("--buffers", type=int, default=1)
+    p.add_argument("--stall", action="store_true")
     p = sub_parsers.add_parser("provide")
     p.add_argument("name")
     p = sub_parsers.add_parser("call")
