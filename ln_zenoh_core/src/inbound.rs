@@ -79,6 +79,19 @@ impl InRule {
         self.state.topics.write().unwrap_or_else(|e| e.into_inner()).insert(key, topic);
     }
 
+    /// Handles a sample of a handed-over `key` that reached the Python side while the key was
+    /// handed over; false if `key` is not handed over.
+    pub fn offer(&self, key: &str, payload: &[u8], att: Option<&[u8]>) -> bool {
+        let topics = self.state.topics.read().unwrap_or_else(|e| e.into_inner());
+        match topics.get(key) {
+            Some(topic) => {
+                handle(&self.state.fns, topic, payload, att);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Samples of `key` go to the Python side again; its port and counters are not used any
     /// more when this returns (a write in progress holds the read lock this waits for).
     pub fn forget(&self, key: &str) {
@@ -129,7 +142,41 @@ fn on_sample_of(state: &RuleState, sample: &Sample) {
     };
 }
 
-fn handle(fns: &LnFns, topic: &InTopic, payload: &ZBytes, att: Option<&[u8]>) {
+/// A sample's payload: as Zenoh holds it (in pieces) or as the Python side hands it over.
+pub trait Payload {
+    fn len(&self) -> usize;
+    /// Copies the payload to `dst`, which has room for len() bytes.
+    ///
+    /// # Safety
+    /// `dst` must be valid for len() bytes of writes.
+    unsafe fn copy_to(&self, dst: *mut u8);
+}
+
+impl Payload for ZBytes {
+    fn len(&self) -> usize {
+        ZBytes::len(self)
+    }
+
+    unsafe fn copy_to(&self, dst: *mut u8) {
+        let mut at = 0usize;
+        for piece in self.slices() {
+            std::ptr::copy_nonoverlapping(piece.as_ptr(), dst.add(at), piece.len());
+            at += piece.len();
+        }
+    }
+}
+
+impl Payload for [u8] {
+    fn len(&self) -> usize {
+        <[u8]>::len(self)
+    }
+
+    unsafe fn copy_to(&self, dst: *mut u8) {
+        std::ptr::copy_nonoverlapping(self.as_ptr(), dst, self.len());
+    }
+}
+
+fn handle<P: Payload + ?Sized>(fns: &LnFns, topic: &InTopic, payload: &P, att: Option<&[u8]>) {
     let c = topic.counters.get();
     add(&c.received, 1);
     let att = match attachment::decode(att) {
@@ -204,7 +251,7 @@ fn handle(fns: &LnFns, topic: &InTopic, payload: &ZBytes, att: Option<&[u8]>) {
 
 /// Copies the payload, in the pieces Zenoh holds it in, into a loaned slot of the topic and
 /// publishes it (no copy into one buffer first); LN_OK or the LN_E* code.
-fn write(fns: &LnFns, port: Port, payload: &ZBytes, timeout: f64) -> std::ffi::c_int {
+fn write<P: Payload + ?Sized>(fns: &LnFns, port: Port, payload: &P, timeout: f64) -> std::ffi::c_int {
     let mut slot: *mut c_void = std::ptr::null_mut();
     // SAFETY: the port is open while the topic is in the map (forget() waits for this), and
     // written by one thread at a time (the caller holds the topic's `writing`).
@@ -212,13 +259,8 @@ fn write(fns: &LnFns, port: Port, payload: &ZBytes, timeout: f64) -> std::ffi::c
     if rc < 0 {
         return rc;
     }
-    let mut at = 0usize;
-    for piece in payload.slices() {
-        // SAFETY: the slot has the topic's size, which the payload's length was checked
-        // against.
-        unsafe { std::ptr::copy_nonoverlapping(piece.as_ptr(), (slot as *mut u8).add(at), piece.len()) };
-        at += piece.len();
-    }
+    // SAFETY: the slot has the topic's size, which the payload's length was checked against.
+    unsafe { payload.copy_to(slot as *mut u8) };
     // SAFETY: the loan of this thread, above.
     unsafe { (fns.write_commit)(port.0) }
 }

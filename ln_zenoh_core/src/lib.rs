@@ -210,6 +210,25 @@ pub unsafe extern "C" fn lnz_in_ready(rule: *const InRule, core: *const Core, ke
     }).unwrap_or(-1)
 }
 
+/// Handles a sample of the handed-over `key` that reached the Python side while it was
+/// handed over (att_len -1: no attachment); 0, or -1 if `key` is not handed over.
+#[no_mangle]
+pub unsafe extern "C" fn lnz_in_offer(rule: *const InRule, key: *const c_char, payload: *const u8,
+                                      len: usize, att: *const u8, att_len: isize) -> c_int {
+    if rule.is_null() || (payload.is_null() && len > 0) {
+        return -1;
+    }
+    let Ok(key) = text_arg(key, "the key") else { return -1 };
+    let payload: &[u8] = if len == 0 { &[] } else { std::slice::from_raw_parts(payload, len) };
+    let att = (att_len >= 0 && !att.is_null())
+        .then(|| std::slice::from_raw_parts(att, att_len as usize));
+    // SAFETY: a handle from lnz_in_open not yet closed; buffers as the caller says.
+    match catch_unwind(AssertUnwindSafe(|| (*rule).offer(key, payload, att))) {
+        Ok(true) => 0,
+        _ => -1,
+    }
+}
+
 /// Takes the topic of `key` back; its port and counters are not used when this returns.
 #[no_mangle]
 pub unsafe extern "C" fn lnz_in_forget(rule: *const InRule, key: *const c_char) {

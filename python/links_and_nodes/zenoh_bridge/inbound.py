@@ -11,9 +11,15 @@ on.  Samples without a valid attachment, or whose size is not the md's, are drop
 counted, never published.
 
 With the native core (native.py) the rule's subscription is the core's: it hands samples of
-keys it does not know to `InRule._on_key` here, and once a topic is set up and its first
-sample after that was published inline (nothing of it left queued here), the topic is handed
-over with `ready` and the core checks and publishes its samples itself, in order.
+keys it does not know to `InRule._on_key` here.  Once a topic is set up, the topic's thread
+publishes what waits in its queue and hands the topic over with `ready`, holding the queue's
+lock, so a sample that meanwhile reached `offer` goes to the core after them; from then on
+the core checks and publishes the topic's samples itself, in order.
+
+While a queued topic is set up its queue (the rule's buffers) fills; a sample that finds it
+full waits up to SETUP_WAIT_S for room (Zenoh holds the sender back meanwhile) before the
+oldest is dropped (`superseded`), and after such a wait the next ones do not wait until there
+is room again, so a slow md fetch costs the link one pause.
 """
 
 from __future__ import annotations
@@ -39,6 +45,7 @@ MAX_TOPICS = 1024  # topics one inbound rule takes; samples of further names are
 # until one finds room again, so a subscriber that stopped reading costs one pause, not one
 # per sample.  The native core does the same (ln_zenoh_core/src/inbound.rs).
 HOLD_S = 0.05
+SETUP_WAIT_S = 1.0  # queued: how long a sample waits for room in the topic's queue
 
 
 class InTopic:
@@ -50,6 +57,7 @@ class InTopic:
         self.native = native  # the rule's native.InRule, or None
         self.handed_over = False
         self._congested = False
+        self._queue_stalled = False  # a sample waited SETUP_WAIT_S for room in vain
         self.stats = bridge.stats.topic(name, "in")
         self.stats.state = "waiting for a sample"
         self.queue: deque[tuple[bytes, bytes | None]] = deque(maxlen=rule.depth)
@@ -71,13 +79,17 @@ class InTopic:
     def offer(self, payload: bytes, attachment: bytes | None) -> None:
         """A sample from Zenoh, called in Zenoh's thread.  Once the topic is set up and
         nothing waits in its queue it is published right here (no thread hand-over);
-        otherwise it is queued for the topic's thread, which alone may block (md fetch)."""
-        self.stats.received += 1
+        otherwise it is queued for the topic's thread, which alone may block (md fetch).  Once
+        the topic is handed over to the core, the core has it."""
+        if self.handed_over:
+            self._to_core(payload, attachment)
+            return
         if self.md is not None and self._handling.acquire(blocking=False):
             try:
                 with self._cond:
-                    inline = not self.queue
+                    inline = not self.queue and not self.handed_over
                 if inline:
+                    self.stats.received += 1
                     self._handle_safely(payload, attachment)
                     if self.native is not None and self.port is not None:
                         self._hand_over()
@@ -85,14 +97,41 @@ class InTopic:
             finally:
                 self._handling.release()
         with self._cond:
-            if len(self.queue) == self.queue.maxlen:
-                self.stats.superseded += 1
-            self.queue.append((payload, attachment))
-            self._cond.notify()
+            if self.rule.queued:
+                self._wait_for_room()
+            if not self.handed_over:
+                self.stats.received += 1
+                if len(self.queue) == self.queue.maxlen:
+                    self.stats.superseded += 1
+                self.queue.append((payload, attachment))
+                self._cond.notify_all()
+                return
+        self._to_core(payload, attachment)
+
+    def _wait_for_room(self) -> None:
+        """Under _cond: wait (SETUP_WAIT_S at most) while the queue is full."""
+        maxlen = self.queue.maxlen
+        if len(self.queue) < maxlen:
+            self._queue_stalled = False
+            return
+        if self._queue_stalled:
+            return
+        deadline = time.monotonic() + SETUP_WAIT_S
+        while len(self.queue) == maxlen and not (self.handed_over or self._stop):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                self._queue_stalled = True
+                return
+            self._cond.wait(left)
+
+    def _to_core(self, payload: bytes, attachment: bytes | None) -> None:
+        if not self.native.offer(topic_key(self.remote, self.name), payload, attachment):
+            self.stats.errors += 1  # cannot be: handed-over topics stay with the core
 
     def _hand_over(self) -> None:
-        """Give the topic to the core; called in Zenoh's thread right after a sample was
-        published inline, so none is waiting here and the order is kept."""
+        """Give the topic to the core: in Zenoh's thread right after a sample was published
+        inline, or in the topic's thread after it published the queue holding its lock; so
+        nothing is left here and the order is kept."""
         from .native import Counters, CoreError
 
         if self.handed_over or self.md is None:
@@ -101,8 +140,7 @@ class InTopic:
         try:
             self.native.ready(topic_key(self.remote, self.name), self.port, self.wait_port,
                               self.md[0], self.md[1], self.rule.rate, self._congested,
-                              counters,
-                              f"topic '{self.name}' from {self.remote}")
+                              counters, f"topic '{self.name}' from {self.remote}")
         except CoreError as exc:
             self.native = None  # stays here, in Python
             self.bridge.say(f"topic '{self.name}': stays in Python: {exc}")
@@ -122,8 +160,16 @@ class InTopic:
             with self._handling:
                 with self._cond:
                     item = self.queue.popleft() if self.queue else None
+                    self._cond.notify_all()  # room for a sample waiting in offer()
                 if item is not None:
                     self._handle_safely(*item)
+                if (self.native is not None and self.port is not None
+                        and not self.handed_over):
+                    with self._cond:  # offer() waits: what it has comes after the queue
+                        while self.queue:
+                            self._handle_safely(*self.queue.popleft())
+                        self._hand_over()
+                        self._cond.notify_all()
 
     def _handle_safely(self, payload: bytes, attachment: bytes | None) -> None:
         try:

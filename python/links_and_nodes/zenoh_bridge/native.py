@@ -124,6 +124,8 @@ def _declare_all(lib: ctypes.CDLL) -> None:
     d(lib, "lnz_in_ready", c_int, [c_void_p, c_void_p, c_char_p, c_void_p, c_void_p, c_size_t,
                                    c_char_p, c_uint64, c_double, c_int,
                                    ctypes.POINTER(Counters), c_char_p, c_char_p, c_size_t])
+    d(lib, "lnz_in_offer", c_int, [c_void_p, c_char_p, c_char_p, c_size_t, c_char_p,
+                                   ctypes.c_ssize_t])
     d(lib, "lnz_in_forget", None, [c_void_p, c_char_p])
     d(lib, "lnz_in_close", None, [c_void_p])
 
@@ -301,6 +303,15 @@ class InRule:
                                       label.encode(), err, ERR_SIZE) < 0:
             del self._keep[key]
             raise CoreError(_text(err))
+
+    def offer(self, key: str, payload: bytes, attachment: bytes | None) -> bool:
+        """Let the core handle a sample of the handed-over `key` that reached Python while
+        it was handed over; False if `key` is not handed over."""
+        if not self.handle:
+            return False
+        att_len = len(attachment) if attachment is not None else -1
+        return self.core.lib.lnz_in_offer(self.handle, key.encode(), payload, len(payload),
+                                          attachment, att_len) == 0
 
     def forget(self, key: str) -> None:
         """The core stops using the key's port and counters before this returns."""

@@ -1,7 +1,8 @@
 """links_and_nodes clients of the Zenoh bridge tests, run as programs inside a site (a lab host):
 
     zb_peer.py pub TOPIC MD [--count N] [--rate HZ]   publish counter 1..N (0: forever),
-               [--wait-subscribers N]             once N subscribers are there
+               [--wait-subscribers N] [--wait]    once N subscribers are there (--wait: a
+                                                  publisher that waits for their buffers)
     zb_peer.py sub TOPIC MD [--buffers N] [--stall]   print "got SEQ COUNTER" per sample
                                                       (--stall: subscribe, never read)
     zb_peer.py provide NAME                           provide zbtest/echo
@@ -22,7 +23,7 @@ import links_and_nodes as ln
 
 def pub(args: argparse.Namespace) -> None:
     clnt = ln.client(f"zb_pub_{args.topic}")
-    port = clnt.publish(args.topic, args.md)
+    port = clnt.publish(args.topic, args.md, wait_for_subscribers=args.wait)
     while port.subscriber_count < args.wait_subscribers:
         time.sleep(0.01)
     print("publishing", flush=True)
@@ -34,7 +35,7 @@ def pub(args: argparse.Namespace) -> None:
         port.packet.counter = i
         if hasattr(port.packet, "value"):
             port.packet.value = i * 0.5
-        port.write()
+        port.write(timeout=60.0)
         if period:
             time.sleep(max(0.0, start + i * period - time.monotonic()))
     print(f"published {i}", flush=True)
@@ -103,6 +104,7 @@ def main() -> None:
     p.add_argument("--rate", type=float, default=0.0)
     p.add_argument("--linger", type=float, default=3600.0)
     p.add_argument("--wait-subscribers", type=int, default=0)
+    p.add_argument("--wait", action="store_true")
     p = sub_parsers.add_parser("sub")
     p.add_argument("topic")
     p.add_argument("md")
