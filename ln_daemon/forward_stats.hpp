@@ -30,7 +30,8 @@ public:
         counter.fetch_add(n, std::memory_order_relaxed);
     }
 
-    void set_connected(bool up) noexcept { connected_.store(up, std::memory_order_relaxed); }
+    // Release/acquire with snapshot(): an error set before a change of state is seen with it.
+    void set_connected(bool up) noexcept { connected_.store(up, std::memory_order_release); }
     void set_error(const std::string &text)
     {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -63,7 +64,7 @@ public:
         s.drops = drops.load(std::memory_order_relaxed);
         s.stale = stale.load(std::memory_order_relaxed);
         s.invalid = invalid.load(std::memory_order_relaxed);
-        s.connected = connected_.load(std::memory_order_relaxed);
+        s.connected = connected_.load(std::memory_order_acquire);
         std::lock_guard<std::mutex> lock(mutex_);
         s.ring = ring_;
         s.peer = peer_;

@@ -356,9 +356,10 @@ bool TcpSender::connect_with_backoff()
 void TcpSender::lost(const std::string &why)
 {
     sock_.reset();
-    counters_.set_connected(false);
+    // The reason first: whoever sees the stream disconnected also sees why.
     counters_.set_error("connection to " + spec_.host + ":" + std::to_string(spec_.port) +
                         " lost: " + why);
+    counters_.set_connected(false);
 }
 
 void TcpSender::write_loop()
