@@ -18,7 +18,7 @@ use zenoh::{Session, Wait};
 use crate::attachment;
 use crate::counters::{add, get, set, Shared};
 use crate::libln::{LnFns, Port, LN_EAGAIN, LN_ETIMEOUT};
-use crate::log::Complainer;
+use crate::log::{Complainer, Logger};
 use crate::rate::RateLimit;
 
 /// The Python side's handler of a sample of a key not handed over (yet): key, payload and
@@ -54,6 +54,7 @@ struct RuleState {
     on_sample: SampleFn,
     ctx: usize,
     fns: LnFns,
+    logger: Logger,
 }
 
 pub struct InRule {
@@ -62,16 +63,22 @@ pub struct InRule {
 }
 
 impl InRule {
-    pub fn open(session: &Session, key_expr: &str, fns: LnFns, on_sample: SampleFn, ctx: usize)
-                -> Result<InRule, String> {
+    pub fn open(session: &Session, key_expr: &str, fns: LnFns, logger: Logger,
+                on_sample: SampleFn, ctx: usize) -> Result<InRule, String> {
         let state = Arc::new(RuleState { topics: RwLock::new(HashMap::new()),
-                                         closed: AtomicBool::new(false), on_sample, ctx, fns });
+                                         closed: AtomicBool::new(false), on_sample, ctx, fns,
+                                         logger });
         let st = state.clone();
         let subscriber = session.declare_subscriber(key_expr.to_string())
             .callback(move |sample| on_sample_of(&st, &sample))
             .wait()
             .map_err(|e| format!("cannot subscribe to {key_expr}: {e}"))?;
         Ok(InRule { state, subscriber: Some(subscriber) })
+    }
+
+    /// What the rule's topics say goes here.
+    pub fn logger(&self) -> Logger {
+        self.state.logger
     }
 
     /// From now on samples of `key` are handled here.

@@ -175,7 +175,7 @@ pub unsafe extern "C" fn lnz_in_open(core: *const Core, key_expr: *const c_char,
         // SAFETY: a handle from lnz_open not yet closed.
         let core = unsafe { &*core };
         InRule::open(&core.session, text_arg(key_expr, "the key expression")?, core.fns,
-                     on_sample, ctx as usize)
+                     core.logger, on_sample, ctx as usize)
     }))
 }
 
@@ -184,18 +184,18 @@ pub unsafe extern "C" fn lnz_in_open(core: *const Core, key_expr: *const c_char,
 /// `wait_port` (one with LN_PUBLISH_WAIT_FOR_SUBSCRIBERS, see inbound::HOLD_S), NULL for a
 /// latest one; `congested` as the Python side left the topic.  0, or -1 with err.
 #[no_mangle]
-pub unsafe extern "C" fn lnz_in_ready(rule: *const InRule, core: *const Core, key: *const c_char,
+pub unsafe extern "C" fn lnz_in_ready(rule: *const InRule, key: *const c_char,
                                port: *mut c_void, wait_port: *mut c_void, size: usize,
                                md_name: *const c_char, layout_hash: u64, rate_hz: f64,
                                congested: c_int, counters: *const Counters,
                                label: *const c_char,
                                err: *mut c_char, errlen: usize) -> c_int {
     guarded(err, errlen, || {
-        if rule.is_null() || core.is_null() || port.is_null() || counters.is_null() {
+        if rule.is_null() || port.is_null() || counters.is_null() {
             return Err("a NULL handle".into());
         }
-        // SAFETY: handles from lnz_in_open and lnz_open not yet closed.
-        let (rule, core) = unsafe { (&*rule, &*core) };
+        // SAFETY: a handle from lnz_in_open not yet closed.
+        let rule = unsafe { &*rule };
         let topic = InTopic { port: Port(port), writing: std::sync::Mutex::new(()),
                               wait_port: (!wait_port.is_null()).then_some(Port(wait_port)),
                               congested: std::sync::atomic::AtomicBool::new(congested != 0),
@@ -203,7 +203,7 @@ pub unsafe extern "C" fn lnz_in_ready(rule: *const InRule, core: *const Core, ke
                               md_name: text_arg(md_name, "the md name")?.to_string(),
                               layout_hash, rate: RateLimit::new(rate_hz),
                               counters: Shared(counters),
-                              complainer: Complainer::new(core.logger,
+                              complainer: Complainer::new(rule.logger(),
                                                           text_arg(label, "the label")?.to_string()) };
         rule.ready(text_arg(key, "the key")?.to_string(), topic);
         Ok(0)

@@ -37,14 +37,14 @@ pub struct OutSpec {
     pub match_ctx: usize,
 }
 
-struct Shared2 {
+struct OutState {
     stop: AtomicBool,
     matching: AtomicBool,
     closed: AtomicBool,
 }
 
 pub struct OutTopic {
-    state: Arc<Shared2>,
+    state: Arc<OutState>,
     thread: Option<JoinHandle<()>>,
     listener: Option<MatchingListener<()>>,
 }
@@ -59,7 +59,7 @@ impl OutTopic {
             .express(!spec.queued)
             .wait()
             .map_err(|e| format!("cannot declare the publisher of {}: {e}", spec.key))?;
-        let state = Arc::new(Shared2 { stop: AtomicBool::new(false),
+        let state = Arc::new(OutState { stop: AtomicBool::new(false),
                                        matching: AtomicBool::new(false),
                                        closed: AtomicBool::new(false) });
         let (on_match, ctx) = (spec.on_match, spec.match_ctx);
@@ -111,7 +111,7 @@ impl Drop for OutTopic {
 }
 
 fn run(publisher: Publisher<'static>, fns: LnFns, spec: OutSpec, encoder: Encoder,
-       state: Arc<Shared2>, complainer: Complainer) {
+       state: Arc<OutState>, complainer: Complainer) {
     let counters = spec.counters.get();
     let rate = RateLimit::new(spec.rate_hz);
     let port = spec.port;

@@ -121,7 +121,7 @@ def _declare_all(lib: ctypes.CDLL) -> None:
     d(lib, "lnz_out_close", None, [c_void_p])
     d(lib, "lnz_in_open", c_void_p, [c_void_p, c_char_p, SAMPLE_FN, c_void_p, c_char_p,
                                      c_size_t])
-    d(lib, "lnz_in_ready", c_int, [c_void_p, c_void_p, c_char_p, c_void_p, c_void_p, c_size_t,
+    d(lib, "lnz_in_ready", c_int, [c_void_p, c_char_p, c_void_p, c_void_p, c_size_t,
                                    c_char_p, c_uint64, c_double, c_int,
                                    ctypes.POINTER(Counters), c_char_p, c_char_p, c_size_t])
     d(lib, "lnz_in_offer", c_int, [c_void_p, c_char_p, c_char_p, c_size_t, c_char_p,
@@ -295,7 +295,7 @@ class InRule:
             return
         err = _err()
         self._keep[key] = counters
-        if self.core.lib.lnz_in_ready(self.handle, self.core.handle, key.encode(), port.handle,
+        if self.core.lib.lnz_in_ready(self.handle, key.encode(), port.handle,
                                       wait_port.handle if wait_port is not None else None,
                                       ctypes.sizeof(port.packet), md_name.encode(),
                                       layout_hash, float(rate or 0.0), int(congested),

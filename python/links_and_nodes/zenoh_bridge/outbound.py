@@ -46,10 +46,12 @@ class OutTopic:
         self._stop = threading.Event()
         self._closers: list[Any] = []
         self.port: Any = None
-        self.native: Any = None
+        self.native: Any = None  # native.OutTopic: the core reads and puts
+        self.ros2: Ros2Out | None = None
+        self._thread: threading.Thread | None = None
         self.key = topic_key(bridge.prefix, name)
         if bridge.core is not None and not bridge.config.ros2:
-            self._open_native(cls.LAYOUT_HASH)
+            self._open_native()
             return
         try:
             congestion = (zenoh.CongestionControl.BLOCK if rule.queued
@@ -64,7 +66,6 @@ class OutTopic:
             self.matching = self.publisher.matching_status.matching  # a change before the above
             self._closers.append(bridge.session.liveliness().declare_token(
                 live_key(bridge.prefix, "topic", name)))
-            self.ros2: Ros2Out | None = None
             if bridge.config.ros2:
                 self.ros2 = Ros2Out(bridge.session, bridge.config.ros2_domain, bridge.ros2_node,
                                     name, md_name, cls.LAYOUT_HASH, rule.depth,
@@ -80,19 +81,17 @@ class OutTopic:
         self._thread = threading.Thread(target=self._run, daemon=True, name=f"out {name}")
         self._thread.start()
 
-    def _open_native(self, layout_hash: int) -> None:
+    def _open_native(self) -> None:
         from .native import Counters
 
         bridge, rule = self.bridge, self.rule
-        self.ros2 = None
-        self._thread = None
         try:
             self._closers.append(bridge.session.liveliness().declare_token(
                 live_key(bridge.prefix, "topic", self.name)))
             self.port = bridge.client.subscribe(self.name, self.md_name, buffers=rule.depth)
             counters = Counters()
             self.native = bridge.core.out_topic(
-                key=self.key, port=self.port, md_name=self.md_name, layout_hash=layout_hash,
+                key=self.key, port=self.port, md_name=self.md_name, layout_hash=self.layout_hash,
                 queued=rule.queued, rate=rule.rate, counters=counters,
                 label=f"topic '{self.name}'", on_match=self._on_matching)
             bridge.stats.add_native(self.name, "out", counters)
@@ -166,9 +165,8 @@ class OutTopic:
 
     def close(self) -> None:
         self._stop.set()
-        thread = getattr(self, "_thread", None)
-        if thread is not None:
-            thread.join()
+        if self._thread is not None:
+            self._thread.join()
         if self.native is not None:
             self.native.close()  # before the port closes: the core reads it until then
         for thing in reversed(self._closers):
