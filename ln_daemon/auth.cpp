@@ -28,6 +28,8 @@ bool crypto_init() noexcept { return sodium_init() >= 0; }
 
 namespace {
 
+Outcome unusable(std::string text) { return outcome::error(proto::Err::os_error, std::move(text)); }
+
 int hex_value(char c) noexcept
 {
     if (c >= '0' && c <= '9')
@@ -41,40 +43,29 @@ int hex_value(char c) noexcept
 
 } // namespace
 
-bool load_key_file(const std::string &path, Key &key, std::string &error)
+Outcome load_key_file(const std::string &path, Key &key)
 {
     UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY));
-    if (!fd) {
-        error = "cannot open key file '" + path + "': " + std::strerror(errno);
-        return false;
-    }
+    if (!fd)
+        return unusable("cannot open key file '" + path + "': " + std::strerror(errno));
     struct stat st;
-    if (::fstat(fd.get(), &st) != 0) {
-        error = "cannot stat key file '" + path + "': " + std::strerror(errno);
-        return false;
-    }
-    if (!S_ISREG(st.st_mode)) {
-        error = "key file '" + path + "' is not a regular file";
-        return false;
-    }
-    if (st.st_uid != ::geteuid()) {
-        error = "key file '" + path + "' is owned by uid " + std::to_string(st.st_uid) +
-                ", not by this daemon's uid " + std::to_string(::geteuid());
-        return false;
-    }
+    if (::fstat(fd.get(), &st) != 0)
+        return unusable("cannot stat key file '" + path + "': " + std::strerror(errno));
+    if (!S_ISREG(st.st_mode))
+        return unusable("key file '" + path + "' is not a regular file");
+    if (st.st_uid != ::geteuid())
+        return unusable("key file '" + path + "' is owned by uid " + std::to_string(st.st_uid) +
+                        ", not by this daemon's uid " + std::to_string(::geteuid()));
     if (st.st_mode & 077) {
         char mode[8];
         std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
-        error = "key file '" + path + "' is accessible by group or others (mode " + mode +
-                "); it must be private: chmod 600 '" + path + "'";
-        return false;
+        return unusable("key file '" + path + "' is accessible by group or others (mode " + mode +
+                        "); it must be private: chmod 600 '" + path + "'");
     }
     char text[130];
     ssize_t n = ::read(fd.get(), text, sizeof text);
-    if (n < 0) {
-        error = "cannot read key file '" + path + "': " + std::strerror(errno);
-        return false;
-    }
+    if (n < 0)
+        return unusable("cannot read key file '" + path + "': " + std::strerror(errno));
     size_t len = static_cast<size_t>(n);
     if (len > 0 && text[len - 1] == '\n')
         --len;
@@ -88,11 +79,11 @@ bool load_key_file(const std::string &path, Key &key, std::string &error)
     sodium_memzero(text, sizeof text);
     if (!valid) {
         sodium_memzero(key.bytes, Key::kBytes);
-        error = "key file '" + path + "' holds no valid key: it must contain exactly 64 "
-                "hex digits (32 bytes), optionally followed by a newline";
-        return false;
+        return unusable("key file '" + path +
+                        "' holds no valid key: it must contain exactly 64 "
+                        "hex digits (32 bytes), optionally followed by a newline");
     }
-    return true;
+    return outcome::ok();
 }
 
 void random_bytes(void *out, size_t n) noexcept { randombytes_buf(out, n); }
@@ -120,14 +111,10 @@ void derive_session(const Key &key, const uint8_t *daemon_nonce, const uint8_t *
 {
     std::string_view nd(reinterpret_cast<const char *>(daemon_nonce), 32);
     std::string_view nc(reinterpret_cast<const char *>(client_nonce), 32);
-    hmac(key.bytes, Key::kBytes, "ln_daemon/1 client proof", {nd, nc, instance},
-         out.client_proof);
-    hmac(key.bytes, Key::kBytes, "ln_daemon/1 daemon proof", {nd, nc, instance},
-         out.daemon_proof);
-    hmac(key.bytes, Key::kBytes, "ln_daemon/1 to daemon", {nd, nc, instance},
-         out.to_daemon.bytes);
-    hmac(key.bytes, Key::kBytes, "ln_daemon/1 to client", {nd, nc, instance},
-         out.to_client.bytes);
+    hmac(key.bytes, Key::kBytes, "ln_daemon/1 client proof", {nd, nc, instance}, out.client_proof);
+    hmac(key.bytes, Key::kBytes, "ln_daemon/1 daemon proof", {nd, nc, instance}, out.daemon_proof);
+    hmac(key.bytes, Key::kBytes, "ln_daemon/1 to daemon", {nd, nc, instance}, out.to_daemon.bytes);
+    hmac(key.bytes, Key::kBytes, "ln_daemon/1 to client", {nd, nc, instance}, out.to_client.bytes);
 }
 
 void frame_tag(const Key &key, uint64_t seq, const void *body, size_t size, Tag out) noexcept

@@ -8,6 +8,8 @@
 #include <string>
 #include <string_view>
 
+#include "outcome.hpp"
+
 namespace lnd {
 
 struct Key {
@@ -26,7 +28,8 @@ bool crypto_init() noexcept;
 
 // Reads a key file: a regular file owned by the daemon's uid, no permission bits for
 // group or others, holding 64 hex digits (optionally followed by a newline).
-bool load_key_file(const std::string &path, Key &key, std::string &error);
+// Refused with error os_error and a sentence.
+Outcome load_key_file(const std::string &path, Key &key);
 
 void random_bytes(void *out, size_t n) noexcept;
 

@@ -44,15 +44,25 @@ const Options &checked(const Options &o)
     return o;
 }
 
-std::string check_common(uint64_t token, const std::string &ring, uint64_t message_size)
+Outcome refused(std::string text)
+{
+    return outcome::error(proto::Err::stream_failed, std::move(text));
+}
+
+Outcome check_common(uint64_t token, const std::string &ring, uint64_t message_size)
 {
     if (token == 0)
-        return "stream token 0 is not allowed";
+        return refused("stream token 0 is not allowed");
     if (ring.empty())
-        return "no ring named";
+        return refused("no ring named");
     if (message_size == 0)
-        return "message size 0";
-    return "";
+        return refused("message size 0");
+    return outcome::ok();
+}
+
+Outcome not_started(const std::exception &e)
+{
+    return refused(std::string("cannot start the stream: ") + e.what());
 }
 
 } // namespace
@@ -126,27 +136,23 @@ Forwarder::Forwarder(const Options &options) : impl_(std::make_unique<Impl>(opti
 
 Forwarder::~Forwarder() = default;
 
-uint16_t Forwarder::data_port() const
-{
-    return impl_->sockets.port;
-}
+uint16_t Forwarder::data_port() const { return impl_->sockets.port; }
 
-std::string Forwarder::set_send(const SendSpec &spec)
+Outcome Forwarder::set_send(const SendSpec &spec)
 {
-    std::string error = check_common(spec.token, spec.ring, spec.message_size);
-    if (error.empty() && spec.host.empty())
-        error = "no receiving host named";
-    if (error.empty() && spec.port == 0)
-        error = "no receiving port named";
-    if (!error.empty())
-        return error;
+    if (Outcome o = check_common(spec.token, spec.ring, spec.message_size); o.failed())
+        return o;
+    if (spec.host.empty())
+        return refused("no receiving host named");
+    if (spec.port == 0)
+        return refused("no receiving port named");
     try {
         std::unique_ptr<SendStream> stream;
-        error = spec.transport == Transport::tcp
-                    ? TcpSender::create(spec, impl_->options, stream)
-                    : UdpSender::create(spec, impl_->options, stream);
-        if (!error.empty())
-            return error;
+        Outcome created = spec.transport == Transport::tcp
+                              ? TcpSender::create(spec, impl_->options, stream)
+                              : UdpSender::create(spec, impl_->options, stream);
+        if (created.failed())
+            return created;
         std::lock_guard<std::mutex> lock(impl_->control);
         if (std::unique_ptr<SendStream> old = impl_->take_sender(spec.token)) {
             old->stop();
@@ -155,28 +161,28 @@ std::string Forwarder::set_send(const SendSpec &spec)
         stream->start();
         std::lock_guard<std::mutex> table_lock(impl_->senders_mutex);
         impl_->senders[spec.token] = std::move(stream);
-        return "";
+        return outcome::ok();
     } catch (const std::exception &e) {
-        return std::string("cannot start the stream: ") + e.what();
+        return not_started(e);
     }
 }
 
-std::string Forwarder::set_recv(const RecvSpec &spec)
+Outcome Forwarder::set_recv(const RecvSpec &spec)
 {
-    std::string error = check_common(spec.token, spec.ring, spec.message_size);
-    if (!error.empty())
-        return error;
+    if (Outcome o = check_common(spec.token, spec.ring, spec.message_size); o.failed())
+        return o;
     try {
         std::shared_ptr<RecvStream> stream;
-        error = RecvStream::open(spec, impl_->budget, impl_->options.udp_max_incomplete, stream);
-        if (!error.empty())
-            return error;
+        if (Outcome o =
+                RecvStream::open(spec, impl_->budget, impl_->options.udp_max_incomplete, stream);
+            o.failed())
+            return o;
         std::lock_guard<std::mutex> lock(impl_->control);
         if (std::shared_ptr<RecvStream> old = impl_->receivers.put(std::move(stream)))
             impl_->retire(old);
-        return "";
+        return outcome::ok();
     } catch (const std::exception &e) {
-        return std::string("cannot start the stream: ") + e.what();
+        return not_started(e);
     }
 }
 
@@ -206,9 +212,8 @@ std::vector<StreamStats> Forwarder::stats() const
     }
     for (const auto &stream : impl_->receivers.all())
         out.push_back(stream->counters.snapshot());
-    std::stable_sort(out.begin(), out.end(), [](const StreamStats &a, const StreamStats &b) {
-        return a.token < b.token;
-    });
+    std::stable_sort(out.begin(), out.end(),
+                     [](const StreamStats &a, const StreamStats &b) { return a.token < b.token; });
     return out;
 }
 

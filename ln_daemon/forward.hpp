@@ -11,18 +11,20 @@
 #include <string>
 #include <vector>
 
+#include "outcome.hpp"
+
 namespace lnd::fwd {
 
 enum class Transport : uint8_t { udp = 0, tcp = 1 };
 
 // Where one topic's samples go from this host.
 struct SendSpec {
-    uint64_t token = 0;       // identifies the stream on the wire and in stats
-    std::string ring;         // shm name of the local ring to read
+    uint64_t token = 0; // identifies the stream on the wire and in stats
+    std::string ring;   // shm name of the local ring to read
     uint64_t layout_hash = 0;
     uint64_t message_size = 0;
     Transport transport = Transport::udp;
-    std::string host;         // receiving daemon: address and data port
+    std::string host; // receiving daemon: address and data port
     uint16_t port = 0;
 };
 
@@ -39,24 +41,24 @@ struct StreamStats {
     uint64_t token = 0;
     bool sending = false; // true: this host sends, false: it receives
     Transport transport = Transport::udp;
-    std::string ring;     // current segment name (follows successors)
-    std::string peer;     // sender: "host:port" it sends to; receiver: last source seen
-    uint64_t samples = 0; // sent / written into the ring
-    uint64_t bytes = 0;   // payload bytes sent / received
-    uint64_t drops = 0;   // sender: samples not sent (ring overrun, queue full, send error);
-                          // receiver: incomplete samples given up
-    uint64_t stale = 0;   // receiver: samples not newer than the ring's newest (duplicates,
-                          // reordered)
-    uint64_t invalid = 0; // receiver: malformed datagrams/frames for this stream
-    bool connected = true; // TCP: connection up (UDP: always true)
+    std::string ring;       // current segment name (follows successors)
+    std::string peer;       // sender: "host:port" it sends to; receiver: last source seen
+    uint64_t samples = 0;   // sent / written into the ring
+    uint64_t bytes = 0;     // payload bytes sent / received
+    uint64_t drops = 0;     // sender: samples not sent (ring overrun, queue full, send error);
+                            // receiver: incomplete samples given up
+    uint64_t stale = 0;     // receiver: samples not newer than the ring's newest (duplicates,
+                            // reordered)
+    uint64_t invalid = 0;   // receiver: malformed datagrams/frames for this stream
+    bool connected = true;  // TCP: connection up (UDP: always true)
     std::string last_error; // most recent problem, "" if none
 };
 
 struct Options {
-    std::string bind_address;                // "" = all interfaces
-    uint16_t data_port = 0;                  // UDP and TCP data port; 0 = ephemeral
-    size_t udp_payload = 1400;               // payload bytes per datagram (fragment)
-    size_t udp_max_incomplete = 4;           // samples being reassembled per stream, at most
+    std::string bind_address;                 // "" = all interfaces
+    uint16_t data_port = 0;                   // UDP and TCP data port; 0 = ephemeral
+    size_t udp_payload = 1400;                // payload bytes per datagram (fragment)
+    size_t udp_max_incomplete = 4;            // samples being reassembled per stream, at most
     size_t udp_reassembly_bytes = 256u << 20; // memory of all reassembly buffers, at most
     double udp_incomplete_timeout = 1.0;      // seconds without a fragment before an
                                               // incomplete sample is given up
@@ -73,8 +75,8 @@ struct Options {
 
 // Global counters of the receive side that belong to no stream.
 struct Totals {
-    uint64_t unknown_stream = 0; // datagrams/connections with a token no RecvSpec has
-    uint64_t malformed = 0;      // datagrams/frames that do not parse at all
+    uint64_t unknown_stream = 0;   // datagrams/connections with a token no RecvSpec has
+    uint64_t malformed = 0;        // datagrams/frames that do not parse at all
     uint64_t reassembly_bytes = 0; // memory held by incomplete UDP samples now
     uint64_t reassembly_peak = 0;  // the most it ever held (<= udp_reassembly_bytes)
 };
@@ -91,11 +93,12 @@ public:
     Forwarder &operator=(const Forwarder &) = delete;
 
     uint16_t data_port() const;
-    // Add or replace (same token) a stream; "" on success, else why not (bad ring, ...).
+    // Add or replace (same token) a stream; refused with error stream_failed and why (bad ring,
+    // ...).
     // Replacing or removing a sending stream joins its threads first, which can take up to
     // ~0.1 s (their ring wait).  Names are resolved by the stream's threads, never here.
-    std::string set_send(const SendSpec &spec);
-    std::string set_recv(const RecvSpec &spec);
+    Outcome set_send(const SendSpec &spec);
+    Outcome set_recv(const RecvSpec &spec);
     // Stop and forget a stream (sending and receiving with that token); false if there is
     // none.  Once it returned nothing more is sent or written into the ring for it.
     bool remove(uint64_t token);

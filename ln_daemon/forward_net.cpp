@@ -126,8 +126,7 @@ bool StopSignal::sleep_us(int64_t us) const noexcept
 
 // ---- addresses -------------------------------------------------------------------------------
 
-std::string resolve(const std::string &host, uint16_t port, int socktype,
-                    std::vector<Address> &out)
+Outcome resolve(const std::string &host, uint16_t port, int socktype, std::vector<Address> &out)
 {
     addrinfo hints = {};
     hints.ai_family = AF_UNSPEC;
@@ -137,8 +136,9 @@ std::string resolve(const std::string &host, uint16_t port, int socktype,
     std::string service = std::to_string(port);
     int rc = ::getaddrinfo(host.c_str(), service.c_str(), &hints, &res);
     if (rc != 0)
-        return "cannot resolve '" + host + "': " +
-               (rc == EAI_SYSTEM ? std::strerror(errno) : ::gai_strerror(rc));
+        return outcome::error(proto::Err::stream_failed,
+                              "cannot resolve '" + host + "': " +
+                                  (rc == EAI_SYSTEM ? std::strerror(errno) : ::gai_strerror(rc)));
     out.clear();
     for (addrinfo *ai = res; ai; ai = ai->ai_next) {
         if (ai->ai_addrlen > sizeof(sockaddr_storage))
@@ -149,7 +149,9 @@ std::string resolve(const std::string &host, uint16_t port, int socktype,
         out.push_back(a);
     }
     ::freeaddrinfo(res);
-    return out.empty() ? "no usable address for '" + host + "'" : "";
+    if (out.empty())
+        return outcome::error(proto::Err::stream_failed, "no usable address for '" + host + "'");
+    return outcome::ok();
 }
 
 std::string address_text(const sockaddr *sa)
@@ -213,8 +215,8 @@ DataSockets bind_data_sockets(const std::string &bind_address, uint16_t port, in
         if (s.tcp)
             set_buffer_sizes(s.tcp.get(), buffer); // accepted connections inherit them
         if (!s.tcp || ::listen(s.tcp.get(), 128) != 0)
-            throw_errno(errno, "cannot listen for TCP data on " + name + ":" +
-                                   std::to_string(port));
+            throw_errno(errno,
+                        "cannot listen for TCP data on " + name + ":" + std::to_string(port));
         s.port = bound_port(s.tcp.get());
         Address udp_where = where;
         set_port(udp_where, s.port);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "fd.hpp"
+#include "outcome.hpp"
 
 namespace lnd::fwd {
 
@@ -39,9 +40,9 @@ struct Address {
     const sockaddr *get() const noexcept { return reinterpret_cast<const sockaddr *>(&storage); }
 };
 
-// All addresses of host:port for `socktype` (SOCK_DGRAM/SOCK_STREAM); "" or the reason.
-std::string resolve(const std::string &host, uint16_t port, int socktype,
-                    std::vector<Address> &out);
+// All addresses of host:port for `socktype` (SOCK_DGRAM/SOCK_STREAM) into `out`; refused
+// with error stream_failed and the reason.
+Outcome resolve(const std::string &host, uint16_t port, int socktype, std::vector<Address> &out);
 // "1.2.3.4:5" or "[::1]:5"; IPv4-mapped IPv6 addresses are shown as IPv4.
 std::string address_text(const sockaddr *sa);
 // SO_RCVBUFFORCE/SO_SNDBUFFORCE (allowed with CAP_NET_ADMIN), else the capped

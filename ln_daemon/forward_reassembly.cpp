@@ -33,8 +33,7 @@ void ReassemblyBudget::give(size_t bytes) noexcept
 
 Reassembler::Reassembler(ReassemblyBudget &budget, size_t max_incomplete) noexcept
     : budget_(budget), max_incomplete_(max_incomplete)
-{
-}
+{}
 
 Reassembler::~Reassembler()
 {
@@ -114,8 +113,7 @@ Reassembler::Outcome Reassembler::store(Entry &e, const wire::Fragment &f, int64
     return out;
 }
 
-Reassembler::Outcome Reassembler::add(const wire::Fragment &f, uint64_t ring_newest,
-                                      int64_t now_ns)
+Reassembler::Outcome Reassembler::add(const wire::Fragment &f, uint64_t ring_newest, int64_t now_ns)
 {
     Outcome out;
     if (Entry *e = find(f.seq)) {
@@ -156,8 +154,8 @@ Reassembler::Outcome Reassembler::add(const wire::Fragment &f, uint64_t ring_new
     while (!budget_.take(charge)) {
         size_t oldest = entries_.size();
         for (size_t i = 0; i < entries_.size(); ++i)
-            if (entries_[i].seq < f.seq && (oldest == entries_.size() ||
-                                            entries_[i].seq < entries_[oldest].seq))
+            if (entries_[i].seq < f.seq &&
+                (oldest == entries_.size() || entries_[i].seq < entries_[oldest].seq))
                 oldest = i;
         if (oldest == entries_.size()) {
             remember(f.seq);
@@ -201,10 +199,7 @@ uint64_t Reassembler::finish(uint64_t seq)
     return drop_older_than(seq);
 }
 
-uint64_t Reassembler::supersede(uint64_t seq)
-{
-    return drop_older_than(seq);
-}
+uint64_t Reassembler::supersede(uint64_t seq) { return drop_older_than(seq); }
 
 uint64_t Reassembler::expire(int64_t now_ns, int64_t max_idle_ns)
 {

@@ -6,22 +6,20 @@
 
 namespace lnd::fwd {
 
-std::string RecvStream::open(const RecvSpec &spec, ReassemblyBudget &budget,
-                             size_t max_incomplete, std::shared_ptr<RecvStream> &out)
+Outcome RecvStream::open(const RecvSpec &spec, ReassemblyBudget &budget, size_t max_incomplete,
+                         std::shared_ptr<RecvStream> &out)
 {
     Tap tap;
-    std::string error =
-        open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_NEWEST);
-    if (!error.empty())
-        return error;
+    if (Outcome o = open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_NEWEST);
+        o.failed())
+        return o;
     out = std::make_shared<RecvStream>(spec, std::move(tap), budget, max_incomplete);
-    return "";
+    return outcome::ok();
 }
 
 RecvStream::RecvStream(const RecvSpec &spec_, Tap tap, ReassemblyBudget &budget,
                        size_t max_incomplete)
-    : spec(spec_),
-      counters(spec_.token, false, spec_.transport, spec_.transport == Transport::udp),
+    : spec(spec_), counters(spec_.token, false, spec_.transport, spec_.transport == Transport::udp),
       reassembler(budget, max_incomplete), tap_(std::move(tap))
 {
     counters.note_segment(ln_ring_tap_segment(tap_.get()));

@@ -23,9 +23,9 @@ namespace lnd::fwd {
 
 class RecvStream {
 public:
-    // Opens the ring; "" and `out` set, or the reason.
-    static std::string open(const RecvSpec &spec, ReassemblyBudget &budget,
-                            size_t max_incomplete, std::shared_ptr<RecvStream> &out);
+    // Opens the ring into `out`, or refuses (error stream_failed).
+    static Outcome open(const RecvSpec &spec, ReassemblyBudget &budget, size_t max_incomplete,
+                        std::shared_ptr<RecvStream> &out);
     RecvStream(const RecvSpec &spec, Tap tap, ReassemblyBudget &budget, size_t max_incomplete);
 
     const RecvSpec spec;

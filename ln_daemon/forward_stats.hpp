@@ -16,8 +16,7 @@ class StreamCounters {
 public:
     StreamCounters(uint64_t token, bool sending, Transport transport, bool connected)
         : token_(token), sending_(sending), transport_(transport), connected_(connected)
-    {
-    }
+    {}
 
     std::atomic<uint64_t> samples{0};
     std::atomic<uint64_t> bytes{0};

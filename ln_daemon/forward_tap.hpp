@@ -12,6 +12,7 @@
 #include <ln_admin.h>
 
 #include "forward_net.hpp"
+#include "outcome.hpp"
 
 namespace lnd::fwd {
 
@@ -20,16 +21,18 @@ struct TapCloser {
 };
 using Tap = std::unique_ptr<ln_ring_tap, TapCloser>;
 
-// Opens a tap on `ring` (LN_TAP_EVERY or LN_TAP_NEWEST); "" on success, else libln's text.
-inline std::string open_tap(Tap &out, const std::string &ring, uint64_t layout_hash,
-                            uint64_t message_size, unsigned mode)
+// Opens a tap on `ring` (LN_TAP_EVERY or LN_TAP_NEWEST) into `out`; refused with libln's
+// text as error stream_failed.
+inline Outcome open_tap(Tap &out, const std::string &ring, uint64_t layout_hash,
+                        uint64_t message_size, unsigned mode)
 {
     ln_ring_tap *tap = nullptr;
     int rc = ln_ring_tap_open(&tap, ring.c_str(), layout_hash, message_size, mode);
     if (rc != LN_OK)
-        return "cannot open ring '" + ring + "': " + ln_last_error();
+        return outcome::error(proto::Err::stream_failed,
+                              "cannot open ring '" + ring + "': " + ln_last_error());
     out.reset(tap);
-    return "";
+    return outcome::ok();
 }
 
 // The next sample into buf (libln's code, LN_ETIMEOUT if none came): polls the tap, yielding

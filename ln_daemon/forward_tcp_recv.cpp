@@ -18,7 +18,7 @@ namespace lnd::fwd {
 namespace {
 
 constexpr int kHelloTimeoutMs = 10000;
-constexpr int kAcceptWakeMs = 1000;      // to reap ended connections without new ones
+constexpr int kAcceptWakeMs = 1000; // to reap ended connections without new ones
 // A sender host that died is noticed after about idle + interval * count seconds.
 constexpr int kKeepIdle = 10, kKeepInterval = 2, kKeepCount = 3;
 
@@ -34,16 +34,11 @@ void send_reply(int fd, wire::Kind kind, wire::Reject reason, uint64_t token,
 
 } // namespace
 
-TcpReceiver::TcpReceiver(int listener, RecvTable &table, TotalCounters &totals,
-                         unsigned spin_us)
+TcpReceiver::TcpReceiver(int listener, RecvTable &table, TotalCounters &totals, unsigned spin_us)
     : listener_(listener), table_(table), totals_(totals), spin_ns_(int64_t{spin_us} * 1000)
-{
-}
+{}
 
-TcpReceiver::~TcpReceiver()
-{
-    stop();
-}
+TcpReceiver::~TcpReceiver() { stop(); }
 
 void TcpReceiver::start()
 {
@@ -112,8 +107,8 @@ void TcpReceiver::accept_loop()
             continue;
         Address from;
         from.length = sizeof from.storage;
-        UniqueFd fd(::accept4(listener_, reinterpret_cast<sockaddr *>(&from.storage),
-                              &from.length, SOCK_NONBLOCK | SOCK_CLOEXEC));
+        UniqueFd fd(::accept4(listener_, reinterpret_cast<sockaddr *>(&from.storage), &from.length,
+                              SOCK_NONBLOCK | SOCK_CLOEXEC));
         if (!fd) {
             if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM)
                 stop_.sleep_for(100); // the connection stays pending: do not spin on it
@@ -126,8 +121,7 @@ void TcpReceiver::accept_loop()
         ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
         ::setsockopt(c->fd.get(), SOL_SOCKET, SO_KEEPALIVE, &one, sizeof one);
         ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_KEEPIDLE, &kKeepIdle, sizeof kKeepIdle);
-        ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_KEEPINTVL, &kKeepInterval,
-                     sizeof kKeepInterval);
+        ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_KEEPINTVL, &kKeepInterval, sizeof kKeepInterval);
         ::setsockopt(c->fd.get(), IPPROTO_TCP, TCP_KEEPCNT, &kKeepCount, sizeof kKeepCount);
         std::lock_guard<std::mutex> lock(mutex_);
         if (connections_.size() >= kMaxTcpConnections) {
@@ -167,11 +161,9 @@ void TcpReceiver::serve(Connection &c)
         c.done.store(true);
         return;
     }
-    if (hello.message_size != s->spec.message_size ||
-        hello.layout_hash != s->spec.layout_hash) {
+    if (hello.message_size != s->spec.message_size || hello.layout_hash != s->spec.layout_hash) {
         StreamCounters::add(s->counters.invalid);
-        s->counters.set_error(c.peer + " sends messages of " +
-                              std::to_string(hello.message_size) +
+        s->counters.set_error(c.peer + " sends messages of " + std::to_string(hello.message_size) +
                               " bytes with another layout hash or size");
         send_reply(fd, wire::Kind::reject, wire::Reject::layout, hello.token, stop_);
         c.done.store(true);

@@ -24,6 +24,11 @@ namespace lnd::fwd {
 
 namespace {
 
+Outcome refused(std::string text)
+{
+    return outcome::error(proto::Err::stream_failed, std::move(text));
+}
+
 constexpr auto kIdleCheck = std::chrono::milliseconds(100); // peer-close check when idle
 constexpr int kConnectTimeoutMs = 5000;
 constexpr int kReplyTimeoutMs = 5000;
@@ -66,23 +71,23 @@ bool peer_gone(int fd, std::string &why)
 
 } // namespace
 
-std::string TcpSender::create(const SendSpec &spec, const Options &options,
-                              std::unique_ptr<SendStream> &out)
+Outcome TcpSender::create(const SendSpec &spec, const Options &options,
+                          std::unique_ptr<SendStream> &out)
 {
     size_t size = spec.message_size ? spec.message_size : 1;
     size_t capacity = std::min(options.tcp_queue_samples, options.tcp_queue_bytes / size);
     if (capacity == 0)
-        return "a sample of " + std::to_string(spec.message_size) +
-               " bytes does not fit the TCP queue bounds (" +
-               std::to_string(options.tcp_queue_samples) + " samples, " +
-               std::to_string(options.tcp_queue_bytes) + " bytes)";
+        return outcome::error(proto::Err::stream_failed,
+                              "a sample of " + std::to_string(spec.message_size) +
+                                  " bytes does not fit the TCP queue bounds (" +
+                                  std::to_string(options.tcp_queue_samples) + " samples, " +
+                                  std::to_string(options.tcp_queue_bytes) + " bytes)");
     Tap tap;
-    std::string error =
-        open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_EVERY);
-    if (!error.empty())
-        return error;
+    if (Outcome o = open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_EVERY);
+        o.failed())
+        return o;
     out = std::make_unique<TcpSender>(spec, options, std::move(tap), capacity);
-    return "";
+    return outcome::ok();
 }
 
 TcpSender::TcpSender(const SendSpec &spec, const Options &options, Tap tap, size_t capacity)
@@ -142,10 +147,7 @@ TcpSender::Buffer TcpSender::take_buffer()
     return Buffer(new uint8_t[spec_.message_size ? spec_.message_size : 1]);
 }
 
-void TcpSender::give_buffer(Buffer b)
-{
-    free_.push_back(std::move(b));
-}
+void TcpSender::give_buffer(Buffer b) { free_.push_back(std::move(b)); }
 
 void TcpSender::read_loop()
 {
@@ -259,12 +261,12 @@ Io TcpSender::write_sample(Sample &s, std::string &error)
     return write_full(sock_.get(), iov, static_cast<int>(count), stop_, error);
 }
 
-std::string TcpSender::try_connect()
+Outcome TcpSender::try_connect()
 {
     std::vector<Address> addresses;
-    std::string error = resolve(spec_.host, spec_.port, SOCK_STREAM, addresses);
-    if (!error.empty())
-        return error;
+    if (Outcome o = resolve(spec_.host, spec_.port, SOCK_STREAM, addresses); o.failed())
+        return o;
+    std::string error;
     UniqueFd fd;
     for (const Address &a : addresses) {
         std::string where = "connecting to " + address_text(a.get()) + ": ";
@@ -285,7 +287,7 @@ std::string TcpSender::try_connect()
         }
         Wait w = wait_fd(fd.get(), POLLOUT, stop_, kConnectTimeoutMs);
         if (w == Wait::stopped)
-            return "stopped";
+            return refused("stopped");
         int soerr = 0;
         socklen_t len = sizeof soerr;
         if (w == Wait::timeout)
@@ -300,7 +302,7 @@ std::string TcpSender::try_connect()
         break;
     }
     if (!fd)
-        return error;
+        return refused(error);
 
     uint8_t hello[wire::kHelloSize];
     wire::encode_hello(hello, {spec_.token, spec_.message_size, spec_.layout_hash});
@@ -313,24 +315,24 @@ std::string TcpSender::try_connect()
         if (io == Io::ok) {
             wire::Reply reply;
             if (!wire::decode_reply(raw, reply))
-                return "the receiver's reply is not one of this protocol version";
+                return refused("the receiver's reply is not one of this protocol version");
             if (reply.kind == wire::Kind::reject) // a busy receiver rejects before the hello
-                return reject_text(reply.reason);
+                return refused(reject_text(reply.reason));
             if (reply.token != spec_.token)
-                return "the receiver accepted another stream";
+                return refused("the receiver accepted another stream");
             sock_ = std::move(fd);
-            return "";
+            return outcome::ok();
         }
     }
     switch (io) {
     case Io::closed:
-        return "the receiver closed the connection during the hello";
+        return refused("the receiver closed the connection during the hello");
     case Io::timeout:
-        return "no reply from the receiver";
+        return refused("no reply from the receiver");
     case Io::stopped:
-        return "stopped";
+        return refused("stopped");
     default:
-        return "hello: " + io_error;
+        return refused("hello: " + io_error);
     }
 }
 
@@ -338,14 +340,14 @@ bool TcpSender::connect_with_backoff()
 {
     int backoff_ms = kFirstBackoffMs;
     while (!stop_.raised()) {
-        std::string error = try_connect();
-        if (error.empty()) {
+        Outcome connected = try_connect();
+        if (!connected.failed()) {
             counters_.set_connected(true);
             return true;
         }
         if (stop_.raised())
             break;
-        counters_.set_error(spec_.host + ":" + std::to_string(spec_.port) + ": " + error);
+        counters_.set_error(spec_.host + ":" + std::to_string(spec_.port) + ": " + connected.text);
         if (stop_.sleep_for(backoff_ms))
             break;
         backoff_ms = std::min(backoff_ms * 2, kMaxBackoffMs);
@@ -371,13 +373,12 @@ void TcpSender::write_loop()
             break;
         if (!have) {
             for (auto end = std::chrono::steady_clock::now() + std::chrono::nanoseconds(spin_ns_);
-                 spin_ns_ > 0 && queued_.load(std::memory_order_acquire) == 0
-                 && !stop_.raised() && std::chrono::steady_clock::now() < end;)
+                 spin_ns_ > 0 && queued_.load(std::memory_order_acquire) == 0 && !stop_.raised() &&
+                 std::chrono::steady_clock::now() < end;)
                 std::this_thread::yield(); // a sample that comes soon: no wake-up
             std::unique_lock<std::mutex> lock(mutex_);
             writer_idle_ = true; // from here the reader may send on sock_ itself
-            ready_.wait_for(lock, kIdleCheck,
-                            [this] { return stop_.raised() || !queue_.empty(); });
+            ready_.wait_for(lock, kIdleCheck, [this] { return stop_.raised() || !queue_.empty(); });
             writer_idle_ = false;
             if (stop_.raised())
                 break;

@@ -22,15 +22,16 @@
 #include "forward_net.hpp"
 #include "forward_send_stream.hpp"
 #include "forward_tap.hpp"
+#include "outcome.hpp"
 
 namespace lnd::fwd {
 
 class TcpSender final : public SendStream {
 public:
-    // Opens the ring; "" and `out` set, or the reason (also when not even one sample fits
+    // Opens the ring into `out`, or refuses (error stream_failed) (also when not even one sample fits
     // the queue bounds).
-    static std::string create(const SendSpec &spec, const Options &options,
-                              std::unique_ptr<SendStream> &out);
+    static Outcome create(const SendSpec &spec, const Options &options,
+                          std::unique_ptr<SendStream> &out);
     TcpSender(const SendSpec &spec, const Options &options, Tap tap, size_t capacity);
     ~TcpSender() override;
 
@@ -58,25 +59,25 @@ private:
     Io write_sample(Sample &s, std::string &error);
     // Connects (and reconnects) until it succeeds or the stream stops (false).
     bool connect_with_backoff();
-    std::string try_connect(); // "" with sock_ set, or what went wrong
+    Outcome try_connect(); // sock_ set, or refused with what went wrong
     void lost(const std::string &why);
-    Buffer take_buffer();      // a free buffer, or a new one within the bound
+    Buffer take_buffer();       // a free buffer, or a new one within the bound
     void give_buffer(Buffer b); // under mutex_
 
     Tap tap_;
     const size_t capacity_; // samples queued plus the one being sent, at most
     const int socket_buffer_;
-    const int64_t spin_ns_;          // poll the tap / the queue this long before sleeping
+    const int64_t spin_ns_;         // poll the tap / the queue this long before sleeping
     std::atomic<size_t> queued_{0}; // queue_.size(), readable without the mutex
 
     std::mutex mutex_;
     std::condition_variable ready_;
     std::deque<Sample> queue_;
-    bool in_flight_ = false;     // a sample taken from the queue (or sent directly) is being sent
-    bool writer_idle_ = false;   // the writer waits for the queue with sock_ connected
+    bool in_flight_ = false;      // a sample taken from the queue (or sent directly) is being sent
+    bool writer_idle_ = false;    // the writer waits for the queue with sock_ connected
     bool reader_sending_ = false; // the reader writes to sock_ (the writer leaves it alone)
-    std::vector<Buffer> free_;   // buffers to reuse
-    size_t allocated_ = 0;       // buffers in existence: at most capacity_ + 1
+    std::vector<Buffer> free_;    // buffers to reuse
+    size_t allocated_ = 0;        // buffers in existence: at most capacity_ + 1
 
     UniqueFd sock_; // the writer's; the reader uses it only while reader_sending_
     StopSignal stop_;

@@ -14,9 +14,9 @@ namespace lnd::fwd {
 
 namespace {
 
-constexpr unsigned kBatch = 32;            // datagrams per recvmmsg
-constexpr size_t kBufferSize = 64 * 1024;  // more than any UDP datagram over IPv4
-constexpr int64_t kSweepNs = 100'000'000;  // how often incomplete samples are checked for age
+constexpr unsigned kBatch = 32;           // datagrams per recvmmsg
+constexpr size_t kBufferSize = 64 * 1024; // more than any UDP datagram over IPv4
+constexpr int64_t kSweepNs = 100'000'000; // how often incomplete samples are checked for age
 
 int64_t monotonic_ns() noexcept
 {
@@ -36,18 +36,13 @@ int64_t seconds_to_ns(double s) noexcept
 
 } // namespace
 
-UdpReceiver::UdpReceiver(int fd, RecvTable &table, TotalCounters &totals,
-                         const Options &options)
+UdpReceiver::UdpReceiver(int fd, RecvTable &table, TotalCounters &totals, const Options &options)
     : fd_(fd), table_(table), totals_(totals),
       max_idle_ns_(seconds_to_ns(options.udp_incomplete_timeout)),
       spin_ns_(int64_t{options.spin_us} * 1000)
-{
-}
+{}
 
-UdpReceiver::~UdpReceiver()
-{
-    stop();
-}
+UdpReceiver::~UdpReceiver() { stop(); }
 
 void UdpReceiver::start()
 {
@@ -91,8 +86,7 @@ void UdpReceiver::sweep(int64_t now_ns)
     }
 }
 
-void UdpReceiver::handle(const uint8_t *datagram, size_t size, const Address &from,
-                         int64_t now_ns)
+void UdpReceiver::handle(const uint8_t *datagram, size_t size, const Address &from, int64_t now_ns)
 {
     wire::Fragment f;
     if (!wire::decode_fragment(datagram, size, f)) {
@@ -171,9 +165,8 @@ void UdpReceiver::run()
         int n = -1;
         if (spin_ns_ > 0) { // a datagram that comes soon is taken without a wake-up
             for (int64_t end = monotonic_ns() + spin_ns_;
-                 (n = ::recvmmsg(fd_, msgs, kBatch, MSG_DONTWAIT, nullptr)) < 0
-                 && errno == EAGAIN && monotonic_ns() < end
-                 && !stop_.load(std::memory_order_acquire);)
+                 (n = ::recvmmsg(fd_, msgs, kBatch, MSG_DONTWAIT, nullptr)) < 0 &&
+                 errno == EAGAIN && monotonic_ns() < end && !stop_.load(std::memory_order_acquire);)
                 std::this_thread::yield();
         }
         if (n < 0)
@@ -190,8 +183,7 @@ void UdpReceiver::run()
                 continue;
             }
             from[i].length = msgs[i].msg_hdr.msg_namelen;
-            handle(static_cast<const uint8_t *>(iov[i].iov_base), msgs[i].msg_len, from[i],
-                   now);
+            handle(static_cast<const uint8_t *>(iov[i].iov_base), msgs[i].msg_len, from[i], now);
         }
         if (n < 0 && err != EAGAIN && err != EWOULDBLOCK && err != EINTR) {
             // Nothing on this socket fails for long (ENOMEM, a pending ICMP error): pause

@@ -15,9 +15,9 @@ namespace lnd::fwd {
 
 namespace {
 
-constexpr unsigned kBatch = 64;            // datagrams per sendmmsg
+constexpr unsigned kBatch = 64; // datagrams per sendmmsg
 constexpr auto kResolveInterval = std::chrono::seconds(1);
-constexpr int kRefusedRetries = 3;         // per sample, see send_sample
+constexpr int kRefusedRetries = 3;                          // per sample, see send_sample
 constexpr int64_t kMinBackoffUs = 50, kMaxBackoffUs = 5000; // after ENOBUFS
 constexpr double kBurstBytes = 64 * 1024; // with a rate limit: sent at once, at most
 
@@ -31,23 +31,21 @@ unsigned batch_size(double rate, size_t datagram)
 
 } // namespace
 
-std::string UdpSender::create(const SendSpec &spec, const Options &options,
-                              std::unique_ptr<SendStream> &out)
+Outcome UdpSender::create(const SendSpec &spec, const Options &options,
+                          std::unique_ptr<SendStream> &out)
 {
     Tap tap;
-    std::string error =
-        open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_NEWEST);
-    if (!error.empty())
-        return error;
+    if (Outcome o = open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_NEWEST);
+        o.failed())
+        return o;
     out = std::make_unique<UdpSender>(spec, options, std::move(tap));
-    return "";
+    return outcome::ok();
 }
 
 UdpSender::UdpSender(const SendSpec &spec, const Options &options, Tap tap)
     : SendStream(spec), tap_(std::move(tap)), chunk_(static_cast<uint16_t>(options.udp_payload)),
       socket_buffer_(options.socket_buffer), spin_ns_(int64_t{options.spin_us} * 1000),
-      rate_(options.udp_max_rate),
-      batch_(batch_size(rate_, wire::kFragmentHeaderSize + chunk_)),
+      rate_(options.udp_max_rate), batch_(batch_size(rate_, wire::kFragmentHeaderSize + chunk_)),
       sample_(new uint8_t[spec.message_size ? spec.message_size : 1]),
       headers_(kBatch * wire::kFragmentHeaderSize), msgs_(kBatch), iov_(2 * kBatch)
 {
@@ -65,10 +63,7 @@ void UdpSender::start()
     thread_ = std::thread([this] { run(); });
 }
 
-void UdpSender::stop() noexcept
-{
-    stop_.raise();
-}
+void UdpSender::stop() noexcept { stop_.raise(); }
 
 void UdpSender::join() noexcept
 {
@@ -83,8 +78,9 @@ void UdpSender::open_socket()
         return;
     next_open_ = now + kResolveInterval;
     std::vector<Address> addresses;
-    std::string error = resolve(spec_.host, spec_.port, SOCK_DGRAM, addresses);
-    if (error.empty()) {
+    Outcome resolved = resolve(spec_.host, spec_.port, SOCK_DGRAM, addresses);
+    std::string error = resolved.text;
+    if (!resolved.failed()) {
         for (const Address &a : addresses) {
             UniqueFd fd(::socket(a.family(), SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
             if (fd && ::connect(fd.get(), a.get(), a.length) == 0) {

@@ -21,9 +21,9 @@ namespace lnd::fwd {
 
 class UdpSender final : public SendStream {
 public:
-    // Opens the ring; "" and `out` set, or the reason.
-    static std::string create(const SendSpec &spec, const Options &options,
-                              std::unique_ptr<SendStream> &out);
+    // Opens the ring into `out`, or refuses (error stream_failed).
+    static Outcome create(const SendSpec &spec, const Options &options,
+                          std::unique_ptr<SendStream> &out);
     UdpSender(const SendSpec &spec, const Options &options, Tap tap);
     ~UdpSender() override;
 
@@ -46,9 +46,9 @@ private:
     const uint16_t chunk_;
     const int socket_buffer_;
     const int64_t spin_ns_; // poll the tap this long before sleeping
-    const double rate_;    // bytes per second, 0: no limit
-    const unsigned batch_; // datagrams per sendmmsg
-    double credit_ = 0;    // bytes that may go now (token bucket)
+    const double rate_;     // bytes per second, 0: no limit
+    const unsigned batch_;  // datagrams per sendmmsg
+    double credit_ = 0;     // bytes that may go now (token bucket)
     std::chrono::steady_clock::time_point last_pace_{};
     std::unique_ptr<uint8_t[]> sample_;
     UniqueFd sock_;

@@ -26,10 +26,7 @@ void put64(uint8_t *p, uint64_t v) noexcept
         p[i] = static_cast<uint8_t>(v >> (8 * i));
 }
 
-uint16_t get16(const uint8_t *p) noexcept
-{
-    return static_cast<uint16_t>(p[0] | p[1] << 8);
-}
+uint16_t get16(const uint8_t *p) noexcept { return static_cast<uint16_t>(p[0] | p[1] << 8); }
 
 uint32_t get32(const uint8_t *p) noexcept
 {
@@ -98,10 +95,7 @@ void encode_fragment_header(uint8_t *out, const Fragment &f) noexcept
     put32(out + 44, f.count);
 }
 
-void set_fragment_index(uint8_t *header, uint32_t index) noexcept
-{
-    put32(header + 40, index);
-}
+void set_fragment_index(uint8_t *header, uint32_t index) noexcept { put32(header + 40, index); }
 
 bool decode_fragment(const uint8_t *d, size_t size, Fragment &f) noexcept
 {

@@ -36,10 +36,10 @@ struct Fragment {
     uint64_t token = 0;
     uint64_t seq = 0;
     int64_t timestamp_ns = 0;
-    uint64_t sample_size = 0; // bytes of the whole sample
-    uint32_t index = 0;       // of this fragment, 0 .. count-1
-    uint32_t count = 0;       // fragments of the sample
-    uint16_t chunk_size = 0;  // payload bytes of every fragment but the last (the sender's)
+    uint64_t sample_size = 0;      // bytes of the whole sample
+    uint32_t index = 0;            // of this fragment, 0 .. count-1
+    uint32_t count = 0;            // fragments of the sample
+    uint16_t chunk_size = 0;       // payload bytes of every fragment but the last (the sender's)
     const uint8_t *data = nullptr; // this fragment's payload
     size_t length = 0;
 };

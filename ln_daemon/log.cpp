@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "fd.hpp"
+#include "outcome.hpp"
 
 namespace lnd {
 
@@ -19,21 +20,17 @@ namespace {
 UniqueFd g_log_fd; // empty: stderr
 } // namespace
 
-bool log_open(const std::string &path, std::string &error)
+Outcome log_open(const std::string &path)
 {
     int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NOCTTY, 0640);
-    if (fd < 0) {
-        error = "cannot open log file '" + path + "': " + std::strerror(errno);
-        return false;
-    }
+    if (fd < 0)
+        return outcome::error(proto::Err::os_error,
+                              "cannot open log file '" + path + "': " + std::strerror(errno));
     g_log_fd.reset(fd);
-    return true;
+    return outcome::ok();
 }
 
-void log_discard() noexcept
-{
-    g_log_fd.reset(::open("/dev/null", O_WRONLY | O_CLOEXEC));
-}
+void log_discard() noexcept { g_log_fd.reset(::open("/dev/null", O_WRONLY | O_CLOEXEC)); }
 
 void logf(const char *fmt, ...) noexcept
 {
@@ -43,8 +40,9 @@ void logf(const char *fmt, ...) noexcept
     struct tm tm;
     ::localtime_r(&tv.tv_sec, &tm);
     size_t n = std::strftime(line, sizeof line, "%Y-%m-%d %H:%M:%S", &tm);
-    int m = std::snprintf(line + n, sizeof line - n, ".%03ld ln_daemon[%ld]: ",
-                          static_cast<long>(tv.tv_usec / 1000), static_cast<long>(::getpid()));
+    int m = std::snprintf(line + n, sizeof line - n,
+                          ".%03ld ln_daemon[%ld]: ", static_cast<long>(tv.tv_usec / 1000),
+                          static_cast<long>(::getpid()));
     if (m > 0)
         n += static_cast<size_t>(m);
     va_list ap;

@@ -6,9 +6,11 @@
 
 namespace lnd {
 
-// Opens (appending, creating 0640) the log file; false and `error` if it cannot.
-// Called again on SIGHUP to follow a rotated file.
-bool log_open(const std::string &path, std::string &error);
+struct Outcome; // outcome.hpp, which uses logf()
+
+// Opens (appending, creating 0640) the log file; refused with error os_error.  Called again
+// on SIGHUP to follow a rotated file.
+Outcome log_open(const std::string &path);
 // Sends the log to /dev/null (a detached daemon without --log).
 void log_discard() noexcept;
 void logf(const char *fmt, ...) noexcept __attribute__((format(printf, 1, 2)));

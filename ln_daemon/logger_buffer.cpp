@@ -28,8 +28,7 @@ uint64_t SampleBuffer::bytes_for(uint32_t depth, uint64_t message_size) noexcept
 
 SampleBuffer::SampleBuffer(uint32_t depth, uint64_t message_size)
     : depth_(depth), message_size_(message_size), slots_(uint64_t{depth} + 1),
-      stride_(static_cast<size_t>(stride_for(message_size))),
-      bytes_(bytes_for(depth, message_size))
+      stride_(static_cast<size_t>(stride_for(message_size))), bytes_(bytes_for(depth, message_size))
 {
     if (bytes_ == UINT64_MAX || bytes_ > SIZE_MAX)
         throw std::bad_alloc();
@@ -90,8 +89,7 @@ void SampleBuffer::clear() noexcept
     count_ = 0;
 }
 
-void SampleBuffer::encode_after(proto::Writer &w, uint64_t after_seq,
-                                uint32_t max_samples) const
+void SampleBuffer::encode_after(proto::Writer &w, uint64_t after_seq, uint32_t max_samples) const
 {
     uint32_t lo = 0, hi = count_; // the first sample with seq > after_seq
     while (lo < hi) {

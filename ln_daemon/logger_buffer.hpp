@@ -66,8 +66,8 @@ private:
 
     const uint32_t depth_;
     const uint64_t message_size_;
-    const uint64_t slots_;  // depth + 1
-    const size_t stride_;   // bytes per slot
+    const uint64_t slots_; // depth + 1
+    const size_t stride_;  // bytes per slot
     const uint64_t bytes_;
     std::unique_ptr<uint8_t[]> data_;
     uint32_t head_ = 0;  // physical index of the oldest sample

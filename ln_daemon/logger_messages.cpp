@@ -5,10 +5,7 @@
 
 namespace lnd {
 
-bool decode_logger_topic(proto::Reader &r, LoggerTopicRequest &out)
-{
-    return wire::decode(r, out);
-}
+bool decode_logger_topic(proto::Reader &r, LoggerTopicRequest &out) { return wire::decode(r, out); }
 
 bool decode_logger_remove(proto::Reader &r, LoggerRemoveRequest &out)
 {
@@ -20,10 +17,7 @@ bool decode_logger_enable(proto::Reader &r, LoggerEnableRequest &out)
     return wire::decode(r, out);
 }
 
-bool decode_logger_fetch(proto::Reader &r, LoggerFetchRequest &out)
-{
-    return wire::decode(r, out);
-}
+bool decode_logger_fetch(proto::Reader &r, LoggerFetchRequest &out) { return wire::decode(r, out); }
 
 bool decode_logger_status(proto::Reader &r, std::string &logger)
 {

@@ -92,8 +92,7 @@ LoggerTopic::LoggerTopic(const LoggerConfig &config, std::string label)
       message_size_(config.message_size), config_(config),
       buffer_(config.depth, config.message_size), divisor_(config.divisor),
       span_ns_(span_ns(config.span_s)), ring_(config.ring)
-{
-}
+{}
 
 LoggerTopic::~LoggerTopic()
 {
@@ -142,8 +141,7 @@ void LoggerTopic::start_run(bool keep_baseline)
         ring = ring_;
     }
     fwd::Tap tap;
-    std::string error = open_tap(tap, ring);
-    set_error(error);
+    set_error(open_tap(tap, ring).text);
     if (tap) {
         began(tap.get());
         std::lock_guard<std::mutex> lock(mutex_);
@@ -226,14 +224,16 @@ void LoggerTopic::fetch(proto::Writer &w, uint64_t after_seq, uint32_t max_bytes
     buffer_.encode_after(w, after_seq, static_cast<uint32_t>(n));
 }
 
-std::string LoggerTopic::open_tap(fwd::Tap &tap, const std::string &ring) const
+Outcome LoggerTopic::open_tap(fwd::Tap &tap, const std::string &ring) const
 {
     ln_ring_tap *t = nullptr;
     int rc = ln_ring_tap_open(&t, ring.c_str(), layout_hash_, message_size_, LN_TAP_EVERY);
     if (rc != LN_OK)
-        return "cannot open ring '" + ring + "': " + ln_error_name(rc) + ": " + ln_last_error();
+        return outcome::error(proto::Err::logger_failed, "cannot open ring '" + ring +
+                                                             "': " + ln_error_name(rc) + ": " +
+                                                             ln_last_error());
     tap.reset(t);
-    return "";
+    return outcome::ok();
 }
 
 uint32_t LoggerTopic::note_segment(ln_ring_tap *tap, std::string &seen)
@@ -267,8 +267,8 @@ void LoggerTopic::take(const ln_sample_info &info)
     ++counters_.received;
     // Within one tap the gap is its overruns; across a reopen of the tap (a new ring, a
     // read error) it is the distance to the last sample seen.
-    counters_.missed += last_seq_ && info.seq > last_seq_ ? info.seq - last_seq_ - 1
-                                                          : info.overruns;
+    counters_.missed +=
+        last_seq_ && info.seq > last_seq_ ? info.seq - last_seq_ - 1 : info.overruns;
     last_seq_ = info.seq;
     if (info.seq % divisor_ != 0) {
         ++counters_.skipped;
@@ -280,7 +280,7 @@ void LoggerTopic::take(const ln_sample_info &info)
 void LoggerTopic::loop(Run &run, fwd::Tap tap)
 {
     ::prctl(PR_SET_TIMERSLACK, 1000UL); // 1 µs: short poll intervals stay short
-    std::string seen; // the tap's segment as last noted
+    std::string seen;                   // the tap's segment as last noted
     uint32_t slots = 0;
     if (tap)
         slots = note_segment(tap.get(), seen);
@@ -292,8 +292,7 @@ void LoggerTopic::loop(Run &run, fwd::Tap tap)
                 std::lock_guard<std::mutex> lock(mutex_);
                 ring = ring_;
             }
-            std::string error = open_tap(tap, ring);
-            set_error(error);
+            set_error(open_tap(tap, ring).text);
             if (!tap) {
                 run.stop.sleep_us(kLoggerRetryUs);
                 continue;

@@ -18,6 +18,7 @@
 #include "forward_tap.hpp"
 #include "logger_buffer.hpp"
 #include "logger_messages.hpp"
+#include "outcome.hpp"
 #include "protocol.hpp"
 
 namespace lnd {
@@ -94,7 +95,7 @@ private:
     void began(ln_ring_tap *tap);
     void loop(Run &run, fwd::Tap tap);
     // Opens a tap on `ring`; "" or why not.
-    std::string open_tap(fwd::Tap &tap, const std::string &ring) const;
+    Outcome open_tap(fwd::Tap &tap, const std::string &ring) const;
     // The tap's segment, noted when it changed (it follows successors); its slot count.
     uint32_t note_segment(ln_ring_tap *tap, std::string &seen);
     void set_error(const std::string &text);

@@ -26,8 +26,9 @@ namespace {
 
 std::string quoted(const std::string &s) { return "'" + s + "'"; }
 
-std::string label(const std::string &instance, const std::string &logger,
-                  const std::string &topic)
+Outcome refused(std::string text) { return error(Err::logger_failed, std::move(text)); }
+
+std::string label(const std::string &instance, const std::string &logger, const std::string &topic)
 {
     return "instance " + instance + " logger " + logger + " topic " + topic;
 }
@@ -51,14 +52,15 @@ Loggers::Loggers(uint64_t memory_limit) : limit_(memory_limit) {}
 
 Loggers::~Loggers() { shutdown(); }
 
-bool Loggers::handles(uint8_t type) noexcept { return logger_msg_name(type) != nullptr; }
+bool Loggers::handles(uint8_t type) const noexcept { return logger_msg_name(type) != nullptr; }
 
-NetOutcome Loggers::handle(const std::string &instance, uint8_t type, proto::Reader &r)
+Outcome Loggers::handle(const Request &req)
 {
-    return outcome::guarded(instance, Err::logger_failed, [&]() -> NetOutcome {
+    return outcome::guarded(req.instance, Err::logger_failed, [&]() -> Outcome {
         using outcome::decoded;
-        const auto &in = instance;
-        switch (static_cast<Msg>(type)) {
+        const auto &in = req.instance;
+        proto::Reader &r = req.body;
+        switch (static_cast<Msg>(req.type)) {
         case Msg::logger_topic:
             return decoded<LoggerTopicRequest>(r, decode_logger_topic,
                                                [&](auto &q) { return configure(in, q); });
@@ -96,51 +98,46 @@ void Loggers::shutdown() noexcept
         logf("stopped %zu logger thread(s)", running);
 }
 
-Loggers::Logger *Loggers::find(const std::string &instance, const std::string &logger,
-                               NetOutcome &refusal)
+Outcome Loggers::find(const std::string &instance, const std::string &logger, Logger *&found)
 {
     auto it = loggers_.find({instance, logger});
-    if (it == loggers_.end()) {
-        refusal = error(Err::logger_failed,
-                        "no logger " + quoted(logger) + " in instance " + instance);
-        return nullptr;
-    }
-    return &it->second;
+    if (it == loggers_.end())
+        return refused("no logger " + quoted(logger) + " in instance " + instance);
+    found = &it->second;
+    return ok();
 }
 
-std::string Loggers::check(const std::string &instance, const LoggerTopicRequest &req) const
+Outcome Loggers::check(const std::string &instance, const LoggerTopicRequest &req) const
 {
     if (limit_ == 0)
-        return "topic logging is disabled on this daemon (it was started with "
-               "--logger-memory 0)";
+        return refused("topic logging is disabled on this daemon (it was started with "
+                       "--logger-memory 0)");
     if (!valid_name(req.logger))
-        return "invalid logger name " + quoted(req.logger) +
-               " (1-255 bytes, no control characters)";
+        return refused("invalid logger name " + quoted(req.logger) +
+                       " (1-255 bytes, no control characters)");
     if (!valid_name(req.topic))
-        return "invalid topic name " + quoted(req.topic) + " for logger " + quoted(req.logger) +
-               " (1-255 bytes, no control characters)";
-    std::string err;
-    if (!ring_in_namespace(instance, req.ring, err))
-        return "logger " + quoted(req.logger) + " topic " + quoted(req.topic) + ": " + err;
+        return refused("invalid topic name " + quoted(req.topic) + " for logger " +
+                       quoted(req.logger) + " (1-255 bytes, no control characters)");
     std::string what = "logger " + quoted(req.logger) + " topic " + quoted(req.topic) + ": ";
+    if (Outcome o = ring_in_namespace(instance, req.ring, Err::logger_failed); o.failed())
+        return outcome::prefixed(what, std::move(o));
     if (req.message_size < 1 || req.message_size > kMaxLoggedMessage)
-        return what + "message size " + std::to_string(req.message_size) +
-               " out of range 1.." + std::to_string(kMaxLoggedMessage) +
-               " (one sample has to fit a LOGGER_DATA reply)";
+        return refused(what + "message size " + std::to_string(req.message_size) +
+                       " out of range 1.." + std::to_string(kMaxLoggedMessage) +
+                       " (one sample has to fit a LOGGER_DATA reply)");
     if (req.depth < 1)
-        return what + "depth must be at least 1";
+        return refused(what + "depth must be at least 1");
     if (req.divisor < 1)
-        return what + "divisor must be at least 1";
+        return refused(what + "divisor must be at least 1");
     if (!std::isfinite(req.span_s) || req.span_s < 0 || req.span_s > kMaxLoggerSpan)
-        return what + "span must be 0 (none) or a number of seconds up to 1e9";
-    return "";
+        return refused(what + "span must be 0 (none) or a number of seconds up to 1e9");
+    return ok();
 }
 
-NetOutcome Loggers::configure(const std::string &instance, const LoggerTopicRequest &req)
+Outcome Loggers::configure(const std::string &instance, const LoggerTopicRequest &req)
 {
-    std::string problem = check(instance, req);
-    if (!problem.empty())
-        return error(Err::logger_failed, problem);
+    if (Outcome o = check(instance, req); o.failed())
+        return o;
     LoggerConfig config = config_of(req);
     auto found = loggers_.find({instance, req.logger});
     LoggerTopic *old = nullptr;
@@ -167,11 +164,10 @@ NetOutcome Loggers::configure(const std::string &instance, const LoggerTopicRequ
     if (needed > free)
         return error(Err::logger_failed,
                      "logger " + quoted(req.logger) + " topic " + quoted(req.topic) + " needs " +
-                         std::to_string(needed) + " bytes (depth " +
-                         std::to_string(config.depth) + " of " +
-                         std::to_string(config.message_size) + "-byte samples), but only " +
-                         std::to_string(free) + " of the daemon's logger memory limit of " +
-                         std::to_string(limit_) +
+                         std::to_string(needed) + " bytes (depth " + std::to_string(config.depth) +
+                         " of " + std::to_string(config.message_size) +
+                         "-byte samples), but only " + std::to_string(free) +
+                         " of the daemon's logger memory limit of " + std::to_string(limit_) +
                          " bytes are free; raise the limit with ln_daemon --logger-memory");
     std::unique_ptr<LoggerTopic> fresh;
     try {
@@ -202,12 +198,11 @@ NetOutcome Loggers::configure(const std::string &instance, const LoggerTopicRequ
     return ok();
 }
 
-NetOutcome Loggers::remove(const std::string &instance, const LoggerRemoveRequest &req)
+Outcome Loggers::remove(const std::string &instance, const LoggerRemoveRequest &req)
 {
-    NetOutcome refusal;
-    Logger *logger = find(instance, req.logger, refusal);
-    if (!logger)
-        return refusal;
+    Logger *logger = nullptr;
+    if (Outcome o = find(instance, req.logger, logger); o.failed())
+        return o;
     std::vector<std::string> names;
     if (req.topic.empty()) {
         for (auto &t : logger->topics)
@@ -232,12 +227,11 @@ NetOutcome Loggers::remove(const std::string &instance, const LoggerRemoveReques
     return ok();
 }
 
-NetOutcome Loggers::enable(const std::string &instance, const LoggerEnableRequest &req)
+Outcome Loggers::enable(const std::string &instance, const LoggerEnableRequest &req)
 {
-    NetOutcome refusal;
-    Logger *logger = find(instance, req.logger, refusal);
-    if (!logger)
-        return refusal;
+    Logger *logger = nullptr;
+    if (Outcome o = find(instance, req.logger, logger); o.failed())
+        return o;
     if (!req.enable) {
         for (auto &t : logger->topics)
             t.second->request_stop();
@@ -256,12 +250,11 @@ NetOutcome Loggers::enable(const std::string &instance, const LoggerEnableReques
     return ok();
 }
 
-NetOutcome Loggers::fetch(const std::string &instance, const LoggerFetchRequest &req)
+Outcome Loggers::fetch(const std::string &instance, const LoggerFetchRequest &req)
 {
-    NetOutcome refusal;
-    Logger *logger = find(instance, req.logger, refusal);
-    if (!logger)
-        return refusal;
+    Logger *logger = nullptr;
+    if (Outcome o = find(instance, req.logger, logger); o.failed())
+        return o;
     auto it = logger->topics.find(req.topic);
     if (it == logger->topics.end())
         return error(Err::logger_failed,
@@ -271,7 +264,7 @@ NetOutcome Loggers::fetch(const std::string &instance, const LoggerFetchRequest 
     return reply(Msg::logger_data, std::move(w.buffer()));
 }
 
-NetOutcome Loggers::status(const std::string &instance, const std::string &name)
+Outcome Loggers::status(const std::string &instance, const std::string &name)
 {
     std::vector<LoggerTopicStatus> list;
     auto add = [&](const std::string &logger_name, const Logger &logger) {
@@ -287,10 +280,9 @@ NetOutcome Loggers::status(const std::string &instance, const std::string &name)
              it != loggers_.end() && it->first.first == instance; ++it)
             add(it->first.second, it->second);
     } else {
-        NetOutcome refusal;
-        Logger *logger = find(instance, name, refusal);
-        if (!logger)
-            return refusal;
+        Logger *logger = nullptr;
+        if (Outcome o = find(instance, name, logger); o.failed())
+            return o;
         add(name, *logger);
     }
     proto::Writer w;

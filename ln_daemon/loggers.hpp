@@ -14,28 +14,28 @@
 
 #include "logger_messages.hpp"
 #include "logger_topic.hpp"
-#include "network.hpp"
+#include "feature.hpp"
+#include "outcome.hpp"
 #include "protocol.hpp"
 
 namespace lnd {
 
 constexpr uint64_t kDefaultLoggerMemory = uint64_t{256} << 20;
-constexpr size_t kMaxLoggerTopics = 2048;   // per daemon, all instances (LOGGER_LIST fits a frame)
-constexpr double kMaxLoggerSpan = 1e9;      // seconds
+constexpr size_t kMaxLoggerTopics = 2048; // per daemon, all instances (LOGGER_LIST fits a frame)
+constexpr double kMaxLoggerSpan = 1e9;    // seconds
 
-class Loggers {
+class Loggers final : public Feature {
 public:
     // `memory_limit` bytes for every buffer together; 0 disables topic logging.
     explicit Loggers(uint64_t memory_limit);
-    ~Loggers(); // stops and joins every thread
+    ~Loggers() override; // stops and joins every thread
     Loggers(const Loggers &) = delete;
     Loggers &operator=(const Loggers &) = delete;
 
-    // True for the message types handle() takes.
-    static bool handles(uint8_t type) noexcept;
-    NetOutcome handle(const std::string &instance, uint8_t type, proto::Reader &r);
-    // Stops every logger thread and waits for them (the daemon's shutdown).
-    void shutdown() noexcept;
+    bool handles(uint8_t type) const noexcept override;
+    Outcome handle(const Request &req) override;
+    // Stops every logger thread and waits for them.
+    void shutdown() noexcept override;
 
     uint64_t memory_used() const noexcept { return used_; }
 
@@ -46,19 +46,19 @@ private:
     };
     using Key = std::pair<std::string, std::string>; // instance, logger name
 
-    NetOutcome configure(const std::string &instance, const LoggerTopicRequest &req);
-    NetOutcome remove(const std::string &instance, const LoggerRemoveRequest &req);
-    NetOutcome enable(const std::string &instance, const LoggerEnableRequest &req);
-    NetOutcome fetch(const std::string &instance, const LoggerFetchRequest &req);
-    NetOutcome status(const std::string &instance, const std::string &logger);
-    // The logger, or nullptr with the refusal in `error`.
-    Logger *find(const std::string &instance, const std::string &logger, NetOutcome &error);
-    // A reason not to take `req`, or "".
-    std::string check(const std::string &instance, const LoggerTopicRequest &req) const;
+    Outcome configure(const std::string &instance, const LoggerTopicRequest &req);
+    Outcome remove(const std::string &instance, const LoggerRemoveRequest &req);
+    Outcome enable(const std::string &instance, const LoggerEnableRequest &req);
+    Outcome fetch(const std::string &instance, const LoggerFetchRequest &req);
+    Outcome status(const std::string &instance, const std::string &logger);
+    // The logger in `found`, or refused.
+    Outcome find(const std::string &instance, const std::string &logger, Logger *&found);
+    // Refuses `req`, or ok.
+    Outcome check(const std::string &instance, const LoggerTopicRequest &req) const;
 
     const uint64_t limit_;
-    uint64_t used_ = 0;   // bytes of every buffer
-    size_t topics_ = 0;   // logger topics of every instance
+    uint64_t used_ = 0; // bytes of every buffer
+    size_t topics_ = 0; // logger topics of every instance
     std::map<Key, Logger> loggers_;
 };
 

@@ -14,7 +14,8 @@ fwd::Transport transport(wire::Transport t)
 std::string cut(const std::string &s) { return s.substr(0, kMaxStatText); }
 
 // The fields STREAM_SEND and STREAM_RECV share.
-template <class Request, class Spec> void stream_fields(Request &req, Spec &out)
+template <class Request, class Spec>
+void stream_fields(Request &req, Spec &out)
 {
     out.token = req.token;
     out.ring = std::move(req.ring);
@@ -77,8 +78,8 @@ void encode_stream_list(proto::Writer &w, const fwd::Totals &totals,
         wire::StreamStat &o = list.streams.emplace_back();
         o.token = s.token;
         o.sending = s.sending;
-        o.transport = s.transport == fwd::Transport::tcp ? wire::Transport::tcp
-                                                         : wire::Transport::udp;
+        o.transport =
+            s.transport == fwd::Transport::tcp ? wire::Transport::tcp : wire::Transport::udp;
         o.ring = cut(s.ring);
         o.peer = cut(s.peer);
         o.samples = s.samples;

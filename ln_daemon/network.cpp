@@ -23,7 +23,7 @@ using outcome::reply;
 
 namespace {
 
-NetOutcome value(uint64_t v)
+Outcome value(uint64_t v)
 {
     proto::Writer w;
     w.u64(v);
@@ -41,14 +41,15 @@ std::string token_text(uint64_t token)
 
 NetCommands::NetCommands(std::string host_id, uint16_t data_port, fwd::Forwarder &forwarder)
     : host_id_(std::move(host_id)), data_port_(data_port), forwarder_(forwarder)
-{
-}
+{}
 
-bool NetCommands::handles(uint8_t type) noexcept { return net_msg_name(type) != nullptr; }
+bool NetCommands::handles(uint8_t type) const noexcept { return net_msg_name(type) != nullptr; }
 
-NetOutcome NetCommands::handle(const std::string &instance, uint8_t type, proto::Reader &r)
+Outcome NetCommands::handle(const Request &req)
 {
-    switch (static_cast<Msg>(type)) {
+    const std::string &instance = req.instance;
+    proto::Reader &r = req.body;
+    switch (static_cast<Msg>(req.type)) {
     case Msg::net_info: {
         if (!r.done())
             return malformed();
@@ -65,36 +66,34 @@ NetOutcome NetCommands::handle(const std::string &instance, uint8_t type, proto:
     case Msg::stream_recv:
     case Msg::stream_remove:
     case Msg::stream_stats:
-        return streams(instance, type, r);
+        return streams(instance, req.type, r);
     default:
-        return rings(instance, type, r);
+        return rings(instance, req.type, r);
     }
 }
 
-NetOutcome NetCommands::rings(const std::string &instance, uint8_t type, proto::Reader &r)
+Outcome NetCommands::rings(const std::string &instance, uint8_t type, proto::Reader &r)
 {
-    std::string err;
     switch (static_cast<Msg>(type)) {
     case Msg::ring_create: {
         RingCreateRequest req;
         if (!decode_ring_create(r, req))
             return malformed();
-        bool limit = false;
-        if (!rings_.create(instance, req, limit, err)) {
-            logf("instance %s: %s", instance.c_str(), err.c_str());
-            return error(limit ? Err::limit : Err::ring_failed, err);
+        if (Outcome o = rings_.create(instance, req); o.failed()) {
+            logf("instance %s: %s", instance.c_str(), o.text.c_str());
+            return o;
         }
-        logf("instance %s: ring %s %s (%u slots of %" PRIu64 " bytes, topic %s)",
-             instance.c_str(), req.name.c_str(), req.adopt ? "adopted" : "created", req.slots,
-             req.message_size, req.topic.c_str());
+        logf("instance %s: ring %s %s (%u slots of %" PRIu64 " bytes, topic %s)", instance.c_str(),
+             req.name.c_str(), req.adopt ? "adopted" : "created", req.slots, req.message_size,
+             req.topic.c_str());
         return ok();
     }
     case Msg::ring_retire: {
         RingRetireRequest req;
         if (!decode_ring_retire(r, req))
             return malformed();
-        if (!rings_.retire(instance, req, err))
-            return error(Err::ring_failed, err);
+        if (Outcome o = rings_.retire(instance, req); o.failed())
+            return o;
         logf("instance %s: ring %s retired into %s", instance.c_str(), req.old_name.c_str(),
              req.successor.c_str());
         return ok();
@@ -103,20 +102,20 @@ NetOutcome NetCommands::rings(const std::string &instance, uint8_t type, proto::
         RingReaderRequest req;
         if (!decode_ring_reader(r, req))
             return malformed();
-        return rings_.reader(instance, req, err) ? ok() : error(Err::ring_failed, err);
+        return rings_.reader(instance, req);
     }
     case Msg::ring_counts: {
         RingCountsRequest req;
         if (!decode_ring_counts(r, req))
             return malformed();
-        return rings_.counts(instance, req, err) ? ok() : error(Err::ring_failed, err);
+        return rings_.counts(instance, req);
     }
     case Msg::ring_remove: {
         std::string name;
         if (!decode_ring_name(r, name))
             return malformed();
-        if (!rings_.remove(instance, name, err))
-            return error(Err::ring_failed, err);
+        if (Outcome o = rings_.remove(instance, name); o.failed())
+            return o;
         logf("instance %s: ring %s removed", instance.c_str(), name.c_str());
         return ok();
     }
@@ -125,24 +124,23 @@ NetOutcome NetCommands::rings(const std::string &instance, uint8_t type, proto::
         if (!decode_ring_name(r, name))
             return malformed();
         uint64_t seq = 0;
-        return rings_.write_seq(instance, name, seq, err) ? value(seq)
-                                                          : error(Err::ring_failed, err);
+        Outcome o = rings_.write_seq(instance, name, seq);
+        return o.failed() ? o : value(seq);
     }
     default:
         return malformed(); // not reached: handles() admits only the types above
     }
 }
 
-NetOutcome NetCommands::streams(const std::string &instance, uint8_t type, proto::Reader &r)
+Outcome NetCommands::streams(const std::string &instance, uint8_t type, proto::Reader &r)
 {
-    NetOutcome refusal;
     switch (static_cast<Msg>(type)) {
     case Msg::stream_send: {
         fwd::SendSpec spec;
         if (!decode_stream_send(r, spec))
             return malformed();
-        if (!admit(instance, spec.token, spec.ring, refusal))
-            return refusal;
+        if (Outcome o = admit(instance, spec.token, spec.ring); o.failed())
+            return o;
         std::string to = spec.host + ":" + std::to_string(spec.port);
         return added(instance, spec.token, spec.ring, ("sending to " + to).c_str(),
                      forwarder_.set_send(spec));
@@ -151,8 +149,8 @@ NetOutcome NetCommands::streams(const std::string &instance, uint8_t type, proto
         fwd::RecvSpec spec;
         if (!decode_stream_recv(r, spec))
             return malformed();
-        if (!admit(instance, spec.token, spec.ring, refusal))
-            return refusal;
+        if (Outcome o = admit(instance, spec.token, spec.ring); o.failed())
+            return o;
         return added(instance, spec.token, spec.ring, "receiving", forwarder_.set_recv(spec));
     }
     case Msg::stream_remove: {
@@ -186,36 +184,28 @@ NetOutcome NetCommands::streams(const std::string &instance, uint8_t type, proto
     }
 }
 
-bool NetCommands::admit(const std::string &instance, uint64_t token, const std::string &ring,
-                        NetOutcome &refusal) const
+Outcome NetCommands::admit(const std::string &instance, uint64_t token,
+                           const std::string &ring) const
 {
-    std::string err;
-    if (!ring_in_namespace(instance, ring, err)) {
-        refusal = error(Err::stream_failed, err);
-        return false;
-    }
+    if (Outcome o = ring_in_namespace(instance, ring, Err::stream_failed); o.failed())
+        return o;
     auto it = streams_.find(token);
-    if (it != streams_.end() && it->second != instance) {
-        refusal = error(Err::stream_failed,
-                        "stream token " + token_text(token) + " is in use by another instance");
-        return false;
-    }
-    if (it == streams_.end() && streams_.size() >= kMaxStreams) {
-        refusal = error(Err::limit,
-                        "too many streams (" + std::to_string(kMaxStreams) + ") on this daemon");
-        return false;
-    }
-    return true;
+    if (it != streams_.end() && it->second != instance)
+        return error(Err::stream_failed,
+                     "stream token " + token_text(token) + " is in use by another instance");
+    if (it == streams_.end() && streams_.size() >= kMaxStreams)
+        return error(Err::limit,
+                     "too many streams (" + std::to_string(kMaxStreams) + ") on this daemon");
+    return ok();
 }
 
-NetOutcome NetCommands::added(const std::string &instance, uint64_t token,
-                              const std::string &ring, const char *what,
-                              const std::string &verdict)
+Outcome NetCommands::added(const std::string &instance, uint64_t token, const std::string &ring,
+                           const char *what, Outcome verdict)
 {
-    if (!verdict.empty()) {
+    if (verdict.failed()) {
         logf("instance %s: stream %s on %s not started: %s", instance.c_str(),
-             token_text(token).c_str(), ring.c_str(), verdict.c_str());
-        return error(Err::stream_failed, verdict);
+             token_text(token).c_str(), ring.c_str(), verdict.text.c_str());
+        return verdict;
     }
     streams_[token] = instance;
     logf("instance %s: stream %s on %s %s", instance.c_str(), token_text(token).c_str(),
@@ -223,7 +213,7 @@ NetOutcome NetCommands::added(const std::string &instance, uint64_t token,
     return ok();
 }
 
-NetOutcome NetCommands::purge(const std::string &instance)
+Outcome NetCommands::purge(const std::string &instance)
 {
     size_t stopped = 0;
     for (auto it = streams_.begin(); it != streams_.end();) {
@@ -236,9 +226,8 @@ NetOutcome NetCommands::purge(const std::string &instance)
         }
     }
     uint64_t count = 0;
-    std::string err;
-    if (!rings_.purge(instance, count, err))
-        return error(Err::ring_failed, err);
+    if (Outcome o = rings_.purge(instance, count); o.failed())
+        return o;
     logf("instance %s: purged %" PRIu64 " segment(s), stopped %zu stream(s)", instance.c_str(),
          count, stopped);
     return value(count);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "fd.hpp"
+#include "outcome.hpp"
 
 namespace lnd {
 
@@ -70,8 +71,8 @@ public:
     virtual ~Os() = default;
     virtual double monotonic() noexcept = 0; // seconds, for deadlines
     virtual double wall() noexcept = 0;      // seconds since the epoch, for reports
-    // Starts the keeper (which starts the process); false with `error` if it cannot.
-    virtual bool launch(const LaunchSpec &spec, Launched &out, std::string &error) = 0;
+    // Starts the keeper (which starts the process); refused with error spawn_failed.
+    virtual Outcome launch(const LaunchSpec &spec, Launched &out) = 0;
     // kill(2); 0 or -errno.
     virtual int kill(pid_t pid, int sig) noexcept = 0;
     // Sends `sig` to every descendant of `keeper` (not the keeper) except members of

@@ -34,6 +34,11 @@ namespace lnd {
 
 namespace {
 
+Outcome failed(std::string text)
+{
+    return outcome::error(proto::Err::spawn_failed, std::move(text));
+}
+
 constexpr int kKeeperSweepMs = 100; // between the keeper's own SIGKILL sweeps
 
 double clock_seconds(clockid_t id) noexcept
@@ -61,20 +66,18 @@ bool make_pipe(UniqueFd &read_end, UniqueFd &write_end) noexcept
 
 // Opens a pty pair: the master for the daemon, the slave for the child.  No echo and no
 // CR before LF, so the output reads as the program wrote it.
-bool open_pty(UniqueFd &master, UniqueFd &slave, std::string &error)
+Outcome open_pty(UniqueFd &master, UniqueFd &slave)
 {
     master.reset(::open("/dev/ptmx", O_RDWR | O_NOCTTY | O_CLOEXEC));
     char name[64];
     if (!master || ::grantpt(master.get()) != 0 || ::unlockpt(master.get()) != 0 ||
         ::ptsname_r(master.get(), name, sizeof name) != 0) {
-        error = std::string("cannot open a pseudo-terminal: ") + std::strerror(errno);
-        return false;
+        return failed(std::string("cannot open a pseudo-terminal: ") + std::strerror(errno));
     }
     slave.reset(::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC));
-    if (!slave) {
-        error = std::string("cannot open pseudo-terminal ") + name + ": " + std::strerror(errno);
-        return false;
-    }
+    if (!slave)
+        return failed(std::string("cannot open pseudo-terminal ") + name + ": " +
+                      std::strerror(errno));
     struct termios tio;
     if (::tcgetattr(slave.get(), &tio) == 0) {
         tio.c_oflag &= ~static_cast<tcflag_t>(ONLCR);
@@ -85,7 +88,7 @@ bool open_pty(UniqueFd &master, UniqueFd &slave, std::string &error)
     ws.ws_row = 50;
     ws.ws_col = 160;
     ::ioctl(slave.get(), TIOCSWINSZ, &ws);
-    return true;
+    return outcome::ok();
 }
 
 // Closes every descriptor from 3 up except those in `keep`.
@@ -124,8 +127,8 @@ struct Prepared {
     std::vector<char *> envp;
     struct rlimit nofile; // RLIMIT_NOFILE as the daemon found it
     int stdin_fd = -1;    // pipes: /dev/null
-    int out_fd = -1;   // pipe write end, or the pty slave
-    int err_fd = -1;   // pipe write end, or the pty slave
+    int out_fd = -1;      // pipe write end, or the pty slave
+    int err_fd = -1;      // pipe write end, or the pty slave
     bool pty = false;
 };
 
@@ -289,7 +292,8 @@ void signal_children(int sig, pid_t skip) noexcept
     UniqueFd status_r, status_w;
     UniqueFd sigfd(::signalfd(-1, &chld, SFD_NONBLOCK | SFD_CLOEXEC));
     if (!sigfd || !make_pipe(status_r, status_w)) {
-        write_report(report_fd, {KeeperReport::failed, static_cast<int32_t>(Stage::setup), 0, errno});
+        write_report(report_fd,
+                     {KeeperReport::failed, static_cast<int32_t>(Stage::setup), 0, errno});
         ::_exit(1);
     }
     pid_t child = ::fork();
@@ -303,8 +307,8 @@ void signal_children(int sig, pid_t skip) noexcept
         if (fd >= 0)
             ::close(fd); // the tree's ends only: the keeper must not keep a stream open
     if (child < 0) {
-        write_report(report_fd, {KeeperReport::failed, static_cast<int32_t>(Stage::setup), 0,
-                                 fork_errno});
+        write_report(report_fd,
+                     {KeeperReport::failed, static_cast<int32_t>(Stage::setup), 0, fork_errno});
         ::_exit(1);
     }
     ChildStatus st;
@@ -318,9 +322,9 @@ void signal_children(int sig, pid_t skip) noexcept
     else
         write_report(report_fd, {KeeperReport::started, child, 0, 0});
 
-    bool orphaned = false; // the daemon is gone: the keeper ends the tree itself
+    bool orphaned = false;     // the daemon is gone: the keeper ends the tree itself
     bool child_reaped = false; // then its pid may be reused: no more signals to its group
-    double kill_at = 0;    // monotonic: SIGKILL sweeps from then on
+    double kill_at = 0;        // monotonic: SIGKILL sweeps from then on
     for (;;) {
         for (;;) {
             int status;
@@ -408,8 +412,8 @@ LinuxOs::LinuxOs() noexcept
     if (::getrlimit(RLIMIT_NOFILE, &nofile_) != 0)
         return;
     struct rlimit raised = nofile_;
-    raised.rlim_cur = raised.rlim_max == RLIM_INFINITY || raised.rlim_max > 65536 ? 65536
-                                                                                  : raised.rlim_max;
+    raised.rlim_cur =
+        raised.rlim_max == RLIM_INFINITY || raised.rlim_max > 65536 ? 65536 : raised.rlim_max;
     if (raised.rlim_cur > nofile_.rlim_cur)
         ::setrlimit(RLIMIT_NOFILE, &raised);
 }
@@ -418,7 +422,7 @@ double LinuxOs::monotonic() noexcept { return clock_seconds(CLOCK_MONOTONIC); }
 
 double LinuxOs::wall() noexcept { return clock_seconds(CLOCK_REALTIME); }
 
-bool LinuxOs::launch(const LaunchSpec &spec, Launched &out, std::string &error)
+Outcome LinuxOs::launch(const LaunchSpec &spec, Launched &out)
 {
     Prepared p{spec, {}, {}, nofile_};
     for (const auto &a : spec.argv)
@@ -429,21 +433,17 @@ bool LinuxOs::launch(const LaunchSpec &spec, Launched &out, std::string &error)
     p.envp.push_back(nullptr);
 
     UniqueFd report_r, report_w, stdin_null, out_r, out_w, err_r, err_w, master, slave;
-    if (!make_pipe(report_r, report_w)) {
-        error = std::string("cannot create a pipe: ") + std::strerror(errno);
-        return false;
-    }
+    if (!make_pipe(report_r, report_w))
+        return failed(std::string("cannot create a pipe: ") + std::strerror(errno));
     if (spec.use_pty) {
-        if (!open_pty(master, slave, error))
-            return false;
+        if (Outcome o = open_pty(master, slave); o.failed())
+            return o;
         p.pty = true;
         p.stdin_fd = p.out_fd = p.err_fd = slave.get();
     } else {
         stdin_null.reset(::open("/dev/null", O_RDONLY | O_CLOEXEC));
-        if (!stdin_null || !make_pipe(out_r, out_w) || !make_pipe(err_r, err_w)) {
-            error = std::string("cannot create the output pipes: ") + std::strerror(errno);
-            return false;
-        }
+        if (!stdin_null || !make_pipe(out_r, out_w) || !make_pipe(err_r, err_w))
+            return failed(std::string("cannot create the output pipes: ") + std::strerror(errno));
         p.stdin_fd = stdin_null.get();
         p.out_fd = out_w.get();
         p.err_fd = err_w.get();
@@ -453,10 +453,8 @@ bool LinuxOs::launch(const LaunchSpec &spec, Launched &out, std::string &error)
             set_nonblocking(fd->get());
 
     pid_t keeper = ::fork();
-    if (keeper < 0) {
-        error = std::string("cannot fork: ") + std::strerror(errno);
-        return false;
-    }
+    if (keeper < 0)
+        return failed(std::string("cannot fork: ") + std::strerror(errno));
     if (keeper == 0)
         keeper_main(p, report_w.get());
     out.keeper = keeper;
@@ -468,7 +466,7 @@ bool LinuxOs::launch(const LaunchSpec &spec, Launched &out, std::string &error)
         out.out = std::move(out_r);
         out.err = std::move(err_r);
     }
-    return true; // the write ends close here: only the keeper and the tree hold them
+    return outcome::ok(); // the write ends close here: only the keeper and the tree hold them
 }
 
 int LinuxOs::kill(pid_t pid, int sig) noexcept { return ::kill(pid, sig) == 0 ? 0 : -errno; }

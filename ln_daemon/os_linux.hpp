@@ -14,7 +14,7 @@ public:
     LinuxOs() noexcept; // raises the daemon's descriptor limit
     double monotonic() noexcept override;
     double wall() noexcept override;
-    bool launch(const LaunchSpec &spec, Launched &out, std::string &error) override;
+    Outcome launch(const LaunchSpec &spec, Launched &out) override;
     int kill(pid_t pid, int sig) noexcept override;
     int kill_tree(pid_t keeper, int sig, pid_t skip_group) noexcept override;
     bool reap(pid_t &pid, int &status) noexcept override;

@@ -74,39 +74,37 @@ namespace {
 // poll loop must not block in open() or write() of a FIFO or a terminal, and the rotation
 // renames the file, which must never happen to a device such as /dev/null.  O_NONBLOCK makes
 // the open of a FIFO return at once, to be refused like anything else that is not regular.
-UniqueFd open_regular(const std::string &path, int flags, uint64_t &size, std::string &error)
+Outcome open_regular(const std::string &path, int flags, uint64_t &size, UniqueFd &out)
 {
-    UniqueFd fd(::open(path.c_str(),
-                       O_WRONLY | O_CREAT | O_CLOEXEC | O_NOCTTY | O_NONBLOCK | flags, 0644));
+    auto failed = [](std::string text) {
+        return outcome::error(proto::Err::spawn_failed, std::move(text));
+    };
+    UniqueFd fd(
+        ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | O_NOCTTY | O_NONBLOCK | flags, 0644));
     struct stat st;
     if (!fd && errno == ENXIO) { // a FIFO without a reader, or a socket
-        error = "output log '" + path + "' is not a regular file";
-        return {};
+        return failed("output log '" + path + "' is not a regular file");
     }
-    if (!fd || ::fstat(fd.get(), &st) != 0) {
-        error = "cannot open output log '" + path + "': " + std::strerror(errno);
-        return {};
-    }
-    if (!S_ISREG(st.st_mode)) {
-        error = "output log '" + path + "' is not a regular file";
-        return {};
-    }
+    if (!fd || ::fstat(fd.get(), &st) != 0)
+        return failed("cannot open output log '" + path + "': " + std::strerror(errno));
+    if (!S_ISREG(st.st_mode))
+        return failed("output log '" + path + "' is not a regular file");
     size = static_cast<uint64_t>(st.st_size);
-    return fd;
+    out = std::move(fd);
+    return outcome::ok();
 }
 
 } // namespace
 
-bool RotatingLog::open(const std::string &path, uint64_t limit, uint32_t keep,
-                       std::string &error)
+Outcome RotatingLog::open(const std::string &path, uint64_t limit, uint32_t keep)
 {
     path_ = path;
     limit_ = limit;
     keep_ = keep;
     uint64_t size = 0;
-    fd_ = open_regular(path, O_APPEND, size, error);
+    Outcome o = open_regular(path, O_APPEND, size, fd_);
     size_ = size;
-    return static_cast<bool>(fd_);
+    return o;
 }
 
 bool RotatingLog::rotate() noexcept
@@ -122,10 +120,8 @@ bool RotatingLog::rotate() noexcept
                  std::strerror(errno));
     }
     uint64_t size;
-    std::string error;
-    fd_ = open_regular(path_, O_TRUNC | O_APPEND, size, error);
-    if (!fd_) {
-        logf("%s after rotation, logging stops", error.c_str());
+    if (Outcome o = open_regular(path_, O_TRUNC | O_APPEND, size, fd_); o.failed()) {
+        logf("%s after rotation, logging stops", o.text.c_str());
         return false;
     }
     size_ = 0;
@@ -143,8 +139,7 @@ void RotatingLog::write_line(std::string_view text) noexcept
                            {const_cast<char *>("\n"), 1}};
     ssize_t n = ::writev(fd_.get(), iov, 2);
     if (n < 0) {
-        logf("output log %s: write failed, logging stops: %s", path_.c_str(),
-             std::strerror(errno));
+        logf("output log %s: write failed, logging stops: %s", path_.c_str(), std::strerror(errno));
         fd_.reset();
         return;
     }

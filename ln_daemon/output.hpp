@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "fd.hpp"
+#include "outcome.hpp"
 #include "protocol.hpp"
 
 namespace lnd {
@@ -19,8 +20,8 @@ struct Line {
     std::string text; // without the newline (and without a trailing CR)
 };
 
-constexpr size_t kMaxLineBytes = 16384;  // longer lines are cut into pieces
-constexpr double kPartialFlushDelay = 0.1; // seconds a partial line waits for its end
+constexpr size_t kMaxLineBytes = 16384;     // longer lines are cut into pieces
+constexpr double kPartialFlushDelay = 0.1;  // seconds a partial line waits for its end
 constexpr size_t kMaxKeptBytes = 64u << 20; // text kept in memory per process, at most
 
 // Cuts one stream's bytes into lines.  A partial line is held back until its newline, until
@@ -60,7 +61,8 @@ private:
 // PATH.1 (PATH.1 to PATH.2 and so on, keeping `keep` old files) and started afresh.
 class RotatingLog {
 public:
-    bool open(const std::string &path, uint64_t limit, uint32_t keep, std::string &error);
+    // Opens (appending, creating) PATH; refused with error spawn_failed.
+    Outcome open(const std::string &path, uint64_t limit, uint32_t keep);
     void write_line(std::string_view text) noexcept;
     bool is_open() const noexcept { return static_cast<bool>(fd_); }
 

@@ -34,12 +34,9 @@ Process::Process(Os &os, Sink &sink, uint64_t id, uint64_t token, ProcessConfig 
     : os_(os), sink_(sink), id_(id), token_(token), config_(std::move(config)),
       spec_(std::move(spec)), keeper_(launched.keeper), report_(std::move(launched.report)),
       out_(std::move(launched.out)), err_(std::move(launched.err)),
-      slave_(std::move(launched.slave)), log_(std::move(log)),
-      buffer_(config_.max_output_lines),
-      out_stream_(spec_.use_pty ? proto::Stream::pty : proto::Stream::out),
-      started_(os.wall())
-{
-}
+      slave_(std::move(launched.slave)), log_(std::move(log)), buffer_(config_.max_output_lines),
+      out_stream_(spec_.use_pty ? proto::Stream::pty : proto::Stream::out), started_(os.wall())
+{}
 
 void Process::set_state(State s)
 {
@@ -57,7 +54,7 @@ void Process::on_report(const KeeperReport &r)
         main_alive_ = true;
         slave_.reset();
         state_ = State::running;
-        sink_.spawn_result(*this, true, proto::Err::bad_request, {});
+        sink_.spawn_result(*this, outcome::ok());
         sink_.state_changed(*this);
         for (const Line &line : early_) // output that overtook the keeper's report
             sink_.line(*this, line);
@@ -68,8 +65,8 @@ void Process::on_report(const KeeperReport &r)
             return;
         failed_ = true;
         slave_.reset();
-        sink_.spawn_result(*this, false, proto::Err::spawn_failed,
-                           describe_failure(spec_, r.value, r.index, r.err));
+        sink_.spawn_result(*this, outcome::error(proto::Err::spawn_failed,
+                                                 describe_failure(spec_, r.value, r.index, r.err)));
         return;
     case KeeperReport::main_exit:
         if (!main_alive_)
@@ -116,8 +113,9 @@ void Process::on_keeper_exit(int status)
         failed_ = true;
         logf("process %s/%s: keeper %d exited with status %#x before starting it",
              instance().c_str(), name().c_str(), static_cast<int>(keeper_), status);
-        sink_.spawn_result(*this, false, proto::Err::spawn_failed,
-                           "the process launcher died before starting the process");
+        sink_.spawn_result(*this,
+                           outcome::error(proto::Err::spawn_failed,
+                                          "the process launcher died before starting the process"));
         return;
     }
     if (main_alive_) {
@@ -136,20 +134,16 @@ void Process::on_keeper_exit(int status)
     sink_.exited(*this);
 }
 
-bool Process::stop(proto::Err &code, std::string &error)
+Outcome Process::stop()
 {
     switch (state_) {
     case State::starting:
-        code = proto::Err::not_running;
-        error = "process " + name() + " is still starting";
-        return false;
+        return outcome::error(proto::Err::not_running, "process " + name() + " is still starting");
     case State::exited:
-        code = proto::Err::not_running;
-        error = "process " + name() + " is not running";
-        return false;
+        return outcome::error(proto::Err::not_running, "process " + name() + " is not running");
     case State::stopping:
         stop_requested_ = true;
-        return true; // already on its way out
+        return outcome::ok(); // already on its way out
     case State::running:
         break;
     }
@@ -160,29 +154,22 @@ bool Process::stop(proto::Err &code, std::string &error)
              static_cast<int>(pid_), config_.term_signal, std::strerror(-rc));
     deadline_ = os_.monotonic() + config_.term_timeout;
     set_state(State::stopping);
-    return true;
+    return outcome::ok();
 }
 
-bool Process::send_signal(int sig, bool group, proto::Err &code, std::string &error)
+Outcome Process::send_signal(int sig, bool group)
 {
-    if (!main_alive_) {
-        code = proto::Err::not_running;
-        error = "process " + name() + " is not running";
-        return false;
-    }
-    if (sig < 0 || sig >= NSIG) {
-        code = proto::Err::bad_request;
-        error = "invalid signal number " + std::to_string(sig);
-        return false;
-    }
+    if (!main_alive_)
+        return outcome::error(proto::Err::not_running, "process " + name() + " is not running");
+    if (sig < 0 || sig >= NSIG)
+        return outcome::error(proto::Err::bad_request,
+                              "invalid signal number " + std::to_string(sig));
     int rc = os_.kill(group ? -pid_ : pid_, sig);
-    if (rc != 0) {
-        code = proto::Err::os_error;
-        error = "cannot send signal " + std::to_string(sig) + " to " + name() + ": " +
-                std::strerror(-rc);
-        return false;
-    }
-    return true;
+    if (rc != 0)
+        return outcome::error(proto::Err::os_error, "cannot send signal " + std::to_string(sig) +
+                                                        " to " + name() + ": " +
+                                                        std::strerror(-rc));
+    return outcome::ok();
 }
 
 void Process::begin_kill()
@@ -270,8 +257,7 @@ Process::ReadResult Process::read_output(Fd which)
         n = ::read(fd.get(), buf, sizeof buf);
     while (n < 0 && errno == EINTR);
     if (n > 0) {
-        on_output(which == Fd::out ? out_stream_ : proto::Stream::err, buf,
-                  static_cast<size_t>(n));
+        on_output(which == Fd::out ? out_stream_ : proto::Stream::err, buf, static_cast<size_t>(n));
         return ReadResult::data;
     }
     if (n < 0 && errno == EAGAIN)

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "os.hpp"
+#include "outcome.hpp"
 #include "output.hpp"
 #include "protocol.hpp"
 #include "spec.hpp"
@@ -25,8 +26,7 @@ class Sink {
 public:
     virtual ~Sink() = default;
     // The answer to SPAWN: ok, or refused with code and text.
-    virtual void spawn_result(const Process &p, bool ok, proto::Err code,
-                              const std::string &error) = 0;
+    virtual void spawn_result(const Process &p, const Outcome &result) = 0;
     virtual void line(const Process &p, const Line &line) = 0;
     virtual void state_changed(const Process &p) = 0;
     virtual void exited(const Process &p) = 0;
@@ -39,17 +39,17 @@ class Process {
 public:
     enum class Fd { report, out, err };
 
-    Process(Os &os, Sink &sink, uint64_t id, uint64_t token, ProcessConfig config,
-            LaunchSpec spec, Launched launched, RotatingLog log);
+    Process(Os &os, Sink &sink, uint64_t id, uint64_t token, ProcessConfig config, LaunchSpec spec,
+            Launched launched, RotatingLog log);
     Process(const Process &) = delete;
     Process &operator=(const Process &) = delete;
 
     // From the keeper.
     void on_report(const KeeperReport &r);
     void on_keeper_exit(int status);
-    // Commands; false with code and text when refused.
-    bool stop(proto::Err &code, std::string &error);
-    bool send_signal(int sig, bool group, proto::Err &code, std::string &error);
+    // Commands.
+    Outcome stop();
+    Outcome send_signal(int sig, bool group);
     // Daemon shutdown: go straight to SIGKILL.
     void kill_now();
     // Output bytes of one stream.
@@ -99,7 +99,7 @@ private:
     std::string report_buf_;
     RotatingLog log_;
     LineBuffer buffer_;
-    LineSplitter split_[2]; // out (or pty), err
+    LineSplitter split_[2];   // out (or pty), err
     std::vector<Line> early_; // lines read before the start was reported
     proto::Stream out_stream_;
 

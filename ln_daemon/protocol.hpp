@@ -18,9 +18,9 @@ using wire::Msg;
 using wire::Stream;
 
 constexpr uint16_t kVersion = wire::kVersion;
-using wire::kMagic;
 using wire::kHeaderBytes;
 using wire::kLengthBytes;
+using wire::kMagic;
 using wire::kMaxFrame;
 using wire::kMaxName;
 using wire::kNonceBytes;
@@ -29,8 +29,8 @@ static_assert(kMaxString == kMaxFrame, "wire_io.hpp's default string limit is th
 
 // The longest CLIENT_HELLO (type, request id, magic, version, nonce, instance, proof): before
 // the handshake no frame may be longer, so an unauthenticated peer costs a few hundred bytes.
-constexpr size_t kMaxHelloFrame = kHeaderBytes + sizeof kMagic + 2 + kNonceBytes + 4 + kMaxName +
-                                  kTagBytes;
+constexpr size_t kMaxHelloFrame =
+    kHeaderBytes + sizeof kMagic + 2 + kNonceBytes + 4 + kMaxName + kTagBytes;
 static_assert(kMaxHelloFrame == 338);
 
 } // namespace lnd::proto

@@ -38,8 +38,7 @@ bool parse_suffix(ln_ndn_bytes rest, PullInterest &in) noexcept
 
 } // namespace
 
-std::unique_ptr<PullPort> PullPort::open(const std::string &address, uint16_t port,
-                                         std::string &error)
+Outcome PullPort::open(const std::string &address, uint16_t port, std::unique_ptr<PullPort> &out)
 {
     const std::string host = address.empty() ? "0.0.0.0" : address;
     const std::string where = host + ":" + std::to_string(port);
@@ -49,25 +48,26 @@ std::unique_ptr<PullPort> PullPort::open(const std::string &address, uint16_t po
     hints.ai_flags = AI_NUMERICHOST | AI_NUMERICSERV | AI_PASSIVE;
     addrinfo *res = nullptr;
     int rc = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &res);
-    if (rc != 0 || !res) {
-        error = "pull address '" + host + "' is not a numeric IPv4 or IPv6 address (" +
-                ::gai_strerror(rc) + ")";
-        return nullptr;
-    }
+    if (rc != 0 || !res)
+        return outcome::error(proto::Err::pull_failed,
+                              "pull address '" + host +
+                                  "' is not a numeric IPv4 or IPv6 address (" + ::gai_strerror(rc) +
+                                  ")");
     UniqueFd fd(::socket(res->ai_family, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
     if (!fd) {
-        error = "cannot make a UDP socket for " + where + ": " + std::strerror(errno);
+        int socket_errno = errno;
         ::freeaddrinfo(res);
-        return nullptr;
+        return outcome::error(proto::Err::pull_failed, "cannot make a UDP socket for " + where +
+                                                           ": " + std::strerror(socket_errno));
     }
     rc = ::bind(fd.get(), res->ai_addr, res->ai_addrlen);
     int bind_errno = errno;
     ::freeaddrinfo(res);
-    if (rc != 0) {
-        error = "cannot bind UDP " + where + ": " + std::strerror(bind_errno) +
-                (bind_errno == EADDRINUSE ? " (something else uses that port)" : "");
-        return nullptr;
-    }
+    if (rc != 0)
+        return outcome::error(
+            proto::Err::pull_failed,
+            "cannot bind UDP " + where + ": " + std::strerror(bind_errno) +
+                (bind_errno == EADDRINUSE ? " (something else uses that port)" : ""));
     sockaddr_storage bound{};
     socklen_t len = sizeof bound;
     ::getsockname(fd.get(), reinterpret_cast<sockaddr *>(&bound), &len);
@@ -76,7 +76,8 @@ std::unique_ptr<PullPort> PullPort::open(const std::string &address, uint16_t po
                         : ntohs(reinterpret_cast<sockaddr_in *>(&bound)->sin_port);
     std::unique_ptr<PullPort> p(new PullPort(host, real, std::move(fd)));
     p->thread_ = std::thread([raw = p.get()] { raw->loop(); });
-    return p;
+    out = std::move(p);
+    return outcome::ok();
 }
 
 PullPort::PullPort(std::string address, uint16_t port, UniqueFd fd)
@@ -107,8 +108,7 @@ void PullPort::detach(PullTopic *topic)
                    entries_.end());
 }
 
-const PullTopic *PullPort::serving(const std::vector<uint8_t> &name,
-                                   const PullTopic *except) const
+const PullTopic *PullPort::serving(const std::vector<uint8_t> &name, const PullTopic *except) const
 {
     std::lock_guard<std::mutex> lock(mutex_);
     for (const Entry &e : entries_)

@@ -15,23 +15,22 @@
 
 #include "fd.hpp"
 #include "forward_net.hpp"
+#include "outcome.hpp"
 #include "pull_messages.hpp"
 #include "pull_reply.hpp"
 #include "pull_topic.hpp"
 
 namespace lnd {
 
-constexpr size_t kPullRxBytes = 9000;  // the largest datagram decoded (a jumbo frame)
-constexpr int kPullIdlePollMs = 1000;  // the receive thread's poll timeout with nothing parked
-constexpr int kPullBatch = 64;         // datagrams per wake-up before expiring parked ones
+constexpr size_t kPullRxBytes = 9000; // the largest datagram decoded (a jumbo frame)
+constexpr int kPullIdlePollMs = 1000; // the receive thread's poll timeout with nothing parked
+constexpr int kPullBatch = 64;        // datagrams per wake-up before expiring parked ones
 
 class PullPort {
 public:
     // Binds a UDP socket to address:port (a numeric IPv4 or IPv6 address; port 0 lets the
-    // kernel pick one, which only tests do) and starts the receive thread; nullptr and the
-    // reason in `error` if it cannot.
-    static std::unique_ptr<PullPort> open(const std::string &address, uint16_t port,
-                                          std::string &error);
+    // kernel pick one, which only tests do) and starts the receive thread, into `out`.
+    static Outcome open(const std::string &address, uint16_t port, std::unique_ptr<PullPort> &out);
     ~PullPort(); // stops and joins the thread, closes the socket
     PullPort(const PullPort &) = delete;
     PullPort &operator=(const PullPort &) = delete;

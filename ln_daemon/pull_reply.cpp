@@ -56,8 +56,7 @@ PullSender::PullSender(uint64_t max_message, size_t max_name)
     : payload_(max_message), name_(max_name + 16), content_(max_message + 64),
       packet_(max_message + max_name + 16 + kDataOverhead),
       lp_(max_message + max_name + 16 + kDataOverhead + kLpOverhead)
-{
-}
+{}
 
 ln_ndn_bytes PullSender::name_with_seq(ln_ndn_bytes base, uint64_t seq) noexcept
 {

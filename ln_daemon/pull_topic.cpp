@@ -30,11 +30,10 @@ size_t name_room(const PullConfig &c) noexcept { return c.name.size() + 64; }
 } // namespace
 
 PullTopic::PullTopic(const PullConfig &config, std::string label)
-    : label_(std::move(label)), config_(config),
-      sender_(config.message_size, name_room(config)), slots_(config.history),
+    : label_(std::move(label)), config_(config), sender_(config.message_size, name_room(config)),
+      slots_(config.history),
       bytes_(config.history * config.message_size) // zeroed: every page touched now
-{
-}
+{}
 
 PullTopic::~PullTopic()
 {
@@ -85,7 +84,7 @@ void PullTopic::start(int fd)
         return;
     sender_.set_fd(fd);
     fwd::Tap tap;
-    set_error(open_tap(tap).c_str());
+    set_error(open_tap(tap).text.c_str());
     auto run = std::make_unique<Run>();
     Run &r = *run;
     r.thread = std::thread([this, &r, t = std::move(tap)]() mutable { loop(r, std::move(t)); });
@@ -122,16 +121,17 @@ PullTopicStatus PullTopic::status() const
 
 // ---- the ring thread -----------------------------------------------------------------------
 
-std::string PullTopic::open_tap(fwd::Tap &tap) const
+Outcome PullTopic::open_tap(fwd::Tap &tap) const
 {
     ln_ring_tap *t = nullptr;
     int rc = ln_ring_tap_open(&t, config_.ring.c_str(), config_.layout_hash, config_.message_size,
                               LN_TAP_EVERY | LN_TAP_INCLUDE_NEWEST);
     if (rc != LN_OK)
-        return "cannot open ring '" + config_.ring + "': " + ln_error_name(rc) + ": " +
-               ln_last_error();
+        return outcome::error(proto::Err::pull_failed, "cannot open ring '" + config_.ring +
+                                                           "': " + ln_error_name(rc) + ": " +
+                                                           ln_last_error());
     tap.reset(t);
-    return "";
+    return outcome::ok();
 }
 
 void PullTopic::set_error(const char *text)
@@ -150,7 +150,7 @@ void PullTopic::loop(Run &run, fwd::Tap tap)
     ::prctl(PR_SET_TIMERSLACK, 1000UL); // 1 µs: a parked Interest is answered at once
     while (!run.stop.raised()) {
         if (!tap) {
-            set_error(open_tap(tap).c_str());
+            set_error(open_tap(tap).text.c_str());
             if (!tap) {
                 run.stop.sleep_us(kPullRetryUs);
                 continue;
@@ -210,7 +210,7 @@ void PullTopic::publish(const ln_sample_info &info)
             }
             p.used = false;
         }
-        counters_.data += n_data; // counted before they go, so a consumer never sees a
+        counters_.data += n_data;  // counted before they go, so a consumer never sees a
         counters_.nacks += n_nack; // reply its counter lacks; failures are taken back
     }
     if (n_data == 0 && n_nack == 0)
@@ -352,8 +352,7 @@ bool PullTopic::answer(const PullInterest &in, Nanos now, PullSender &sender, Er
         counters_.nacks += verdict == Verdict::nack;
         if (slot) {
             publish_us = slot->publish_us;
-            std::memcpy(sender.payload(),
-                        &bytes_[(seq % config_.history) * config_.message_size],
+            std::memcpy(sender.payload(), &bytes_[(seq % config_.history) * config_.message_size],
                         config_.message_size);
         }
     }

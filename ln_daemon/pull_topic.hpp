@@ -20,13 +20,14 @@
 
 #include "forward_net.hpp"
 #include "forward_tap.hpp"
+#include "outcome.hpp"
 #include "pull_messages.hpp"
 #include "pull_reply.hpp"
 
 namespace lnd {
 
-constexpr size_t kPullParked = 64;         // parked Interests per topic
-constexpr size_t kPullNonces = 64;         // recent (name, nonce) pairs per topic
+constexpr size_t kPullParked = 64; // parked Interests per topic
+constexpr size_t kPullNonces = 64; // recent (name, nonce) pairs per topic
 constexpr uint32_t kMaxPullHistory = 65536;
 constexpr uint32_t kMaxPullParkMs = 60000; // a parked Interest waits at most this long
 constexpr int64_t kPullRetryUs = 500000;   // reopening a ring that is not there (yet)
@@ -128,7 +129,7 @@ private:
     // A tap that delivers the ring's newest sample, then every later one: a topic that
     // published before it was served, or publishes rarely, answers at once.  "" or why
     // the ring cannot be opened.
-    std::string open_tap(fwd::Tap &tap) const;
+    Outcome open_tap(fwd::Tap &tap) const;
     void set_error(const char *text);
     // Stores the sample just read into the sender's payload buffer and answers the
     // Interests parked for it (and NACKs those it passed over).
@@ -145,14 +146,14 @@ private:
 
     const std::string label_;
     PullConfig config_;
-    PullSender sender_;            // the ring thread's: answers to parked Interests
+    PullSender sender_; // the ring thread's: answers to parked Interests
 
-    mutable std::mutex mutex_; // guards everything below
-    std::vector<Slot> slots_;     // slot seq % history
-    std::vector<uint8_t> bytes_;  // history × message_size
-    uint64_t latest_ = 0;         // newest seq stored, 0: none yet
-    int64_t last_stamp_ns_ = 0;   // of the newest sample
-    double period_us_ = 0;        // EWMA of the publish period
+    mutable std::mutex mutex_;   // guards everything below
+    std::vector<Slot> slots_;    // slot seq % history
+    std::vector<uint8_t> bytes_; // history × message_size
+    uint64_t latest_ = 0;        // newest seq stored, 0: none yet
+    int64_t last_stamp_ns_ = 0;  // of the newest sample
+    double period_us_ = 0;       // EWMA of the publish period
     std::array<Parked, kPullParked> parked_{};
     std::array<Seen, kPullNonces> seen_{};
     size_t seen_next_ = 0;

@@ -32,6 +32,8 @@ std::string label(const std::string &instance, const std::string &topic)
     return "instance " + instance + " pull topic " + topic;
 }
 
+Outcome refused(std::string text) { return error(Err::pull_failed, std::move(text)); }
+
 std::string where(const std::string &address, uint16_t port)
 {
     return (address.empty() ? "0.0.0.0" : address) + ":" + std::to_string(port);
@@ -43,14 +45,15 @@ Pulls::Pulls(bool any_port) : any_port_(any_port) {}
 
 Pulls::~Pulls() { shutdown(); }
 
-bool Pulls::handles(uint8_t type) noexcept { return pull_msg_name(type) != nullptr; }
+bool Pulls::handles(uint8_t type) const noexcept { return pull_msg_name(type) != nullptr; }
 
-NetOutcome Pulls::handle(const std::string &instance, uint8_t type, proto::Reader &r)
+Outcome Pulls::handle(const Request &req)
 {
-    return outcome::guarded(instance, Err::pull_failed, [&]() -> NetOutcome {
+    return outcome::guarded(req.instance, Err::pull_failed, [&]() -> Outcome {
         using outcome::decoded;
-        const auto &in = instance;
-        switch (static_cast<Msg>(type)) {
+        const auto &in = req.instance;
+        proto::Reader &r = req.body;
+        switch (static_cast<Msg>(req.type)) {
         case Msg::pull_topic:
             return decoded<PullTopicRequest>(r, decode_pull_topic,
                                              [&](auto &q) { return configure(in, q); });
@@ -80,39 +83,39 @@ void Pulls::shutdown() noexcept
         logf("stopped %zu pull topic(s)", n);
 }
 
-std::string Pulls::check(const std::string &instance, const PullTopicRequest &req,
-                         PullConfig &config) const
+Outcome Pulls::check(const std::string &instance, const PullTopicRequest &req,
+                     PullConfig &config) const
 {
     if (!valid_name(req.topic))
-        return "invalid topic name " + quoted(req.topic) +
-               " (1-255 bytes, no control characters)";
+        return refused("invalid topic name " + quoted(req.topic) +
+                       " (1-255 bytes, no control characters)");
     const std::string what = "pull topic " + quoted(req.topic) + ": ";
-    std::string err;
-    if (!ring_in_namespace(instance, req.ring, err))
-        return what + err;
+    if (Outcome o = ring_in_namespace(instance, req.ring, Err::pull_failed); o.failed())
+        return outcome::prefixed(what, std::move(o));
     if (req.message_size < 1 || req.message_size > kMaxPullMessage)
-        return what + "message size " + std::to_string(req.message_size) + " out of range 1.." +
-               std::to_string(kMaxPullMessage) +
-               " (a sample travels in one UDP datagram; pull topics do not segment)";
+        return refused(what + "message size " + std::to_string(req.message_size) +
+                       " out of range 1.." + std::to_string(kMaxPullMessage) +
+                       " (a sample travels in one UDP datagram; pull topics do not segment)");
     if (req.port == 0 && !any_port_)
-        return what + "port 0 is not a port to serve on";
+        return refused(what + "port 0 is not a port to serve on");
     if (req.history < 1 || req.history > kMaxPullHistory)
-        return what + "history " + std::to_string(req.history) + " out of range 1.." +
-               std::to_string(kMaxPullHistory);
+        return refused(what + "history " + std::to_string(req.history) + " out of range 1.." +
+                       std::to_string(kMaxPullHistory));
     if (req.signature == LN_NDN_SIG_DIGEST_SHA256 && !req.key.empty())
-        return what + "a key is given, but the signature is DigestSha256 (0); HMAC-SHA256 is 4";
+        return refused(what +
+                       "a key is given, but the signature is DigestSha256 (0); HMAC-SHA256 is 4");
     if (req.signature == LN_NDN_SIG_HMAC_SHA256 && req.key.empty())
-        return what + "HMAC-SHA256 needs a key";
+        return refused(what + "HMAC-SHA256 needs a key");
     if (req.signature != LN_NDN_SIG_DIGEST_SHA256 && req.signature != LN_NDN_SIG_HMAC_SHA256)
-        return what + "unknown signature type " + std::to_string(req.signature) +
-               " (0 DigestSha256, 4 HMAC-SHA256)";
+        return refused(what + "unknown signature type " + std::to_string(req.signature) +
+                       " (0 DigestSha256, 4 HMAC-SHA256)");
     std::vector<uint8_t> name(req.name.size() * 2 + 64);
     int n = ln_ndn_name_from_uri(name.data(), name.size(), req.name.c_str());
     if (n < 0 || req.name.find('\0') != std::string::npos)
-        return what + "name " + quoted(req.name) + " is not a valid NDN URI (" +
-               (n < 0 ? ln_ndn_strerror(n) : "a NUL byte") + ")";
+        return refused(what + "name " + quoted(req.name) + " is not a valid NDN URI (" +
+                       (n < 0 ? ln_ndn_strerror(n) : "a NUL byte") + ")");
     if (n == 0)
-        return what + "name " + quoted(req.name) + " has no component";
+        return refused(what + "name " + quoted(req.name) + " has no component");
     name.resize(static_cast<size_t>(n));
     config.ring = req.ring;
     config.md_name = req.md_name;
@@ -124,21 +127,23 @@ std::string Pulls::check(const std::string &instance, const PullTopicRequest &re
     config.freshness_ms = req.freshness_ms;
     config.signature = req.signature;
     config.key = req.key;
-    return "";
+    return ok();
 }
 
-PullPort *Pulls::port_for(const PortKey &key, std::string &error)
+Outcome Pulls::port_for(const PortKey &key, PullPort *&port)
 {
     auto it = ports_.find(key);
-    if (it != ports_.end())
-        return it->second.get();
-    std::unique_ptr<PullPort> port = PullPort::open(key.first, key.second, error);
-    if (!port)
-        return nullptr;
-    logf("pull port %s:%u open", port->address().c_str(), port->port());
-    PullPort *raw = port.get();
-    ports_[key] = std::move(port);
-    return raw;
+    if (it != ports_.end()) {
+        port = it->second.get();
+        return ok();
+    }
+    std::unique_ptr<PullPort> opened;
+    if (Outcome o = PullPort::open(key.first, key.second, opened); o.failed())
+        return o;
+    logf("pull port %s:%u open", opened->address().c_str(), opened->port());
+    port = opened.get();
+    ports_[key] = std::move(opened);
+    return ok();
 }
 
 void Pulls::release(const PortKey &key)
@@ -159,12 +164,11 @@ std::string Pulls::owner(const PullTopic *topic) const
     return "another topic";
 }
 
-NetOutcome Pulls::configure(const std::string &instance, const PullTopicRequest &req)
+Outcome Pulls::configure(const std::string &instance, const PullTopicRequest &req)
 {
     PullConfig config;
-    std::string problem = check(instance, req, config);
-    if (!problem.empty())
-        return error(Err::pull_failed, problem);
+    if (Outcome o = check(instance, req, config); o.failed())
+        return o;
     const std::string what = "pull topic " + quoted(req.topic) + ": ";
     const PortKey key{req.address.empty() ? "0.0.0.0" : req.address, req.port};
     auto found = topics_.find({instance, req.topic});
@@ -176,16 +180,15 @@ NetOutcome Pulls::configure(const std::string &instance, const PullTopicRequest 
     const uint64_t needed = PullTopic::bytes_for(config.history, config.message_size);
     const uint64_t free = kMaxPullMemory - (used_ - (old ? old->topic->memory() : 0));
     if (needed > free)
-        return error(Err::pull_failed,
-                     what + "a history of " + std::to_string(config.history) + " samples of " +
-                         std::to_string(config.message_size) + " bytes needs " +
-                         std::to_string(needed) + " bytes, but only " + std::to_string(free) +
-                         " of the daemon's " + std::to_string(kMaxPullMemory) +
-                         " bytes for pull histories are free");
-    std::string port_error;
-    PullPort *port = port_for(key, port_error);
-    if (!port)
-        return error(Err::pull_failed, what + port_error);
+        return error(Err::pull_failed, what + "a history of " + std::to_string(config.history) +
+                                           " samples of " + std::to_string(config.message_size) +
+                                           " bytes needs " + std::to_string(needed) +
+                                           " bytes, but only " + std::to_string(free) +
+                                           " of the daemon's " + std::to_string(kMaxPullMemory) +
+                                           " bytes for pull histories are free");
+    PullPort *port = nullptr;
+    if (Outcome o = port_for(key, port); o.failed())
+        return outcome::prefixed(what, std::move(o));
     if (const PullTopic *other = port->serving(config.name, old ? old->topic.get() : nullptr)) {
         std::string text = what + "name " + quoted(req.name) + " is served already on " +
                            where(key.first, port->port()) + " by " + owner(other);
@@ -225,14 +228,16 @@ NetOutcome Pulls::configure(const std::string &instance, const PullTopicRequest 
         release(old_port);
     logf("%s: %s %s on %s from ring %s (history %u of %" PRIu64 " bytes, freshness %u ms, %s)",
          label(instance, req.topic).c_str(),
-         !old ? "serving" : keep ? "updated, serving" : "reallocated, serving", req.name.c_str(),
-         where(key.first, port->port()).c_str(), config.ring.c_str(), config.history,
-         config.message_size, config.freshness_ms,
+         !old   ? "serving"
+         : keep ? "updated, serving"
+                : "reallocated, serving",
+         req.name.c_str(), where(key.first, port->port()).c_str(), config.ring.c_str(),
+         config.history, config.message_size, config.freshness_ms,
          config.signature == LN_NDN_SIG_HMAC_SHA256 ? "HMAC-SHA256" : "DigestSha256");
     return ok();
 }
 
-NetOutcome Pulls::remove(const std::string &instance, const std::string &topic)
+Outcome Pulls::remove(const std::string &instance, const std::string &topic)
 {
     std::vector<std::map<Key, Served>::iterator> gone;
     if (topic.empty()) {
@@ -261,7 +266,7 @@ NetOutcome Pulls::remove(const std::string &instance, const std::string &topic)
     return ok();
 }
 
-NetOutcome Pulls::status(const std::string &instance, const std::string &topic) const
+Outcome Pulls::status(const std::string &instance, const std::string &topic) const
 {
     std::vector<PullTopicStatus> list;
     std::vector<PortKey> keys;

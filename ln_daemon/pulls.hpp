@@ -11,7 +11,8 @@
 #include <string>
 #include <utility>
 
-#include "network.hpp"
+#include "feature.hpp"
+#include "outcome.hpp"
 #include "protocol.hpp"
 #include "pull_messages.hpp"
 #include "pull_port.hpp"
@@ -19,41 +20,40 @@
 
 namespace lnd {
 
-constexpr size_t kMaxPullTopics = 1024;             // per daemon, all instances
+constexpr size_t kMaxPullTopics = 1024;                  // per daemon, all instances
 constexpr uint64_t kMaxPullMemory = uint64_t{256} << 20; // history bytes, all topics
 
-class Pulls {
+class Pulls final : public Feature {
 public:
     // `any_port`: also take port 0 (the kernel picks one; PULL_LIST shows which), for tests.
     explicit Pulls(bool any_port = false);
-    ~Pulls(); // stops and joins every thread
+    ~Pulls() override; // stops and joins every thread
     Pulls(const Pulls &) = delete;
     Pulls &operator=(const Pulls &) = delete;
 
-    // True for the message types handle() takes.
-    static bool handles(uint8_t type) noexcept;
-    NetOutcome handle(const std::string &instance, uint8_t type, proto::Reader &r);
-    // Stops every thread, closes every port (the daemon's shutdown).
-    void shutdown() noexcept;
+    bool handles(uint8_t type) const noexcept override;
+    Outcome handle(const Request &req) override;
+    // Stops every thread, closes every port.
+    void shutdown() noexcept override;
 
     uint64_t memory_used() const noexcept { return used_; }
 
 private:
-    using Key = std::pair<std::string, std::string>;   // instance, topic
+    using Key = std::pair<std::string, std::string>;  // instance, topic
     using PortKey = std::pair<std::string, uint16_t>; // address, port as requested
     struct Served {
         std::unique_ptr<PullTopic> topic;
         PortKey port;
     };
 
-    NetOutcome configure(const std::string &instance, const PullTopicRequest &req);
-    NetOutcome remove(const std::string &instance, const std::string &topic);
-    NetOutcome status(const std::string &instance, const std::string &topic) const;
-    // A reason not to take `req`, or "" with its config filled in.
-    std::string check(const std::string &instance, const PullTopicRequest &req,
-                      PullConfig &config) const;
-    // The port for `key`, opened if needed; nullptr and the reason in `error`.
-    PullPort *port_for(const PortKey &key, std::string &error);
+    Outcome configure(const std::string &instance, const PullTopicRequest &req);
+    Outcome remove(const std::string &instance, const std::string &topic);
+    Outcome status(const std::string &instance, const std::string &topic) const;
+    // Refuses `req`, or fills in its config.
+    Outcome check(const std::string &instance, const PullTopicRequest &req,
+                  PullConfig &config) const;
+    // The port for `key` in `port`, opened if needed.
+    Outcome port_for(const PortKey &key, PullPort *&port);
     // Closes the port if no topic is left on it.
     void release(const PortKey &key);
     // The (instance, topic) served as `topic`, for refusals.

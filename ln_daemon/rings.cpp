@@ -17,39 +17,42 @@
 
 namespace lnd {
 
+using outcome::ok;
+
 namespace {
 
-std::string libln_error(const std::string &what, int rc)
+Outcome refused(std::string text)
 {
-    return what + ": " + ln_error_name(rc) + ": " + ln_last_error();
+    return outcome::error(proto::Err::ring_failed, std::move(text));
+}
+
+Outcome libln_error(const std::string &what, int rc)
+{
+    return refused(what + ": " + ln_error_name(rc) + ": " + ln_last_error());
 }
 
 // A segment that exists must have the size its geometry gives and the layout asked for,
 // else it is some other ring.  (A tap checks the layout: the admin handle cannot.)
-bool check_geometry(const RingCreateRequest &req, std::string &error)
+Outcome check_geometry(const RingCreateRequest &req)
 {
     UniqueFd fd(::shm_open(req.name.c_str(), O_RDONLY | O_CLOEXEC, 0));
     struct stat st;
     if (!fd || ::fstat(fd.get(), &st) != 0)
-        return true; // gone meanwhile: the next call on it says so
+        return ok(); // gone meanwhile: the next call on it says so
     uint64_t want = ln_ring_segment_size(req.message_size, req.slots);
-    if (static_cast<uint64_t>(st.st_size) != want) {
-        error = "segment " + req.name + " exists with " + std::to_string(st.st_size) +
-                " bytes, not the " + std::to_string(want) + " of " +
-                std::to_string(req.slots) + " slots of " + std::to_string(req.message_size) +
-                " bytes";
-        return false;
-    }
+    if (static_cast<uint64_t>(st.st_size) != want)
+        return refused("segment " + req.name + " exists with " + std::to_string(st.st_size) +
+                       " bytes, not the " + std::to_string(want) + " of " +
+                       std::to_string(req.slots) + " slots of " + std::to_string(req.message_size) +
+                       " bytes");
     ln_ring_tap *tap = nullptr;
-    int rc = ln_ring_tap_open(&tap, req.name.c_str(), req.layout_hash, req.message_size,
-                              LN_TAP_NEWEST);
+    int rc =
+        ln_ring_tap_open(&tap, req.name.c_str(), req.layout_hash, req.message_size, LN_TAP_NEWEST);
     if (rc == LN_OK)
         ln_ring_tap_close(tap);
-    if (rc == LN_ELAYOUT) {
-        error = libln_error("adopting segment " + req.name, rc);
-        return false;
-    }
-    return true; // anything else is not a mismatch of this ring (e.g. a successor is gone)
+    if (rc == LN_ELAYOUT)
+        return libln_error("adopting segment " + req.name, rc);
+    return ok(); // anything else is not a mismatch of this ring (e.g. a successor is gone)
 }
 
 } // namespace
@@ -70,16 +73,14 @@ std::string ring_prefix(const std::string &instance)
     return out;
 }
 
-bool ring_in_namespace(const std::string &instance, const std::string &name,
-                       std::string &error)
+Outcome ring_in_namespace(const std::string &instance, const std::string &name, proto::Err code)
 {
     std::string prefix = ring_prefix(instance);
     if (name.size() > prefix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
         name.find('/', 1) == std::string::npos && name.find('\0') == std::string::npos)
-        return true;
-    error = "ring name '" + name + "' is not in the namespace of instance " + instance + " (" +
-            prefix + "*)";
-    return false;
+        return ok();
+    return outcome::error(code, "ring name '" + name + "' is not in the namespace of instance " +
+                                    instance + " (" + prefix + "*)");
 }
 
 void RingTable::Closer::operator()(ln_ring_admin *admin) const noexcept
@@ -90,167 +91,135 @@ void RingTable::Closer::operator()(ln_ring_admin *admin) const noexcept
 RingTable::RingTable() = default;
 RingTable::~RingTable() = default;
 
-ln_ring_admin *RingTable::find(const std::string &instance, const std::string &name,
-                               std::string &error)
+Outcome RingTable::find(const std::string &instance, const std::string &name, ln_ring_admin *&admin)
 {
-    if (!ring_in_namespace(instance, name, error))
-        return nullptr;
+    if (Outcome o = ring_in_namespace(instance, name); o.failed())
+        return o;
     auto it = rings_.find(name);
-    if (it == rings_.end()) {
-        error = "this daemon holds no ring " + name + " (create or adopt it first)";
-        return nullptr;
-    }
-    return it->second.get();
+    if (it == rings_.end())
+        return refused("this daemon holds no ring " + name + " (create or adopt it first)");
+    admin = it->second.get();
+    return ok();
 }
 
-bool RingTable::create(const std::string &instance, const RingCreateRequest &req, bool &limit,
-                       std::string &error)
+Outcome RingTable::create(const std::string &instance, const RingCreateRequest &req)
 {
-    limit = false;
-    if (!ring_in_namespace(instance, req.name, error))
-        return false;
+    if (Outcome o = ring_in_namespace(instance, req.name); o.failed())
+        return o;
     auto held = rings_.find(req.name);
     if (held != rings_.end()) {
         UniqueFd fd(::shm_open(req.name.c_str(), O_RDONLY | O_CLOEXEC, 0));
         if (!fd && errno == ENOENT) {
             rings_.erase(held); // unlinked behind our back: the handle is stale
         } else if (req.adopt) { // still held from before the manager went away
-            return check_geometry(req, error);
+            return check_geometry(req);
         } else {
-            error = "ring " + req.name + " exists already";
-            return false;
+            return refused("ring " + req.name + " exists already");
         }
     }
-    if (rings_.size() >= kMaxRings) {
-        limit = true;
-        error = "too many rings (" + std::to_string(kMaxRings) + ") on this daemon";
-        return false;
-    }
+    if (rings_.size() >= kMaxRings)
+        return outcome::error(proto::Err::limit,
+                              "too many rings (" + std::to_string(kMaxRings) + ") on this daemon");
     ln_ring_admin *raw = nullptr;
     if (req.adopt) {
         int rc = ln_ring_admin_open(&raw, req.name.c_str());
         if (rc == LN_OK) {
             Handle handle(raw);
-            if (!check_geometry(req, error))
-                return false;
+            if (Outcome o = check_geometry(req); o.failed())
+                return o;
             rings_.emplace(req.name, std::move(handle));
-            return true;
+            return ok();
         }
-        if (rc != LN_ENOTFOUND) {
-            error = libln_error("adopting segment " + req.name, rc);
-            return false;
-        }
+        if (rc != LN_ENOTFOUND)
+            return libln_error("adopting segment " + req.name, rc);
     }
     int rc = ln_ring_admin_create(&raw, req.name.c_str(), req.topic.c_str(), req.md_name.c_str(),
                                   req.layout_hash, req.message_size, req.slots);
-    if (rc != LN_OK) {
-        error = libln_error("creating segment " + req.name + " with " +
-                                std::to_string(req.slots) + " slots of " +
-                                std::to_string(req.message_size) + " bytes",
-                            rc);
-        return false;
-    }
+    if (rc != LN_OK)
+        return libln_error("creating segment " + req.name + " with " + std::to_string(req.slots) +
+                               " slots of " + std::to_string(req.message_size) + " bytes",
+                           rc);
     rings_.emplace(req.name, Handle(raw));
-    return true;
+    return ok();
 }
 
-bool RingTable::retire(const std::string &instance, const RingRetireRequest &req,
-                       std::string &error)
+Outcome RingTable::retire(const std::string &instance, const RingRetireRequest &req)
 {
-    ln_ring_admin *old = find(instance, req.old_name, error);
-    if (!old)
-        return false;
-    ln_ring_admin *successor = find(instance, req.successor, error);
-    if (!successor)
-        return false;
-    if (old == successor) {
-        error = "a ring cannot be its own successor";
-        return false;
-    }
-    if (!std::isfinite(req.timeout) || req.timeout < 0 || req.timeout > kMaxRetireTimeout) {
-        error = "retire timeout " + std::to_string(req.timeout) + " is not in 0.." +
-                std::to_string(kMaxRetireTimeout) + " s";
-        return false;
-    }
+    ln_ring_admin *old = nullptr;
+    if (Outcome o = find(instance, req.old_name, old); o.failed())
+        return o;
+    ln_ring_admin *successor = nullptr;
+    if (Outcome o = find(instance, req.successor, successor); o.failed())
+        return o;
+    if (old == successor)
+        return refused("a ring cannot be its own successor");
+    if (!std::isfinite(req.timeout) || req.timeout < 0 || req.timeout > kMaxRetireTimeout)
+        return refused("retire timeout " + std::to_string(req.timeout) + " is not in 0.." +
+                       std::to_string(kMaxRetireTimeout) + " s");
     int rc = ln_ring_admin_retire(old, successor, req.successor.c_str(), req.timeout);
-    if (rc != LN_OK) {
-        error = libln_error("retiring " + req.old_name + " into " + req.successor, rc);
-        return false;
-    }
-    return true;
+    if (rc != LN_OK)
+        return libln_error("retiring " + req.old_name + " into " + req.successor, rc);
+    return ok();
 }
 
-bool RingTable::reader(const std::string &instance, const RingReaderRequest &req,
-                       std::string &error)
+Outcome RingTable::reader(const std::string &instance, const RingReaderRequest &req)
 {
-    ln_ring_admin *admin = find(instance, req.name, error);
-    if (!admin)
-        return false;
+    ln_ring_admin *admin = nullptr;
+    if (Outcome o = find(instance, req.name, admin); o.failed())
+        return o;
     int rc = req.reserve ? ln_ring_admin_reserve_reader(admin, req.index, req.pid, req.buffers)
                          : ln_ring_admin_release_reader(admin, req.index);
-    if (rc != LN_OK) {
-        error = libln_error((req.reserve ? "reserving reader slot " : "releasing reader slot ") +
-                                std::to_string(req.index) + " of " + req.name,
-                            rc);
-        return false;
-    }
-    return true;
+    if (rc != LN_OK)
+        return libln_error((req.reserve ? "reserving reader slot " : "releasing reader slot ") +
+                               std::to_string(req.index) + " of " + req.name,
+                           rc);
+    return ok();
 }
 
-bool RingTable::counts(const std::string &instance, const RingCountsRequest &req,
-                       std::string &error)
+Outcome RingTable::counts(const std::string &instance, const RingCountsRequest &req)
 {
-    ln_ring_admin *admin = find(instance, req.name, error);
-    if (!admin)
-        return false;
+    ln_ring_admin *admin = nullptr;
+    if (Outcome o = find(instance, req.name, admin); o.failed())
+        return o;
     int rc = ln_ring_admin_set_counts(admin, req.publishers, req.subscribers);
-    if (rc != LN_OK) {
-        error = libln_error("setting the port counts of " + req.name, rc);
-        return false;
-    }
-    return true;
+    if (rc != LN_OK)
+        return libln_error("setting the port counts of " + req.name, rc);
+    return ok();
 }
 
-bool RingTable::write_seq(const std::string &instance, const std::string &name, uint64_t &seq,
-                          std::string &error)
+Outcome RingTable::write_seq(const std::string &instance, const std::string &name, uint64_t &seq)
 {
-    ln_ring_admin *admin = find(instance, name, error);
-    if (!admin)
-        return false;
+    ln_ring_admin *admin = nullptr;
+    if (Outcome o = find(instance, name, admin); o.failed())
+        return o;
     int rc = ln_ring_admin_write_seq(admin, &seq);
-    if (rc != LN_OK) {
-        error = libln_error("reading the sequence number of " + name, rc);
-        return false;
-    }
-    return true;
+    if (rc != LN_OK)
+        return libln_error("reading the sequence number of " + name, rc);
+    return ok();
 }
 
-bool RingTable::remove(const std::string &instance, const std::string &name, std::string &error)
+Outcome RingTable::remove(const std::string &instance, const std::string &name)
 {
-    if (!ring_in_namespace(instance, name, error))
-        return false;
+    if (Outcome o = ring_in_namespace(instance, name); o.failed())
+        return o;
     rings_.erase(name);
     int rc = ln_ring_admin_unlink(name.c_str());
-    if (rc != LN_OK) {
-        error = libln_error("unlinking segment " + name, rc);
-        return false;
-    }
-    return true;
+    if (rc != LN_OK)
+        return libln_error("unlinking segment " + name, rc);
+    return ok();
 }
 
-bool RingTable::purge(const std::string &instance, uint64_t &count, std::string &error)
+Outcome RingTable::purge(const std::string &instance, uint64_t &count)
 {
     std::string prefix = ring_prefix(instance);
     for (auto it = rings_.lower_bound(prefix);
          it != rings_.end() && it->first.compare(0, prefix.size(), prefix) == 0;)
         it = rings_.erase(it);
     int rc = ln_ring_admin_purge_instance(sanitize_instance(instance).c_str());
-    if (rc < 0) {
-        error = libln_error("removing the segments " + prefix + "*", rc);
-        return false;
-    }
+    if (rc < 0)
+        return libln_error("removing the segments " + prefix + "*", rc);
     count = static_cast<uint64_t>(rc);
-    return true;
+    return ok();
 }
 
 } // namespace lnd

@@ -13,12 +13,14 @@
 #include <string>
 
 #include "net_messages.hpp"
+#include "outcome.hpp"
+#include "protocol.hpp"
 
 struct ln_ring_admin;
 
 namespace lnd {
 
-constexpr size_t kMaxRings = 16384;     // handles per daemon, all instances
+constexpr size_t kMaxRings = 16384;        // handles per daemon, all instances
 constexpr double kMaxRetireTimeout = 10.0; // RING_RETIRE blocks the poll loop that long at most
 
 // The instance name as segment names carry it (libln's ln_name_instance, naming.h: every
@@ -26,10 +28,10 @@ constexpr double kMaxRetireTimeout = 10.0; // RING_RETIRE blocks the poll loop t
 std::string sanitize_instance(const std::string &instance);
 // "/ln.<sanitized instance>."
 std::string ring_prefix(const std::string &instance);
-// True if `name` is a segment name in the instance's namespace: the prefix, then at least
-// one more byte and no further '/'; else false and a sentence in `error`.
-bool ring_in_namespace(const std::string &instance, const std::string &name,
-                       std::string &error);
+// Whether `name` is a segment name in the instance's namespace: the prefix, then at least
+// one more byte and no further '/'; else error `code` with a sentence.
+Outcome ring_in_namespace(const std::string &instance, const std::string &name,
+                          proto::Err code = proto::Err::ring_failed);
 
 class RingTable {
 public:
@@ -38,20 +40,18 @@ public:
     RingTable(const RingTable &) = delete;
     RingTable &operator=(const RingTable &) = delete;
 
-    // Each returns false with a sentence in `error` if refused or if libln failed (then
-    // with ln_last_error()'s text); `limit` is set when the table is full.
-    bool create(const std::string &instance, const RingCreateRequest &req, bool &limit,
-                std::string &error);
-    bool retire(const std::string &instance, const RingRetireRequest &req, std::string &error);
-    bool reader(const std::string &instance, const RingReaderRequest &req, std::string &error);
-    bool counts(const std::string &instance, const RingCountsRequest &req, std::string &error);
-    bool write_seq(const std::string &instance, const std::string &name, uint64_t &seq,
-                   std::string &error);
+    // Each refuses with error ring_failed and a sentence, or with libln's failure (then with
+    // ln_last_error()'s text); create() with error limit when the table is full.
+    Outcome create(const std::string &instance, const RingCreateRequest &req);
+    Outcome retire(const std::string &instance, const RingRetireRequest &req);
+    Outcome reader(const std::string &instance, const RingReaderRequest &req);
+    Outcome counts(const std::string &instance, const RingCountsRequest &req);
+    Outcome write_seq(const std::string &instance, const std::string &name, uint64_t &seq);
     // Closes the handle if there is one and unlinks the segment (gone already is fine).
-    bool remove(const std::string &instance, const std::string &name, std::string &error);
+    Outcome remove(const std::string &instance, const std::string &name);
     // Closes every handle of the instance's namespace and unlinks every segment in it,
     // held or not; `count` is how many segments were unlinked.
-    bool purge(const std::string &instance, uint64_t &count, std::string &error);
+    Outcome purge(const std::string &instance, uint64_t &count);
 
     size_t size() const noexcept { return rings_.size(); }
 
@@ -61,10 +61,8 @@ private:
     };
     using Handle = std::unique_ptr<ln_ring_admin, Closer>;
 
-    // The held handle of `name`, or nullptr with `error` (outside the namespace, not held).
-    ln_ring_admin *find(const std::string &instance, const std::string &name,
-                        std::string &error);
-    bool adopt(const RingCreateRequest &req, std::string &error);
+    // The held handle of `name` in `admin`; refused outside the namespace or when not held.
+    Outcome find(const std::string &instance, const std::string &name, ln_ring_admin *&admin);
 
     std::map<std::string, Handle> rings_; // by segment name
 };

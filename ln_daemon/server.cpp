@@ -21,10 +21,7 @@
 #include <vector>
 
 #include "log.hpp"
-#include "logger_messages.hpp"
-#include "pull_messages.hpp"
 #include "messages.hpp"
-#include "net_messages.hpp"
 
 namespace lnd {
 
@@ -83,11 +80,13 @@ const char *msg_name(uint8_t type) noexcept
 } // namespace
 
 Server::Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
-               NetCommands &net, Loggers &loggers, Pulls &pulls)
+               std::string host_id, std::vector<Feature *> features)
     : os_(os), key_(key), listener_(std::move(listener)), signals_(std::move(signals)),
-      log_path_(std::move(log_path)), supervisor_(os, *this), net_(net), loggers_(loggers),
-      pulls_(pulls)
+      log_path_(std::move(log_path)), processes_(os, *this, std::move(host_id)),
+      supervisor_(processes_.supervisor())
 {
+    features_.push_back(&processes_);
+    features_.insert(features_.end(), features.begin(), features.end());
 }
 
 Server::~Server() = default;
@@ -104,8 +103,7 @@ void Server::accept_all()
         if (!fd) {
             if (errno == EMFILE || errno == ENFILE) {
                 // The pending connection stays readable: without a pause this would spin.
-                logf("accept: %s; not accepting for %.1f s", std::strerror(errno),
-                     kAcceptPause);
+                logf("accept: %s; not accepting for %.1f s", std::strerror(errno), kAcceptPause);
                 accept_paused_until_ = os_.monotonic() + kAcceptPause;
             } else if (errno != EAGAIN && errno != EINTR && errno != ECONNABORTED) {
                 logf("accept: %s", std::strerror(errno));
@@ -214,8 +212,8 @@ void Server::drop(Connection &c, const char *why)
     if (c.dead)
         return;
     if (why)
-        logf("connection %s%s%s closed: %s", c.peer.c_str(),
-             c.instance.empty() ? "" : " instance ", c.instance.c_str(), why);
+        logf("connection %s%s%s closed: %s", c.peer.c_str(), c.instance.empty() ? "" : " instance ",
+             c.instance.c_str(), why);
     c.dead = true;
     c.out.clear();
 }
@@ -368,119 +366,41 @@ void Server::handle_hello(Connection &c, uint8_t type, proto::Reader &r)
     logf("connection %s authenticated for instance %s", c.peer.c_str(), c.instance.c_str());
 }
 
+Feature *Server::owner(uint8_t type) const noexcept
+{
+    for (Feature *f : features_)
+        if (f->handles(type))
+            return f;
+    return nullptr;
+}
+
 void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Reader &r)
 {
-    Err code = Err::bad_request;
-    std::string error;
-    proto::Writer w;
     auto malformed = [&] {
         refuse(c, req, Err::bad_request, std::string("malformed ") + msg_name(type) + " request");
     };
-    switch (static_cast<Msg>(type)) {
-    case Msg::spawn: {
-        SpawnRequest sr;
-        if (!decode_spawn(r, sr))
-            return malformed();
-        // Clients report the host they run on; this daemon's id names this host.
-        env_default(sr.env, "LN_HOST_ID", net_.host_id());
-        uint64_t token = next_token_++;
-        if (shutdown_signals_) {
-            send_error(c, req, Err::spawn_failed, "the daemon is shutting down");
-            return;
-        }
-        if (!supervisor_.spawn(c.instance, sr, token, code, error)) {
-            send_error(c, req, code, error);
-            return;
-        }
-        pending_[token] = {c.id, req};
-        logf("instance %s: starting %s", c.instance.c_str(), sr.name.c_str());
-        return;
-    }
-    case Msg::stop:
-    case Msg::forget:
-    case Msg::output:
-    case Msg::signal: {
-        // STOP and FORGET are just the name; OUTPUT adds a line count, SIGNAL a signal.
-        std::string name;
-        uint32_t n = 0;
-        int32_t sig = 0;
-        bool group = false;
-        bool ok = false;
-        if (type == static_cast<uint8_t>(Msg::output)) {
-            wire::Output q;
-            ok = wire::decode(r, q);
-            name = std::move(q.name);
-            n = q.lines;
-        } else if (type == static_cast<uint8_t>(Msg::signal)) {
-            wire::Signal q;
-            ok = wire::decode(r, q);
-            name = std::move(q.name);
-            sig = q.signal;
-            group = q.group;
-        } else {
-            wire::Stop q; // the same layout as FORGET
-            ok = wire::decode(r, q);
-            name = std::move(q.name);
-        }
-        if (!ok)
-            return malformed();
-        if (type == static_cast<uint8_t>(Msg::forget)) {
-            if (!supervisor_.forget(c.instance, name, code, error))
-                return send_error(c, req, code, error);
-            return send(c, Msg::ok, req, {});
-        }
-        Process *p = supervisor_.find(c.instance, name, code, error);
-        if (!p)
-            return send_error(c, req, code, error);
-        if (type == static_cast<uint8_t>(Msg::output)) {
-            encode_lines(w, *p, n, proto::kMaxFrame - 64);
-            return send(c, Msg::output_lines, req, w.buffer());
-        }
-        bool done = type == static_cast<uint8_t>(Msg::stop)
-                        ? p->stop(code, error)
-                        : p->send_signal(sig, group, code, error);
-        if (!done)
-            return send_error(c, req, code, error);
-        if (type == static_cast<uint8_t>(Msg::stop))
-            logf("instance %s: stopping %s (pid %d)", c.instance.c_str(), name.c_str(),
-                 static_cast<int>(p->pid()));
-        return send(c, Msg::ok, req, {});
-    }
-    case Msg::list: {
-        wire::List empty;
-        if (!wire::decode(r, empty))
-            return malformed();
-        wire::ProcessList list;
-        for (const Process *p : supervisor_.list(c.instance))
-            list.processes.push_back(process_info(*p));
-        wire::encode(w, list);
-        return send(c, Msg::process_list, req, w.buffer());
-    }
-    case Msg::ping:
+    if (type == static_cast<uint8_t>(Msg::ping)) {
         if (!r.done())
             return malformed();
         return send(c, Msg::ok, req, {});
-    default:
-        break;
     }
-    NetOutcome out;
-    if (NetCommands::handles(type)) {
-        out = net_.handle(c.instance, type, r);
-    } else if (Loggers::handles(type)) {
-        out = loggers_.handle(c.instance, type, r);
-    } else if (Pulls::handles(type)) {
-        out = pulls_.handle(c.instance, type, r);
-    } else {
+    Feature *feature = owner(type);
+    if (!feature) {
         refuse(c, req, Err::bad_request, "unknown message type " + std::to_string(type));
         return;
     }
+    uint64_t id = next_request_++;
+    Outcome out = feature->handle(Request{c.instance, type, id, r});
     switch (out.kind) {
-    case NetOutcome::Kind::malformed:
+    case Outcome::Kind::malformed:
         return malformed();
-    case NetOutcome::Kind::error:
+    case Outcome::Kind::error:
         return send_error(c, req, out.code, out.text);
-    case NetOutcome::Kind::reply:
+    case Outcome::Kind::reply:
         return send(c, out.type, req, out.payload);
+    case Outcome::Kind::deferred:
+        pending_[id] = {c.id, req};
+        return;
     }
 }
 
@@ -495,14 +415,14 @@ void Server::broadcast(const std::string &instance, Msg type, const std::string 
 
 // ---- Sink ------------------------------------------------------------------------------
 
-void Server::spawn_result(const Process &p, bool ok, Err code, const std::string &error)
+void Server::spawn_result(const Process &p, const Outcome &result)
 {
-    if (ok)
+    if (!result.failed())
         logf("instance %s: %s started, pid %d", p.instance().c_str(), p.name().c_str(),
              static_cast<int>(p.pid()));
     else
         logf("instance %s: %s not started: %s", p.instance().c_str(), p.name().c_str(),
-             error.c_str());
+             result.text.c_str());
     auto it = pending_.find(p.token());
     if (it == pending_.end())
         return;
@@ -511,8 +431,8 @@ void Server::spawn_result(const Process &p, bool ok, Err code, const std::string
     auto c = conns_.find(conn_id);
     if (c == conns_.end() || c->second->phase != Connection::Phase::ready)
         return; // the requester is gone; LIST shows the outcome
-    if (!ok)
-        return send_error(*c->second, req, code, error);
+    if (result.failed())
+        return send_error(*c->second, req, result.code, result.text);
     proto::Writer w;
     encode_info(w, p);
     send(*c->second, Msg::spawned, req, w.buffer());
@@ -535,11 +455,11 @@ void Server::state_changed(const Process &p)
 void Server::exited(const Process &p)
 {
     if (p.exit_kind() == proto::ExitKind::signal)
-        logf("instance %s: %s (pid %d) killed by signal %d", p.instance().c_str(),
-             p.name().c_str(), static_cast<int>(p.pid()), p.exit_value());
+        logf("instance %s: %s (pid %d) killed by signal %d", p.instance().c_str(), p.name().c_str(),
+             static_cast<int>(p.pid()), p.exit_value());
     else
-        logf("instance %s: %s (pid %d) exited with code %d", p.instance().c_str(),
-             p.name().c_str(), static_cast<int>(p.pid()), p.exit_value());
+        logf("instance %s: %s (pid %d) exited with code %d", p.instance().c_str(), p.name().c_str(),
+             static_cast<int>(p.pid()), p.exit_value());
     proto::Writer w;
     encode_exited_event(w, p);
     broadcast(p.instance(), Msg::ev_exited, w.buffer());
@@ -552,7 +472,7 @@ void Server::begin_shutdown()
     if (++shutdown_signals_ == 1) {
         logf("shutting down: stopping %zu process(es)", supervisor_.alive());
         listener_.reset();
-        supervisor_.stop_all();
+        processes_.stop_all();
     } else {
         logf("second shutdown signal: SIGKILL to every process tree");
         supervisor_.kill_all();
@@ -574,9 +494,8 @@ void Server::read_signals()
             break;
         case SIGHUP:
             if (!log_path_.empty()) {
-                std::string error;
-                if (!log_open(log_path_, error))
-                    logf("%s", error.c_str());
+                if (Outcome o = log_open(log_path_); o.failed())
+                    logf("%s", o.text.c_str());
                 else
                     logf("log file reopened");
             }
@@ -667,8 +586,9 @@ int Server::run()
     }
     for (auto &entry : conns_) // best effort: the last events
         flush(*entry.second);
-    loggers_.shutdown(); // they logged what the processes published while they stopped
-    pulls_.shutdown();
+    // Loggers logged what the processes published while they stopped.
+    for (Feature *f : features_)
+        f->shutdown();
     logf("every process has exited; daemon ends");
     return 0;
 }

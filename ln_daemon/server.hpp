@@ -1,8 +1,8 @@
 // The daemon's poll loop and its TCP side: accepting connections, the authentication
-// handshake, framing with per-frame tags, dispatching commands to the Supervisor (processes),
-// to NetCommands (rings, forwarding), to Loggers (topic logging) and to Pulls (pull topics),
-// and turning the Supervisor's news into replies and events.  A connection that misbehaves is closed with
-// one log line; nothing it sends can affect another connection or a process.
+// handshake, framing with per-frame tags, dispatching each request to the feature that owns
+// its message type (processes, network, loggers, pull topics: feature.hpp), and turning the
+// Supervisor's news into replies and events.  A connection that misbehaves is closed with one
+// log line; nothing it sends can affect another connection or a process.
 #pragma once
 
 #include <cstdint>
@@ -11,15 +11,14 @@
 #include <string>
 #include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include "auth.hpp"
 #include "fd.hpp"
-#include "loggers.hpp"
-#include "network.hpp"
+#include "feature.hpp"
 #include "process.hpp"
+#include "processes.hpp"
 #include "protocol.hpp"
-#include "pulls.hpp"
-#include "supervisor.hpp"
 
 namespace lnd {
 
@@ -34,19 +33,17 @@ struct Connection;
 class Server final : public Sink {
 public:
     // `listener` is a bound, listening, non-blocking socket; `signals` a signalfd for
-    // SIGCHLD, SIGTERM, SIGINT and SIGHUP.  `log_path` is reopened on SIGHUP.  `net` takes
-    // the ring and stream requests, `loggers` the LOGGER_* ones, `pulls` the PULL_* ones;
-    // all must outlive the server.
+    // SIGCHLD, SIGTERM, SIGINT and SIGHUP.  `log_path` is reopened on SIGHUP.  `host_id`
+    // is the LN_HOST_ID of spawned processes.  The server runs the process requests itself;
+    // `features` take the others (in this order at shutdown) and must outlive the server.
     Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
-           NetCommands &net, Loggers &loggers, Pulls &pulls);
+           std::string host_id, std::vector<Feature *> features);
     ~Server() override;
-    // Runs until SIGTERM/SIGINT has stopped every process, then stops the logger and pull
-    // threads;
+    // Runs until SIGTERM/SIGINT has stopped every process, then shuts the features down;
     // returns the exit status.
     int run();
 
-    void spawn_result(const Process &p, bool ok, proto::Err code,
-                      const std::string &error) override;
+    void spawn_result(const Process &p, const Outcome &result) override;
     void line(const Process &p, const Line &line) override;
     void state_changed(const Process &p) override;
     void exited(const Process &p) override;
@@ -60,6 +57,8 @@ private:
     void parse_frames(Connection &c);
     void handle_hello(Connection &c, uint8_t type, proto::Reader &r);
     void handle_request(Connection &c, uint8_t type, uint32_t req, proto::Reader &r);
+    // The feature that takes `type`, or nullptr.
+    Feature *owner(uint8_t type) const noexcept;
     void flush(Connection &c);
     void send(Connection &c, proto::Msg type, uint32_t req, const std::string &payload);
     void send_error(Connection &c, uint32_t req, proto::Err code, const std::string &text);
@@ -74,14 +73,14 @@ private:
     UniqueFd listener_;
     UniqueFd signals_;
     std::string log_path_;
-    Supervisor supervisor_;
-    NetCommands &net_;
-    Loggers &loggers_;
-    Pulls &pulls_;
+    Processes processes_;
+    Supervisor &supervisor_;          // processes_'
+    std::vector<Feature *> features_; // processes_ first
     std::map<uint64_t, std::unique_ptr<Connection>> conns_;
     uint64_t next_conn_ = 1;
-    uint64_t next_token_ = 1;
-    std::unordered_map<uint64_t, std::pair<uint64_t, uint32_t>> pending_; // token -> conn, req
+    uint64_t next_request_ = 1;
+    // Deferred answers: request id -> connection, request number
+    std::unordered_map<uint64_t, std::pair<uint64_t, uint32_t>> pending_;
     int shutdown_signals_ = 0;
     double accept_paused_until_ = 0; // monotonic
 };

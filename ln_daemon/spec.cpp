@@ -16,17 +16,22 @@ namespace lnd {
 
 namespace {
 
+Outcome invalid(std::string text)
+{
+    return outcome::error(proto::Err::invalid_spec, std::move(text));
+}
+
 struct NamedLimit {
     const char *name;
     int resource;
 };
 
 constexpr NamedLimit kLimits[] = {
-    {"as", RLIMIT_AS},         {"core", RLIMIT_CORE},         {"cpu", RLIMIT_CPU},
-    {"data", RLIMIT_DATA},     {"fsize", RLIMIT_FSIZE},       {"locks", RLIMIT_LOCKS},
+    {"as", RLIMIT_AS},           {"core", RLIMIT_CORE},         {"cpu", RLIMIT_CPU},
+    {"data", RLIMIT_DATA},       {"fsize", RLIMIT_FSIZE},       {"locks", RLIMIT_LOCKS},
     {"memlock", RLIMIT_MEMLOCK}, {"msgqueue", RLIMIT_MSGQUEUE}, {"nice", RLIMIT_NICE},
-    {"nofile", RLIMIT_NOFILE}, {"nproc", RLIMIT_NPROC},       {"rss", RLIMIT_RSS},
-    {"rtprio", RLIMIT_RTPRIO}, {"rttime", RLIMIT_RTTIME},     {"sigpending", RLIMIT_SIGPENDING},
+    {"nofile", RLIMIT_NOFILE},   {"nproc", RLIMIT_NPROC},       {"rss", RLIMIT_RSS},
+    {"rtprio", RLIMIT_RTPRIO},   {"rttime", RLIMIT_RTTIME},     {"sigpending", RLIMIT_SIGPENDING},
     {"stack", RLIMIT_STACK},
 };
 
@@ -83,8 +88,7 @@ bool valid_name(const std::string &s) noexcept
     return true;
 }
 
-void env_default(std::vector<std::string> &env, const std::string &name,
-                 const std::string &value)
+void env_default(std::vector<std::string> &env, const std::string &name, const std::string &value)
 {
     for (const auto &e : env)
         if (e.size() > name.size() && e[name.size()] == '=' && e.compare(0, name.size(), name) == 0)
@@ -100,120 +104,86 @@ const char *policy_name(int policy) noexcept
     return "unknown policy";
 }
 
-bool check_spawn(const SpawnRequest &req, LaunchSpec &launch, ProcessConfig &config,
-                 std::string &error)
+Outcome check_spawn(const SpawnRequest &req, LaunchSpec &launch, ProcessConfig &config)
 {
-    if (!valid_name(req.name)) {
-        error = "invalid process name: it must be 1 to 255 bytes without control characters";
-        return false;
-    }
-    if (req.argv.empty() || req.argv[0].empty()) {
-        error = "empty command";
-        return false;
-    }
-    if (req.shell && req.argv.size() != 1) {
-        error = "a shell command is one string, got " + std::to_string(req.argv.size());
-        return false;
-    }
+    if (!valid_name(req.name))
+        return invalid(
+            "invalid process name: it must be 1 to 255 bytes without control characters");
+    if (req.argv.empty() || req.argv[0].empty())
+        return invalid("empty command");
+    if (req.shell && req.argv.size() != 1)
+        return invalid("a shell command is one string, got " + std::to_string(req.argv.size()));
     for (const auto &a : req.argv)
-        if (has_nul(a)) {
-            error = "the command contains a NUL byte";
-            return false;
-        }
+        if (has_nul(a))
+            return invalid("the command contains a NUL byte");
     for (const auto &e : req.env) {
         size_t eq = e.find('=');
-        if (eq == 0 || eq == std::string::npos || has_nul(e)) {
-            error = "invalid environment entry '" + e.substr(0, 64) +
-                    "': it must be NAME=VALUE without NUL bytes";
-            return false;
-        }
+        if (eq == 0 || eq == std::string::npos || has_nul(e))
+            return invalid("invalid environment entry '" + e.substr(0, 64) +
+                           "': it must be NAME=VALUE without NUL bytes");
     }
     launch.argv = req.shell ? std::vector<std::string>{"/bin/sh", "-c", req.argv[0]} : req.argv;
     launch.env = req.env;
 
     launch.cwd = req.cwd.empty() ? "/" : req.cwd;
-    if (launch.cwd[0] != '/' || has_nul(launch.cwd)) {
-        error = "working directory '" + req.cwd + "' is not an absolute path";
-        return false;
-    }
+    if (launch.cwd[0] != '/' || has_nul(launch.cwd))
+        return invalid("working directory '" + req.cwd + "' is not an absolute path");
 
     launch.rlimits.clear();
     for (const auto &r : req.rlimits) {
         int resource = find_limit(r.name);
-        if (resource < 0) {
-            error = "unknown resource limit '" + r.name +
-                    "' (known: as, core, cpu, data, fsize, locks, memlock, msgqueue, nice, "
-                    "nofile, nproc, rss, rtprio, rttime, sigpending, stack)";
-            return false;
-        }
-        if (r.soft < -1 || r.hard < -1) {
-            error = "resource limit " + r.name + ": negative value (use unlimited)";
-            return false;
-        }
+        if (resource < 0)
+            return invalid("unknown resource limit '" + r.name +
+                           "' (known: as, core, cpu, data, fsize, locks, memlock, msgqueue, nice, "
+                           "nofile, nproc, rss, rtprio, rttime, sigpending, stack)");
+        if (r.soft < -1 || r.hard < -1)
+            return invalid("resource limit " + r.name + ": negative value (use unlimited)");
         uint64_t soft = r.soft < 0 ? RLIM_INFINITY : static_cast<uint64_t>(r.soft);
         uint64_t hard = r.hard < 0 ? RLIM_INFINITY : static_cast<uint64_t>(r.hard);
-        if (hard != RLIM_INFINITY && (soft == RLIM_INFINITY || soft > hard)) {
-            error = "resource limit " + r.name + ": soft limit " + limit_value(soft) +
-                    " is above the hard limit " + limit_value(hard);
-            return false;
-        }
+        if (hard != RLIM_INFINITY && (soft == RLIM_INFINITY || soft > hard))
+            return invalid("resource limit " + r.name + ": soft limit " + limit_value(soft) +
+                           " is above the hard limit " + limit_value(hard));
         launch.rlimits.push_back({resource, r.name, soft, hard});
     }
 
     launch.policy = find_policy(req.policy);
-    if (launch.policy < 0) {
-        error = "unknown scheduling policy '" + req.policy +
-                "' (known: SCHED_OTHER, SCHED_BATCH, SCHED_IDLE, SCHED_FIFO, SCHED_RR)";
-        return false;
-    }
+    if (launch.policy < 0)
+        return invalid("unknown scheduling policy '" + req.policy +
+                       "' (known: SCHED_OTHER, SCHED_BATCH, SCHED_IDLE, SCHED_FIFO, SCHED_RR)");
     launch.priority = req.priority;
     if (launch.policy == SCHED_FIFO || launch.policy == SCHED_RR) {
         int lo = sched_get_priority_min(launch.policy), hi = sched_get_priority_max(launch.policy);
-        if (req.priority < lo || req.priority > hi) {
-            error = "priority " + std::to_string(req.priority) + " is out of range for " +
-                    policy_name(launch.policy) + " (" + std::to_string(lo) + ".." +
-                    std::to_string(hi) + ")";
-            return false;
-        }
+        if (req.priority < lo || req.priority > hi)
+            return invalid("priority " + std::to_string(req.priority) + " is out of range for " +
+                           policy_name(launch.policy) + " (" + std::to_string(lo) + ".." +
+                           std::to_string(hi) + ")");
     } else if (req.priority < -20 || req.priority > 19) {
-        error = "nice value " + std::to_string(req.priority) + " is out of range for " +
-                policy_name(launch.policy) + " (-20..19)";
-        return false;
+        return invalid("nice value " + std::to_string(req.priority) + " is out of range for " +
+                       policy_name(launch.policy) + " (-20..19)");
     }
 
     launch.affinity.clear();
     for (uint32_t cpu : req.affinity) {
-        if (cpu >= CPU_SETSIZE) {
-            error = "CPU " + std::to_string(cpu) + " in the affinity list is out of range (0.." +
-                    std::to_string(CPU_SETSIZE - 1) + ")";
-            return false;
-        }
+        if (cpu >= CPU_SETSIZE)
+            return invalid("CPU " + std::to_string(cpu) +
+                           " in the affinity list is out of range (0.." +
+                           std::to_string(CPU_SETSIZE - 1) + ")");
         launch.affinity.push_back(static_cast<int>(cpu));
     }
     launch.use_pty = req.use_pty;
 
-    if (req.max_output_lines > kMaxOutputLines) {
-        error = "max_output_lines " + std::to_string(req.max_output_lines) +
-                " is above the limit of " + std::to_string(kMaxOutputLines);
-        return false;
-    }
-    if (!req.log_path.empty() && (req.log_path[0] != '/' || has_nul(req.log_path))) {
-        error = "output log path '" + req.log_path + "' is not an absolute path";
-        return false;
-    }
-    if (req.log_keep > kMaxLogKeep) {
-        error = "output log keep count " + std::to_string(req.log_keep) +
-                " is above the limit of " + std::to_string(kMaxLogKeep);
-        return false;
-    }
-    if (req.term_signal < 1 || req.term_signal >= NSIG || req.term_signal == SIGSTOP) {
-        error = "invalid term signal " + std::to_string(req.term_signal);
-        return false;
-    }
-    if (!std::isfinite(req.term_timeout) || req.term_timeout < 0 || req.term_timeout > 1e6) {
-        error = "term timeout must be between 0 and 1e6 seconds";
-        return false;
-    }
+    if (req.max_output_lines > kMaxOutputLines)
+        return invalid("max_output_lines " + std::to_string(req.max_output_lines) +
+                       " is above the limit of " + std::to_string(kMaxOutputLines));
+    if (!req.log_path.empty() && (req.log_path[0] != '/' || has_nul(req.log_path)))
+        return invalid("output log path '" + req.log_path + "' is not an absolute path");
+    if (req.log_keep > kMaxLogKeep)
+        return invalid("output log keep count " + std::to_string(req.log_keep) +
+                       " is above the limit of " + std::to_string(kMaxLogKeep));
+    if (req.term_signal < 1 || req.term_signal >= NSIG || req.term_signal == SIGSTOP)
+        return invalid("invalid term signal " + std::to_string(req.term_signal));
+    if (!std::isfinite(req.term_timeout) || req.term_timeout < 0 || req.term_timeout > 1e6)
+        return invalid("term timeout must be between 0 and 1e6 seconds");
 
     launch.term_signal = req.term_signal;
     launch.term_timeout = req.term_timeout;
@@ -224,7 +194,7 @@ bool check_spawn(const SpawnRequest &req, LaunchSpec &launch, ProcessConfig &con
     config.log_keep = req.log_keep;
     config.term_signal = req.term_signal;
     config.term_timeout = req.term_timeout;
-    return true;
+    return outcome::ok();
 }
 
 std::string describe_failure(const LaunchSpec &spec, int32_t stage, int32_t index, int32_t err)
@@ -243,9 +213,8 @@ std::string describe_failure(const LaunchSpec &spec, int32_t stage, int32_t inde
         }
         return "cannot set a resource limit: " + why;
     case Stage::scheduler: {
-        std::string text = std::string("cannot set scheduling policy ") +
-                           policy_name(spec.policy) + " with priority " +
-                           std::to_string(spec.priority) + ": " + why;
+        std::string text = std::string("cannot set scheduling policy ") + policy_name(spec.policy) +
+                           " with priority " + std::to_string(spec.priority) + ": " + why;
         if (err == EPERM)
             text += " (needs root, CAP_SYS_NICE or a large enough RLIMIT_RTPRIO, and real-time "
                     "runtime in the daemon's cgroup)";

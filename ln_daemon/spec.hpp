@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "os.hpp"
+#include "outcome.hpp"
 #include "protocol.hpp"
 
 namespace lnd {
@@ -35,12 +36,10 @@ constexpr uint32_t kMaxLogKeep = 1000;
 bool valid_name(const std::string &s) noexcept;
 
 // Appends NAME=value to `env` unless it has an entry for NAME already.
-void env_default(std::vector<std::string> &env, const std::string &name,
-                 const std::string &value);
+void env_default(std::vector<std::string> &env, const std::string &name, const std::string &value);
 
-// Checks `req`; false and a sentence in `error` if anything is refused.
-bool check_spawn(const SpawnRequest &req, LaunchSpec &launch, ProcessConfig &config,
-                 std::string &error);
+// Checks `req` into `launch` and `config`; refused with error invalid_spec and a sentence.
+Outcome check_spawn(const SpawnRequest &req, LaunchSpec &launch, ProcessConfig &config);
 
 // The sentence for a failed child setup, e.g. "command not found: foo".
 std::string describe_failure(const LaunchSpec &spec, int32_t stage, int32_t index, int32_t err);

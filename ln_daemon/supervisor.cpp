@@ -11,46 +11,35 @@
 
 namespace lnd {
 
-bool Supervisor::spawn(const std::string &instance, const SpawnRequest &req, uint64_t token,
-                       proto::Err &code, std::string &error)
+Outcome Supervisor::spawn(const std::string &instance, const SpawnRequest &req, uint64_t token)
 {
     LaunchSpec launch;
     ProcessConfig config;
-    if (!check_spawn(req, launch, config, error)) {
-        code = proto::Err::invalid_spec;
-        return false;
-    }
+    if (Outcome o = check_spawn(req, launch, config); o.failed())
+        return o;
     config.instance = instance;
     Key key{instance, req.name};
     auto it = procs_.find(key);
     if (it != procs_.end()) {
-        if (it->second->state() != State::exited) {
-            code = proto::Err::already_running;
-            error = "process " + req.name + " is already " +
-                    state_name(it->second->state()) +
+        if (it->second->state() != State::exited)
+            return outcome::error(
+                proto::Err::already_running,
+                "process " + req.name + " is already " + state_name(it->second->state()) +
                     (it->second->pid() ? " (pid " + std::to_string(it->second->pid()) + ")"
-                                       : std::string());
-            return false;
-        }
+                                       : std::string()));
         erase(it->second.get()); // a new run replaces the record of the old one
     }
-    if (procs_.size() >= kMaxProcesses) {
-        code = proto::Err::limit;
-        error = "too many processes (" + std::to_string(kMaxProcesses) +
-                "); forget exited ones first";
-        return false;
-    }
+    if (procs_.size() >= kMaxProcesses)
+        return outcome::error(proto::Err::limit, "too many processes (" +
+                                                     std::to_string(kMaxProcesses) +
+                                                     "); forget exited ones first");
     RotatingLog log;
-    if (!config.log_path.empty() &&
-        !log.open(config.log_path, config.log_limit, config.log_keep, error)) {
-        code = proto::Err::spawn_failed;
-        return false;
-    }
+    if (!config.log_path.empty())
+        if (Outcome o = log.open(config.log_path, config.log_limit, config.log_keep); o.failed())
+            return o;
     Launched launched;
-    if (!os_.launch(launch, launched, error)) {
-        code = proto::Err::spawn_failed;
-        return false;
-    }
+    if (Outcome o = os_.launch(launch, launched); o.failed())
+        return o;
     pid_t keeper = launched.keeper;
     auto proc = std::make_unique<Process>(os_, sink_, next_id_++, token, std::move(config),
                                           std::move(launch), std::move(launched), std::move(log));
@@ -58,20 +47,18 @@ bool Supervisor::spawn(const std::string &instance, const SpawnRequest &req, uin
     by_id_[p->id()] = p;
     by_keeper_[keeper] = p;
     procs_.emplace(std::move(key), std::move(proc));
-    return true;
+    return outcome::deferred();
 }
 
-Process *Supervisor::find(const std::string &instance, const std::string &name,
-                          proto::Err &code, std::string &error)
+Outcome Supervisor::find(const std::string &instance, const std::string &name, Process *&found)
 {
     auto it = procs_.find({instance, name});
     // A record still starting belongs to its SPAWN until that is answered.
-    if (it == procs_.end() || it->second->state() == State::starting) {
-        code = proto::Err::unknown_process;
-        error = "no process " + name + " in instance " + instance;
-        return nullptr;
-    }
-    return it->second.get();
+    if (it == procs_.end() || it->second->state() == State::starting)
+        return outcome::error(proto::Err::unknown_process,
+                              "no process " + name + " in instance " + instance);
+    found = it->second.get();
+    return outcome::ok();
 }
 
 std::vector<const Process *> Supervisor::list(const std::string &instance) const
@@ -90,19 +77,17 @@ Process *Supervisor::find_keeper(pid_t keeper) noexcept
     return it == by_keeper_.end() ? nullptr : it->second;
 }
 
-bool Supervisor::forget(const std::string &instance, const std::string &name, proto::Err &code,
-                        std::string &error)
+Outcome Supervisor::forget(const std::string &instance, const std::string &name)
 {
-    Process *p = find(instance, name, code, error);
-    if (!p)
-        return false;
-    if (p->state() != State::exited) {
-        code = proto::Err::still_running;
-        error = "process " + name + " is " + state_name(p->state()) + "; stop it first";
-        return false;
-    }
+    Process *p = nullptr;
+    if (Outcome o = find(instance, name, p); o.failed())
+        return o;
+    if (p->state() != State::exited)
+        return outcome::error(proto::Err::still_running, "process " + name + " is " +
+                                                             state_name(p->state()) +
+                                                             "; stop it first");
     erase(p);
-    return true;
+    return outcome::ok();
 }
 
 void Supervisor::erase(Process *p)
@@ -185,11 +170,9 @@ void Supervisor::stop_all()
 {
     if (shutdown_ == Shutdown::none)
         shutdown_ = Shutdown::stop;
-    proto::Err code;
-    std::string error;
     for (auto &entry : procs_)
         if (entry.second->state() == State::running)
-            entry.second->stop(code, error);
+            (void)entry.second->stop(); // a running process is never refused
 }
 
 void Supervisor::kill_all()

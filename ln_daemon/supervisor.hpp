@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "os.hpp"
+#include "outcome.hpp"
 #include "process.hpp"
 #include "spec.hpp"
 
@@ -25,21 +26,19 @@ class Supervisor {
 public:
     Supervisor(Os &os, Sink &sink) : os_(os), sink_(sink) {}
 
-    // Starts a process.  false: refused at once (code, error).  true: Sink::spawn_result
-    // with `token` follows once the keeper has reported.
-    bool spawn(const std::string &instance, const SpawnRequest &req, uint64_t token,
-               proto::Err &code, std::string &error);
-    // nullptr (code, error) if the instance has no process of that name.
-    Process *find(const std::string &instance, const std::string &name, proto::Err &code,
-                  std::string &error);
+    // Starts a process: refused at once, or deferred: Sink::spawn_result with `token`
+    // follows once the keeper has reported.
+    Outcome spawn(const std::string &instance, const SpawnRequest &req, uint64_t token);
+    // The instance's process of that name in `found`; refused if there is none.
+    Outcome find(const std::string &instance, const std::string &name, Process *&found);
     std::vector<const Process *> list(const std::string &instance) const;
     // The record whose keeper is `keeper`, in any state (nullptr if none).
     Process *find_keeper(pid_t keeper) noexcept;
-    bool forget(const std::string &instance, const std::string &name, proto::Err &code,
-                std::string &error);
+    // Drops the record of an exited process.
+    Outcome forget(const std::string &instance, const std::string &name);
 
-    void reap();  // after SIGCHLD: every exited child
-    void tick();  // every poll round
+    void reap(); // after SIGCHLD: every exited child
+    void tick(); // every poll round
     double next_deadline() const noexcept;
 
     struct FdRef {

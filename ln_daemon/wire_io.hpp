@@ -51,8 +51,7 @@ class Reader {
 public:
     Reader(const void *data, size_t size) noexcept
         : p_(static_cast<const uint8_t *>(data)), left_(size)
-    {
-    }
+    {}
     uint8_t u8() noexcept { return static_cast<uint8_t>(le(1)); }
     uint16_t u16() noexcept { return static_cast<uint16_t>(le(2)); }
     uint32_t u32() noexcept { return static_cast<uint32_t>(le(4)); }

@@ -38,11 +38,11 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 sys.path.insert(0, str(REPO / "python"))  # measure this checkout, not an installed one
 
+from links_and_nodes.manager.frontends.launch import ManagerProcess, segments, start_manager  # noqa: E402
 from links_and_nodes.manager.processes import daemon_client as dc  # noqa: E402
 from links_and_nodes.manager.processes import daemon_keys as dk  # noqa: E402
 from links_and_nodes.manager.processes import daemon_launch as dl  # noqa: E402
 from links_and_nodes.manager.processes import daemon_wire as dw  # noqa: E402
-from links_and_nodes.manager.frontends.launch import ManagerProcess, segments, start_manager  # noqa: E402
 
 PUBLISHER = REPO / "build" / "release" / "bench" / "logging" / "bench_logger_pub"
 GOAL_COST_RATIO = 1.05

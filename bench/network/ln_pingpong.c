@@ -19,9 +19,9 @@ static const char usage[] =
     "subscription.  SIZE: 64, 4096, 1048576 or 4194304 (the lnbench/sample_* mds).\n"
     "pong and sink print \"ready\" once subscribed; ping, sink and source print one JSON line.\n";
 
-#define RETRY_S 1.0       /* ping: resend a ping not answered within this */
-#define GIVE_UP_S 60.0    /* nothing at all arrived for this long: the topic is not forwarded */
-#define IDLE_S 2.0        /* sink: the stream has ended when nothing came for this long */
+#define RETRY_S 1.0        /* ping: resend a ping not answered within this */
+#define GIVE_UP_S 60.0     /* nothing at all arrived for this long: the topic is not forwarded */
+#define IDLE_S 2.0         /* sink: the stream has ended when nothing came for this long */
 #define PRIME (1ull << 63) /* source: marks the samples sent until the sink answers */
 #define DONE UINT64_MAX    /* sink -> source on PREFIX.ready: counting has ended */
 #define SINK_MEMORY ((size_t)64 << 20) /* bytes of the sink's queue */
@@ -64,8 +64,8 @@ static ends open_ends(const char* role, const char* prefix, const char* out, ben
     int rc = ln_client_create(&e.clnt, client, NULL);
     if (rc < 0)
         bench_fail("ln_client_create", rc);
-    if ((rc = ln_publish(e.clnt, &e.pub, out_topic, out_md.name, out_md.hash, out_md.size,
-                         NULL)) < 0)
+    if ((rc = ln_publish(e.clnt, &e.pub, out_topic, out_md.name, out_md.hash, out_md.size, NULL)) <
+        0)
         bench_fail("ln_publish", rc);
     ln_port_options o;
     ln_port_options_init(&o);
@@ -134,8 +134,10 @@ static uint64_t round_trip(const ends* e, void* out, void* in, size_t size, uint
         if (!timed_out)
             continue;
         if (++waited * RETRY_S >= GIVE_UP_S) {
-            fprintf(stderr, "ln_pingpong: no pong for %.0f s: are the topics forwarded between "
-                    "the hosts?\n", GIVE_UP_S);
+            fprintf(stderr,
+                    "ln_pingpong: no pong for %.0f s: are the topics forwarded between "
+                    "the hosts?\n",
+                    GIVE_UP_S);
             exit(1);
         }
         (*resent)++;
@@ -144,8 +146,8 @@ static uint64_t round_trip(const ends* e, void* out, void* in, size_t size, uint
     }
 }
 
-static int ping(const char* prefix, bench_md md, uint32_t flags, uint64_t count,
-                uint64_t warmup, const char* path)
+static int ping(const char* prefix, bench_md md, uint32_t flags, uint64_t count, uint64_t warmup,
+                const char* path)
 {
     ends e = open_ends("ping", prefix, "ping", md, "pong", md, flags, 1);
     void *out = bench_alloc(md.size), *in = bench_alloc(md.size);
@@ -173,8 +175,8 @@ static int sink(const char* prefix, bench_md md, uint32_t flags, uint64_t count)
 {
     size_t buffers = SINK_MEMORY / md.size;
     buffers = buffers < 2 ? 2 : buffers > 1024 ? 1024 : buffers;
-    ends e = open_ends("sink", prefix, "ready", bench_md_for(64), "data", md, flags,
-                       (uint32_t)buffers);
+    ends e =
+        open_ends("sink", prefix, "ready", bench_md_for(64), "data", md, flags, (uint32_t)buffers);
     uint8_t *buf = bench_alloc(md.size), ack[64] = {0};
     uint64_t received = 0, primes = 0, disorder = 0, last = 0, first_ns = 0, last_ns = 0;
     int timed_out;
@@ -200,8 +202,10 @@ static int sink(const char* prefix, bench_md md, uint32_t flags, uint64_t count)
     for (int k = 0; k < 3; k++) /* over UDP one may be lost */
         put(e.pub, ack, sizeof ack, DONE);
     if (received == 0)
-        fprintf(stderr, "ln_pingpong: no sample of %s.data in %.0f s (%" PRIu64 " priming "
-                "samples)\n", prefix, GIVE_UP_S, primes);
+        fprintf(stderr,
+                "ln_pingpong: no sample of %s.data in %.0f s (%" PRIu64 " priming "
+                "samples)\n",
+                prefix, GIVE_UP_S, primes);
     printf("{\"received\": %" PRIu64 ", \"bytes\": %" PRIu64 ", \"overruns\": %" PRIu64
            ", \"disorder\": %" PRIu64 ", \"elapsed_s\": %.9f, \"primes\": %" PRIu64 "}\n",
            received, received * (uint64_t)md.size, ln_inport_overruns(e.sub), disorder,
@@ -225,8 +229,10 @@ static int source(const char* prefix, bench_md md, uint32_t flags, uint64_t coun
         if (!timed_out && (got & PRIME) && got != DONE)
             break;
         if ((double)(bench_now_ns() - start) * 1e-9 > GIVE_UP_S) {
-            fprintf(stderr, "ln_pingpong: the sink did not answer for %.0f s: are the topics "
-                    "forwarded between the hosts?\n", GIVE_UP_S);
+            fprintf(stderr,
+                    "ln_pingpong: the sink did not answer for %.0f s: are the topics "
+                    "forwarded between the hosts?\n",
+                    GIVE_UP_S);
             return 1;
         }
     }
@@ -256,9 +262,8 @@ static int source(const char* prefix, bench_md md, uint32_t flags, uint64_t coun
 int main(int argc, char** argv)
 {
     const char* role = argc > 1 ? argv[1] : "";
-    int ok = (argc == 5 && strcmp(role, "pong") == 0) || (argc == 8 && strcmp(role, "ping") == 0)
-             || (argc == 6 && strcmp(role, "sink") == 0)
-             || (argc == 7 && strcmp(role, "source") == 0);
+    int ok = (argc == 5 && strcmp(role, "pong") == 0) || (argc == 8 && strcmp(role, "ping") == 0) ||
+             (argc == 6 && strcmp(role, "sink") == 0) || (argc == 7 && strcmp(role, "source") == 0);
     if (!ok) {
         fputs(usage, stderr);
         return 2;

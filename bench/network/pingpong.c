@@ -14,8 +14,8 @@
 #include "bench_common.h"
 #include "bench_io.h"
 
-#define UDP_MAX 65507         /* largest UDP payload over IPv4 */
-#define RETRY_MS 1000         /* UDP: resend a ping not answered within this */
+#define UDP_MAX 65507             /* largest UDP payload over IPv4 */
+#define RETRY_MS 1000             /* UDP: resend a ping not answered within this */
 #define GIVE_UP_NS 30000000000ull /* UDP: fail after this long without any answer */
 
 static const char usage[] =
@@ -37,8 +37,7 @@ static uint64_t number(const char* text, uint64_t max, const char* what)
     errno = 0;
     unsigned long long v = strtoull(text, &end, 10);
     if (errno || !*text || *end || v > max) {
-        fprintf(stderr, "pingpong: %s must be a number up to %" PRIu64 ": %s\n", what, max,
-                text);
+        fprintf(stderr, "pingpong: %s must be a number up to %" PRIu64 ": %s\n", what, max, text);
         exit(2);
     }
     return v;
@@ -79,7 +78,8 @@ static ping_args ping_setup(char** argv, uint64_t max_size)
 /* A socket bound to every IPv4 address at `port` (listening, for TCP). */
 static int server_socket(int type, const char* port_text)
 {
-    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_ANY),
+    struct sockaddr_in sa = {.sin_family = AF_INET,
+                             .sin_addr.s_addr = htonl(INADDR_ANY),
                              .sin_port = htons((uint16_t)number(port_text, 65535, "PORT"))};
     int fd = socket(AF_INET, type | SOCK_CLOEXEC, 0), one = 1;
     if (fd < 0)

@@ -215,9 +215,12 @@ static void latency(ln_client* clnt, const char* name, long period_ns, int sets,
     for (int k = -warm; k < sets; k++) {
         char value[32];
         snprintf(value, sizeof value, "%d", first + k + warm);
-        ln_parameters_query_request_t req = {
-            .op_len = 3, .op = (char*)"set", .name_len = 4, .name = (char*)"gain",
-            .value_len = (uint32_t)strlen(value), .value = value};
+        ln_parameters_query_request_t req = {.op_len = 3,
+                                             .op = (char*)"set",
+                                             .name_len = 4,
+                                             .name = (char*)"gain",
+                                             .value_len = (uint32_t)strlen(value),
+                                             .value = value};
         ln_parameters_query_response_t resp;
         uint64_t before = atomic_load(&seen_ns);
         uint64_t t0 = now_ns();
@@ -225,13 +228,12 @@ static void latency(ln_client* clnt, const char* name, long period_ns, int sets,
             fail("ln_service_call", rc);
         uint64_t t1 = now_ns();
         if (resp.status != 0) {
-            fprintf(stderr, "param_bench: set refused: %.*s\n", (int)resp.reason_len,
-                    resp.reason);
+            fprintf(stderr, "param_bench: set refused: %.*s\n", (int)resp.reason_len, resp.reason);
             exit(1);
         }
         uint64_t seen;
         while ((seen = atomic_load(&seen_ns)) == before) { /* the loop takes it soon */
-            struct timespec poll = {0, 20000}; /* the loop stamps it: no need to spin */
+            struct timespec poll = {0, 20000};             /* the loop stamps it: no need to spin */
             nanosleep(&poll, NULL);
         }
         if (k >= 0) {
@@ -265,11 +267,16 @@ int main(int argc, char** argv)
     if ((rc = ln_parameter_block_create(clnt, &blk, "bench")) < 0)
         fail("ln_parameter_block_create", rc);
     const ln_parameter_desc d[] = {
-        {.name = "kp", .type = "double", .count = 7, .input = v.kp_in, .output = v.kp,
-         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX, .min = 0, .max = 1000},
+        {.name = "kp",
+         .type = "double",
+         .count = 7,
+         .input = v.kp_in,
+         .output = v.kp,
+         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX,
+         .min = 0,
+         .max = 1000},
         {.name = "kd", .type = "double", .count = 7, .input = v.kd_in, .output = v.kd},
-        {.name = "limits", .type = "float", .count = 2, .input = v.limits_in,
-         .output = v.limits},
+        {.name = "limits", .type = "float", .count = 2, .input = v.limits_in, .output = v.limits},
         {.name = "mode", .type = "int32_t", .input = &v.mode_in, .output = &v.mode},
         {.name = "cycle", .type = "uint64_t", .input = &v.cycle_in, .output = &v.cycle},
         {.name = "gain", .type = "double", .output = &v.gain},
@@ -289,8 +296,11 @@ int main(int argc, char** argv)
     if ((rc = ln_get_service(clnt, &svc, ln_parameter_block_service_name(blk),
                              LN_PARAMETERS_QUERY_SERVICE)) < 0)
         fail("ln_get_service", rc);
-    ln_parameters_query_request_t req = {.op_len = 3, .op = (char*)"set", .name_len = 4,
-                                         .name = (char*)"gain", .value_len = 1,
+    ln_parameters_query_request_t req = {.op_len = 3,
+                                         .op = (char*)"set",
+                                         .name_len = 4,
+                                         .name = (char*)"gain",
+                                         .value_len = 1,
                                          .value = (char*)"1"};
     ln_parameters_query_response_t resp;
     if ((rc = ln_service_call(svc, &req, &resp, 5.0)) < 0 || resp.status != 0)

@@ -80,10 +80,7 @@ static uint64_t now_us(clockid_t clock)
     return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
 }
 
-static uint32_t now_ms(void)
-{
-    return (uint32_t)(now_us(CLOCK_MONOTONIC) / 1000u);
-}
+static uint32_t now_ms(void) { return (uint32_t)(now_us(CLOCK_MONOTONIC) / 1000u); }
 
 static void add_record(uint64_t seq, uint64_t publish_us)
 {
@@ -306,23 +303,25 @@ static void write_json(const char* path, const char* mode, uint64_t start_us, ui
     FILE* f = fopen(path, "w");
     if (!f)
         die(path);
-    fprintf(f, "{\"mode\": \"%s\", \"start_us\": %" PRIu64 ", \"end_us\": %" PRIu64
+    fprintf(f,
+            "{\"mode\": \"%s\", \"start_us\": %" PRIu64 ", \"end_us\": %" PRIu64
             ", \"received_packets\": %" PRIu64 ", \"samples\": [",
             mode, start_us, end_us, received_packets);
     for (size_t i = 0; i < nrecords; i++)
-        fprintf(f, "%s[%" PRIu64 ", %" PRIu64 ", %" PRIu64 "]", i ? ", " : "",
-                records[i].seq, records[i].publish_us, records[i].receive_us);
+        fprintf(f, "%s[%" PRIu64 ", %" PRIu64 ", %" PRIu64 "]", i ? ", " : "", records[i].seq,
+                records[i].publish_us, records[i].receive_us);
     fprintf(f, "], \"events\": [");
     for (size_t i = 0; i < nevents; i++)
-        fprintf(f, "%s[%" PRIu64 ", %d, %" PRIu64 ", %" PRIu32 "]", i ? ", " : "",
-                events[i].at_us, events[i].kind, events[i].seq, events[i].t_ms);
+        fprintf(f, "%s[%" PRIu64 ", %d, %" PRIu64 ", %" PRIu32 "]", i ? ", " : "", events[i].at_us,
+                events[i].kind, events[i].seq, events[i].t_ms);
     fprintf(f, "], \"rtt_sent\": %zu, \"rtt_us\": [", rtt_sent);
     for (size_t i = 0; i < nrtt; i++)
         fprintf(f, "%s%" PRIu64, i ? ", " : "", rtts[i]);
     fprintf(f, "]");
     if (pull) {
         const ln_pull_stats* s = &sub.stats;
-        fprintf(f, ", \"stats\": {\"interests\": %" PRIu32 ", \"syncs\": %" PRIu32
+        fprintf(f,
+                ", \"stats\": {\"interests\": %" PRIu32 ", \"syncs\": %" PRIu32
                 ", \"data\": %" PRIu32 ", \"timeouts\": %" PRIu32 ", \"nacks\": %" PRIu32
                 ", \"late\": %" PRIu32 ", \"bad\": %" PRIu32 ", \"refreshes\": %" PRIu32
                 "}, \"latest_seq\": %" PRIu64 ", \"t_ms\": %" PRIu32 ", \"window\": %u"

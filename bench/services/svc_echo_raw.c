@@ -72,8 +72,8 @@ static int client(const char* path, uint64_t count, uint64_t warmup, const char*
         uint64_t t1 = bench_now_ns();
         memcpy(&got, resp, sizeof got);
         if (got != i) {
-            fprintf(stderr, "svc_echo_raw: call %llu came back as %llu\n",
-                    (unsigned long long)i, (unsigned long long)got);
+            fprintf(stderr, "svc_echo_raw: call %llu came back as %llu\n", (unsigned long long)i,
+                    (unsigned long long)got);
             return 1;
         }
         if (i >= warmup)
@@ -90,8 +90,7 @@ int main(int argc, char** argv)
     if (argc == 3 && strcmp(argv[1], "server") == 0)
         return server(argv[2]);
     if (argc == 6 && strcmp(argv[1], "client") == 0)
-        return client(argv[2], strtoull(argv[3], NULL, 10), strtoull(argv[4], NULL, 10),
-                      argv[5]);
+        return client(argv[2], strtoull(argv[3], NULL, 10), strtoull(argv[4], NULL, 10), argv[5]);
     fputs(usage, stderr);
     return 2;
 }

@@ -101,8 +101,7 @@ int main(int argc, char** argv)
     if (argc == 4 && strcmp(argv[1], "provide") == 0)
         return provide(argv[2], strtoull(argv[3], NULL, 10));
     if (argc == 6 && strcmp(argv[1], "call") == 0)
-        return call(argv[2], strtoull(argv[3], NULL, 10), strtoull(argv[4], NULL, 10),
-                    argv[5]);
+        return call(argv[2], strtoull(argv[3], NULL, 10), strtoull(argv[4], NULL, 10), argv[5]);
     fputs(usage, stderr);
     return 2;
 }

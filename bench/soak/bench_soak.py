@@ -28,7 +28,7 @@ import startup_run as run  # noqa: E402
 
 from links_and_nodes.manager.processes import daemon_keys as dk  # noqa: E402
 from links_and_nodes.manager.processes import daemon_launch as dl  # noqa: E402
-from links_and_nodes.manager.frontends.scripting import ManagerError, connect  # noqa: E402
+from links_and_nodes.tools.scripting import ManagerError, connect  # noqa: E402
 
 DURATION, QUICK_DURATION, INTERVAL = 600.0, 30.0, 5.0
 TOPICS, PUBLISHERS, PROCESSES, RATE = 200, 4, 50, 1000.0

@@ -30,7 +30,7 @@ import startup_run as run  # noqa: E402
 from links_and_nodes.manager.processes import daemon_keys as dk  # noqa: E402
 from links_and_nodes.manager.processes import daemon_launch as dl  # noqa: E402
 from links_and_nodes.manager.processes import daemon_wire as dw  # noqa: E402
-from links_and_nodes.manager.frontends.scripting import ManagerError, connect  # noqa: E402
+from links_and_nodes.tools.scripting import ManagerError, connect  # noqa: E402
 
 PROCESSES, ROUNDS, QUICK_ROUNDS = 50, 11, 2
 GOAL_SECONDS, GOAL_RATIO = 1.5, 3.0  # all-ready (warm daemon); and over the shell floor

@@ -51,7 +51,8 @@ static void open_sub(port* p, const char* name, const char* event, uint64_t queu
     iox_sub_options_init(&o);
     o.queueCapacity = queue;
     o.historyRequest = 0;
-    o.queueFullPolicy = block ? QueueFullPolicy_BLOCK_PRODUCER : QueueFullPolicy_DISCARD_OLDEST_DATA;
+    o.queueFullPolicy =
+        block ? QueueFullPolicy_BLOCK_PRODUCER : QueueFullPolicy_DISCARD_OLDEST_DATA;
     p->sub = iox_sub_init(&p->sub_storage, "lnbench", name, event, &o);
     p->ws = iox_ws_init(&p->ws_storage);
     if (iox_ws_attach_subscriber_state(p->ws, p->sub, SubscriberState_HAS_DATA, 0, NULL) !=
@@ -79,8 +80,10 @@ static void send_one(const port* p, uint64_t value)
     void* chunk;
     enum iox_AllocationResult rc = iox_pub_loan_chunk(p->pub, &chunk, (uint32_t)p->size);
     if (rc != AllocationResult_SUCCESS) {
-        fprintf(stderr, "iox_bench: iox_pub_loan_chunk of %zu bytes failed (%d); does RouDi's "
-                "config have a mempool for it?\n", p->size, (int)rc);
+        fprintf(stderr,
+                "iox_bench: iox_pub_loan_chunk of %zu bytes failed (%d); does RouDi's "
+                "config have a mempool for it?\n",
+                p->size, (int)rc);
         exit(2);
     }
     bench_stamp(chunk, p->size, value);
@@ -110,8 +113,7 @@ static uint64_t receive_one(const port* p, double timeout_s, int* got)
         iox_notification_info_t info[1];
         uint64_t missed = 0;
         struct timespec t = {(time_t)timeout_s, (long)((timeout_s - (time_t)timeout_s) * 1e9)};
-        if (iox_ws_timed_wait(p->ws, t, info, 1, &missed) == 0 &&
-            !iox_sub_has_chunks(p->sub)) {
+        if (iox_ws_timed_wait(p->ws, t, info, 1, &missed) == 0 && !iox_sub_has_chunks(p->sub)) {
             *got = 0;
             return 0;
         }
@@ -152,7 +154,8 @@ static int pingpong(int ping, char** argv, port* p)
     }
     wait_subscribed(p);
     wait_subscribers(p);
-    uint64_t* rtt = bench_alloc((count ? count : 1) * sizeof(uint64_t)); /* touched: no faults later */
+    uint64_t* rtt =
+        bench_alloc((count ? count : 1) * sizeof(uint64_t)); /* touched: no faults later */
     for (uint64_t i = 0; rtt && i < warmup + count; i++) {
         if (i == warmup)
             faults = bench_minflt();
@@ -229,8 +232,10 @@ static int publisher(char** argv, port* p)
 
 int main(int argc, char** argv)
 {
-    static const struct { const char* role; int argc; } roles[] = {
-        {"pong", 7}, {"ping", 8}, {"sub", 8}, {"pub", 7}};
+    static const struct {
+        const char* role;
+        int argc;
+    } roles[] = {{"pong", 7}, {"ping", 8}, {"sub", 8}, {"pub", 7}};
     int role = -1;
     for (int i = 0; i < 4; i++)
         if (argc == roles[i].argc && strcmp(argv[1], roles[i].role) == 0)
@@ -250,8 +255,9 @@ int main(int argc, char** argv)
     snprintf(name, sizeof name, "iox_bench_%s_%d", roles[role].role, (int)getpid());
     iox_set_loglevel(Iceoryx_LogLevel_Warn); /* stdout is for the driver */
     iox_runtime_init(name);
-    int rc = role <= 1 ? pingpong(role == 1, argv, &p)
-                       : role == 2 ? subscriber(argv, &p) : publisher(argv, &p);
+    int rc = role <= 1   ? pingpong(role == 1, argv, &p)
+             : role == 2 ? subscriber(argv, &p)
+                         : publisher(argv, &p);
     fflush(stdout);
     if (p.sub) {
         iox_ws_deinit(p.ws);

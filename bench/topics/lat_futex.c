@@ -103,8 +103,8 @@ int main(int argc, char** argv)
         uint64_t t1 = bench_now_ns();
         memcpy(&got, reply, sizeof got);
         if (got != i) {
-            fprintf(stderr, "lat_futex: round trip %llu came back as %llu\n",
-                    (unsigned long long)i, (unsigned long long)got);
+            fprintf(stderr, "lat_futex: round trip %llu came back as %llu\n", (unsigned long long)i,
+                    (unsigned long long)got);
             return 1;
         }
         if (i >= warmup)

@@ -118,7 +118,8 @@ int main(int argc, char** argv)
         return 0;
     }
     uint64_t warmup = strtoull(argv[6], NULL, 10), faults = 0;
-    uint64_t* rtt = bench_alloc((count ? count : 1) * sizeof(uint64_t)); /* touched: no faults later */
+    uint64_t* rtt =
+        bench_alloc((count ? count : 1) * sizeof(uint64_t)); /* touched: no faults later */
     void* reply = bench_alloc(size);
     for (uint64_t i = 0; rtt && i < warmup + count; i++) {
         if (i == warmup)
@@ -128,8 +129,8 @@ int main(int argc, char** argv)
         uint64_t got = receive_one(&e, reply, 0);
         uint64_t t1 = bench_now_ns();
         if (got != i) {
-            fprintf(stderr, "lat_ln: round trip %llu came back as %llu\n",
-                    (unsigned long long)i, (unsigned long long)got);
+            fprintf(stderr, "lat_ln: round trip %llu came back as %llu\n", (unsigned long long)i,
+                    (unsigned long long)got);
             return 1;
         }
         if (i >= warmup)

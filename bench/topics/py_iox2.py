@@ -10,7 +10,7 @@ import sys
 import time
 
 import iceoryx2 as iox2
-from receipts import minflt, Receipts
+from receipts import Receipts, minflt
 
 USAGE = """usage: py_iox2.py sub NAME SIZE COUNT BUFFERS WARM | pub NAME SIZE COUNT BUFFERS WARM SECONDS
 The subscriber polls (iceoryx2 publish-subscribe has no blocking receive) until the last

@@ -13,8 +13,9 @@ import time
 from array import array
 from pathlib import Path
 
-import links_and_nodes as ln
 from receipts import Receipts, minflt
+
+import links_and_nodes as ln
 
 MD_DIR = Path(__file__).resolve().parents[1] / "md"
 MDS = {64: "lnbench/sample_64", 4096: "lnbench/sample_4k", 1 << 20: "lnbench/sample_1m",

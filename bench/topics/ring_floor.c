@@ -197,7 +197,8 @@ static int latency(int argc, char** argv, size_t size)
     int rc = reap(pong);
     bench_write_samples(argv[5], rtt, count);
     printf("{\"ping_minflt\": %" PRIu64 ", \"pong_minflt\": %" PRIu64 ", \"samples\": %" PRIu64
-           "}\n", faults, (uint64_t)s->child_faults, count);
+           "}\n",
+           faults, (uint64_t)s->child_faults, count);
     return rc;
 }
 

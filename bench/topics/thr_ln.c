@@ -21,8 +21,7 @@ typedef struct run {
 
 /* One sample into *counter; 1 if read, 0 after the timeout, -1 if a zero-copy sample was
  * overwritten while borrowed (counted as an overrun by libln, not returned). */
-static int read_one(ln_inport* sub, const run* r, uint8_t* buf, double timeout,
-                    uint64_t* counter)
+static int read_one(ln_inport* sub, const run* r, uint8_t* buf, double timeout, uint64_t* counter)
 {
     int rc;
     if (!r->zc) {

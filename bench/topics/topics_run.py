@@ -10,9 +10,9 @@ import subprocess
 import time
 import uuid
 from collections.abc import Callable
-from typing import Any
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from links_and_nodes.manager.frontends.launch import ManagerProcess, segments, start_manager
 

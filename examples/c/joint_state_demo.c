@@ -19,8 +19,8 @@ static void simulate(robot_joint_state_t* state, uint32_t cycle)
     state->cycle = cycle;
     state->timestamp = cycle * CYCLE_TIME;
     for (int axis = 0; axis < AXES; axis++) {
-        double amplitude = 0.1 * (axis + 1);                 /* rad */
-        double omega = 2.0 * PI * (0.5 + 0.25 * axis);     /* rad/s */
+        double amplitude = 0.1 * (axis + 1);           /* rad */
+        double omega = 2.0 * PI * (0.5 + 0.25 * axis); /* rad/s */
         double t = state->timestamp;
         state->position[axis] = amplitude * sin(omega * t);
         state->velocity[axis] = amplitude * omega * cos(omega * t);
@@ -40,8 +40,8 @@ int main(void)
 {
     int rc = LN_VERSION_CHECK();
     if (rc != LN_OK) {
-        fprintf(stderr, "libln %s cannot serve this program (built with %s): %s\n",
-                ln_version(), LN_VERSION_STRING, ln_strerror(rc));
+        fprintf(stderr, "libln %s cannot serve this program (built with %s): %s\n", ln_version(),
+                LN_VERSION_STRING, ln_strerror(rc));
         return 1;
     }
     printf("libln %s\n", ln_version());

@@ -58,8 +58,7 @@ static void on_event(void* user, int event, uint64_t seq, uint32_t t_ms)
 {
     static const char* names[] = {"", "timeout", "nack", "sync"};
     (void)user;
-    fprintf(stderr, "[%s seq %llu, t = %u ms]\n", names[event & 3], (unsigned long long)seq,
-            t_ms);
+    fprintf(stderr, "[%s seq %llu, t = %u ms]\n", names[event & 3], (unsigned long long)seq, t_ms);
 }
 
 static int usage(void)

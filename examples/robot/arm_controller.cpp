@@ -26,17 +26,14 @@ namespace {
 
 constexpr int joints = 7;
 constexpr double pi = 3.14159265358979323846;
-constexpr double kp_max = 1000.0;  // Nm/rad
-constexpr double kd_max = 50.0;    // Nm s/rad
+constexpr double kp_max = 1000.0; // Nm/rad
+constexpr double kd_max = 50.0;   // Nm s/rad
 constexpr std::uint8_t mode_torque = 3;
-constexpr double write_timeout = 0.0002;  // s, a fifth of the sensor's period
+constexpr double write_timeout = 0.0002; // s, a fifth of the sensor's period
 
 volatile std::sig_atomic_t stop_signal = 0;
 
-extern "C" void on_signal(int sig)
-{
-    stop_signal = sig;
-}
+extern "C" void on_signal(int sig) { stop_signal = sig; }
 
 struct gains {
     double kp[joints];
@@ -49,7 +46,7 @@ void target(double t, double q[joints], double qd[joints])
 {
     for (int j = 0; j < joints; j++) {
         double amplitude = 0.6 - 0.05 * j;               // rad
-        double omega = 2.0 * pi * 0.2 * (1.0 + j / 7.0);  // rad/s
+        double omega = 2.0 * pi * 0.2 * (1.0 + j / 7.0); // rad/s
         q[j] = amplitude * std::sin(omega * t);
         qd[j] = amplitude * omega * std::cos(omega * t);
     }
@@ -57,7 +54,8 @@ void target(double t, double q[joints], double qd[joints])
 
 // Publishes msg unless the ring stays locked for longer than `timeout` (it is, for a moment,
 // while the manager grows it for a new subscriber): then the sample is dropped, false.
-template <typename T> bool publish(ln::outport<T>& port, const T& msg, double timeout)
+template <typename T>
+bool publish(ln::outport<T>& port, const T& msg, double timeout)
 {
     try {
         port.write(msg, timeout);
@@ -74,7 +72,7 @@ std::string check(const double kp[joints], const double kd[joints])
 {
     char why[160] = "";
     for (int j = 0; j < joints && why[0] == '\0'; j++) {
-        if (!(kp[j] > 0.0 && kp[j] <= kp_max))  // also refuses NaN
+        if (!(kp[j] > 0.0 && kp[j] <= kp_max)) // also refuses NaN
             std::snprintf(why, sizeof why, "kp[%d] = %g Nm/rad is outside (0, %g]", j, kp[j],
                           kp_max);
         else if (!(kd[j] >= 0.0 && kd[j] <= kd_max))
@@ -84,7 +82,7 @@ std::string check(const double kp[joints], const double kd[joints])
     return why;
 }
 
-}  // namespace
+} // namespace
 
 int main(int argc, char** argv)
 {
@@ -97,7 +95,7 @@ int main(int argc, char** argv)
 
     // Moderate gains until the supervisor sets its own.
     gains active{{50, 50, 30, 25, 12, 8, 4}, {10, 10, 6, 5, 2.5, 1.6, 0.8}, "default"};
-    double kp[joints], kd[joints];  // what the loop uses: the parameters' outputs
+    double kp[joints], kd[joints]; // what the loop uses: the parameters' outputs
     unsigned long accepted = 0, refused = 0;
     try {
         ln::client clnt("arm_controller", argc, argv);
@@ -112,21 +110,21 @@ int main(int argc, char** argv)
             return "";
         });
         params.register_parameters(
-            ln::parameters::port_description{"kp", "stiffness per joint (Nm/rad)", &active.kp,
-                                             &kp, 0.0, kp_max},
-            ln::parameters::port_description{"kd", "damping per joint (Nm s/rad)", &active.kd,
-                                             &kd, 0.0, kd_max});
+            ln::parameters::port_description{"kp", "stiffness per joint (Nm/rad)", &active.kp, &kp,
+                                             0.0, kp_max},
+            ln::parameters::port_description{"kd", "damping per joint (Nm s/rad)", &active.kd, &kd,
+                                             0.0, kd_max});
         params.update();
-        auto state_in = clnt.subscribe<robot::joint_state_t>("arm.state");  // latest mode
+        auto state_in = clnt.subscribe<robot::joint_state_t>("arm.state"); // latest mode
         auto command_out = clnt.publish<robot::command_t>("arm.command");
         auto reference_out = clnt.publish<robot::joint_state_t>("arm.reference");
         using call_t = ln::service_provider<robot::set_gains_t>::call;
-        std::string answer;  // the response's message points into it while it is sent
+        std::string answer; // the response's message points into it while it is sent
         auto provider = clnt.provide_service<robot::set_gains_t>(
             "arm.set_gains",
             [&](call_t& c) {
                 gains wanted;
-                std::memcpy(wanted.kp, c.req.kp, sizeof wanted.kp);  // packed: copy out
+                std::memcpy(wanted.kp, c.req.kp, sizeof wanted.kp); // packed: copy out
                 std::memcpy(wanted.kd, c.req.kd, sizeof wanted.kd);
                 if (c.req.profile_name != nullptr)
                     wanted.profile.assign(c.req.profile_name, c.req.profile_name_len);
@@ -135,7 +133,7 @@ int main(int argc, char** argv)
                 c.resp.message_len = static_cast<std::uint32_t>(answer.size());
                 c.resp.message = answer.data();
                 if (answer.empty()) {
-                    active = wanted;  // used from the next cycle on
+                    active = wanted; // used from the next cycle on
                     accepted++;
                 } else {
                     refused++;
@@ -145,7 +143,7 @@ int main(int argc, char** argv)
                 std::fflush(stdout);
                 c.respond();
             },
-            "control");  // registered last: once it is there, every port is ready
+            "control"); // registered last: once it is there, every port is ready
         std::printf("following arm.state, serving arm.set_gains\n");
         std::fflush(stdout);
 
@@ -158,7 +156,7 @@ int main(int argc, char** argv)
         double next_status = 1.0;
         while (!stop_signal) {
             if (state_in.read(state, 0.05)) {
-                if (params.update() > 0) {  // an override came (or went): from this cycle on
+                if (params.update() > 0) { // an override came (or went): from this cycle on
                     std::printf("parameters: kp[0] %g (%s), kd[0] %g (%s)\n", kp[0],
                                 params.changed("kp") ? "changed" : "same", kd[0],
                                 params.changed("kd") ? "changed" : "same");
@@ -180,7 +178,7 @@ int main(int argc, char** argv)
                 dropped += !publish(command_out, command, write_timeout);
                 dropped += !publish(reference_out, reference, write_timeout);
                 if (last_cycle != 0 && state.cycle > last_cycle + 1)
-                    skipped += state.cycle - last_cycle - 1;  // latest mode: we fell behind
+                    skipped += state.cycle - last_cycle - 1; // latest mode: we fell behind
                 last_cycle = state.cycle;
                 cycles++;
                 cycles_in_second++;
@@ -190,8 +188,8 @@ int main(int argc, char** argv)
                         extra = ", " + std::to_string(dropped) + " samples dropped";
                     std::printf("t=%.0f s: %lu cycles in the last second, %lu "
                                 "skipped in all%s, gains '%s' (kp[0] %g, kd[0] %g)\n",
-                                t, cycles_in_second, skipped, extra.c_str(),
-                                active.profile.c_str(), kp[0], kd[0]);
+                                t, cycles_in_second, skipped, extra.c_str(), active.profile.c_str(),
+                                kp[0], kd[0]);
                     std::fflush(stdout);
                     cycles_in_second = 0;
                     next_status = std::floor(t) + 1.0;

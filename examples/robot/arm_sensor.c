@@ -19,17 +19,14 @@
 
 enum { JOINTS = 7 };
 static const double INERTIA[JOINTS] = {1.2, 1.2, 0.8, 0.6, 0.3, 0.2, 0.1}; /* kg m^2 */
-static const double DAMPING = 0.5;        /* Nm s/rad, viscous friction of every joint */
-static const double MAX_TORQUE = 100.0;   /* Nm, the motors' limit */
+static const double DAMPING = 0.5;          /* Nm s/rad, viscous friction of every joint */
+static const double MAX_TORQUE = 100.0;     /* Nm, the motors' limit */
 static const double COMMAND_TIMEOUT = 0.05; /* s without a new command before torque off */
 static const uint8_t MODE_TORQUE = 3;       /* robot/command's mode */
 
 static volatile sig_atomic_t stop_signal;
 
-static void on_signal(int sig)
-{
-    stop_signal = sig;
-}
+static void on_signal(int sig) { stop_signal = sig; }
 
 static int fail(const char* what, int rc)
 {
@@ -51,10 +48,7 @@ static void advance(struct timespec* t, long ns)
     }
 }
 
-static double clamp(double x, double limit)
-{
-    return x > limit ? limit : x < -limit ? -limit : x;
-}
+static double clamp(double x, double limit) { return x > limit ? limit : x < -limit ? -limit : x; }
 
 int main(int argc, char** argv)
 {
@@ -125,8 +119,8 @@ int main(int argc, char** argv)
         } else if (rc != LN_EAGAIN) {
             return fail("read arm.command", rc);
         }
-        int driven = command_at >= 0.0 && t - command_at <= COMMAND_TIMEOUT
-                     && command.mode == MODE_TORQUE;
+        int driven =
+            command_at >= 0.0 && t - command_at <= COMMAND_TIMEOUT && command.mode == MODE_TORQUE;
         for (int j = 0; j < JOINTS; j++) {
             double tau = driven ? clamp(command.target[j], MAX_TORQUE) : 0.0;
             double acc = (tau - DAMPING * state.velocity[j]) / INERTIA[j];
@@ -163,8 +157,8 @@ int main(int argc, char** argv)
             late++;
             next = now;
         }
-        while (!stop_signal
-               && (rc = clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, NULL)) != 0)
+        while (!stop_signal &&
+               (rc = clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, NULL)) != 0)
             ; /* EINTR: a signal; the loop condition sees a stop request */
     }
     printf("stopped by %s after %lu commands, %lu late cycles, %lu samples dropped\n",

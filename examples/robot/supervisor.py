@@ -75,6 +75,35 @@ class ErrorStats:
                 + (f", {self.unmatched} unmatched" if self.unmatched else ""))
 
 
+def first_gains(gains: ln.service, profile: str) -> bool:
+    """Set the first gains. Under robot.lnc the controller is ready before we start; by hand
+    it may not be yet, so this retries for 10 s (False, said on stderr, if it never
+    answered)."""
+    deadline = time.monotonic() + 10.0
+    while True:
+        try:
+            set_gains(gains, profile)
+            return True
+        except ln.LnError as exc:
+            if time.monotonic() > deadline or stop_signal is not None:
+                print(f"supervisor: cannot call arm.set_gains: {exc}", file=sys.stderr)
+                return False
+            time.sleep(0.2)
+
+
+def take_states(state: ln.subscriber, positions: dict[int, np.ndarray], newest: int,
+                cycle: int) -> int:
+    """Read the queued states up to `cycle` into `positions` (cycle -> measured position);
+    the newest cycle read."""
+    while newest < cycle:
+        pkt = state.read(timeout=0.05)
+        if pkt is None:
+            break
+        newest = int(pkt.cycle)
+        positions[newest] = np.array(pkt.position)
+    return newest
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--switch-after", type=float, default=3.0, metavar="SECONDS",
@@ -90,18 +119,9 @@ def main() -> int:
     reference = clnt.subscribe("arm.reference", "robot/joint_state", buffers=BUFFERS)
     gains = clnt.get_service("arm.set_gains", "robot/set_gains")
     profile = "soft"
-    # Under robot.lnc the controller is ready before we start; by hand it may not be yet.
-    deadline = time.monotonic() + 10.0
-    while True:
-        try:
-            set_gains(gains, profile)
-            break
-        except ln.LnError as exc:
-            if time.monotonic() > deadline or stop_signal is not None:
-                print(f"supervisor: cannot call arm.set_gains: {exc}", file=sys.stderr)
-                clnt.close()
-                return 1
-            time.sleep(0.2)
+    if not first_gains(gains, profile):
+        clnt.close()
+        return 1
     switched = False
 
     positions: dict[int, np.ndarray] = {}  # cycle -> measured position, not yet matched
@@ -125,12 +145,7 @@ def main() -> int:
         target = np.array(ref.position)
         # The controller publishes the reference of a cycle after reading its state, so the
         # state is already in our queue.
-        while newest_state < cycle:
-            pkt = state.read(timeout=0.05)
-            if pkt is None:
-                break
-            newest_state = int(pkt.cycle)
-            positions[newest_state] = np.array(pkt.position)
+        newest_state = take_states(state, positions, newest_state, cycle)
         measured = positions.pop(cycle, None)
         for old in [c for c in positions if c < cycle]:
             del positions[old]

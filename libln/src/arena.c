@@ -93,8 +93,4 @@ void ln_arena_free(ln_arena* a)
     a->held = 0;
 }
 
-size_t ln_arena_held(const ln_arena* a)
-{
-    return a->held;
-}
-
+size_t ln_arena_held(const ln_arena* a) { return a->held; }

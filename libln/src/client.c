@@ -55,10 +55,7 @@ pid_t ln_client_pid(const ln_client* clnt)
     return clnt->pid;
 }
 
-const char* ln_client_instance(const ln_client* clnt)
-{
-    return clnt->instance;
-}
+const char* ln_client_instance(const ln_client* clnt) { return clnt->instance; }
 
 int ln_client_local_host(ln_client* clnt, char* out, size_t size)
 {
@@ -66,9 +63,9 @@ int ln_client_local_host(ln_client* clnt, char* out, size_t size)
     socklen_t len = sizeof addr;
     pthread_mutex_lock(&clnt->request_lock);
     int fd = clnt->conn.fd;
-    int ok = fd >= 0 && clnt->conn.usable && getsockname(fd, (struct sockaddr*)&addr, &len) == 0
-             && getnameinfo((struct sockaddr*)&addr, len, out, (socklen_t)size, NULL, 0,
-                            NI_NUMERICHOST) == 0;
+    int ok = fd >= 0 && clnt->conn.usable && getsockname(fd, (struct sockaddr*)&addr, &len) == 0 &&
+             getnameinfo((struct sockaddr*)&addr, len, out, (socklen_t)size, NULL, 0,
+                         NI_NUMERICHOST) == 0;
     pthread_mutex_unlock(&clnt->request_lock);
     return ok ? LN_OK
               : ln_set_error(clnt, LN_ECONNECTION, "client \"%s\" is not connected to its manager",
@@ -115,15 +112,9 @@ out:
               : LN_OK;
 }
 
-void ln_client_lock_ports(ln_client* clnt)
-{
-    pthread_mutex_lock(&clnt->ports_lock);
-}
+void ln_client_lock_ports(ln_client* clnt) { pthread_mutex_lock(&clnt->ports_lock); }
 
-void ln_client_unlock_ports(ln_client* clnt)
-{
-    pthread_mutex_unlock(&clnt->ports_lock);
-}
+void ln_client_unlock_ports(ln_client* clnt) { pthread_mutex_unlock(&clnt->ports_lock); }
 
 void ln_client_settle_port(ln_client* clnt, void* port, uint64_t gen)
 {
@@ -253,8 +244,8 @@ static int reconnect_wanted(const ln_client_options* opts)
     const char* env = getenv("LN_RECONNECT");
     if (env == NULL)
         return 1;
-    return !(strcmp(env, "0") == 0 || strcasecmp(env, "no") == 0 || strcasecmp(env, "off") == 0
-             || strcasecmp(env, "false") == 0);
+    return !(strcmp(env, "0") == 0 || strcasecmp(env, "no") == 0 || strcasecmp(env, "off") == 0 ||
+             strcasecmp(env, "false") == 0);
 }
 
 static void free_client(ln_client* c)

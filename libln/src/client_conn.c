@@ -119,8 +119,8 @@ static int read_frame(ln_client* c, struct ln_conn* k, const char* request,
         return unexpected(c, k, request, *type);
     /* A WELCOME of another protocol version may have other fields: handshake() says so. */
     ln_rbuf peek = *body;
-    if ((*type != LN_MSG_WELCOME || ln_rbuf_u16(&peek) == LN_PROTO_VERSION)
-        && ln_proto_check_fields(*type, body) != LN_OK)
+    if ((*type != LN_MSG_WELCOME || ln_rbuf_u16(&peek) == LN_PROTO_VERSION) &&
+        ln_proto_check_fields(*type, body) != LN_OK)
         return malformed(c, k, request, "fields do not match the frame type");
     return LN_OK;
 }
@@ -150,10 +150,13 @@ static int handshake(ln_client* c, struct ln_conn* k, const char* name, uint32_t
     ln_wbuf_reset(&k->tx);
     char host_id[LN_HOST_ID_MAX];
     ln_host_id(host_id, sizeof host_id); /* the manager finds this host's ln_daemon by it */
-    ln_msg_hello hello = {.magic = LN_PROTO_MAGIC, .version = LN_PROTO_VERSION,
-                          .pid = (uint32_t)c->pid, .client_name = ln_strv_of(name),
+    ln_msg_hello hello = {.magic = LN_PROTO_MAGIC,
+                          .version = LN_PROTO_VERSION,
+                          .pid = (uint32_t)c->pid,
+                          .client_name = ln_strv_of(name),
                           .libln_version = ln_strv_of(ln_version()),
-                          .host_id = ln_strv_of(host_id), .flags = flags};
+                          .host_id = ln_strv_of(host_id),
+                          .flags = flags};
     int rc = ln_msg_hello_frame(&k->tx, &hello);
     if (rc != LN_OK)
         return ln_set_error(c, rc, "cannot encode HELLO: %s", ln_strerror(rc));
@@ -177,8 +180,8 @@ static int handshake(ln_client* c, struct ln_conn* k, const char* name, uint32_t
     uint16_t version = ln_rbuf_u16(&peek);
     if (version != LN_PROTO_VERSION)
         return ln_set_error(c, LN_EVERSION,
-                            "manager %s: client speaks protocol %d, manager speaks %u",
-                            c->address, LN_PROTO_VERSION, (unsigned)version);
+                            "manager %s: client speaks protocol %d, manager speaks %u", c->address,
+                            LN_PROTO_VERSION, (unsigned)version);
     ln_msg_welcome welcome = {0};
     ln_msg_welcome_read(&r, &welcome); /* read_frame checked it */
     uint32_t id = welcome.client_id;
@@ -190,8 +193,8 @@ static int handshake(ln_client* c, struct ln_conn* k, const char* name, uint32_t
     if (flags & LN_PROTO_HELLO_RECONNECT) {
         if (strcmp(instance, c->instance) != 0)
             return ln_set_error(c, LN_ECONNECTION,
-                                "manager %s now serves instance \"%s\", not \"%s\"",
-                                c->address, instance, c->instance);
+                                "manager %s now serves instance \"%s\", not \"%s\"", c->address,
+                                instance, c->instance);
     } else {
         memcpy(c->name, given, sizeof c->name);
         memcpy(c->instance, instance, sizeof c->instance);
@@ -292,10 +295,7 @@ static void reply_free(void* p)
     free(r);
 }
 
-static void reply_key_init(void)
-{
-    pthread_key_create(&reply_key, reply_free);
-}
+static void reply_key_init(void) { pthread_key_create(&reply_key, reply_free); }
 
 /* Copies *reply into the calling thread's buffer and points *reply at it. */
 static int copy_reply(ln_client* c, ln_rbuf* reply)
@@ -324,10 +324,7 @@ static int copy_reply(ln_client* c, ln_rbuf* reply)
 
 static _Thread_local uint64_t request_gen;
 
-uint64_t ln_client_request_gen(void)
-{
-    return request_gen;
-}
+uint64_t ln_client_request_gen(void) { return request_gen; }
 
 static int check_body(ln_client* clnt, uint16_t type, const ln_wbuf* body)
 {
@@ -386,8 +383,7 @@ static void keepalive(int fd)
 }
 
 /* Resolves and connects to the manager into *fd; LN_OK or a recorded error. */
-static int connect_manager(ln_client* c, const char* from, const struct timespec* deadline,
-                           int* fd)
+static int connect_manager(ln_client* c, const char* from, const struct timespec* deadline, int* fd)
 {
     char what[MAX_ADDRESS + 64];
     snprintf(what, sizeof what, "cannot connect to manager %s%s", c->address, from);

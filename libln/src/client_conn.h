@@ -28,11 +28,11 @@ struct ln_client_port {
 struct ln_client {
     uint32_t magic;
     pid_t pid;
-    double timeout; /* seconds, < 0: wait forever */
+    double timeout;                          /* seconds, < 0: wait forever */
     char address[LN_CLIENT_MAX_ADDRESS + 3]; /* "host:port" for texts, IPv6 hosts in [] */
     char host[LN_CLIENT_MAX_ADDRESS + 1];    /* what to connect to again */
     char port[6];
-    char name[LN_PROTO_MAX_STR + 1];         /* as assigned by the manager at creation */
+    char name[LN_PROTO_MAX_STR + 1]; /* as assigned by the manager at creation */
     char instance[LN_PROTO_MAX_STR + 1];
 
     /* Lock order: ports_lock, then request_lock, then state_lock; none is taken by

@@ -48,8 +48,9 @@ int ln_control(ln_client* clnt, const char* command, char** result)
     if (ok != 1) {
         char reason[LN_ERROR_TEXT_MAX];
         if (ln_json_string(copy, "error", reason, sizeof reason) != 0)
-            strcpy(reason, ok == 0 ? "no reason given" : "the answer is not a JSON object "
-                                                         "with \"ok\"");
+            strcpy(reason, ok == 0 ? "no reason given"
+                                   : "the answer is not a JSON object "
+                                     "with \"ok\"");
         rc = ok == 0 ? refusal_code(copy) : LN_EPROTOCOL;
         free(copy);
         return ln_set_error(clnt, rc, "%s", reason);
@@ -61,7 +62,4 @@ int ln_control(ln_client* clnt, const char* command, char** result)
     return LN_OK;
 }
 
-void ln_free(void* p)
-{
-    free(p);
-}
+void ln_free(void* p) { free(p); }

@@ -6,8 +6,8 @@
 
 /* Every code lies in -1 .. -LN_ERROR_COUNT; with the duplicate-case check of the switches
  * below this proves the table is contiguous, which ln_error_count() promises. */
-#define LN_ERRNO_RANGE_(name, code, message)                                                  \
-    _Static_assert((code) <= -1 && (code) >= -LN_ERROR_COUNT,                                 \
+#define LN_ERRNO_RANGE_(name, code, message)                                                       \
+    _Static_assert((code) <= -1 && (code) >= -LN_ERROR_COUNT,                                      \
                    "LN_E" #name " must lie in -1 .. -(number of table entries)");
 LN_ERRNO_MAP(LN_ERRNO_RANGE_)
 #undef LN_ERRNO_RANGE_
@@ -17,8 +17,8 @@ const char* ln_strerror(int code)
     switch (code) {
     case LN_OK:
         return "success";
-#define LN_ERRNO_MESSAGE_(name, value, message)                                               \
-    case LN_##name:                                                                           \
+#define LN_ERRNO_MESSAGE_(name, value, message)                                                    \
+    case LN_##name:                                                                                \
         return message;
         LN_ERRNO_MAP(LN_ERRNO_MESSAGE_)
 #undef LN_ERRNO_MESSAGE_
@@ -32,8 +32,8 @@ const char* ln_error_name(int code)
     switch (code) {
     case LN_OK:
         return "OK";
-#define LN_ERRNO_NAME_(name, value, message)                                                  \
-    case LN_##name:                                                                           \
+#define LN_ERRNO_NAME_(name, value, message)                                                       \
+    case LN_##name:                                                                                \
         return #name;
         LN_ERRNO_MAP(LN_ERRNO_NAME_)
 #undef LN_ERRNO_NAME_
@@ -42,7 +42,4 @@ const char* ln_error_name(int code)
     }
 }
 
-int ln_error_count(void)
-{
-    return LN_ERROR_COUNT;
-}
+int ln_error_count(void) { return LN_ERROR_COUNT; }

@@ -39,11 +39,11 @@ struct ln_event {
     ln_event_filter filter;
     void* filter_data;
 
-    pthread_mutex_t lock; /* one call at a time; guards everything below */
+    pthread_mutex_t lock;    /* one call at a time; guards everything below */
     handler_entry** entries; /* as the manager listed them last, by name */
     size_t nentries;
-    int listed;              /* a list came at least once */
-    ln_arena replies;        /* decoded replies of the last call */
+    int listed;       /* a list came at least once */
+    ln_arena replies; /* decoded replies of the last call */
 };
 
 static int event_check(const ln_event* ev)
@@ -75,10 +75,7 @@ static void event_free(ln_event* ev)
     free(ev);
 }
 
-static void event_close_fn(void* ev)
-{
-    ln_event_release(ev);
-}
+static void event_close_fn(void* ev) { ln_event_release(ev); }
 
 /* A caller registers nothing; it asks for the handlers on every call. */
 static int event_reclaim(ln_client* clnt, void* ev)
@@ -101,10 +98,12 @@ int ln_get_event(ln_client* clnt, ln_event** out, const char* event, const char*
     *out = NULL;
     if ((rc = ln_event_check_name(clnt, "ln_get_event", event)) != LN_OK)
         return rc;
-    if (md_name == NULL || signature == NULL || md_name[0] == '\0'
-        || strlen(md_name) > LN_SVC_MAX_NAME)
-        return ln_set_error(clnt, LN_EINVAL, "ln_get_event: event \"%s\": md name (1..%d "
-                            "bytes) and signature are required", event, LN_SVC_MAX_NAME);
+    if (md_name == NULL || signature == NULL || md_name[0] == '\0' ||
+        strlen(md_name) > LN_SVC_MAX_NAME)
+        return ln_set_error(clnt, LN_EINVAL,
+                            "ln_get_event: event \"%s\": md name (1..%d "
+                            "bytes) and signature are required",
+                            event, LN_SVC_MAX_NAME);
     ln_event* ev = calloc(1, sizeof *ev);
     if (ev == NULL)
         return ln_set_error(clnt, LN_ENOMEM, "out of memory for event \"%s\"", event);
@@ -177,12 +176,14 @@ static int add_handler(ln_event* ev, const char* item, handler_entry** list, siz
     char name[LN_SVC_MAX_NAME + 1], client[CLIENT_MAX], hex[2 * LN_EVENT_MAX_CONNECT_SIZE + 1];
     uint8_t wire[LN_EVENT_MAX_CONNECT_SIZE];
     size_t len;
-    if (ln_json_string(item, "service", name, sizeof name) != 0
-        || ln_json_string(item, "client", client, sizeof client) != 0
-        || ln_json_string(item, "connect", hex, sizeof hex) != 0
-        || ln_event_unhex(hex, wire, sizeof wire, &len) != 0)
-        return ln_set_error(ev->clnt, LN_EPROTOCOL, "event \"%s\": the manager's handler list "
-                            "is malformed", ev->name);
+    if (ln_json_string(item, "service", name, sizeof name) != 0 ||
+        ln_json_string(item, "client", client, sizeof client) != 0 ||
+        ln_json_string(item, "connect", hex, sizeof hex) != 0 ||
+        ln_event_unhex(hex, wire, sizeof wire, &len) != 0)
+        return ln_set_error(ev->clnt, LN_EPROTOCOL,
+                            "event \"%s\": the manager's handler list "
+                            "is malformed",
+                            ev->name);
     handler_entry* e = take_entry(ev, name);
     if (e == NULL)
         return ln_set_error(ev->clnt, LN_ENOMEM, "event \"%s\": out of memory", ev->name);
@@ -209,12 +210,16 @@ static int take_list(ln_event* ev, const char* answer)
     const char* start;
     size_t len;
     if (pos == NULL)
-        return ln_set_error(ev->clnt, LN_EPROTOCOL, "event \"%s\": the manager's answer has "
-                            "no event list", ev->name);
+        return ln_set_error(ev->clnt, LN_EPROTOCOL,
+                            "event \"%s\": the manager's answer has "
+                            "no event list",
+                            ev->name);
     int found = ln_json_next(&pos, &start, &len);
     if (found < 0)
-        return ln_set_error(ev->clnt, LN_EPROTOCOL, "event \"%s\": the manager's event list "
-                            "is malformed", ev->name);
+        return ln_set_error(ev->clnt, LN_EPROTOCOL,
+                            "event \"%s\": the manager's event list "
+                            "is malformed",
+                            ev->name);
     handler_entry** list = calloc(LN_EVENT_MAX_HANDLERS, sizeof *list);
     char* item = found ? strndup(start, len) : NULL;
     size_t n = 0;
@@ -223,29 +228,34 @@ static int take_list(ln_event* ev, const char* answer)
                  : LN_OK;
     if (rc == LN_OK && found) {
         char md_name[LN_SVC_MAX_NAME + 1], hash[32];
-        if (ln_json_string(item, "md_name", md_name, sizeof md_name) != 0
-            || ln_json_string(item, "layout_hash", hash, sizeof hash) != 0)
-            rc = ln_set_error(ev->clnt, LN_EPROTOCOL, "event \"%s\": the manager's event entry "
-                              "is malformed", ev->name);
+        if (ln_json_string(item, "md_name", md_name, sizeof md_name) != 0 ||
+            ln_json_string(item, "layout_hash", hash, sizeof hash) != 0)
+            rc = ln_set_error(ev->clnt, LN_EPROTOCOL,
+                              "event \"%s\": the manager's event entry "
+                              "is malformed",
+                              ev->name);
         else if (strtoull(hash, NULL, 16) != ev->layout_hash)
-            rc = ln_set_error(ev->clnt, LN_ELAYOUT, "event \"%s\": layout of md \"%s\" (hash "
+            rc = ln_set_error(ev->clnt, LN_ELAYOUT,
+                              "event \"%s\": layout of md \"%s\" (hash "
                               "0x%016llx) differs from its handlers' md \"%s\" (hash %s)",
-                              ev->name, ev->md_name, (unsigned long long)ev->layout_hash,
-                              md_name, hash);
+                              ev->name, ev->md_name, (unsigned long long)ev->layout_hash, md_name,
+                              hash);
         const char* hpos = rc == LN_OK ? ln_json_array(item, "handlers") : NULL;
         const char* hstart;
         size_t hlen;
         int more = 0;
-        while (rc == LN_OK && hpos != NULL && (more = ln_json_next(&hpos, &hstart, &hlen)) == 1
-               && n < LN_EVENT_MAX_HANDLERS) {
+        while (rc == LN_OK && hpos != NULL && (more = ln_json_next(&hpos, &hstart, &hlen)) == 1 &&
+               n < LN_EVENT_MAX_HANDLERS) {
             char* h = strndup(hstart, hlen);
             rc = h == NULL ? ln_set_error(ev->clnt, LN_ENOMEM, "out of memory")
                            : add_handler(ev, h, list, &n);
             free(h);
         }
         if (rc == LN_OK && (hpos == NULL || more < 0))
-            rc = ln_set_error(ev->clnt, LN_EPROTOCOL, "event \"%s\": the manager's handler "
-                              "list is malformed", ev->name);
+            rc = ln_set_error(ev->clnt, LN_EPROTOCOL,
+                              "event \"%s\": the manager's handler "
+                              "list is malformed",
+                              ev->name);
     }
     free(item);
     if (rc != LN_OK) { /* the entries taken go back */
@@ -286,8 +296,10 @@ static int refresh(ln_event* ev)
     if (rc == LN_ECONNECTION && ev->listed)
         return LN_OK;
     if (rc != LN_OK)
-        return ln_set_error(ev->clnt, rc, "event \"%s\": cannot ask the manager for its "
-                            "handlers: %s", ev->name, ln_last_error());
+        return ln_set_error(ev->clnt, rc,
+                            "event \"%s\": cannot ask the manager for its "
+                            "handlers: %s",
+                            ev->name, ln_last_error());
     rc = take_list(ev, answer);
     ln_free(answer);
     return rc;
@@ -344,13 +356,14 @@ static int receive_all(ln_event* ev, const struct timespec* deadline)
         if (rc == LN_OK && has_reply) {
             e->reply = ln_arena_alloc(&ev->replies, size ? size : 1);
             rc = e->reply == NULL
-                     ? ln_set_error(ev->clnt, LN_ENOMEM, "event \"%s\": out of memory",
-                                    ev->name)
+                     ? ln_set_error(ev->clnt, LN_ENOMEM, "event \"%s\": out of memory", ev->name)
                      : ln_sig_decode(ev->call_sig, data, len, e->reply, &ev->replies,
                                      LN_SERVICE_DEFAULT_MAX_SIZE);
             if (rc != LN_OK) {
-                rc = ln_set_error(ev->clnt, rc, "event \"%s\": bad reply from handler \"%s\": "
-                                  "%s", ev->name, e->name, ln_last_error());
+                rc = ln_set_error(ev->clnt, rc,
+                                  "event \"%s\": bad reply from handler \"%s\": "
+                                  "%s",
+                                  ev->name, e->name, ln_last_error());
                 e->reply = NULL;
             }
         }
@@ -387,9 +400,10 @@ static int call_locked(ln_event* ev, const void* call, double timeout)
         if (want < 0) {
             for (size_t j = 0; j < ev->nentries; j++)
                 ev->entries[j]->selected = 0;
-            return ln_set_error(ev->clnt, want, "event \"%s\": the filter stopped the call at "
-                                "handler \"%s\" (%s)", ev->name, e->name,
-                                ln_error_name(want) ? ln_error_name(want) : "?");
+            return ln_set_error(ev->clnt, want,
+                                "event \"%s\": the filter stopped the call at "
+                                "handler \"%s\" (%s)",
+                                ev->name, e->name, ln_error_name(want) ? ln_error_name(want) : "?");
         }
         e->selected = want > 0;
     }
@@ -407,8 +421,7 @@ int ln_event_call(ln_event* ev, const void* call, double timeout)
     if (isnan(timeout))
         return ln_set_error(ev->clnt, LN_EINVAL, "event \"%s\": timeout is NaN", ev->name);
     if (call == NULL && ln_sig_size(ev->call_sig) > 0)
-        return ln_set_error(ev->clnt, LN_EINVAL, "event \"%s\": the call struct is NULL",
-                            ev->name);
+        return ln_set_error(ev->clnt, LN_EINVAL, "event \"%s\": the call struct is NULL", ev->name);
     pthread_mutex_lock(&ev->lock);
     rc = call_locked(ev, call, timeout);
     pthread_mutex_unlock(&ev->lock);
@@ -452,7 +465,7 @@ int ln_event_get_result(const ln_event* ev, size_t index, ln_event_result* out)
     }
     pthread_mutex_unlock(&e->lock);
     if (rc != LN_OK)
-        return ln_set_error(ev->clnt, rc, "event \"%s\": the last call has no result %zu",
-                            ev->name, index);
+        return ln_set_error(ev->clnt, rc, "event \"%s\": the last call has no result %zu", ev->name,
+                            index);
     return LN_OK;
 }

@@ -12,15 +12,15 @@ int ln_event_check_name(ln_client* clnt, const char* what, const char* event)
         return ln_set_error(clnt, LN_EINVAL, "%s: the event name is NULL", what);
     size_t n = strlen(event);
     if (n == 0 || n > LN_EVENT_MAX_NAME)
-        return ln_set_error(clnt, LN_EINVAL, "%s: event name of %zu bytes, must be 1..%d", what,
-                            n, LN_EVENT_MAX_NAME);
+        return ln_set_error(clnt, LN_EINVAL, "%s: event name of %zu bytes, must be 1..%d", what, n,
+                            LN_EVENT_MAX_NAME);
     if (event[0] == '.')
-        return ln_set_error(clnt, LN_EINVAL, "%s: event name \"%s\" must not start with '.'",
-                            what, event);
+        return ln_set_error(clnt, LN_EINVAL, "%s: event name \"%s\" must not start with '.'", what,
+                            event);
     for (const char* p = event; *p != '\0'; p++) {
         char c = *p;
-        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')
-              || strchr("_.:/-", c) != NULL))
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+              strchr("_.:/-", c) != NULL))
             return ln_set_error(clnt, LN_EINVAL,
                                 "%s: event name \"%s\" may only contain A-Z a-z 0-9 _ . : / -",
                                 what, event);
@@ -36,14 +36,16 @@ int ln_event_parse_signature(ln_client* clnt, const char* md_name, const char* s
     *handler_signature = NULL;
     int rc = ln_sig_split(signature, &a, &b);
     if (rc != LN_OK)
-        rc = ln_set_error(clnt, rc, "event md \"%s\": %s (an event signature is "
-                          "\"connect|call\")", md_name, ln_last_error());
+        rc = ln_set_error(clnt, rc,
+                          "event md \"%s\": %s (an event signature is "
+                          "\"connect|call\")",
+                          md_name, ln_last_error());
     if (rc == LN_OK && (rc = ln_sig_parse(a, connect)) != LN_OK)
         rc = ln_set_error(clnt, rc, "event md \"%s\": connect signature: %s", md_name,
                           ln_last_error());
     if (rc == LN_OK && (rc = ln_sig_parse(b, call)) != LN_OK)
-        rc = ln_set_error(clnt, rc, "event md \"%s\": call signature: %s", md_name,
-                          ln_last_error());
+        rc =
+            ln_set_error(clnt, rc, "event md \"%s\": call signature: %s", md_name, ln_last_error());
     if (rc == LN_OK) {
         size_t n = strlen(b) + 1 + sizeof LN_EVENT_REPLY_SIG;
         *handler_signature = malloc(n);
@@ -70,8 +72,8 @@ void ln_event_reply_pack(uint8_t out[LN_EVENT_REPLY_SIZE], int has_reply, uint32
     memcpy(out + 5, &data, sizeof data);
 }
 
-void ln_event_reply_unpack(const uint8_t in[LN_EVENT_REPLY_SIZE], int* has_reply,
-                           uint32_t* len, const uint8_t** data)
+void ln_event_reply_unpack(const uint8_t in[LN_EVENT_REPLY_SIZE], int* has_reply, uint32_t* len,
+                           const uint8_t** data)
 {
     *has_reply = in[0] != 0;
     memcpy(len, in + 1, sizeof *len);

@@ -54,8 +54,9 @@ static int handler_check(const ln_event_handler* h)
 static int request_check(const ln_event_request* call)
 {
     if (call == NULL || call->magic != LN_EVENT_REQUEST_MAGIC)
-        return ln_set_error(NULL, LN_EBADHANDLE, "invalid event call (use it only inside its "
-                                                 "handler)");
+        return ln_set_error(NULL, LN_EBADHANDLE,
+                            "invalid event call (use it only inside its "
+                            "handler)");
     return LN_OK;
 }
 
@@ -121,8 +122,8 @@ int ln_event_request_reply_error(ln_event_request* call, const char* text)
     if (rc != LN_OK)
         return rc;
     if (call->answered)
-        return ln_set_error(call->h->clnt, LN_EBUSY,
-                            "event \"%s\": this call is answered already", call->h->event);
+        return ln_set_error(call->h->clnt, LN_EBUSY, "event \"%s\": this call is answered already",
+                            call->h->event);
     rc = ln_service_request_respond_error(call->req, text);
     call->answered = 1;
     return rc;
@@ -158,16 +159,14 @@ static int reclaim_handler(ln_client* clnt, void* handler)
             rc = LN_EREFUSED;
     }
     if (rc != LN_OK)
-        return ln_set_error(clnt, rc, "event \"%s\": the manager refused to take back handler "
-                            "\"%s\": %s", h->event, h->name,
-                            answer[0] ? answer : ln_last_error());
+        return ln_set_error(clnt, rc,
+                            "event \"%s\": the manager refused to take back handler "
+                            "\"%s\": %s",
+                            h->event, h->name, answer[0] ? answer : ln_last_error());
     return LN_OK;
 }
 
-static void handler_close_fn(void* handler)
-{
-    ln_event_disconnect(handler);
-}
+static void handler_close_fn(void* handler) { ln_event_disconnect(handler); }
 
 static const ln_client_port_ops handler_ops = {handler_close_fn, reclaim_handler};
 
@@ -179,8 +178,8 @@ static void make_name(ln_event_handler* h)
     size_t n = 0;
     for (; cn[n] != '\0' && n < CLIENT_PART_MAX; n++) {
         char c = cn[n];
-        int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')
-                 || c == '_' || c == '-' || c == '.';
+        int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                 c == '_' || c == '-' || c == '.';
         part[n] = ok ? c : '_';
     }
     part[n] = '\0';
@@ -189,8 +188,8 @@ static void make_name(ln_event_handler* h)
 }
 
 /* The event_connect command for the manager (malloc'd), or NULL. */
-static char* connect_command(const ln_event_handler* h, const char* md_name,
-                             uint64_t layout_hash, const char* signature, const char* hex)
+static char* connect_command(const ln_event_handler* h, const char* md_name, uint64_t layout_hash,
+                             const char* signature, const char* hex)
 {
     char* text = NULL;
     size_t size = 0;
@@ -203,8 +202,8 @@ static char* connect_command(const ln_event_handler* h, const char* md_name,
     ln_event_json_quote(f, h->name);
     fputs(", \"md_name\": ", f);
     ln_event_json_quote(f, md_name);
-    fprintf(f, ", \"layout_hash\": \"0x%016llx\", \"signature\": ",
-            (unsigned long long)layout_hash);
+    fprintf(f,
+            ", \"layout_hash\": \"0x%016llx\", \"signature\": ", (unsigned long long)layout_hash);
     ln_event_json_quote(f, signature);
     fprintf(f, ", \"connect\": \"%s\"}", hex);
     if (fclose(f) != 0) {
@@ -221,8 +220,7 @@ static int provide(ln_event_handler* h, const char* md_name, uint64_t layout_has
     int rc = LN_OK;
     for (int attempt = 0; attempt < NAME_ATTEMPTS; attempt++) {
         make_name(h);
-        rc = ln_get_service_provider(h->clnt, &h->prov, h->name, md_name, layout_hash,
-                                     handler_sig);
+        rc = ln_get_service_provider(h->clnt, &h->prov, h->name, md_name, layout_hash, handler_sig);
         if (rc != LN_OK)
             return rc;
         rc = ln_service_provider_set_handler(h->prov, on_call, h);
@@ -255,12 +253,13 @@ int ln_event_connect(ln_client* clnt, ln_event_handler** out, const char* event,
     if ((rc = ln_event_check_name(clnt, "ln_event_connect", event)) != LN_OK)
         return rc;
     if (md_name == NULL || signature == NULL || handler == NULL)
-        return ln_set_error(clnt, LN_EINVAL, "ln_event_connect: event \"%s\": md name, "
-                            "signature and handler are required", event);
+        return ln_set_error(clnt, LN_EINVAL,
+                            "ln_event_connect: event \"%s\": md name, "
+                            "signature and handler are required",
+                            event);
     ln_event_handler* h = calloc(1, sizeof *h);
     if (h == NULL)
-        return ln_set_error(clnt, LN_ENOMEM, "out of memory for a handler of event \"%s\"",
-                            event);
+        return ln_set_error(clnt, LN_ENOMEM, "out of memory for a handler of event \"%s\"", event);
     h->clnt = clnt;
     h->fn = handler;
     h->user_data = user_data;
@@ -272,11 +271,12 @@ int ln_event_connect(ln_client* clnt, ln_event_handler** out, const char* event,
     ln_wbuf_init(&wire);
     if (rc == LN_OK && connect == NULL && ln_sig_size(h->connect_sig) > 0)
         rc = ln_set_error(clnt, LN_EINVAL, "event \"%s\": the connect struct is NULL", event);
-    if (rc == LN_OK
-        && (rc = ln_sig_encode(h->connect_sig, connect, &wire, LN_EVENT_MAX_CONNECT_SIZE))
-               != LN_OK)
-        rc = ln_set_error(clnt, rc, "event \"%s\": connect struct: %s (at most %d bytes in "
-                          "wire form)", event, ln_last_error(), LN_EVENT_MAX_CONNECT_SIZE);
+    if (rc == LN_OK &&
+        (rc = ln_sig_encode(h->connect_sig, connect, &wire, LN_EVENT_MAX_CONNECT_SIZE)) != LN_OK)
+        rc = ln_set_error(clnt, rc,
+                          "event \"%s\": connect struct: %s (at most %d bytes in "
+                          "wire form)",
+                          event, ln_last_error(), LN_EVENT_MAX_CONNECT_SIZE);
     if (rc == LN_OK)
         rc = provide(h, md_name, layout_hash, handler_sig, group);
     if (rc == LN_OK) {
@@ -320,10 +320,11 @@ int ln_event_disconnect(ln_event_handler* h)
     /* Unregistering the service makes the manager forget the connect struct too. */
     rc = ln_unregister_service_provider(h->prov);
     if (rc != LN_OK)
-        return rc == LN_EBUSY
-                   ? ln_set_error(h->clnt, rc, "event \"%s\": a handler cannot disconnect "
-                                  "itself while it runs", h->event)
-                   : rc;
+        return rc == LN_EBUSY ? ln_set_error(h->clnt, rc,
+                                             "event \"%s\": a handler cannot disconnect "
+                                             "itself while it runs",
+                                             h->event)
+                              : rc;
     ln_client_remove_port(h->clnt, h);
     handler_free(h);
     return LN_OK;

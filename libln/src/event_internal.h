@@ -34,8 +34,8 @@ int ln_event_parse_signature(ln_client* clnt, const char* md_name, const char* s
 /* The reply record's fields. */
 void ln_event_reply_pack(uint8_t out[LN_EVENT_REPLY_SIZE], int has_reply, uint32_t len,
                          const void* data);
-void ln_event_reply_unpack(const uint8_t in[LN_EVENT_REPLY_SIZE], int* has_reply,
-                           uint32_t* len, const uint8_t** data);
+void ln_event_reply_unpack(const uint8_t in[LN_EVENT_REPLY_SIZE], int* has_reply, uint32_t* len,
+                           const uint8_t** data);
 
 /* Writes s as a quoted JSON string. */
 void ln_event_json_quote(FILE* f, const char* s);

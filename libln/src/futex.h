@@ -38,10 +38,9 @@ static inline uint32_t ln_futex_announce(_Atomic uint32_t* word)
 static inline void ln_futex_bump_wake(_Atomic uint32_t* word)
 {
     uint32_t v = atomic_load_explicit(word, memory_order_seq_cst);
-    while (!atomic_compare_exchange_weak_explicit(word, &v,
-                                                  ((v & ~LN_FUTEX_SLEEPERS) + 1) &
-                                                      ~LN_FUTEX_SLEEPERS,
-                                                  memory_order_seq_cst, memory_order_seq_cst))
+    while (!atomic_compare_exchange_weak_explicit(
+        word, &v, ((v & ~LN_FUTEX_SLEEPERS) + 1) & ~LN_FUTEX_SLEEPERS, memory_order_seq_cst,
+        memory_order_seq_cst))
         ;
     syscall(SYS_futex, (uint32_t*)word, FUTEX_WAKE, INT_MAX, NULL, NULL, 0);
 }

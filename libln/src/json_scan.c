@@ -163,11 +163,21 @@ int ln_json_string(const char* json, const char* key, char* out, size_t size)
         if (c == '\\') {
             c = *++p;
             switch (c) {
-            case 'n': c = '\n'; break;
-            case 't': c = '\t'; break;
-            case 'r': c = '\r'; break;
-            case 'b': c = '\b'; break;
-            case 'f': c = '\f'; break;
+            case 'n':
+                c = '\n';
+                break;
+            case 't':
+                c = '\t';
+                break;
+            case 'r':
+                c = '\r';
+                break;
+            case 'b':
+                c = '\b';
+                break;
+            case 'f':
+                c = '\f';
+                break;
             case 'u': {
                 int v = hex_value(p + 1);
                 if (v < 0)
@@ -187,7 +197,8 @@ int ln_json_string(const char* json, const char* key, char* out, size_t size)
                 }
                 break;
             }
-            default: break; /* \" \\ \/ */
+            default:
+                break; /* \" \\ \/ */
             }
         }
         put(out, size, &n, c);
@@ -200,11 +211,11 @@ size_t ln_json_quote(const char* s, char* out, size_t size)
 {
     size_t n = 0;
     char esc[8];
-#define PUT(ch)                                                                               \
-    do {                                                                                      \
-        if (n + 1 < size)                                                                     \
-            out[n] = (ch);                                                                    \
-        n++;                                                                                  \
+#define PUT(ch)                                                                                    \
+    do {                                                                                           \
+        if (n + 1 < size)                                                                          \
+            out[n] = (ch);                                                                         \
+        n++;                                                                                       \
     } while (0)
     PUT('"');
     for (const unsigned char* p = (const unsigned char*)s; *p != '\0'; p++) {

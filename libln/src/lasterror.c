@@ -9,10 +9,7 @@
 
 static _Thread_local char last_text[LN_ERROR_TEXT_MAX];
 
-const char* ln_last_error(void)
-{
-    return last_text;
-}
+const char* ln_last_error(void) { return last_text; }
 
 int ln_errno_to_code(int err)
 {

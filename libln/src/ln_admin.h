@@ -42,7 +42,7 @@ LN_ADMIN_API int ln_ring_admin_write_seq(ln_ring_admin* admin, uint64_t* seq);
 typedef struct ln_ring_info {
     char topic[256];
     char md_name[256];
-    char successor[256];   /* set once retired */
+    char successor[256]; /* set once retired */
     uint64_t layout_hash;
     uint64_t message_size;
     uint64_t write_seq;

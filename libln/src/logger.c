@@ -93,13 +93,16 @@ int ln_logger_add_topic(ln_logger* lg, const char* topic, uint32_t depth, uint32
     if (rc != LN_OK)
         return rc;
     if (topic == NULL || depth == 0 || divisor == 0 || !(span >= 0) || isinf(span))
-        return ln_set_error(lg->clnt, LN_EINVAL, "ln_logger_add_topic: needs a topic, depth "
+        return ln_set_error(lg->clnt, LN_EINVAL,
+                            "ln_logger_add_topic: needs a topic, depth "
                             ">= 1, divisor >= 1 and a finite span >= 0");
     char* quoted = quote(topic);
     if (quoted == NULL)
         return ln_set_error(lg->clnt, LN_ENOMEM, "out of memory");
-    rc = command(lg, "logger_add", "\"topic\": %s, \"depth\": %u, \"divisor\": %u, "
-                 "\"span\": %.17g", quoted, depth, divisor, span);
+    rc = command(lg, "logger_add",
+                 "\"topic\": %s, \"depth\": %u, \"divisor\": %u, "
+                 "\"span\": %.17g",
+                 quoted, depth, divisor, span);
     free(quoted);
     return rc;
 }

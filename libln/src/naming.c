@@ -16,8 +16,8 @@ size_t ln_name_instance(const char* instance, char* out, size_t size)
         unsigned char c = *p;
         if ((c & 0xc0) == 0x80)
             continue; /* a continuation byte: its character has its '_' already */
-        int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')
-                 || c == '_' || c == '-';
+        int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                 c == '_' || c == '-';
         if (n + 1 < size)
             out[n] = ok ? (char)c : '_';
         n++;
@@ -54,8 +54,8 @@ int ln_name_segment_prefix(const char* instance, char* out, size_t size)
     return rc;
 }
 
-int ln_name_segment(const char* instance, uint64_t topic_id, uint64_t generation,
-                    const char* tag, char* out, size_t size)
+int ln_name_segment(const char* instance, uint64_t topic_id, uint64_t generation, const char* tag,
+                    char* out, size_t size)
 {
     int rc = ln_name_segment_prefix(instance, out, size);
     if (rc != LN_OK)
@@ -63,8 +63,7 @@ int ln_name_segment(const char* instance, uint64_t topic_id, uint64_t generation
     size_t len = strlen(out);
     int has_tag = tag != NULL && *tag != '\0';
     return fitted(snprintf(out + len, size - len, "%llu.%llu%s%s", (unsigned long long)topic_id,
-                           (unsigned long long)generation, has_tag ? "." : "",
-                           has_tag ? tag : ""),
+                           (unsigned long long)generation, has_tag ? "." : "", has_tag ? tag : ""),
                   size - len);
 }
 

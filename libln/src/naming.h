@@ -25,8 +25,8 @@ int ln_name_segment_prefix(const char* instance, char* out, size_t size);
 /* "/ln.<sanitized instance>.<topic id>.<generation>", with ".<tag>" after it when tag is
  * neither NULL nor "" (segments a daemon makes for another host's topic).  LN_OK or
  * LN_ETOOBIG. */
-int ln_name_segment(const char* instance, uint64_t topic_id, uint64_t generation,
-                    const char* tag, char* out, size_t size);
+int ln_name_segment(const char* instance, uint64_t topic_id, uint64_t generation, const char* tag,
+                    char* out, size_t size);
 
 /* The instance's runtime directory (not created here): $LN_RUNTIME_DIR (the directory itself),
  * else $XDG_RUNTIME_DIR/ln/<sanitized instance>, else /tmp/ln-<uid>/<sanitized instance>.

@@ -37,8 +37,8 @@ static int remaining_ms(const struct timespec* deadline)
         return -1;
     struct timespec now;
     clock_gettime(CLOCK_MONOTONIC, &now);
-    long long ns = (long long)(deadline->tv_sec - now.tv_sec) * 1000000000LL
-                   + (deadline->tv_nsec - now.tv_nsec);
+    long long ns = (long long)(deadline->tv_sec - now.tv_sec) * 1000000000LL +
+                   (deadline->tv_nsec - now.tv_nsec);
     if (ns <= 0)
         return 0;
     long long ms = (ns + 999999) / 1000000;
@@ -79,8 +79,7 @@ int ln_net_resolve(const char* host, const char* port, struct addrinfo** out)
 static int connect_one(const struct addrinfo* ai, const struct timespec* deadline, int cancel_fd,
                        int* fd)
 {
-    int s = socket(ai->ai_family, ai->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC,
-                   ai->ai_protocol);
+    int s = socket(ai->ai_family, ai->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, ai->ai_protocol);
     if (s < 0)
         return errno;
     int err = 0;
@@ -145,8 +144,7 @@ int ln_net_write_all(int fd, const void* buf, size_t len, const struct timespec*
     return 0;
 }
 
-int ln_net_read_all(int fd, void* buf, size_t len, const struct timespec* deadline,
-                    int cancel_fd)
+int ln_net_read_all(int fd, void* buf, size_t len, const struct timespec* deadline, int cancel_fd)
 {
     char* p = buf;
     while (len > 0) {

@@ -35,8 +35,7 @@ int ln_net_write_all(int fd, const void* buf, size_t len, const struct timespec*
 
 /* Receives exactly len bytes.  Returns 0, LN_NET_EOF if the peer closed the connection
  * first, or an errno value (ETIMEDOUT when the deadline passed). */
-int ln_net_read_all(int fd, void* buf, size_t len, const struct timespec* deadline,
-                    int cancel_fd);
+int ln_net_read_all(int fd, void* buf, size_t len, const struct timespec* deadline, int cancel_fd);
 
 /* Waits until fd has data or the peer closed it.  Returns 0 or an errno value (ETIMEDOUT). */
 int ln_net_wait_readable(int fd, const struct timespec* deadline, int cancel_fd);

@@ -24,8 +24,8 @@ static int name_ok(const char* name, const char* extra)
         return 0;
     for (size_t i = 0; i < len; i++) {
         char c = name[i];
-        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')
-              || c == '_' || strchr(extra, c) != NULL))
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+              c == '_' || strchr(extra, c) != NULL))
             return 0;
     }
     return 1;
@@ -65,10 +65,7 @@ static void block_free(ln_parameter_block* b)
     free(b);
 }
 
-static void block_close_fn(void* b)
-{
-    ln_parameter_block_destroy(b);
-}
+static void block_close_fn(void* b) { ln_parameter_block_destroy(b); }
 
 static int block_reclaim(ln_client* clnt, void* b)
 {
@@ -107,18 +104,21 @@ int ln_parameter_block_create(ln_client* clnt, ln_parameter_block** out, const c
         return ln_set_error(clnt, LN_EINVAL, "ln_parameter_block_create: out must not be NULL");
     *out = NULL;
     if (!name_ok(name, "-"))
-        return ln_set_error(clnt, LN_EINVAL, "parameter block name \"%.80s\" must be 1..%d "
-                            "bytes of A-Z a-z 0-9 _ -", name ? name : "(null)",
-                            LN_PARAMETER_MAX_NAME);
+        return ln_set_error(clnt, LN_EINVAL,
+                            "parameter block name \"%.80s\" must be 1..%d "
+                            "bytes of A-Z a-z 0-9 _ -",
+                            name ? name : "(null)", LN_PARAMETER_MAX_NAME);
     /* The service name: the client's name with what service names do not allow replaced. */
     char service[256];
     int n = snprintf(service, sizeof service, "%s.parameters.%s", ln_client_name(clnt), name);
     if (n < 0 || (size_t)n >= sizeof service)
-        return ln_set_error(clnt, LN_EINVAL, "parameter block \"%s\": the service name "
-                            "\"<client>.parameters.%s\" is over 255 bytes", name, name);
+        return ln_set_error(clnt, LN_EINVAL,
+                            "parameter block \"%s\": the service name "
+                            "\"<client>.parameters.%s\" is over 255 bytes",
+                            name, name);
     for (char* c = service; *c; c++)
-        if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9')
-              || strchr("_.:/-", *c) != NULL))
+        if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') ||
+              strchr("_.:/-", *c) != NULL))
             *c = '_';
     ln_parameter_block* b = ln_param_new(clnt, name, service);
     if (b == NULL)
@@ -160,42 +160,56 @@ int ln_parameter_block_add(ln_parameter_block* b, const ln_parameter_desc* d)
         return ln_set_error(b->clnt, LN_EINVAL, "ln_parameter_block_add: desc is NULL");
     const char* what = b->name;
     if (b->registered)
-        return ln_set_error(b->clnt, LN_EBUSY, "parameter block \"%s\": add parameters before "
-                            "registering", what);
+        return ln_set_error(b->clnt, LN_EBUSY,
+                            "parameter block \"%s\": add parameters before "
+                            "registering",
+                            what);
     if (!name_ok(d->name, ".-"))
-        return ln_set_error(b->clnt, LN_EINVAL, "parameter block \"%s\": parameter name "
-                            "\"%.80s\" must be 1..%d bytes of A-Z a-z 0-9 _ . -", what,
-                            d->name ? d->name : "(null)", LN_PARAMETER_MAX_NAME);
+        return ln_set_error(b->clnt, LN_EINVAL,
+                            "parameter block \"%s\": parameter name "
+                            "\"%.80s\" must be 1..%d bytes of A-Z a-z 0-9 _ . -",
+                            what, d->name ? d->name : "(null)", LN_PARAMETER_MAX_NAME);
     const ln_param_type* t = ln_param_type_find(d->type);
     if (t == NULL)
-        return ln_set_error(b->clnt, LN_EINVAL, "parameter \"%s\": \"%.80s\" is not an md "
-                            "primitive type (char, int8_t .. uint64_t, float, double)", d->name,
-                            d->type ? d->type : "(null)");
+        return ln_set_error(b->clnt, LN_EINVAL,
+                            "parameter \"%s\": \"%.80s\" is not an md "
+                            "primitive type (char, int8_t .. uint64_t, float, double)",
+                            d->name, d->type ? d->type : "(null)");
     uint32_t count = d->count ? d->count : 1;
     if (count > LN_PARAM_MAX_COUNT)
-        return ln_set_error(b->clnt, LN_EINVAL, "parameter \"%s\": %u elements are over the "
-                            "limit of %u", d->name, count, LN_PARAM_MAX_COUNT);
+        return ln_set_error(b->clnt, LN_EINVAL,
+                            "parameter \"%s\": %u elements are over the "
+                            "limit of %u",
+                            d->name, count, LN_PARAM_MAX_COUNT);
     if (d->output == NULL)
         return ln_set_error(b->clnt, LN_EINVAL, "parameter \"%s\": output is NULL", d->name);
     if (d->flags & ~(LN_PARAMETER_MIN | LN_PARAMETER_MAX | LN_PARAMETER_READ_ONLY))
         return ln_set_error(b->clnt, LN_EINVAL, "parameter \"%s\": unknown flags 0x%x", d->name,
                             d->flags);
     if ((d->flags & (LN_PARAMETER_MIN | LN_PARAMETER_MAX)) && t->kind == LN_PK_CHAR)
-        return ln_set_error(b->clnt, LN_EINVAL, "parameter \"%s\": a char parameter has no "
-                            "range", d->name);
-    if (((d->flags & LN_PARAMETER_MIN) && isnan(d->min))
-        || ((d->flags & LN_PARAMETER_MAX) && isnan(d->max))
-        || ((d->flags & LN_PARAMETER_MIN) && (d->flags & LN_PARAMETER_MAX) && d->min > d->max))
-        return ln_set_error(b->clnt, LN_EINVAL, "parameter \"%s\": min %g and max %g are no "
-                            "range", d->name, d->min, d->max);
+        return ln_set_error(b->clnt, LN_EINVAL,
+                            "parameter \"%s\": a char parameter has no "
+                            "range",
+                            d->name);
+    if (((d->flags & LN_PARAMETER_MIN) && isnan(d->min)) ||
+        ((d->flags & LN_PARAMETER_MAX) && isnan(d->max)) ||
+        ((d->flags & LN_PARAMETER_MIN) && (d->flags & LN_PARAMETER_MAX) && d->min > d->max))
+        return ln_set_error(b->clnt, LN_EINVAL,
+                            "parameter \"%s\": min %g and max %g are no "
+                            "range",
+                            d->name, d->min, d->max);
     if (ln_param_find(b, d->name) >= 0)
-        return ln_set_error(b->clnt, LN_EEXIST, "parameter block \"%s\" has a parameter \"%s\" "
-                            "already", what, d->name);
+        return ln_set_error(b->clnt, LN_EEXIST,
+                            "parameter block \"%s\" has a parameter \"%s\" "
+                            "already",
+                            what, d->name);
     size_t size = t->size * count;
     size_t offset = (b->values_size + 7) & ~(size_t)7;
     if (offset + size > LN_PARAM_MAX_BYTES)
-        return ln_set_error(b->clnt, LN_ELIMIT, "parameter block \"%s\": its values are over "
-                            "%zu bytes", what, LN_PARAM_MAX_BYTES);
+        return ln_set_error(b->clnt, LN_ELIMIT,
+                            "parameter block \"%s\": its values are over "
+                            "%zu bytes",
+                            what, LN_PARAM_MAX_BYTES);
     if (b->n == b->cap) {
         uint32_t cap = b->cap ? 2 * b->cap : 8;
         ln_param* params = realloc(b->params, cap * sizeof *params);
@@ -203,8 +217,7 @@ int ln_parameter_block_add(ln_parameter_block* b, const ln_parameter_desc* d)
             b->params = params;
         ln_param_rt* rt = params ? realloc(b->rt, cap * sizeof *rt) : NULL;
         if (rt == NULL)
-            return ln_set_error(b->clnt, LN_ENOMEM, "out of memory for parameter \"%s\"",
-                                d->name);
+            return ln_set_error(b->clnt, LN_ENOMEM, "out of memory for parameter \"%s\"", d->name);
         b->rt = rt;
         b->cap = cap;
     }
@@ -227,8 +240,8 @@ int ln_parameter_block_add(ln_parameter_block* b, const ln_parameter_desc* d)
     p->description = strdup(d->description ? d->description : "");
     if (p->description == NULL)
         return ln_set_error(b->clnt, LN_ENOMEM, "out of memory for parameter \"%s\"", d->name);
-    b->rt[b->n] = (ln_param_rt){.input = d->input, .output = d->output, .size = size,
-                                .offset = offset};
+    b->rt[b->n] =
+        (ln_param_rt){.input = d->input, .output = d->output, .size = size, .offset = offset};
     b->values_size = offset + size;
     return (int)b->n++;
 }
@@ -240,8 +253,10 @@ int ln_parameter_block_set_validator(ln_parameter_block* b, ln_parameter_validat
     if (rc != LN_OK)
         return rc;
     if (b->registered)
-        return ln_set_error(b->clnt, LN_EBUSY, "parameter block \"%s\": set the validator "
-                            "before registering", b->name);
+        return ln_set_error(b->clnt, LN_EBUSY,
+                            "parameter block \"%s\": set the validator "
+                            "before registering",
+                            b->name);
     b->validator = validator;
     b->validator_user = user_data;
     return LN_OK;
@@ -250,8 +265,7 @@ int ln_parameter_block_set_validator(ln_parameter_block* b, ln_parameter_validat
 static int allocate(ln_parameter_block* b)
 {
     size_t size = b->values_size ? b->values_size : 1, n = b->n ? b->n : 1;
-    uint8_t** areas[] = {&b->values, &b->known_in, &b->known_out, &b->report_in,
-                         &b->report_out};
+    uint8_t** areas[] = {&b->values, &b->known_in, &b->known_out, &b->report_in, &b->report_out};
     for (size_t i = 0; i < LN_ARRAY_SIZE(areas); i++)
         if ((*areas[i] = calloc(1, size)) == NULL)
             return LN_ENOMEM;
@@ -337,8 +351,8 @@ void ln_param_publish(ln_parameter_block* b)
         s->overridden[i] = (uint8_t)b->params[i].overridden;
     }
     memcpy(s->values, b->values, b->values_size);
-    uint32_t old = atomic_exchange_explicit(&b->middle, b->back | LN_PARAM_DIRTY,
-                                            memory_order_acq_rel);
+    uint32_t old =
+        atomic_exchange_explicit(&b->middle, b->back | LN_PARAM_DIRTY, memory_order_acq_rel);
     b->back = old & 3u;
 }
 
@@ -370,8 +384,8 @@ int ln_parameter_block_update(ln_parameter_block* b)
             r->changed = 1;
             changed++;
             if (r->input == NULL) /* written only when it changes */
-                memcpy(r->output, r->overridden ? s->values + r->offset
-                                                : b->defaults + r->offset, r->size);
+                memcpy(r->output, r->overridden ? s->values + r->offset : b->defaults + r->offset,
+                       r->size);
         }
         b->rt_any_changed = changed > 0;
         atomic_store_explicit(&b->applied_gen, newest, memory_order_release);
@@ -386,14 +400,13 @@ int ln_parameter_block_update(ln_parameter_block* b)
     atomic_store_explicit(&b->updates, count, memory_order_relaxed);
     if (atomic_load_explicit(&b->report_state, memory_order_relaxed) == LN_REPORT_REQUESTED) {
         uint32_t expected = LN_REPORT_REQUESTED;
-        if (atomic_compare_exchange_strong_explicit(&b->report_state, &expected,
-                                                    LN_REPORT_WRITING, memory_order_acquire,
-                                                    memory_order_relaxed)) {
+        if (atomic_compare_exchange_strong_explicit(&b->report_state, &expected, LN_REPORT_WRITING,
+                                                    memory_order_acquire, memory_order_relaxed)) {
             for (uint32_t i = 0; i < b->n; i++) {
                 const ln_param_rt* r = &b->rt[i];
                 memcpy(b->report_out + r->offset, r->output, r->size);
-                memcpy(b->report_in + r->offset,
-                       r->input ? r->input : b->defaults + r->offset, r->size);
+                memcpy(b->report_in + r->offset, r->input ? r->input : b->defaults + r->offset,
+                       r->size);
             }
             b->report_update = count;
             atomic_store_explicit(&b->report_state, LN_REPORT_DONE, memory_order_release);

@@ -51,8 +51,7 @@ void ln_param_history_add(ln_parameter_block* b, const char* op, const uint8_t* 
 
 void ln_param_history_write(const ln_parameter_block* b, uint64_t since, ln_pbuf* out)
 {
-    uint64_t oldest = b->generation >= LN_PARAM_HISTORY ? b->generation - LN_PARAM_HISTORY + 1
-                                                        : 1;
+    uint64_t oldest = b->generation >= LN_PARAM_HISTORY ? b->generation - LN_PARAM_HISTORY + 1 : 1;
     ln_pbuf_add(out, "{\"generation\": %llu, \"oldest\": %llu, \"changes\": [",
                 (unsigned long long)b->generation, (unsigned long long)oldest);
     int first = 1;
@@ -61,9 +60,9 @@ void ln_param_history_write(const ln_parameter_block* b, uint64_t since, ln_pbuf
         if (c->gen != g)
             continue;
         ln_pbuf_add(out, "%s{\"generation\": %llu, \"time\": %lld.%09lld, \"op\": \"%s\", %s}",
-                    first ? "" : ", ", (unsigned long long)g,
-                    (long long)(c->time_ns / 1000000000), (long long)(c->time_ns % 1000000000),
-                    c->op, c->json ? c->json : "\"parameters\": []");
+                    first ? "" : ", ", (unsigned long long)g, (long long)(c->time_ns / 1000000000),
+                    (long long)(c->time_ns % 1000000000), c->op,
+                    c->json ? c->json : "\"parameters\": []");
         first = 0;
     }
     ln_pbuf_add(out, "]}");

@@ -23,8 +23,8 @@
 #include "param_json.h"
 
 #define LN_PARAM_MAGIC 0x4c4e5042u
-#define LN_PARAM_DIRTY 0x4u          /* in `middle`: a newer copy waits for the loop */
-#define LN_PARAM_MAX_COUNT (1u << 20) /* elements of one parameter */
+#define LN_PARAM_DIRTY 0x4u                   /* in `middle`: a newer copy waits for the loop */
+#define LN_PARAM_MAX_COUNT (1u << 20)         /* elements of one parameter */
 #define LN_PARAM_MAX_BYTES ((size_t)16 << 20) /* value bytes of one block */
 #define LN_PARAM_REASON_MAX 512
 #define LN_PARAM_GROUP "ln.parameters" /* the service group and thread pool of every block */
@@ -98,13 +98,13 @@ struct ln_parameter_block {
 
     /* service side */
     pthread_mutex_t lock;
-    uint64_t generation;  /* of the last change */
-    uint8_t* values;      /* the overrides (those of params[i].overridden) */
-    uint8_t* defaults;    /* the value of a parameter without input, taken at add() */
-    uint8_t* known_in;    /* inputs and outputs as of the last report (or registration) */
+    uint64_t generation; /* of the last change */
+    uint8_t* values;     /* the overrides (those of params[i].overridden) */
+    uint8_t* defaults;   /* the value of a parameter without input, taken at add() */
+    uint8_t* known_in;   /* inputs and outputs as of the last report (or registration) */
     uint8_t* known_out;
-    uint64_t known_update; /* update() count of that report, 0: registration */
-    char* config_errors;   /* JSON array of texts: refused initial overrides */
+    uint64_t known_update;                     /* update() count of that report, 0: registration */
+    char* config_errors;                       /* JSON array of texts: refused initial overrides */
     ln_param_change history[LN_PARAM_HISTORY]; /* ring: change gen lives at gen % size */
     uint32_t back;
 
@@ -176,8 +176,8 @@ void ln_param_history_free(ln_parameter_block* blk);
 int ln_param_handle(ln_client* clnt, ln_service_request* call, void* blk);
 /* One request as the handler carries it out (takes the lock): 0 with the result's JSON in
  * out, or -1 with err set. */
-int ln_param_request(ln_parameter_block* blk, const char* op, const char* name,
-                     const char* value, ln_pbuf* out, ln_param_err* err);
+int ln_param_request(ln_parameter_block* blk, const char* op, const char* name, const char* value,
+                     ln_pbuf* out, ln_param_err* err);
 /* Takes the block's initial overrides from $LN_PARAMETERS (before it is registered). */
 void ln_param_configure(ln_parameter_block* blk);
 

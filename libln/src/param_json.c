@@ -90,12 +90,26 @@ int ln_pj_string(const char** pos, char* out, size_t cap, size_t* len)
         }
         c = (unsigned char)*++p;
         switch (c) {
-        case '"': case '\\': case '/': put(out, cap, &n, (char)c); break;
-        case 'b': put(out, cap, &n, '\b'); break;
-        case 'f': put(out, cap, &n, '\f'); break;
-        case 'n': put(out, cap, &n, '\n'); break;
-        case 'r': put(out, cap, &n, '\r'); break;
-        case 't': put(out, cap, &n, '\t'); break;
+        case '"':
+        case '\\':
+        case '/':
+            put(out, cap, &n, (char)c);
+            break;
+        case 'b':
+            put(out, cap, &n, '\b');
+            break;
+        case 'f':
+            put(out, cap, &n, '\f');
+            break;
+        case 'n':
+            put(out, cap, &n, '\n');
+            break;
+        case 'r':
+            put(out, cap, &n, '\r');
+            break;
+        case 't':
+            put(out, cap, &n, '\t');
+            break;
         case 'u': {
             unsigned cp, low;
             if (hex4(p + 1, &cp) != 0) {
@@ -103,8 +117,8 @@ int ln_pj_string(const char** pos, char* out, size_t cap, size_t* len)
                 return -1;
             }
             p += 4;
-            if (cp >= 0xD800 && cp < 0xDC00 && p[1] == '\\' && p[2] == 'u'
-                && hex4(p + 3, &low) == 0 && low >= 0xDC00 && low < 0xE000) {
+            if (cp >= 0xD800 && cp < 0xDC00 && p[1] == '\\' && p[2] == 'u' &&
+                hex4(p + 3, &low) == 0 && low >= 0xDC00 && low < 0xE000) {
                 cp = 0x10000 + ((cp - 0xD800) << 10) + (low - 0xDC00);
                 p += 6;
             } else if (cp >= 0xD800 && cp < 0xE000) {
@@ -214,10 +228,7 @@ static int next(const char** pos, int* first, char close)
     return 1;
 }
 
-int ln_pj_next_element(const char** pos, int* first)
-{
-    return next(pos, first, ']');
-}
+int ln_pj_next_element(const char** pos, int* first) { return next(pos, first, ']'); }
 
 int ln_pj_next_member(const char** pos, int* first, char* key, size_t cap)
 {
@@ -258,7 +269,8 @@ static int skip(const char** pos, int depth)
             if (skip(pos, depth + 1) != 0)
                 return -1;
         return rc;
-    case 't': case 'f':
+    case 't':
+    case 'f':
         return ln_pj_bool(pos, &b);
     case 'n':
         if (strncmp(*pos, "null", 4) != 0)
@@ -270,17 +282,11 @@ static int skip(const char** pos, int depth)
     }
 }
 
-int ln_pj_skip(const char** pos)
-{
-    return skip(pos, 0);
-}
+int ln_pj_skip(const char** pos) { return skip(pos, 0); }
 
 /* ---- writing ---- */
 
-void ln_pbuf_init(ln_pbuf* b)
-{
-    memset(b, 0, sizeof *b);
-}
+void ln_pbuf_init(ln_pbuf* b) { memset(b, 0, sizeof *b); }
 
 void ln_pbuf_free(ln_pbuf* b)
 {
@@ -342,8 +348,8 @@ static size_t utf8_len(const unsigned char* s, size_t left)
     unsigned cp = n == 2 ? (s[0] & 0x1Fu) : n == 3 ? (s[0] & 0x0Fu) : (s[0] & 0x07u);
     for (size_t i = 1; i < n; i++)
         cp = (cp << 6) | (s[i] & 0x3Fu);
-    if ((n == 3 && (cp < 0x800 || (cp >= 0xD800 && cp < 0xE000)))
-        || (n == 4 && (cp < 0x10000 || cp > 0x10FFFF)))
+    if ((n == 3 && (cp < 0x800 || (cp >= 0xD800 && cp < 0xE000))) ||
+        (n == 4 && (cp < 0x10000 || cp > 0x10FFFF)))
         return 0;
     return n;
 }

@@ -28,11 +28,10 @@ static void write_param(ln_pbuf* o, const ln_parameter_block* b, uint32_t i, uin
     const ln_param* p = &b->params[i];
     ln_pbuf_add(o, "{\"name\": ");
     ln_pbuf_quote(o, p->name, strlen(p->name));
-    ln_pbuf_add(o, ", \"type\": \"%s\", \"count\": %u, \"description\": ", p->type->name,
-                p->count);
+    ln_pbuf_add(o, ", \"type\": \"%s\", \"count\": %u, \"description\": ", p->type->name, p->count);
     ln_pbuf_quote(o, p->description, strlen(p->description));
-    ln_pbuf_add(o, ", \"read_only\": %s, \"min\": ",
-                p->flags & LN_PARAMETER_READ_ONLY ? "true" : "false");
+    ln_pbuf_add(
+        o, ", \"read_only\": %s, \"min\": ", p->flags & LN_PARAMETER_READ_ONLY ? "true" : "false");
     if (p->flags & LN_PARAMETER_MIN)
         ln_pbuf_double(o, p->min, 0);
     else
@@ -66,7 +65,8 @@ static void write_block(ln_pbuf* o, const ln_parameter_block* b, int only, int l
     ln_pbuf_quote(o, client ? client : "", client ? strlen(client) : 0);
     ln_pbuf_add(o, ", \"service\": ");
     ln_pbuf_quote(o, b->service, strlen(b->service));
-    ln_pbuf_add(o, ", \"generation\": %llu, \"applied_generation\": %llu, \"updates\": %llu, "
+    ln_pbuf_add(o,
+                ", \"generation\": %llu, \"applied_generation\": %llu, \"updates\": %llu, "
                 "\"live\": %s, \"values_update\": %llu, \"config_errors\": %s, "
                 "\"parameters\": [",
                 (unsigned long long)b->generation, (unsigned long long)applied,
@@ -145,8 +145,7 @@ static int do_set(ln_parameter_block* b, const char* name, const char* value, ln
     if (name[0] != '\0') {
         int i = ln_param_find(b, name);
         if (i < 0) {
-            ln_param_fail(err, "not_found", "block \"%s\" has no parameter \"%s\"", b->name,
-                          name);
+            ln_param_fail(err, "not_found", "block \"%s\" has no parameter \"%s\"", b->name, name);
             goto out;
         }
         if (ln_param_check(b, (uint32_t)i, &cursor, staged + b->params[i].offset, err) != 0)
@@ -156,7 +155,8 @@ static int do_set(ln_parameter_block* b, const char* name, const char* value, ln
         int first = 1, more;
         char key[LN_PARAMETER_MAX_NAME + 2];
         if (ln_pj_open(&cursor, '{') != 0) {
-            ln_param_fail(err, "bad_request", "set without a name needs a JSON object "
+            ln_param_fail(err, "bad_request",
+                          "set without a name needs a JSON object "
                           "{\"parameter\": value, ...}");
             goto out;
         }
@@ -171,8 +171,7 @@ static int do_set(ln_parameter_block* b, const char* name, const char* value, ln
                 ln_param_fail(err, "bad_request", "parameter \"%s\" is given twice", key);
                 goto out;
             }
-            if (ln_param_check(b, (uint32_t)i, &cursor, staged + b->params[i].offset, err)
-                != 0)
+            if (ln_param_check(b, (uint32_t)i, &cursor, staged + b->params[i].offset, err) != 0)
                 goto out;
             which[i] = 1;
         }
@@ -204,14 +203,14 @@ out:
 
 /* Marks in chosen[] the parameters a reset names: `name`, else the JSON array of names in
  * `value`, else every one.  0 or -1. */
-static int reset_names(ln_parameter_block* b, const char* name, const char* value,
-                       uint8_t* chosen, ln_param_err* err)
+static int reset_names(ln_parameter_block* b, const char* name, const char* value, uint8_t* chosen,
+                       ln_param_err* err)
 {
     if (name[0] != '\0') {
         int i = ln_param_find(b, name);
         if (i < 0)
-            return ln_param_fail(err, "not_found", "block \"%s\" has no parameter \"%s\"",
-                                 b->name, name);
+            return ln_param_fail(err, "not_found", "block \"%s\" has no parameter \"%s\"", b->name,
+                                 name);
         chosen[i] = 1;
         return 0;
     }
@@ -223,15 +222,16 @@ static int reset_names(ln_parameter_block* b, const char* name, const char* valu
     int first = 1, more;
     char key[LN_PARAMETER_MAX_NAME + 2];
     if (ln_pj_open(&cursor, '[') != 0)
-        return ln_param_fail(err, "bad_request", "reset takes no value or a JSON list of "
+        return ln_param_fail(err, "bad_request",
+                             "reset takes no value or a JSON list of "
                              "parameter names");
     while ((more = ln_pj_next_element(&cursor, &first)) == 1) {
         if (ln_pj_string(&cursor, key, sizeof key, NULL) != 0)
             return ln_param_fail(err, "bad_request", "reset: a list of names (strings)");
         int i = ln_param_find(b, key);
         if (i < 0)
-            return ln_param_fail(err, "not_found", "block \"%s\" has no parameter \"%s\"",
-                                 b->name, key);
+            return ln_param_fail(err, "not_found", "block \"%s\" has no parameter \"%s\"", b->name,
+                                 key);
         chosen[i] = 1;
     }
     if (more != 0 || *ln_pj_ws(cursor) != '\0')
@@ -309,8 +309,8 @@ static int dispatch(ln_parameter_block* b, const char* op, const char* name, con
         int only = -1, live = 0;
         double wait = 0;
         if (name[0] != '\0' && (only = ln_param_find(b, name)) < 0)
-            return ln_param_fail(err, "not_found", "block \"%s\" has no parameter \"%s\"",
-                                 b->name, name);
+            return ln_param_fail(err, "not_found", "block \"%s\" has no parameter \"%s\"", b->name,
+                                 name);
         if (op[0] == 'g') {
             wait = DEFAULT_WAIT;
             if (option("get", value, "wait", &wait, MAX_WAIT, err) != 0)
@@ -335,8 +335,8 @@ static int dispatch(ln_parameter_block* b, const char* op, const char* name, con
                          "unknown op \"%.40s\" (list, get, set, reset, changes)", op);
 }
 
-int ln_param_request(ln_parameter_block* b, const char* op, const char* name,
-                     const char* value, ln_pbuf* out, ln_param_err* err)
+int ln_param_request(ln_parameter_block* b, const char* op, const char* name, const char* value,
+                     ln_pbuf* out, ln_param_err* err)
 {
     pthread_mutex_lock(&b->lock);
     int rc = dispatch(b, op, name, value, out, err);
@@ -454,8 +454,7 @@ void ln_param_configure(ln_parameter_block* b)
                 continue;
             }
             const char* start = cursor;
-            if (ln_param_check(b, (uint32_t)i, &cursor, staged + b->params[i].offset, &err)
-                != 0) {
+            if (ln_param_check(b, (uint32_t)i, &cursor, staged + b->params[i].offset, &err) != 0) {
                 snprintf(text, sizeof text, "refused: %s", err.reason);
                 config_error(b, &errors, text);
                 cursor = start;

@@ -22,8 +22,8 @@ static const ln_param_type types[] = {
 static const struct {
     const char* alias;
     const char* name;
-} aliases[] = {{"short", "int16_t"}, {"int", "int32_t"}, {"float32_t", "float"},
-               {"float64_t", "double"}};
+} aliases[] = {
+    {"short", "int16_t"}, {"int", "int32_t"}, {"float32_t", "float"}, {"float64_t", "double"}};
 
 const ln_param_type* ln_param_type_find(const char* name)
 {
@@ -72,10 +72,26 @@ static void store_int(void* dst, const ln_param_type* t, int64_t s, uint64_t u)
 {
     int neg = t->kind == LN_PK_INT;
     switch (t->size) {
-    case 1: { uint8_t v = neg ? (uint8_t)(int8_t)s : (uint8_t)u; memcpy(dst, &v, 1); break; }
-    case 2: { uint16_t v = neg ? (uint16_t)(int16_t)s : (uint16_t)u; memcpy(dst, &v, 2); break; }
-    case 4: { uint32_t v = neg ? (uint32_t)(int32_t)s : (uint32_t)u; memcpy(dst, &v, 4); break; }
-    default: { uint64_t v = neg ? (uint64_t)s : u; memcpy(dst, &v, 8); break; }
+    case 1: {
+        uint8_t v = neg ? (uint8_t)(int8_t)s : (uint8_t)u;
+        memcpy(dst, &v, 1);
+        break;
+    }
+    case 2: {
+        uint16_t v = neg ? (uint16_t)(int16_t)s : (uint16_t)u;
+        memcpy(dst, &v, 2);
+        break;
+    }
+    case 4: {
+        uint32_t v = neg ? (uint32_t)(int32_t)s : (uint32_t)u;
+        memcpy(dst, &v, 4);
+        break;
+    }
+    default: {
+        uint64_t v = neg ? (uint64_t)s : u;
+        memcpy(dst, &v, 8);
+        break;
+    }
     }
 }
 
@@ -99,10 +115,27 @@ static double element_double(const ln_param_type* t, const void* src)
     }
     int64_t v = 0;
     switch (t->size) {
-    case 1: { int8_t x; memcpy(&x, src, 1); v = x; break; }
-    case 2: { int16_t x; memcpy(&x, src, 2); v = x; break; }
-    case 4: { int32_t x; memcpy(&x, src, 4); v = x; break; }
-    default: memcpy(&v, src, 8); break;
+    case 1: {
+        int8_t x;
+        memcpy(&x, src, 1);
+        v = x;
+        break;
+    }
+    case 2: {
+        int16_t x;
+        memcpy(&x, src, 2);
+        v = x;
+        break;
+    }
+    case 4: {
+        int32_t x;
+        memcpy(&x, src, 4);
+        v = x;
+        break;
+    }
+    default:
+        memcpy(&v, src, 8);
+        break;
     }
     return (double)v;
 }
@@ -126,8 +159,10 @@ static int parse_number(const ln_param* p, const char** cursor, void* dst, const
         else if (strcmp(word, "-Infinity") == 0)
             special = -INFINITY;
         if (special == 0 || t->kind != LN_PK_FLOAT)
-            return ln_param_fail(err, "type", "%s: expected a number (%s), not the string "
-                                 "\"%.40s\"", where, t->name, word);
+            return ln_param_fail(err, "type",
+                                 "%s: expected a number (%s), not the string "
+                                 "\"%.40s\"",
+                                 where, t->name, word);
         if (t->size == 4) {
             float f = (float)special;
             memcpy(dst, &f, 4);
@@ -141,16 +176,18 @@ static int parse_number(const ln_param* p, const char** cursor, void* dst, const
         if (ln_pj_bool(cursor, &b) != 0)
             return ln_param_fail(err, "bad_request", "%s: malformed value", where);
         if (t->kind == LN_PK_FLOAT)
-            return ln_param_fail(err, "type", "%s: expected a number (%s), not %s", where,
-                                 t->name, b ? "true" : "false");
+            return ln_param_fail(err, "type", "%s: expected a number (%s), not %s", where, t->name,
+                                 b ? "true" : "false");
         store_int(dst, t, b, (uint64_t)b);
         return 0;
     }
     const char* start;
     size_t len;
     if (ln_pj_number(cursor, &start, &len) != 0) {
-        const char* what = c == '[' ? "a list" : c == '{' ? "an object" : c == 'n' ? "null"
-                                                                                  : "that";
+        const char* what = c == '['   ? "a list"
+                           : c == '{' ? "an object"
+                           : c == 'n' ? "null"
+                                      : "that";
         if (c != '[' && c != '{' && c != 'n')
             return ln_param_fail(err, "bad_request", "%s: malformed value", where);
         return ln_param_fail(err, "type", "%s: expected a number (%s), not %s", where, t->name,
@@ -167,8 +204,7 @@ static int parse_number(const ln_param* p, const char** cursor, void* dst, const
         double d = strtod(text, NULL);
         if (t->size == 4) {
             if (isinf((float)d) || isinf(d))
-                return ln_param_fail(err, "range", "%s: %s is out of range for float", where,
-                                     text);
+                return ln_param_fail(err, "range", "%s: %s is out of range for float", where, text);
             float f = (float)d;
             memcpy(dst, &f, 4);
         } else {
@@ -210,8 +246,8 @@ static int parse_number(const ln_param* p, const char** cursor, void* dst, const
     }
     return 0;
 out_of_range:
-    return ln_param_fail(err, "range", "%s: %s is out of range for %s (%.0Lf..%.0Lf)", where,
-                         text, t->name, lo, hi);
+    return ln_param_fail(err, "range", "%s: %s is out of range for %s (%.0Lf..%.0Lf)", where, text,
+                         t->name, lo, hi);
 }
 
 /* v as the shortest decimal that reads back as it (as JSON writes it, without quotes). */
@@ -262,9 +298,9 @@ static int check_range(const ln_param* p, const void* value, ln_param_err* err)
             else
                 snprintf(text, sizeof text, "%.0f", v);
             shortest(low ? p->min : p->max, 0, bound, sizeof bound);
-            return ln_param_fail(err, "range", "%s: %s is %s the %s %s (allowed: %s)", where,
-                                 text, low ? "below" : "above", low ? "minimum" : "maximum",
-                                 bound, range);
+            return ln_param_fail(err, "range", "%s: %s is %s the %s %s (allowed: %s)", where, text,
+                                 low ? "below" : "above", low ? "minimum" : "maximum", bound,
+                                 range);
         }
     }
     return 0;
@@ -290,8 +326,10 @@ int ln_param_parse(const ln_param* p, const char** cursor, void* dst, ln_param_e
         if (rc != 0)
             return ln_param_fail(err, "bad_request", "%s: malformed string", p->name);
         if (len > p->count)
-            return ln_param_fail(err, "size", "%s: a string of %zu bytes does not fit in "
-                                 "char[%u]", p->name, len, p->count);
+            return ln_param_fail(err, "size",
+                                 "%s: a string of %zu bytes does not fit in "
+                                 "char[%u]",
+                                 p->name, len, p->count);
         return 0;
     }
     if (p->count == 1) {
@@ -300,8 +338,8 @@ int ln_param_parse(const ln_param* p, const char** cursor, void* dst, ln_param_e
         return check_range(p, dst, err);
     }
     if (c != '[')
-        return ln_param_fail(err, "type", "%s: expected a list of %u values (%s[%u])",
-                             p->name, p->count, p->type->name, p->count);
+        return ln_param_fail(err, "type", "%s: expected a list of %u values (%s[%u])", p->name,
+                             p->count, p->type->name, p->count);
     ln_pj_open(cursor, '[');
     int first = 1, rc;
     uint32_t n = 0;
@@ -315,13 +353,12 @@ int ln_param_parse(const ln_param* p, const char** cursor, void* dst, ln_param_e
             } while ((rc = ln_pj_next_element(cursor, &first)) == 1);
             if (rc != 0)
                 return ln_param_fail(err, "bad_request", "%s: malformed list", p->name);
-            return ln_param_fail(err, "size", "%s: %u values do not fit in %s[%u]", p->name,
-                                 more, p->type->name, p->count);
+            return ln_param_fail(err, "size", "%s: %u values do not fit in %s[%u]", p->name, more,
+                                 p->type->name, p->count);
         }
         char where[LN_PARAMETER_MAX_NAME + 16];
         snprintf(where, sizeof where, "%s[%u]", p->name, n);
-        if (parse_number(p, cursor, (uint8_t*)dst + (size_t)n * p->type->size, where, err)
-            != 0)
+        if (parse_number(p, cursor, (uint8_t*)dst + (size_t)n * p->type->size, where, err) != 0)
             return -1;
         n++;
     }
@@ -344,8 +381,7 @@ int ln_param_check(ln_parameter_block* blk, uint32_t index, const char** cursor,
     if (blk->validator != NULL) {
         char reason[LN_PARAM_REASON_MAX] = "";
         if (blk->validator(blk, (int)index, p->name, dst, reason, sizeof reason,
-                           blk->validator_user)
-            != 0) {
+                           blk->validator_user) != 0) {
             reason[sizeof reason - 1] = '\0';
             return ln_param_fail(err, "refused", "%s: %s", p->name,
                                  reason[0] ? reason : "refused by the program");
@@ -367,10 +403,27 @@ static void write_element(ln_pbuf* b, const ln_param_type* t, const void* src)
     } else {
         int64_t v = 0;
         switch (t->size) {
-        case 1: { int8_t x; memcpy(&x, src, 1); v = x; break; }
-        case 2: { int16_t x; memcpy(&x, src, 2); v = x; break; }
-        case 4: { int32_t x; memcpy(&x, src, 4); v = x; break; }
-        default: memcpy(&v, src, 8); break;
+        case 1: {
+            int8_t x;
+            memcpy(&x, src, 1);
+            v = x;
+            break;
+        }
+        case 2: {
+            int16_t x;
+            memcpy(&x, src, 2);
+            v = x;
+            break;
+        }
+        case 4: {
+            int32_t x;
+            memcpy(&x, src, 4);
+            v = x;
+            break;
+        }
+        default:
+            memcpy(&v, src, 8);
+            break;
         }
         ln_pbuf_add(b, "%" PRId64, v);
     }

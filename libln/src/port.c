@@ -73,10 +73,7 @@ static int on_client(ln_port_common* p, int rc)
 }
 
 /* Move to the newest generation (publishers: they only ever write the newest ring). */
-static int follow(ln_port_common* p)
-{
-    return on_client(p, ln_ring_follow(&p->ring));
-}
+static int follow(ln_port_common* p) { return on_client(p, ln_ring_follow(&p->ring)); }
 
 /* NaN is the one timeout that means nothing. */
 static int check_timeout(ln_client* clnt, double timeout, const char* what)
@@ -109,13 +106,17 @@ static int check_flags(ln_client* clnt, uint16_t msg, uint32_t flags)
 {
     const uint32_t transports = LN_SUBSCRIBE_UDP | LN_SUBSCRIBE_TCP;
     if (msg == LN_MSG_PUBLISH && (flags & transports))
-        return ln_set_error(clnt, LN_EINVAL, "ln_publish: flags 0x%x hold LN_SUBSCRIBE_* bits, "
-                            "which only subscribers take", flags);
+        return ln_set_error(clnt, LN_EINVAL,
+                            "ln_publish: flags 0x%x hold LN_SUBSCRIBE_* bits, "
+                            "which only subscribers take",
+                            flags);
     if (msg == LN_MSG_SUBSCRIBE && (flags & LN_PUBLISH_WAIT_FOR_SUBSCRIBERS))
-        return ln_set_error(clnt, LN_EINVAL, "ln_subscribe: LN_PUBLISH_WAIT_FOR_SUBSCRIBERS is a "
+        return ln_set_error(clnt, LN_EINVAL,
+                            "ln_subscribe: LN_PUBLISH_WAIT_FOR_SUBSCRIBERS is a "
                             "publisher flag");
     if ((flags & transports) == transports)
-        return ln_set_error(clnt, LN_EINVAL, "ln_subscribe: LN_SUBSCRIBE_UDP and "
+        return ln_set_error(clnt, LN_EINVAL,
+                            "ln_subscribe: LN_SUBSCRIBE_UDP and "
                             "LN_SUBSCRIBE_TCP together; choose one transport");
     return LN_OK;
 }
@@ -134,8 +135,10 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
     if (rc != LN_OK)
         return ln_set_error(NULL, rc, "invalid client handle");
     if (!topic || !md_name || size == 0 || size > UINT32_MAX)
-        return ln_set_error(clnt, LN_EINVAL, "%s: topic and md name are required, size must be "
-                            "1..4 GiB", msg == LN_MSG_PUBLISH ? "ln_publish" : "ln_subscribe");
+        return ln_set_error(clnt, LN_EINVAL,
+                            "%s: topic and md name are required, size must be "
+                            "1..4 GiB",
+                            msg == LN_MSG_PUBLISH ? "ln_publish" : "ln_subscribe");
     if (strlen(topic) >= sizeof(p->topic) || strlen(md_name) >= sizeof(p->md_name))
         return ln_set_error(clnt, LN_EINVAL, "topic or md name longer than %zu bytes",
                             sizeof(p->topic) - 1);
@@ -147,14 +150,20 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
     char segment[LN_RING_NAME_MAX];
     ln_wbuf_init(&body);
     if (msg == LN_MSG_PUBLISH) {
-        ln_msg_publish m = {.topic = ln_strv_of(topic), .md_name = ln_strv_of(md_name),
-                            .layout_hash = hash, .message_size = (uint32_t)size,
-                            .buffers = o->buffers, .flags = o->flags};
+        ln_msg_publish m = {.topic = ln_strv_of(topic),
+                            .md_name = ln_strv_of(md_name),
+                            .layout_hash = hash,
+                            .message_size = (uint32_t)size,
+                            .buffers = o->buffers,
+                            .flags = o->flags};
         ln_msg_publish_write_after_id(&body, &m);
     } else {
-        ln_msg_subscribe m = {.topic = ln_strv_of(topic), .md_name = ln_strv_of(md_name),
-                              .layout_hash = hash, .message_size = (uint32_t)size,
-                              .buffers = o->buffers, .flags = o->flags};
+        ln_msg_subscribe m = {.topic = ln_strv_of(topic),
+                              .md_name = ln_strv_of(md_name),
+                              .layout_hash = hash,
+                              .message_size = (uint32_t)size,
+                              .buffers = o->buffers,
+                              .flags = o->flags};
         ln_msg_subscribe_write_after_id(&body, &m);
     }
     rc = ln_client_request(clnt, msg, &body, &type, &reply);
@@ -163,8 +172,8 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
         return rc;
     *gen = ln_client_request_gen();
     ln_msg_port_ok ok;
-    if (type != LN_MSG_PORT_OK || ln_msg_port_ok_read_after_id(&reply, &ok) != LN_OK
-        || ln_strv_copy(ok.segment, segment, sizeof segment) != LN_OK)
+    if (type != LN_MSG_PORT_OK || ln_msg_port_ok_read_after_id(&reply, &ok) != LN_OK ||
+        ln_strv_copy(ok.segment, segment, sizeof segment) != LN_OK)
         return ln_set_error(clnt, LN_EPROTOCOL, "unexpected answer %u to a port request", type);
     p->port_id = ok.port_id;
     *reader_index = ok.reader_index;
@@ -194,15 +203,9 @@ static int open_port(ln_port_common* p, ln_client* clnt, uint16_t msg, const cha
 
 static int close_port(ln_port_common* p);
 
-static void close_outport(void* port)
-{
-    ln_unpublish(port);
-}
+static void close_outport(void* port) { ln_unpublish(port); }
 
-static void close_inport(void* port)
-{
-    ln_unsubscribe(port);
-}
+static void close_inport(void* port) { ln_unsubscribe(port); }
 
 /* After a reconnect (ports and request locks held): tell the new manager about the port and
  * the ring and reader slot it uses, so that it adopts them instead of making new ones.  A
@@ -216,10 +219,14 @@ static int reclaim_port(ln_client* clnt, void* port)
     ln_rbuf reply;
     uint16_t type = 0;
     ln_wbuf_init(&body);
-    ln_msg_reclaim_port m = {.kind = p->kind, .topic = ln_strv_of(p->topic),
-                             .md_name = ln_strv_of(p->md_name), .layout_hash = p->layout_hash,
-                             .message_size = (uint32_t)p->size, .buffers = p->buffers,
-                             .flags = p->flags, .segment = ln_strv_of(p->segment),
+    ln_msg_reclaim_port m = {.kind = p->kind,
+                             .topic = ln_strv_of(p->topic),
+                             .md_name = ln_strv_of(p->md_name),
+                             .layout_hash = p->layout_hash,
+                             .message_size = (uint32_t)p->size,
+                             .buffers = p->buffers,
+                             .flags = p->flags,
+                             .segment = ln_strv_of(p->segment),
                              .reader_index = p->reader};
     ln_msg_reclaim_port_write_after_id(&body, &m);
     int rc = ln_client_request_locked(clnt, LN_MSG_RECLAIM_PORT, &body, &type, &reply);
@@ -227,17 +234,19 @@ static int reclaim_port(ln_client* clnt, void* port)
     const char* what = p->kind == LN_PROTO_RECLAIM_PUBLISHER ? "publisher" : "subscriber";
     p->registered = 0;
     if (rc != LN_OK)
-        return ln_set_error(clnt, rc, "topic '%s': the manager refused to take back this "
+        return ln_set_error(clnt, rc,
+                            "topic '%s': the manager refused to take back this "
                             "client's %s on %s (it keeps working on that ring, unknown to the "
-                            "manager): %s", p->topic, what, p->segment, ln_last_error());
+                            "manager): %s",
+                            p->topic, what, p->segment, ln_last_error());
     char segment[LN_RING_NAME_MAX];
     ln_msg_port_ok ok = {0};
-    if (ln_msg_port_ok_read_after_id(&reply, &ok) != LN_OK
-        || ln_strv_copy(ok.segment, segment, sizeof segment) != LN_OK
-        || ok.reader_index != p->reader)
-        return ln_set_error(clnt, LN_EPROTOCOL, "topic '%s': the manager took back the %s with "
-                            "reader slot %u instead of %u", p->topic, what, ok.reader_index,
-                            p->reader);
+    if (ln_msg_port_ok_read_after_id(&reply, &ok) != LN_OK ||
+        ln_strv_copy(ok.segment, segment, sizeof segment) != LN_OK || ok.reader_index != p->reader)
+        return ln_set_error(clnt, LN_EPROTOCOL,
+                            "topic '%s': the manager took back the %s with "
+                            "reader slot %u instead of %u",
+                            p->topic, what, ok.reader_index, p->reader);
     p->port_id = ok.port_id;
     p->registered = 1;
     memcpy(p->segment, segment, sizeof p->segment);
@@ -294,9 +303,8 @@ int ln_publish(ln_client* clnt, ln_outport** out, const char* topic, const char*
     uint32_t reader = 0;
     uint64_t gen = 0;
     int rc;
-    ln_outport* p = (ln_outport*)new_port(clnt, sizeof(ln_outport), LN_MSG_PUBLISH, topic,
-                                          md_name, layout_hash, message_size, opts, &reader,
-                                          &gen, &rc);
+    ln_outport* p = (ln_outport*)new_port(clnt, sizeof(ln_outport), LN_MSG_PUBLISH, topic, md_name,
+                                          layout_hash, message_size, opts, &reader, &gen, &rc);
     if (!p)
         return rc;
     p->flags = opts ? opts->flags : 0;
@@ -314,9 +322,8 @@ int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char
     uint32_t reader = 0;
     uint64_t gen = 0;
     int rc;
-    ln_inport* p = (ln_inport*)new_port(clnt, sizeof(ln_inport), LN_MSG_SUBSCRIBE, topic,
-                                        md_name, layout_hash, message_size, opts, &reader,
-                                        &gen, &rc);
+    ln_inport* p = (ln_inport*)new_port(clnt, sizeof(ln_inport), LN_MSG_SUBSCRIBE, topic, md_name,
+                                        layout_hash, message_size, opts, &reader, &gen, &rc);
     if (!p)
         return rc;
     p->cur.buffers = opts && opts->buffers > 1 ? opts->buffers : 1;
@@ -375,8 +382,8 @@ static int begin_write(ln_outport* p, ln_deadline* d, ln_ring_slot** slot)
         if (rc != LN_OK)
             return timeout_code(rc, d);
         int retired = atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire);
-        if (!retired && (!(p->flags & LN_PUBLISH_WAIT_FOR_SUBSCRIBERS) ||
-                         ln_ring_has_space(&p->c.ring))) {
+        if (!retired &&
+            (!(p->flags & LN_PUBLISH_WAIT_FOR_SUBSCRIBERS) || ln_ring_has_space(&p->c.ring))) {
             *slot = ln_ring_begin(&p->c.ring);
             return LN_OK;
         }
@@ -393,8 +400,10 @@ int ln_write(ln_outport* p, const void* data, size_t size, double timeout)
     if (rc != LN_OK)
         return rc;
     if (size != p->c.size || !data)
-        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_write on '%s': %zu bytes given, messages "
-                            "are %llu bytes", p->c.topic, size, (unsigned long long)p->c.size);
+        return ln_set_error(p->c.clnt, LN_EINVAL,
+                            "ln_write on '%s': %zu bytes given, messages "
+                            "are %llu bytes",
+                            p->c.topic, size, (unsigned long long)p->c.size);
     if (p->loan)
         return ln_set_error(p->c.clnt, LN_EBUSY, "ln_write on '%s': a loan is outstanding",
                             p->c.topic);
@@ -437,8 +446,10 @@ static int check_loan(ln_outport* p, const char* what)
     if (!p->loan)
         return ln_set_error(p->c.clnt, LN_EINVAL, "%s on '%s': no loan", what, p->c.topic);
     if (!pthread_equal(p->loan_thread, pthread_self()))
-        return ln_set_error(p->c.clnt, LN_EBUSY, "%s on '%s': the loan belongs to another "
-                            "thread; commit or abort it there", what, p->c.topic);
+        return ln_set_error(p->c.clnt, LN_EBUSY,
+                            "%s on '%s': the loan belongs to another "
+                            "thread; commit or abort it there",
+                            what, p->c.topic);
     return LN_OK;
 }
 
@@ -501,17 +512,21 @@ int ln_read(ln_inport* p, void* data, size_t size, double timeout, ln_sample_inf
     if (rc != LN_OK)
         return rc;
     if (size != p->c.size || !data)
-        return ln_set_error(p->c.clnt, LN_EINVAL, "ln_read on '%s': buffer of %zu bytes, messages "
-                            "are %llu bytes", p->c.topic, size, (unsigned long long)p->c.size);
+        return ln_set_error(p->c.clnt, LN_EINVAL,
+                            "ln_read on '%s': buffer of %zu bytes, messages "
+                            "are %llu bytes",
+                            p->c.topic, size, (unsigned long long)p->c.size);
     if (p->borrowed)
-        return ln_set_error(p->c.clnt, LN_EBUSY, "ln_read on '%s': a borrowed sample is not "
-                            "released", p->c.topic);
+        return ln_set_error(p->c.clnt, LN_EBUSY,
+                            "ln_read on '%s': a borrowed sample is not "
+                            "released",
+                            p->c.topic);
     if ((rc = check_timeout(p->c.clnt, timeout, "ln_read")) != LN_OK)
         return rc;
     uint64_t word;
     int64_t ts;
-    rc = read_result(p, ln_ring_read_copy(&p->c.ring, &p->cur, timeout, p->spin_us, data,
-                                          &word, &ts), timeout);
+    rc = read_result(
+        p, ln_ring_read_copy(&p->c.ring, &p->cur, timeout, p->spin_us, data, &word, &ts), timeout);
     if (rc != LN_OK)
         return on_client(&p->c, rc);
     fill_info(p, word, ts, info);
@@ -551,9 +566,10 @@ int ln_read_release(ln_inport* p)
     rc = ln_ring_finish(&p->c.ring, &p->cur, p->borrowed, p->borrowed_word, 0);
     p->borrowed = NULL;
     if (rc != LN_OK) {
-        return ln_set_error(p->c.clnt, LN_EOVERRUN, "topic '%s': sample %llu was overwritten "
-                            "while borrowed", p->c.topic,
-                            (unsigned long long)LN_SLOT_SEQ(p->borrowed_word));
+        return ln_set_error(p->c.clnt, LN_EOVERRUN,
+                            "topic '%s': sample %llu was overwritten "
+                            "while borrowed",
+                            p->c.topic, (unsigned long long)LN_SLOT_SEQ(p->borrowed_word));
     }
     return LN_OK;
 }

@@ -128,10 +128,7 @@ void ln_wbuf_textv(ln_wbuf* b, ln_strv v)
     ln_wbuf_bytes(b, v.s, v.len);
 }
 
-void ln_wbuf_text(ln_wbuf* b, const char* s)
-{
-    ln_wbuf_textv(b, ln_strv_of(s));
-}
+void ln_wbuf_text(ln_wbuf* b, const char* s) { ln_wbuf_textv(b, ln_strv_of(s)); }
 
 /* ---- reader -------------------------------------------------------------------------- */
 
@@ -218,10 +215,7 @@ const char* ln_rbuf_text(ln_rbuf* r, size_t* len)
     return r->failed ? NULL : v.s;
 }
 
-int ln_rbuf_end(const ln_rbuf* r)
-{
-    return r->failed || r->left != 0 ? LN_EPROTOCOL : LN_OK;
-}
+int ln_rbuf_end(const ln_rbuf* r) { return r->failed || r->left != 0 ? LN_EPROTOCOL : LN_OK; }
 
 /* ---- UTF-8 ----------------------------------------------------------------------------
  * Strict RFC 3629: the same set of byte strings Python's str.decode('utf-8') accepts, so
@@ -305,8 +299,8 @@ int ln_proto_parse_header(const uint8_t header[LN_PROTO_HEADER_SIZE], uint32_t* 
 int ln_proto_decode_frame(const void* data, size_t len, uint16_t* type, ln_rbuf* body)
 {
     uint32_t body_len;
-    if (len < LN_PROTO_HEADER_SIZE || ln_proto_parse_header(data, &body_len, type) != LN_OK
-        || len - LN_PROTO_HEADER_SIZE != body_len)
+    if (len < LN_PROTO_HEADER_SIZE || ln_proto_parse_header(data, &body_len, type) != LN_OK ||
+        len - LN_PROTO_HEADER_SIZE != body_len)
         return LN_EPROTOCOL;
     ln_rbuf_init(body, (const uint8_t*)data + LN_PROTO_HEADER_SIZE, body_len);
     return LN_OK;
@@ -329,10 +323,7 @@ static const ln_wire_msg_info* find_type(uint16_t type)
     return NULL;
 }
 
-int ln_proto_type_known(uint16_t type)
-{
-    return find_type(type) != NULL;
-}
+int ln_proto_type_known(uint16_t type) { return find_type(type) != NULL; }
 
 int ln_proto_to_client(uint16_t type)
 {

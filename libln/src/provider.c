@@ -77,8 +77,7 @@ int ln_svc_check_names(ln_client* clnt, const char* what, const char* name, cons
                        const char* signature)
 {
     if (name == NULL || md_name == NULL || signature == NULL)
-        return ln_set_error(clnt, LN_EINVAL, "%s: name, md name and signature are required",
-                            what);
+        return ln_set_error(clnt, LN_EINVAL, "%s: name, md name and signature are required", what);
     if (name[0] == '\0' || strlen(name) > LN_SVC_MAX_NAME)
         return ln_set_error(clnt, LN_EINVAL, "%s: service name must be 1..%d bytes", what,
                             LN_SVC_MAX_NAME);
@@ -88,22 +87,22 @@ int ln_svc_check_names(ln_client* clnt, const char* what, const char* name, cons
     return LN_OK;
 }
 
-static void provider_close_fn(void* p)
-{
-    ln_unregister_service_provider(p);
-}
+static void provider_close_fn(void* p) { ln_unregister_service_provider(p); }
 
 /* Its REGISTER_SERVICE body: every field but the request id. */
 static void registration(const ln_service_provider* p, ln_wbuf* body)
 {
     char host_id[LN_HOST_ID_MAX];
     ln_host_id(host_id, sizeof host_id);
-    ln_msg_register_service m = {
-        .name = ln_strv_of(p->name), .md_name = ln_strv_of(p->md_name),
-        .layout_hash = p->layout_hash, .signature = ln_strv_of(p->signature),
-        .group = ln_strv_of(p->group_name), .host_id = ln_strv_of(host_id),
-        .unix_path = ln_strv_of(p->unix_path),
-        .tcp_host = ln_strv_of(p->tcp_port ? p->tcp_host : ""), .tcp_port = p->tcp_port};
+    ln_msg_register_service m = {.name = ln_strv_of(p->name),
+                                 .md_name = ln_strv_of(p->md_name),
+                                 .layout_hash = p->layout_hash,
+                                 .signature = ln_strv_of(p->signature),
+                                 .group = ln_strv_of(p->group_name),
+                                 .host_id = ln_strv_of(host_id),
+                                 .unix_path = ln_strv_of(p->unix_path),
+                                 .tcp_host = ln_strv_of(p->tcp_port ? p->tcp_host : ""),
+                                 .tcp_port = p->tcp_port};
     ln_msg_register_service_write_after_id(body, &m);
 }
 
@@ -122,7 +121,8 @@ static int reclaim_provider(ln_client* clnt, void* provider)
     int rc = ln_client_request_locked(clnt, LN_MSG_REGISTER_SERVICE, &body, &reply_type, &reply);
     ln_wbuf_free(&body);
     if (rc != LN_OK)
-        return ln_set_error(clnt, rc, "service \"%s\": the manager refused to take back its "
+        return ln_set_error(clnt, rc,
+                            "service \"%s\": the manager refused to take back its "
                             "registration (callers that are connected keep being served): %s",
                             p->name, ln_last_error());
     return LN_OK;
@@ -178,8 +178,8 @@ int ln_service_provider_set_handler(ln_service_provider* p, ln_service_handler h
         return ln_set_error(p->clnt, LN_EINVAL, "service \"%s\": handler must not be NULL",
                             p->name);
     if (p->group != NULL)
-        return ln_set_error(p->clnt, LN_EBUSY,
-                            "service \"%s\": set the handler before registering", p->name);
+        return ln_set_error(p->clnt, LN_EBUSY, "service \"%s\": set the handler before registering",
+                            p->name);
     p->handler = handler;
     p->user_data = user_data;
     return LN_OK;
@@ -209,8 +209,8 @@ static int open_listeners(ln_service_provider* p, int* ufd, int* tfd, char* host
     char dir[512];
     if (ln_svc_socket_dir(ln_client_instance(p->clnt), dir, sizeof dir) == LN_OK) {
         if (ln_name_service_socket(dir, (long)getpid(), atomic_fetch_add(&socket_counter, 1) + 1,
-                                   p->unix_path, sizeof p->unix_path) != LN_OK
-            || ln_svc_listen_unix(p->unix_path, ufd) != 0)
+                                   p->unix_path, sizeof p->unix_path) != LN_OK ||
+            ln_svc_listen_unix(p->unix_path, ufd) != 0)
             p->unix_path[0] = '\0';
     }
     int err = ln_svc_listen_tcp(tfd, &p->tcp_port);
@@ -283,8 +283,8 @@ int ln_service_provider_register(ln_service_provider* p, const char* group)
     ln_client_lock_ports(p->clnt);
     p->group = g;
     ln_client_settle_port(p->clnt, p, gen);
-    if ((ufd >= 0 && (rc = ln_svc_group_add_listener(g, p, ufd)) != LN_OK)
-        || (tfd >= 0 && (rc = ln_svc_group_add_listener(g, p, tfd)) != LN_OK)) {
+    if ((ufd >= 0 && (rc = ln_svc_group_add_listener(g, p, ufd)) != LN_OK) ||
+        (tfd >= 0 && (rc = ln_svc_group_add_listener(g, p, tfd)) != LN_OK)) {
         ln_svc_group_remove_provider(g, p); /* closes what was added */
         ln_client_lock_ports(p->clnt);
         p->group = NULL;
@@ -338,8 +338,7 @@ void ln_svc_report_calls(ln_service_provider* p, int force)
         atomic_store(&p->reported_calls, calls);
         ln_wbuf body;
         ln_wbuf_init(&body);
-        ln_msg_service_called m = {.name = ln_strv_of(p->name), .calls = calls,
-                                   .errors = errors};
+        ln_msg_service_called m = {.name = ln_strv_of(p->name), .calls = calls, .errors = errors};
         ln_msg_service_called_write_after_id(&body, &m);
         uint16_t reply_type;
         ln_rbuf reply;
@@ -414,13 +413,13 @@ static int handle_hello(ln_svc_endpoint* ep, ln_rbuf* r)
         return -1;
     }
     if (version != LN_SVC_VERSION) {
-        send_error(ep, 0, LN_EVERSION, "service \"%s\" speaks service protocol %d, not %u",
-                   p->name, LN_SVC_VERSION, version);
+        send_error(ep, 0, LN_EVERSION, "service \"%s\" speaks service protocol %d, not %u", p->name,
+                   LN_SVC_VERSION, version);
         return -1;
     }
     if (strcmp(name, p->name) != 0) {
-        send_error(ep, 0, LN_ENOTFOUND, "this socket serves service \"%s\", not \"%s\"",
-                   p->name, name);
+        send_error(ep, 0, LN_ENOTFOUND, "this socket serves service \"%s\", not \"%s\"", p->name,
+                   name);
         return -1;
     }
     if (hash != p->layout_hash) {
@@ -443,8 +442,7 @@ static int handle_request(ln_svc_endpoint* ep, ln_rbuf* r)
     ln_service_provider* p = ep->prov;
     uint32_t call_id = ln_rbuf_u32(r);
     if (r->failed) {
-        send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": REQUEST frame without a call id",
-                   p->name);
+        send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": REQUEST frame without a call id", p->name);
         return -1;
     }
     ln_service_request req = {.prov = p, .ep = ep, .call_id = call_id};
@@ -531,8 +529,7 @@ int ln_svc_conn_readable(ln_svc_endpoint* ep)
         used += LN_SVC_HEADER_SIZE + body_len;
         if (!ep->greeted) {
             if (type != LN_SVC_HELLO) {
-                send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": expected a HELLO frame",
-                           p->name);
+                send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": expected a HELLO frame", p->name);
                 return -1;
             }
             if (handle_hello(ep, &r) < 0)
@@ -543,8 +540,8 @@ int ln_svc_conn_readable(ln_svc_endpoint* ep)
                 return -1;
             answered += n;
         } else {
-            send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": unexpected frame type %u",
-                       p->name, type);
+            send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": unexpected frame type %u", p->name,
+                       type);
             return -1;
         }
     }
@@ -599,14 +596,13 @@ int ln_service_request_respond(ln_service_request* req, const void* response)
         rc = ln_svc_frame_end(&ep->tx, start);
     if (rc != LN_OK) {
         ln_wbuf_reset(&ep->tx);
-        return ln_set_error(p->clnt, rc, "service \"%s\": cannot encode the response: %s",
-                            p->name, ln_last_error());
+        return ln_set_error(p->clnt, rc, "service \"%s\": cannot encode the response: %s", p->name,
+                            ln_last_error());
     }
     req->answered = 1;
     if (send_tx(ep) != LN_OK)
         return ln_set_error(p->clnt, LN_ECONNECTION,
-                            "service \"%s\": the caller is gone, response not delivered",
-                            p->name);
+                            "service \"%s\": the caller is gone, response not delivered", p->name);
     return LN_OK;
 }
 

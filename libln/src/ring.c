@@ -33,9 +33,10 @@ int ln_ring_check_header(const ln_ring_header* h, uint64_t size, const char* nam
              LN_RING_MAGIC)
         why = "no ring magic";
     else if (h->version != LN_RING_VERSION)
-        return ln_set_error(NULL, LN_EVERSION, "shared memory '%s' is a topic ring of format "
-                            "version %u, this library uses %u", name, h->version,
-                            LN_RING_VERSION);
+        return ln_set_error(NULL, LN_EVERSION,
+                            "shared memory '%s' is a topic ring of format "
+                            "version %u, this library uses %u",
+                            name, h->version, LN_RING_VERSION);
     else if (h->header_size != ln_ring_header_bytes())
         why = "its header size differs from this library's";
     else if (h->segment_size != size)
@@ -45,8 +46,10 @@ int ln_ring_check_header(const ln_ring_header* h, uint64_t size, const char* nam
              h->header_size + (uint64_t)h->slot_count * h->slot_stride != size)
         why = "inconsistent ring geometry";
     if (why)
-        return ln_set_error(NULL, LN_EPROTOCOL, "shared memory '%s' is not a usable topic ring: "
-                            "%s", name, why);
+        return ln_set_error(NULL, LN_EPROTOCOL,
+                            "shared memory '%s' is not a usable topic ring: "
+                            "%s",
+                            name, why);
     return LN_OK;
 }
 
@@ -67,9 +70,8 @@ int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64
                           "topic '%.*s' in '%s' has md '%.*s' (hash 0x%016llx, %llu bytes), the "
                           "port expects hash 0x%016llx, %llu bytes",
                           LN_RING_NAME_MAX, h->topic, name, LN_RING_NAME_MAX, h->md_name,
-                          (unsigned long long)h->layout_hash,
-                          (unsigned long long)h->message_size, (unsigned long long)layout_hash,
-                          (unsigned long long)message_size);
+                          (unsigned long long)h->layout_hash, (unsigned long long)h->message_size,
+                          (unsigned long long)layout_hash, (unsigned long long)message_size);
         ln_shm_unmap(&ring->map);
         return rc;
     }
@@ -98,8 +100,10 @@ int ln_ring_follow_once(ln_ring* ring)
     memcpy(next, ring->hdr->successor, sizeof(next));
     next[sizeof(next) - 1] = '\0';
     if (!next[0] || strcmp(next, ring->name) == 0)
-        return ln_set_error(NULL, LN_EPROTOCOL, "topic '%.*s': ring '%s' is retired without a "
-                            "valid successor", LN_RING_NAME_MAX, ring->hdr->topic, ring->name);
+        return ln_set_error(NULL, LN_EPROTOCOL,
+                            "topic '%.*s': ring '%s' is retired without a "
+                            "valid successor",
+                            LN_RING_NAME_MAX, ring->hdr->topic, ring->name);
     ln_ring fresh;
     int rc = ln_ring_attach(&fresh, next, ring->layout_hash, ring->message_size);
     if (rc != LN_OK)
@@ -113,9 +117,10 @@ int ln_ring_follow(ln_ring* ring)
 {
     for (int hop = 0; atomic_load_explicit(&ring->hdr->retired, memory_order_acquire); hop++) {
         if (hop == LN_MAX_GENERATION_HOPS)
-            return ln_set_error(NULL, LN_EPROTOCOL, "topic '%.*s': more than %d retired rings "
-                                "in a row (a cycle?)", LN_RING_NAME_MAX, ring->hdr->topic,
-                                LN_MAX_GENERATION_HOPS);
+            return ln_set_error(NULL, LN_EPROTOCOL,
+                                "topic '%.*s': more than %d retired rings "
+                                "in a row (a cycle?)",
+                                LN_RING_NAME_MAX, ring->hdr->topic, LN_MAX_GENERATION_HOPS);
         int rc = ln_ring_follow_once(ring);
         if (rc != LN_OK)
             return rc;
@@ -300,9 +305,10 @@ int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t
         uint64_t w = atomic_load_explicit(&h->write_seq, memory_order_acquire);
         /* No publisher gets there; n + 1 below would wrap and this loop never end. */
         if (w > LN_RING_MAX_SEQ)
-            return ln_set_error(NULL, LN_EPROTOCOL, "ring '%s' is corrupted: its write_seq %llu "
-                                "is beyond every sequence number", ring->name,
-                                (unsigned long long)w);
+            return ln_set_error(NULL, LN_EPROTOCOL,
+                                "ring '%s' is corrupted: its write_seq %llu "
+                                "is beyond every sequence number",
+                                ring->name, (unsigned long long)w);
         if (w < c->next)
             return LN_EAGAIN;
         uint64_t n = w;
@@ -433,8 +439,8 @@ int ln_ring_next(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin
     }
 }
 
-int ln_ring_read_copy(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us,
-                      void* buf, uint64_t* word, int64_t* ts)
+int ln_ring_read_copy(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us, void* buf,
+                      uint64_t* word, int64_t* ts)
 {
     for (;;) {
         ln_ring_slot* slot;

@@ -50,7 +50,7 @@
 
 enum { LN_SLOT_COMMITTED = 0, LN_SLOT_WRITING = 1 };
 #define LN_SLOT_SEQ(word) ((word) >> 2)
-#define LN_SLOT_STATE(word) ((unsigned)((word) & 3u))
+#define LN_SLOT_STATE(word) ((unsigned)((word)&3u))
 #define LN_SLOT_WORD(seq, state) (((seq) << 2) | (uint64_t)(state))
 #define LN_RING_MAX_SEQ (UINT64_MAX >> 2) /* what fits beside the state bits */
 
@@ -82,7 +82,7 @@ typedef struct ln_ring_header {
     char successor[LN_RING_NAME_MAX];
     /* publishers */
     alignas(64) pthread_mutex_t write_lock;
-    alignas(64) _Atomic uint64_t write_seq; /* last committed sequence number, 0: none yet */
+    alignas(64) _Atomic uint64_t write_seq;   /* last committed sequence number, 0: none yet */
     alignas(64) _Atomic uint32_t data_futex;  /* readers sleep here (futex.h) */
     alignas(64) _Atomic uint32_t space_futex; /* publishers waiting for queued readers */
     alignas(64) ln_ring_reader readers[LN_RING_MAX_READERS];
@@ -182,10 +182,10 @@ void ln_ring_wake_readers(ln_ring* ring);
 typedef struct ln_ring_cursor {
     uint64_t next;
     uint32_t buffers;
-    int reader;          /* reader slot index, -1 if none */
-    uint64_t pending;    /* overruns not yet reported by a read */
-    uint64_t total;      /* overruns since subscribing */
-    int whole_ring;      /* buffers follow the ring's slot count across growth (a tap, EVERY) */
+    int reader;       /* reader slot index, -1 if none */
+    uint64_t pending; /* overruns not yet reported by a read */
+    uint64_t total;   /* overruns since subscribing */
+    int whole_ring;   /* buffers follow the ring's slot count across growth (a tap, EVERY) */
 } ln_ring_cursor;
 
 /* Choose the sample to read now: LN_OK with *slot and *word (its seq word) set, LN_EAGAIN if
@@ -217,7 +217,7 @@ int ln_ring_next(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin
 /* ln_ring_next, then copy the payload (message_size bytes) to buf and finish; a sample
  * overwritten while copied is counted and the next one taken.  On LN_OK *word and *ts hold
  * the sample's seq word and timestamp. */
-int ln_ring_read_copy(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us,
-                      void* buf, uint64_t* word, int64_t* ts);
+int ln_ring_read_copy(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us, void* buf,
+                      uint64_t* word, int64_t* ts);
 
 #endif /* LN_RING_H */

@@ -106,9 +106,10 @@ int ln_ring_admin_open(ln_ring_admin** out, const char* shm_name)
     uint64_t size = 0;
     int rc = ln_shm_open(shm_name, ln_ring_header_bytes(), &a->map, &size);
     if (rc == LN_EPROTOCOL) /* shorter than a header */
-        rc = ln_set_error(NULL, LN_EPROTOCOL, "shared memory '%s' is not a usable topic ring: "
-                          "%llu bytes is too small for a ring header", shm_name,
-                          (unsigned long long)size);
+        rc = ln_set_error(NULL, LN_EPROTOCOL,
+                          "shared memory '%s' is not a usable topic ring: "
+                          "%llu bytes is too small for a ring header",
+                          shm_name, (unsigned long long)size);
     if (rc != LN_OK)
         goto fail;
     if ((rc = ln_ring_check_header(a->map.addr, size, shm_name)) != LN_OK)
@@ -200,8 +201,10 @@ int ln_ring_admin_reserve_reader(ln_ring_admin* a, uint32_t index, int32_t pid, 
     if (rc != LN_OK)
         return rc;
     if (index >= LN_RING_MAX_READERS || buffers == 0 || buffers >= a->hdr->slot_count)
-        return ln_set_error(NULL, LN_EINVAL, "reader slot %u with %u buffers does not fit a ring "
-                            "of %u slots", index, buffers, a->hdr->slot_count);
+        return ln_set_error(NULL, LN_EINVAL,
+                            "reader slot %u with %u buffers does not fit a ring "
+                            "of %u slots",
+                            index, buffers, a->hdr->slot_count);
     ln_ring_reader* r = &a->hdr->readers[index];
     atomic_store_explicit(&r->pid, pid, memory_order_relaxed);
     atomic_store_explicit(&r->buffers, buffers, memory_order_relaxed);
@@ -212,10 +215,7 @@ int ln_ring_admin_reserve_reader(ln_ring_admin* a, uint32_t index, int32_t pid, 
     return LN_OK;
 }
 
-static void wake_publishers(ln_ring_header* h)
-{
-    ln_futex_bump_wake(&h->space_futex);
-}
+static void wake_publishers(ln_ring_header* h) { ln_futex_bump_wake(&h->space_futex); }
 
 int ln_ring_admin_release_reader(ln_ring_admin* a, uint32_t index)
 {

@@ -42,13 +42,16 @@ int ln_ring_tap_open(ln_ring_tap** out, const char* shm_name, uint64_t layout_ha
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_open: out is NULL");
     *out = NULL;
     if (!shm_name || message_size == 0)
-        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_open: a segment name and a message "
+        return ln_set_error(NULL, LN_EINVAL,
+                            "ln_ring_tap_open: a segment name and a message "
                             "size are required");
     const unsigned from_newest = mode & LN_TAP_INCLUDE_NEWEST;
     mode &= ~LN_TAP_INCLUDE_NEWEST;
     if (mode != LN_TAP_EVERY && mode != LN_TAP_NEWEST)
-        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_open: mode %u is neither "
-                            "LN_TAP_EVERY nor LN_TAP_NEWEST", mode);
+        return ln_set_error(NULL, LN_EINVAL,
+                            "ln_ring_tap_open: mode %u is neither "
+                            "LN_TAP_EVERY nor LN_TAP_NEWEST",
+                            mode);
     ln_ring_tap* t = calloc(1, sizeof(*t));
     if (!t)
         return ln_set_error(NULL, LN_ENOMEM, "out of memory");
@@ -97,8 +100,8 @@ int ln_ring_tap_read(ln_ring_tap* t, void* buf, ln_sample_info* info, double tim
     int64_t ts;
     rc = ln_ring_read_copy(&t->ring, &t->cur, timeout, 0, buf, &word, &ts);
     if (rc == LN_EAGAIN || rc == LN_ETIMEOUT)
-        return ln_set_error(NULL, LN_ETIMEOUT, "tap on '%s': no sample within %g s",
-                            t->ring.name, timeout);
+        return ln_set_error(NULL, LN_ETIMEOUT, "tap on '%s': no sample within %g s", t->ring.name,
+                            timeout);
     if (rc != LN_OK)
         return rc;
     uint64_t seq = LN_SLOT_SEQ(word);
@@ -122,9 +125,10 @@ int ln_ring_tap_inject(ln_ring_tap* t, const void* data, uint64_t seq, int64_t t
     if (!data)
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject: data is NULL");
     if (seq > LN_RING_MAX_SEQ)
-        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject: sequence number %llu is "
-                            "beyond %llu", (unsigned long long)seq,
-                            (unsigned long long)LN_RING_MAX_SEQ);
+        return ln_set_error(NULL, LN_EINVAL,
+                            "ln_ring_tap_inject: sequence number %llu is "
+                            "beyond %llu",
+                            (unsigned long long)seq, (unsigned long long)LN_RING_MAX_SEQ);
     ln_deadline d = ln_deadline_in(LN_TAP_LOCK_TIMEOUT);
     for (;;) {
         if ((rc = ln_ring_lock(&t->ring, &d)) != LN_OK)
@@ -140,9 +144,10 @@ int ln_ring_tap_inject(ln_ring_tap* t, const void* data, uint64_t seq, int64_t t
     uint64_t newest = atomic_load_explicit(&t->ring.hdr->write_seq, memory_order_relaxed);
     if (seq <= newest) {
         ln_ring_unlock(&t->ring);
-        return ln_set_error(NULL, LN_EOVERRUN, "tap on '%s': sample %llu is not newer than "
-                            "the ring's newest, %llu", t->ring.name, (unsigned long long)seq,
-                            (unsigned long long)newest);
+        return ln_set_error(NULL, LN_EOVERRUN,
+                            "tap on '%s': sample %llu is not newer than "
+                            "the ring's newest, %llu",
+                            t->ring.name, (unsigned long long)seq, (unsigned long long)newest);
     }
     /* No waiting for queued readers: a slot they have not read yet is overwritten and they
      * count it as lost, as with any publisher that does not wait. */

@@ -65,10 +65,7 @@ static void service_free(ln_service* s)
     free(s);
 }
 
-static void service_close_fn(void* s)
-{
-    ln_service_release(s);
-}
+static void service_close_fn(void* s) { ln_service_release(s); }
 
 /* A caller registers nothing: after a reconnect it simply looks the service up again on its
  * next call that needs to. */
@@ -166,8 +163,7 @@ static int fill(ln_service* s, size_t need, const struct timespec* deadline)
 /* Reads one whole frame into s->rx.  LN_OK with type and body, or an error (recorded; the
  * caller disconnects).  The provider answers one frame per request, so any byte beyond the
  * frame is a protocol error. */
-static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* type,
-                      ln_rbuf* body)
+static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* type, ln_rbuf* body)
 {
     if (s->rx_cap < RX_INITIAL) {
         uint8_t* rx = realloc(s->rx, RX_INITIAL);
@@ -194,9 +190,10 @@ static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* 
         if (total > s->rx_cap) {
             uint8_t* rx = realloc(s->rx, total);
             if (rx == NULL)
-                return ln_set_error(s->clnt, LN_ENOMEM, "service \"%s\": out of memory for a "
-                                                        "response of %u bytes", s->name,
-                                    (unsigned)len);
+                return ln_set_error(s->clnt, LN_ENOMEM,
+                                    "service \"%s\": out of memory for a "
+                                    "response of %u bytes",
+                                    s->name, (unsigned)len);
             s->rx = rx;
             s->rx_cap = total;
         }
@@ -212,8 +209,8 @@ static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* 
                             s->name, s->provider, s->via);
     if (err == LN_NET_EOF)
         return ln_set_error(s->clnt, LN_ECONNECTION,
-                            "service \"%s\": provider \"%s\" (%s) closed the connection",
-                            s->name, s->provider, s->via);
+                            "service \"%s\": provider \"%s\" (%s) closed the connection", s->name,
+                            s->provider, s->via);
     if (err != 0)
         return ln_set_errno_error(s->clnt, err,
                                   "service \"%s\": connection to provider \"%s\" (%s) failed",
@@ -231,10 +228,10 @@ static int take_error(ln_service* s, ln_rbuf* body)
     ln_rbuf_str(body, text, sizeof text);
     if (ln_rbuf_end(body) != LN_OK || code >= 0 || code < -LN_ERROR_COUNT)
         return ln_set_error(s->clnt, LN_EPROTOCOL,
-                            "service \"%s\": malformed ERROR frame from provider \"%s\"",
-                            s->name, s->provider);
-    return ln_set_error(s->clnt, code, "service \"%s\" (provider \"%s\"): %s", s->name,
-                        s->provider, text);
+                            "service \"%s\": malformed ERROR frame from provider \"%s\"", s->name,
+                            s->provider);
+    return ln_set_error(s->clnt, code, "service \"%s\" (provider \"%s\"): %s", s->name, s->provider,
+                        text);
 }
 
 static int send_buf(ln_service* s, const ln_wbuf* b, const struct timespec* deadline)
@@ -247,16 +244,15 @@ static int send_buf(ln_service* s, const ln_wbuf* b, const struct timespec* dead
                             s->name, s->provider, s->via);
     if (err != 0)
         return ln_set_errno_error(s->clnt, err,
-                                  "service \"%s\": cannot send to provider \"%s\" (%s)",
-                                  s->name, s->provider, s->via);
+                                  "service \"%s\": cannot send to provider \"%s\" (%s)", s->name,
+                                  s->provider, s->via);
     return LN_OK;
 }
 
 /* ---- connecting ---- */
 
 static int open_connection(ln_service* s, const char* host_id, const char* unix_path,
-                           const char* tcp_host, uint16_t tcp_port,
-                           const struct timespec* deadline)
+                           const char* tcp_host, uint16_t tcp_port, const struct timespec* deadline)
 {
     char mine[LN_HOST_ID_MAX];
     ln_host_id(mine, sizeof mine);
@@ -278,8 +274,8 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
         int gai = ln_net_resolve(tcp_host, port, &ai);
         if (gai != 0)
             return ln_set_error(s->clnt, LN_ECONNECTION,
-                                "service \"%s\": cannot resolve provider host \"%s\": %s",
-                                s->name, tcp_host, gai_strerror(gai));
+                                "service \"%s\": cannot resolve provider host \"%s\": %s", s->name,
+                                tcp_host, gai_strerror(gai));
         err = ln_net_connect(ai, deadline, -1, &s->fd);
         freeaddrinfo(ai);
         if (err == 0)
@@ -289,8 +285,8 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
     }
     if (err == ETIMEDOUT)
         return ln_set_error(s->clnt, LN_ETIMEOUT,
-                            "service \"%s\": connecting to provider \"%s\" (%s) timed out",
-                            s->name, s->provider, s->via);
+                            "service \"%s\": connecting to provider \"%s\" (%s) timed out", s->name,
+                            s->provider, s->via);
     return ln_set_errno_error(s->clnt, err == 0 ? ECONNREFUSED : err,
                               "service \"%s\": cannot connect to provider \"%s\" (%s)", s->name,
                               s->provider, s->via);
@@ -301,7 +297,8 @@ static int connect_service(ln_service* s, const struct timespec* deadline)
 {
     ln_wbuf body;
     ln_wbuf_init(&body);
-    ln_msg_find_service find = {.name = ln_strv_of(s->name), .md_name = ln_strv_of(s->md_name),
+    ln_msg_find_service find = {.name = ln_strv_of(s->name),
+                                .md_name = ln_strv_of(s->md_name),
                                 .layout_hash = s->layout_hash};
     ln_msg_find_service_write_after_id(&body, &find);
     uint16_t reply_type;
@@ -314,14 +311,16 @@ static int connect_service(ln_service* s, const struct timespec* deadline)
     char host_id[LN_PROTO_MAX_STR + 1], unix_path[LN_PROTO_MAX_STR + 1];
     char tcp_host[LN_PROTO_MAX_STR + 1], signature[LN_PROTO_MAX_STR + 1];
     ln_msg_service_info info;
-    if (ln_msg_service_info_read_after_id(&reply, &info) != LN_OK
-        || ln_strv_copy(info.provider, s->provider, sizeof s->provider) != LN_OK
-        || ln_strv_copy(info.host_id, host_id, sizeof host_id) != LN_OK
-        || ln_strv_copy(info.unix_path, unix_path, sizeof unix_path) != LN_OK
-        || ln_strv_copy(info.tcp_host, tcp_host, sizeof tcp_host) != LN_OK
-        || ln_strv_copy(info.signature, signature, sizeof signature) != LN_OK)
-        return ln_set_error(s->clnt, LN_EPROTOCOL, "cannot call service \"%s\": malformed "
-                            "SERVICE_INFO", s->name);
+    if (ln_msg_service_info_read_after_id(&reply, &info) != LN_OK ||
+        ln_strv_copy(info.provider, s->provider, sizeof s->provider) != LN_OK ||
+        ln_strv_copy(info.host_id, host_id, sizeof host_id) != LN_OK ||
+        ln_strv_copy(info.unix_path, unix_path, sizeof unix_path) != LN_OK ||
+        ln_strv_copy(info.tcp_host, tcp_host, sizeof tcp_host) != LN_OK ||
+        ln_strv_copy(info.signature, signature, sizeof signature) != LN_OK)
+        return ln_set_error(s->clnt, LN_EPROTOCOL,
+                            "cannot call service \"%s\": malformed "
+                            "SERVICE_INFO",
+                            s->name);
     uint16_t tcp_port = info.tcp_port;
     rc = open_connection(s, host_id, unix_path, tcp_host, tcp_port, deadline);
     if (rc != LN_OK)
@@ -382,14 +381,14 @@ static int send_request(ln_service* s, const void* request, const struct timespe
     ln_wbuf_u32(&s->tx, call_id);
     rc = ln_sig_encode(s->req_sig, request, &s->tx, s->max_size);
     if (rc != LN_OK)
-        return ln_set_error(s->clnt, rc, "service \"%s\": cannot encode the request: %s",
-                            s->name, ln_last_error());
+        return ln_set_error(s->clnt, rc, "service \"%s\": cannot encode the request: %s", s->name,
+                            ln_last_error());
     rc = ln_svc_frame_end(&s->tx, start);
     if (rc != LN_OK)
         return ln_set_error(s->clnt, rc, "service \"%s\": cannot encode the request", s->name);
     rc = send_buf(s, &s->tx, deadline);
-    if (rc != LN_OK && reused && s->is_unix
-        && (s->send_errno == EPIPE || s->send_errno == ECONNRESET || s->send_errno == ENOTCONN)) {
+    if (rc != LN_OK && reused && s->is_unix &&
+        (s->send_errno == EPIPE || s->send_errno == ECONNRESET || s->send_errno == ENOTCONN)) {
         /* The provider had closed this connection before the request went out (it was
          * restarted): nothing was delivered, so sending again on a new connection is safe. */
         disconnect(s);
@@ -407,8 +406,10 @@ static int receive_response(ln_service* s, void* response, const struct timespec
 {
     uint32_t call_id = s->last_call;
     if (s->fd < 0)
-        return ln_set_error(s->clnt, LN_ECONNECTION, "service \"%s\": no request is waiting "
-                            "for an answer", s->name);
+        return ln_set_error(s->clnt, LN_ECONNECTION,
+                            "service \"%s\": no request is waiting "
+                            "for an answer",
+                            s->name);
     uint16_t type;
     ln_rbuf body;
     int rc = read_frame(s, deadline, &type, &body);
@@ -461,8 +462,8 @@ int ln_service_call(ln_service* s, const void* request, void* response, double t
         return rc;
     if (isnan(timeout))
         return ln_set_error(s->clnt, LN_EINVAL, "service \"%s\": timeout is NaN", s->name);
-    if ((request == NULL && ln_sig_size(s->req_sig) > 0)
-        || (response == NULL && ln_sig_size(s->resp_sig) > 0))
+    if ((request == NULL && ln_sig_size(s->req_sig) > 0) ||
+        (response == NULL && ln_sig_size(s->resp_sig) > 0))
         return ln_set_error(s->clnt, LN_EINVAL, "service \"%s\": request or response is NULL",
                             s->name);
     struct timespec ts;

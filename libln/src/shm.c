@@ -46,8 +46,8 @@ int ln_shm_create(const char* name, uint64_t size, size_t map_len, ln_map* out)
     if (fd < 0)
         return ln_set_errno_error(NULL, errno, "cannot create shared memory '%s'", name);
     if (ftruncate(fd, (off_t)size) != 0) {
-        rc = ln_set_errno_error(NULL, errno, "cannot size shared memory '%s' to %llu bytes",
-                                name, (unsigned long long)size);
+        rc = ln_set_errno_error(NULL, errno, "cannot size shared memory '%s' to %llu bytes", name,
+                                (unsigned long long)size);
         goto fail;
     }
     /* Reserve the pages now: tmpfs would otherwise kill the first writer that touches a page

@@ -20,9 +20,9 @@ static const struct {
     const char* name;
     size_t size;
 } prims[] = {
-    {"char", 1},    {"int8_t", 1},   {"uint8_t", 1},  {"int16_t", 2}, {"uint16_t", 2},
-    {"int32_t", 4}, {"uint32_t", 4}, {"int64_t", 8},  {"uint64_t", 8}, {"float", 4},
-    {"double", 8},
+    {"char", 1},     {"int8_t", 1},  {"uint8_t", 1},  {"int16_t", 2},
+    {"uint16_t", 2}, {"int32_t", 4}, {"uint32_t", 4}, {"int64_t", 8},
+    {"uint64_t", 8}, {"float", 4},   {"double", 8},
 };
 enum { PRIM_CHAR = 0, PRIM_UINT32 = 6, PRIM_RECORD = -1 };
 
@@ -55,10 +55,7 @@ void ln_sig_free(ln_sig* sig)
     free(sig);
 }
 
-size_t ln_sig_size(const ln_sig* sig)
-{
-    return sig->size;
-}
+size_t ln_sig_size(const ln_sig* sig) { return sig->size; }
 
 /* ---- parser ----------------------------------------------------------------------------- */
 
@@ -169,8 +166,7 @@ static int parse_item(parser* ps, ln_sig* sig, unsigned index)
         if (len == 0)
             return parse_error(ps, start, "expected a type or '[', found %s", found(ps->p, b));
         if (it.prim == PRIM_RECORD)
-            return parse_error(ps, start, "unknown type '%.*s'", (int)(len > 32 ? 32 : len),
-                               ps->p);
+            return parse_error(ps, start, "unknown type '%.*s'", (int)(len > 32 ? 32 : len), ps->p);
         ps->p += len;
         it.elem_size = it.elem_wire_min = prims[it.prim].size;
     }
@@ -221,7 +217,7 @@ static int parse_item(parser* ps, ln_sig* sig, unsigned index)
         }
         it.offset = prev->offset;
         sig->n--; /* the count item becomes part of the dynamic one */
-        add = 8; /* the pointer; the count's 4 bytes (memory and wire) are counted */
+        add = 8;  /* the pointer; the count's 4 bytes (memory and wire) are counted */
         sig->has_dynamic = 1;
     } else {
         it.offset = sig->size;
@@ -259,8 +255,8 @@ static int parse_items(parser* ps, ln_sig* sig, char end)
             return LN_OK;
         if (*ps->p != ',') {
             char b[8];
-            return parse_error(ps, ps->p, "expected ',' or %s, found %s",
-                               end ? "']'" : "the end", found(ps->p, b));
+            return parse_error(ps, ps->p, "expected ',' or %s, found %s", end ? "']'" : "the end",
+                               found(ps->p, b));
         }
         ps->p++;
     }
@@ -387,7 +383,8 @@ static int enc_record(codec* c, const ln_sig* sig, const uint8_t* mem)
                 char p[256];
                 return ln_set_error(NULL, LN_EINVAL,
                                     "encoding %s: dynamic field has %u elements but a NULL "
-                                    "pointer", path_text(c, it, p, sizeof p), count);
+                                    "pointer",
+                                    path_text(c, it, p, sizeof p), count);
             }
             if ((rc = enc_room(c, it, 4)) != LN_OK)
                 return rc;
@@ -411,8 +408,7 @@ static int enc_record(codec* c, const ln_sig* sig, const uint8_t* mem)
             ln_wbuf_bytes(c->out, elems, bytes);
         }
         if (c->out->failed)
-            return ln_set_error(NULL, c->out->failed, "encoding: %s",
-                                ln_strerror(c->out->failed));
+            return ln_set_error(NULL, c->out->failed, "encoding: %s", ln_strerror(c->out->failed));
     }
     return LN_OK;
 }
@@ -461,12 +457,11 @@ static int dec_dynamic(codec* c, const sig_item* it, uint8_t* at)
         return rc;
     /* Before allocating: can the bytes left hold `count` elements at all? */
     size_t wire_min;
-    if (__builtin_mul_overflow((size_t)count, it->elem_wire_min, &wire_min) ||
-        wire_min > c->left)
+    if (__builtin_mul_overflow((size_t)count, it->elem_wire_min, &wire_min) || wire_min > c->left)
         return ln_set_error(NULL, LN_EPROTOCOL,
                             "decoding %s: count %u needs at least %zu bytes per element, "
-                            "only %zu bytes are left", path_text(c, it, p, sizeof p), count,
-                            it->elem_wire_min, c->left);
+                            "only %zu bytes are left",
+                            path_text(c, it, p, sizeof p), count, it->elem_wire_min, c->left);
     if (count > 0) {
         size_t bytes, alloc;
         if (__builtin_mul_overflow((size_t)count, it->elem_size, &bytes) ||
@@ -474,8 +469,8 @@ static int dec_dynamic(codec* c, const sig_item* it, uint8_t* at)
             alloc > c->max - c->allocated)
             return ln_set_error(NULL, LN_ETOOBIG,
                                 "decoding %s: %u elements would exceed the limit of %zu bytes "
-                                "(%zu already used)", path_text(c, it, p, sizeof p), count,
-                                c->max, c->allocated);
+                                "(%zu already used)",
+                                path_text(c, it, p, sizeof p), count, c->max, c->allocated);
         elems = ln_arena_alloc(c->arena, alloc);
         if (elems == NULL)
             return ln_set_error(NULL, LN_ENOMEM, "decoding %s: out of memory for %zu bytes",
@@ -524,14 +519,14 @@ static int dec_record(codec* c, const ln_sig* sig, uint8_t* mem)
     return LN_OK;
 }
 
-int ln_sig_decode(const ln_sig* sig, const uint8_t* data, size_t len, void* msg,
-                  ln_arena* arena, size_t max_bytes)
+int ln_sig_decode(const ln_sig* sig, const uint8_t* data, size_t len, void* msg, ln_arena* arena,
+                  size_t max_bytes)
 {
     assert(sig != NULL && arena != NULL && (msg != NULL || sig->size == 0));
     assert(data != NULL || len == 0);
     if (len > max_bytes)
-        return ln_set_error(NULL, LN_ETOOBIG, "decoding: %zu bytes exceed the limit of %zu",
-                            len, max_bytes);
+        return ln_set_error(NULL, LN_ETOOBIG, "decoding: %zu bytes exceed the limit of %zu", len,
+                            max_bytes);
     if (sig->size > 0)
         memset(msg, 0, sig->size);
     codec c = {.max = max_bytes, .p = data, .left = len, .arena = arena};

@@ -74,7 +74,7 @@ int ln_sig_encode(const ln_sig* sig, const void* msg, ln_wbuf* out, size_t max_b
  * LN_EPROTOCOL for truncation, trailing bytes, or a count that the remaining bytes cannot
  * hold (checked before allocating); LN_ENOMEM.  On failure `msg` is unspecified and whatever
  * was allocated stays in the arena until it is reset. */
-int ln_sig_decode(const ln_sig* sig, const uint8_t* data, size_t len, void* msg,
-                  ln_arena* arena, size_t max_bytes);
+int ln_sig_decode(const ln_sig* sig, const uint8_t* data, size_t len, void* msg, ln_arena* arena,
+                  size_t max_bytes);
 
 #endif /* LN_SIGCODEC_H */

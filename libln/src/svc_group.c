@@ -72,10 +72,7 @@ static struct ln_svc_state* state_of(ln_client* clnt, int create)
     return s;
 }
 
-static const char* shown(const char* group)
-{
-    return group[0] ? group : "(default)";
-}
+static const char* shown(const char* group) { return group[0] ? group : "(default)"; }
 
 int ln_svc_group_get(ln_client* clnt, const char* name, int create, ln_svc_group** out)
 {
@@ -119,8 +116,7 @@ int ln_svc_group_get(ln_client* clnt, const char* name, int create, ln_svc_group
             s->groups = g;
         }
     } else if (g == NULL) {
-        rc = ln_set_error(clnt, LN_ENOTFOUND, "no service is registered in group %s",
-                          shown(name));
+        rc = ln_set_error(clnt, LN_ENOTFOUND, "no service is registered in group %s", shown(name));
     }
     pthread_mutex_unlock(&s->lock);
     *out = g;
@@ -313,8 +309,8 @@ static int remaining_ms(const struct timespec* deadline)
         return -1;
     struct timespec now;
     clock_gettime(CLOCK_MONOTONIC, &now);
-    double left = (double)(deadline->tv_sec - now.tv_sec)
-                  + (double)(deadline->tv_nsec - now.tv_nsec) * 1e-9;
+    double left =
+        (double)(deadline->tv_sec - now.tv_sec) + (double)(deadline->tv_nsec - now.tv_nsec) * 1e-9;
     if (left <= 0)
         return 0;
     return left > 1e6 ? 1000000000 : (int)ceil(left * 1000.0);
@@ -326,7 +322,8 @@ int ln_wait_and_handle_service_group_requests(ln_client* clnt, const char* group
     if (rc != LN_OK)
         return rc;
     if (isnan(timeout))
-        return ln_set_error(clnt, LN_EINVAL, "wait_and_handle_service_group_requests: timeout is NaN");
+        return ln_set_error(clnt, LN_EINVAL,
+                            "wait_and_handle_service_group_requests: timeout is NaN");
     ln_svc_group* g;
     rc = ln_svc_group_get(clnt, group, 0, &g);
     if (rc != LN_OK)
@@ -438,8 +435,7 @@ static int pool_get(ln_client* clnt, const char* name, ln_svc_pool** out)
     if (name == NULL)
         name = "";
     if (strlen(name) > LN_SVC_MAX_NAME)
-        return ln_set_error(clnt, LN_EINVAL, "thread pool name is over %d bytes",
-                            LN_SVC_MAX_NAME);
+        return ln_set_error(clnt, LN_EINVAL, "thread pool name is over %d bytes", LN_SVC_MAX_NAME);
     struct ln_svc_state* s = state_of(clnt, 1);
     if (s == NULL)
         return ln_set_error(clnt, LN_ENOMEM, "out of memory for thread pool \"%s\"", name);

@@ -130,14 +130,15 @@ int ln_svc_listen_tcp(int* fd, uint16_t* port)
     addr.sin_family = AF_INET;
     addr.sin_addr.s_addr = htonl(INADDR_ANY);
     const char* bind_host = getenv("LN_SERVICE_BIND");
-    if (bind_host != NULL && *bind_host != '\0' && inet_pton(AF_INET, bind_host, &addr.sin_addr) != 1)
+    if (bind_host != NULL && *bind_host != '\0' &&
+        inet_pton(AF_INET, bind_host, &addr.sin_addr) != 1)
         return EINVAL;
     int s = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (s < 0)
         return errno;
     socklen_t len = sizeof addr;
-    if (bind(s, (struct sockaddr*)&addr, sizeof addr) != 0 || listen(s, 128) != 0
-        || getsockname(s, (struct sockaddr*)&addr, &len) != 0) {
+    if (bind(s, (struct sockaddr*)&addr, sizeof addr) != 0 || listen(s, 128) != 0 ||
+        getsockname(s, (struct sockaddr*)&addr, &len) != 0) {
         int err = errno;
         close(s);
         return err;
@@ -175,9 +176,9 @@ int ln_svc_connect_unix(const char* path, const struct timespec* deadline, int* 
             return err;
         struct timespec now;
         clock_gettime(CLOCK_MONOTONIC, &now);
-        if (deadline != NULL
-            && (now.tv_sec > deadline->tv_sec
-                || (now.tv_sec == deadline->tv_sec && now.tv_nsec >= deadline->tv_nsec)))
+        if (deadline != NULL &&
+            (now.tv_sec > deadline->tv_sec ||
+             (now.tv_sec == deadline->tv_sec && now.tv_nsec >= deadline->tv_nsec)))
             return ETIMEDOUT;
         nanosleep(&(struct timespec){0, 1000000}, NULL);
     }

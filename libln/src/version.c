@@ -2,10 +2,7 @@
  * libln it was loaded with and whether that library can serve the header it was built with. */
 #include "ln_internal.h"
 
-const char* ln_version(void)
-{
-    return LN_VERSION_STRING;
-}
+const char* ln_version(void) { return LN_VERSION_STRING; }
 
 int ln_version_check(int major, int minor)
 {

@@ -4,8 +4,7 @@
 
 #include "ndn_internal.h"
 
-LN_NDN_EXPORT int ln_ndn_encode_pull_content(uint8_t* out, size_t cap,
-                                             const ln_ndn_pull_content* c)
+LN_NDN_EXPORT int ln_ndn_encode_pull_content(uint8_t* out, size_t cap, const ln_ndn_pull_content* c)
 {
     size_t p = 0, need;
     if (!c || (!out && cap) || (!c->payload.data && c->payload.size))
@@ -41,8 +40,8 @@ LN_NDN_EXPORT int ln_ndn_encode_pull_content(uint8_t* out, size_t cap,
 
 LN_NDN_EXPORT int ln_ndn_decode_pull_content(ln_ndn_bytes content, ln_ndn_pull_content* out)
 {
-    static const uint8_t order[] = {LN_NDN_T_PULL_LATEST, LN_NDN_T_PULL_TIME,
-                                    LN_NDN_T_PULL_PERIOD, LN_NDN_T_PULL_PAYLOAD};
+    static const uint8_t order[] = {LN_NDN_T_PULL_LATEST, LN_NDN_T_PULL_TIME, LN_NDN_T_PULL_PERIOD,
+                                    LN_NDN_T_PULL_PAYLOAD};
     ln_ndn_i_tlv t;
     size_t next = 0, i;
     int r;
@@ -66,8 +65,9 @@ LN_NDN_EXPORT int ln_ndn_decode_pull_content(ln_ndn_bytes content, ln_ndn_pull_c
                 out->payload.data = t.start;
             continue;
         }
-        r = ln_ndn_read_nonneg(t.value, i == 0 ? &out->latest_seq
-                                        : i == 1 ? &out->publish_us : &out->period_us);
+        r = ln_ndn_read_nonneg(t.value, i == 0   ? &out->latest_seq
+                                        : i == 1 ? &out->publish_us
+                                                 : &out->period_us);
         if (r < 0) {
             memset(out, 0, sizeof *out);
             return r;

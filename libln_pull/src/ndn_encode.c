@@ -4,8 +4,8 @@
 
 #include "ndn_internal.h"
 
-LN_NDN_EXPORT int ln_ndn_write_tlv(uint8_t* out, size_t cap, uint32_t type,
-                                   const uint8_t* value, size_t size)
+LN_NDN_EXPORT int ln_ndn_write_tlv(uint8_t* out, size_t cap, uint32_t type, const uint8_t* value,
+                                   size_t size)
 {
     size_t head;
     if ((!out && cap) || (!value && size))

@@ -15,10 +15,7 @@
 #define LN_NDN_I_CLAMP(cap) ((cap) > LN_NDN_I_MAX ? LN_NDN_I_MAX : (cap))
 
 /* Bytes of a VAR-NUMBER (of a type or length) / of a NonNegativeInteger's value. */
-static inline size_t ln_ndn_i_varnum_size(uint32_t v)
-{
-    return v < 253 ? 1 : v <= 0xffffu ? 3 : 5;
-}
+static inline size_t ln_ndn_i_varnum_size(uint32_t v) { return v < 253 ? 1 : v <= 0xffffu ? 3 : 5; }
 static inline size_t ln_ndn_i_nonneg_size(uint64_t v)
 {
     return v <= 0xffu ? 1 : v <= 0xffffu ? 2 : v <= 0xffffffffu ? 4 : 8;
@@ -44,9 +41,6 @@ int ln_ndn_i_next(ln_ndn_bytes* rest, ln_ndn_i_tlv* out);
 
 /* The evolvability rule of packet format 0.3: an unknown (or out-of-order) element is
  * critical if its type is below 32 or odd. */
-static inline int ln_ndn_i_critical(uint64_t type)
-{
-    return type < 32 || (type & 1u);
-}
+static inline int ln_ndn_i_critical(uint64_t type) { return type < 32 || (type & 1u); }
 
 #endif

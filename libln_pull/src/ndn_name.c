@@ -21,10 +21,10 @@ LN_NDN_EXPORT int ln_ndn_name_next(ln_ndn_bytes* rest, ln_ndn_component* out)
 
 static int hex(char c)
 {
-    return c >= '0' && c <= '9' ? c - '0'
-         : c >= 'a' && c <= 'f' ? c - 'a' + 10
-         : c >= 'A' && c <= 'F' ? c - 'A' + 10
-                                : -1;
+    return c >= '0' && c <= '9'   ? c - '0'
+           : c >= 'a' && c <= 'f' ? c - 'a' + 10
+           : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                  : -1;
 }
 
 /* Decimal digits in [s, e) into *v (no sign, no overflow); 0 or LN_NDN_ENAME. */

@@ -140,16 +140,19 @@ static int flag(const ln_ndn_i_tlv* t, uint8_t* out)
 }
 #endif
 
-static uint32_t clamp32(uint64_t v)
-{
-    return v > 0xffffffffu ? 0xffffffffu : (uint32_t)v;
-}
+static uint32_t clamp32(uint64_t v) { return v > 0xffffffffu ? 0xffffffffu : (uint32_t)v; }
 
 /* ---- Interest ---------------------------------------------------------------------------- */
-static const uint16_t interest_order[] = {
-    LN_NDN_T_NAME, LN_NDN_T_CAN_BE_PREFIX, LN_NDN_T_MUST_BE_FRESH, LN_NDN_T_FORWARDING_HINT,
-    LN_NDN_T_NONCE, LN_NDN_T_INTEREST_LIFETIME, LN_NDN_T_HOP_LIMIT, LN_NDN_T_APP_PARAMETERS,
-    0x2c /* InterestSignatureInfo */, 0x2e /* InterestSignatureValue */};
+static const uint16_t interest_order[] = {LN_NDN_T_NAME,
+                                          LN_NDN_T_CAN_BE_PREFIX,
+                                          LN_NDN_T_MUST_BE_FRESH,
+                                          LN_NDN_T_FORWARDING_HINT,
+                                          LN_NDN_T_NONCE,
+                                          LN_NDN_T_INTEREST_LIFETIME,
+                                          LN_NDN_T_HOP_LIMIT,
+                                          LN_NDN_T_APP_PARAMETERS,
+                                          0x2c /* InterestSignatureInfo */,
+                                          0x2e /* InterestSignatureValue */};
 
 static int interest_field(void* ctx, size_t index, const ln_ndn_i_tlv* t, int depth)
 {

@@ -31,8 +31,8 @@ static void put_decimal(out_buf* o, uint64_t v)
 
 static int unreserved(uint8_t c)
 {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '-' || c == '.' || c == '_' || c == '~';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+           c == '.' || c == '_' || c == '~';
 }
 
 LN_NDN_EXPORT int ln_ndn_name_to_uri(char* out, size_t cap, ln_ndn_bytes name)

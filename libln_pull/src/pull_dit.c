@@ -27,9 +27,8 @@ LN_NDN_EXPORT void ln_pull_options_hardened(ln_pull_options* o, uint32_t deadlin
     o->t_min_ms = deadline_ms < 10 ? deadline_ms : 10;
     o->window = 3;
     o->boot_after = 3;
-    o->flags = LN_PULL_SLOT_OFFSET | LN_PULL_SKIP_OLD | LN_PULL_NACK_JUMP |
-               LN_PULL_SYNC_QUARTER | LN_PULL_KARN | LN_PULL_SYNC_SLOTS | LN_PULL_REFRESH |
-               LN_PULL_AUTO_WINDOW;
+    o->flags = LN_PULL_SLOT_OFFSET | LN_PULL_SKIP_OLD | LN_PULL_NACK_JUMP | LN_PULL_SYNC_QUARTER |
+               LN_PULL_KARN | LN_PULL_SYNC_SLOTS | LN_PULL_REFRESH | LN_PULL_AUTO_WINDOW;
 }
 
 /* xorshift32 */
@@ -206,8 +205,9 @@ static void size_window(ln_pull_sub* s)
 static void rtt_sample(ln_pull_sub* s, uint32_t sent, uint32_t now)
 {
     uint32_t r = (uint32_t)(now - sent) > 4000000u ? 4000000000u : (now - sent) * 1000u;
-    s->srtt_us = !s->srtt_us ? r : r >= s->srtt_us ? s->srtt_us + (r - s->srtt_us) / 8
-                                                 : s->srtt_us - (s->srtt_us - r) / 8;
+    s->srtt_us = !s->srtt_us       ? r
+                 : r >= s->srtt_us ? s->srtt_us + (r - s->srtt_us) / 8
+                                   : s->srtt_us - (s->srtt_us - r) / 8;
     size_window(s);
 }
 
@@ -279,8 +279,8 @@ static void on_timeout(ln_pull_sub* s, ln_pull_slot* slot, uint32_t now)
 
 LN_NDN_EXPORT int ln_pull_start_name(ln_pull_sub* s, const uint8_t* name, size_t size,
                                      const ln_pull_options* o, ln_pull_send_fn send,
-                                     ln_pull_data_fn on_data, ln_pull_event_fn on_event,
-                                     void* user, uint32_t now_ms, uint32_t seed)
+                                     ln_pull_data_fn on_data, ln_pull_event_fn on_event, void* user,
+                                     uint32_t now_ms, uint32_t seed)
 {
     ln_ndn_bytes rest;
     ln_ndn_component c;
@@ -334,8 +334,7 @@ LN_NDN_EXPORT int ln_pull_start(ln_pull_sub* s, const char* uri, const ln_pull_o
 #endif
 
 /* ---- replies -------------------------------------------------------------------------------- */
-static void on_sync_reply(ln_pull_sub* s, uint64_t seq, const ln_ndn_pull_content* c,
-                          uint32_t now)
+static void on_sync_reply(ln_pull_sub* s, uint64_t seq, const ln_ndn_pull_content* c, uint32_t now)
 {
     if (s->opt.poll_ms) { /* polling: every reply counts, the newest sample is delivered */
         s->syncing = 0;
@@ -497,13 +496,26 @@ static int nonneg32(ln_ndn_bytes v, uint32_t* out)
 
 static int decode(const uint8_t* buf, size_t size, ln_ndn_packet* out)
 {
-    static const uint8_t interest_order[] = {LN_NDN_T_NAME, LN_NDN_T_CAN_BE_PREFIX,
-        LN_NDN_T_MUST_BE_FRESH, LN_NDN_T_FORWARDING_HINT, LN_NDN_T_NONCE,
-        LN_NDN_T_INTEREST_LIFETIME, LN_NDN_T_HOP_LIMIT, LN_NDN_T_APP_PARAMETERS, 0x2c, 0x2e};
-    static const uint8_t data_order[] = {LN_NDN_T_NAME, LN_NDN_T_META_INFO, LN_NDN_T_CONTENT,
-        LN_NDN_T_SIGNATURE_INFO, LN_NDN_T_SIGNATURE_VALUE, LN_NDN_T_CONTENT_TYPE,
-        LN_NDN_T_FRESHNESS_PERIOD, LN_NDN_T_FINAL_BLOCK_ID, LN_NDN_T_SIGNATURE_TYPE,
-        LN_NDN_T_KEY_LOCATOR};
+    static const uint8_t interest_order[] = {LN_NDN_T_NAME,
+                                             LN_NDN_T_CAN_BE_PREFIX,
+                                             LN_NDN_T_MUST_BE_FRESH,
+                                             LN_NDN_T_FORWARDING_HINT,
+                                             LN_NDN_T_NONCE,
+                                             LN_NDN_T_INTEREST_LIFETIME,
+                                             LN_NDN_T_HOP_LIMIT,
+                                             LN_NDN_T_APP_PARAMETERS,
+                                             0x2c,
+                                             0x2e};
+    static const uint8_t data_order[] = {LN_NDN_T_NAME,
+                                         LN_NDN_T_META_INFO,
+                                         LN_NDN_T_CONTENT,
+                                         LN_NDN_T_SIGNATURE_INFO,
+                                         LN_NDN_T_SIGNATURE_VALUE,
+                                         LN_NDN_T_CONTENT_TYPE,
+                                         LN_NDN_T_FRESHNESS_PERIOD,
+                                         LN_NDN_T_FINAL_BLOCK_ID,
+                                         LN_NDN_T_SIGNATURE_TYPE,
+                                         LN_NDN_T_KEY_LOCATOR};
     ln_ndn_bytes rest, f[10], sub;
     ln_ndn_i_tlv t, n;
     ln_ndn_component c;
@@ -715,8 +727,7 @@ LN_NDN_EXPORT uint32_t ln_pull_poll(ln_pull_sub* s, uint32_t now_ms)
         ln_pull_slot* expired = NULL;
         for (i = 0; i < LN_PULL_MAX_WINDOW; i++) {
             ln_pull_slot* slot = &s->slots[i];
-            if (slot->seq &&
-                until(now_ms, deadline(s, slot)) == 0 &&
+            if (slot->seq && until(now_ms, deadline(s, slot)) == 0 &&
                 (!expired || slot->seq < expired->seq))
                 expired = slot;
         }

@@ -1,6 +1,8 @@
-//! The attachment of every bridged sample (docs/zenoh.md, python/.../zenoh_bridge/wire.py),
+//! The attachment of every bridged sample (docs/zenoh.md; described in
+//! python/links_and_nodes/wire/zenoh.schema, the Python codec in zenoh_bridge/wire.py),
 //! little-endian, 29 + N bytes: magic "LZ", version 1, flags 0, seq u64, publish time i64 ns,
-//! layout hash u64, N (u8), md name (N bytes of UTF-8).
+//! layout hash u64, N (u8), md name (N bytes of UTF-8).  Both codecs are held to the golden
+//! vectors of tests/golden/zenoh_attachment.txt (the tests below, and pytest).
 
 pub const HEAD_SIZE: usize = 29;
 const MAGIC: &[u8; 2] = b"LZ";
@@ -99,5 +101,86 @@ mod tests {
         bytes.push(0);
         assert!(decode(Some(&bytes)).err().unwrap().contains("for an md name of 3"));
         assert!(Encoder::new("", 1).is_err());
+    }
+
+    const GOLDEN: &str = include_str!("../../tests/golden/zenoh_attachment.txt");
+
+    /// The values of a golden `json` line: a flat object of strings and integers.
+    fn flat_json(text: &str) -> std::collections::HashMap<String, String> {
+        let mut out = std::collections::HashMap::new();
+        let body = text.trim().strip_prefix('{').and_then(|t| t.strip_suffix('}')).unwrap();
+        let mut rest = body.trim();
+        while !rest.is_empty() {
+            let (key, after) = quoted(rest);
+            let after = after.trim_start().strip_prefix(':').unwrap().trim_start();
+            let (value, after) = if after.starts_with('"') {
+                quoted(after)
+            } else {
+                let end = after.find(',').unwrap_or(after.len());
+                (after[..end].trim().to_string(), &after[end..])
+            };
+            out.insert(key, value);
+            rest = after.trim_start().strip_prefix(',').unwrap_or(after).trim_start();
+        }
+        out
+    }
+
+    /// A JSON string at the start of `text` (no escapes but \" and \\) and what follows.
+    fn quoted(text: &str) -> (String, &str) {
+        let mut value = String::new();
+        let mut chars = text.strip_prefix('"').unwrap().char_indices();
+        while let Some((i, c)) = chars.next() {
+            match c {
+                '"' => return (value, &text[i + 2..]),
+                '\\' => value.push(chars.next().unwrap().1),
+                c => value.push(c),
+            }
+        }
+        panic!("unterminated string in {text:?}");
+    }
+
+    fn hex(text: &str) -> Vec<u8> {
+        (0..text.len()).step_by(2).map(|i| u8::from_str_radix(&text[i..i + 2], 16).unwrap())
+            .collect()
+    }
+
+    #[test]
+    fn golden_vectors() {
+        // (line, values, bytes) of each `message` vector
+        let mut vectors: Vec<(usize, std::collections::HashMap<String, String>, Vec<u8>)> = vec![];
+        let mut refusals = 0;
+        for (number, line) in GOLDEN.lines().enumerate().map(|(i, l)| (i + 1, l)) {
+            let (word, rest) = line.split_once(' ').unwrap_or((line, ""));
+            match word {
+                "message" => vectors.push((number, Default::default(), vec![])),
+                "json" => vectors.last_mut().unwrap().1 = flat_json(rest),
+                "hex" => vectors.last_mut().unwrap().2.extend(hex(rest.trim())),
+                "refuse" => {
+                    let (data, why) = rest.split_once(' ').unwrap();
+                    let bytes = if data == "none" { None } else { Some(hex(data.trim_matches('-'))) };
+                    let got = decode(bytes.as_deref());
+                    let text = got.err().unwrap_or_else(|| panic!("line {number}: decoded"));
+                    assert!(text.starts_with(why), "line {number}: {text:?}, not {why:?}");
+                    refusals += 1;
+                }
+                _ => {}
+            }
+        }
+        assert!(vectors.len() >= 3 && refusals >= 5);
+        for (line, values, bytes) in &vectors {
+            let num = |name: &str| values[name].parse::<i128>().unwrap();
+            let (seq, time, hash) = (num("seq") as u64, num("publish_time_ns") as i64,
+                                     num("layout_hash") as u64);
+            let md_name = values["md_name"].as_str();
+            assert_eq!((values["magic"].as_str(), num("version"), num("flags")),
+                       ("4c5a", 1, 0), "line {line}");
+            let encoded = Encoder::new(md_name, hash).unwrap().encode(seq, time);
+            assert_eq!(&encoded, bytes, "line {line}: encoded");
+            let att = decode(Some(bytes)).unwrap_or_else(|e| panic!("line {line}: {e}"));
+            assert_eq!((att.seq, att.layout_hash, att.md_name), (seq, hash, md_name),
+                       "line {line}: decoded");
+            assert_eq!(i64::from_le_bytes(bytes[12..20].try_into().unwrap()), time,
+                       "line {line}: publish time");
+        }
     }
 }

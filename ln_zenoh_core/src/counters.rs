@@ -1,28 +1,26 @@
 //! The counters of one bridged topic, shared with the Python side: it allocates the struct
-//! (ctypes, the same field order as `TopicStats` of stats.py) and reads it when it reports;
-//! the core adds to it.
+//! (ctypes, the fields of `TopicStats` of stats.py in this order) and reads it when it
+//! reports; the core adds to it.  The order is written once here and exported as NAMES
+//! (lnz_counter_names), which native.py checks against its own when it loads the core.
 
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
-#[repr(C)]
-pub struct Counters {
-    pub read: AtomicU64,
-    pub sent: AtomicU64,
-    pub unmatched: AtomicU64,
-    pub rate_limited: AtomicU64,
-    pub overruns: AtomicU64,
-    pub received: AtomicU64,
-    pub published: AtomicU64,
-    pub bad_attachment: AtomicU64,
-    pub bad_size: AtomicU64,
-    pub refused: AtomicU64,
-    pub md_unavailable: AtomicU64,
-    pub superseded: AtomicU64,
-    pub gaps: AtomicU64,
-    pub bytes: AtomicU64,
-    pub errors: AtomicU64,
-    pub last_seq: AtomicU64,
-    pub forced: AtomicU64,
+/// Declares Counters and NAMES, its field names in order, from one list.
+macro_rules! counters {
+    ($($name:ident),* $(,)?) => {
+        #[repr(C)]
+        pub struct Counters {
+            $(pub $name: AtomicU64,)*
+        }
+
+        /// The fields of Counters, space-separated, NUL-terminated.
+        pub const NAMES: &str = concat!($(stringify!($name), " ",)* "\0");
+    };
+}
+
+counters! {
+    read, sent, unmatched, rate_limited, overruns, received, published, bad_attachment,
+    bad_size, refused, md_unavailable, superseded, gaps, bytes, errors, last_seq, forced,
 }
 
 /// A pointer to the Python side's counters, valid until the object using it is closed.
@@ -51,4 +49,17 @@ pub fn set(counter: &AtomicU64, n: u64) {
 
 pub fn get(counter: &AtomicU64) -> u64 {
     counter.load(Relaxed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_follow_the_struct() {
+        let n = NAMES.trim_end_matches('\0').split_whitespace().count();
+        assert_eq!(n, 17);
+        assert_eq!(std::mem::size_of::<Counters>(), n * 8);
+        assert!(NAMES.starts_with("read sent ") && NAMES.ends_with(" last_seq forced \0"));
+    }
 }

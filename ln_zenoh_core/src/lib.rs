@@ -10,6 +10,10 @@
 //!
 //! C ABI (ctypes declarations in python/links_and_nodes/zenoh_bridge/native.py): every
 //! function that can fail returns NULL or a negative number and writes why into err[errlen].
+//! What both sides must agree on beyond the signatures is written once: the attachment in
+//! python/links_and_nodes/wire/zenoh.schema (golden vectors in tests/golden), the counters'
+//! order and the libln function table here (exported, checked by native.py when it loads the
+//! core), the error codes in ln.h's table (build.rs).
 //! Safety, for every function: handles are the ones this library returned and not yet closed,
 //! strings are NUL-terminated, buffers are as large as their sizes say, and the callbacks
 //! stay callable until the object they were given to is closed.
@@ -79,6 +83,20 @@ fn guarded<T>(err: *mut c_char, errlen: usize, f: impl FnOnce() -> Result<T, Str
 
 fn boxed<T>(v: Option<T>) -> *mut T {
     v.map_or(std::ptr::null_mut(), |v| Box::into_raw(Box::new(v)))
+}
+
+/// The counters' field names in their order (counters.rs), space-separated: the Python side
+/// checks them against its struct before it uses the core.  A static string.
+#[no_mangle]
+pub extern "C" fn lnz_counter_names() -> *const c_char {
+    counters::NAMES.as_ptr() as *const c_char
+}
+
+/// The libln functions lnz_open's table holds, in order, as `ln_` + these space-separated
+/// names (libln.rs): the Python side builds the table from them.  A static string.
+#[no_mangle]
+pub extern "C" fn lnz_libln_functions() -> *const c_char {
+    libln::FN_NAMES.as_ptr() as *const c_char
 }
 
 /// Opens the Zenoh session from a configuration in JSON5 (what the Python side built from

@@ -1,12 +1,10 @@
 //! The few libln calls the core makes, as function pointers the Python bridge hands over
 //! (it has libln loaded already, so the core needs no link-time dependency on it), and the
-//! codes of ln.h's error table it tells apart.
+//! codes of ln.h's error table (LN_ETIMEOUT, ...), generated from it by build.rs.
 
 use std::ffi::{c_char, c_int, c_void, CStr};
 
-pub const LN_ETIMEOUT: c_int = -3;
-pub const LN_EAGAIN: c_int = -4;
-pub const LN_EOVERRUN: c_int = -15;
+include!(concat!(env!("OUT_DIR"), "/ln_errors.rs"));
 
 /// struct ln_sample_info of ln.h.
 #[repr(C)]
@@ -24,18 +22,30 @@ type StrError = unsafe extern "C" fn(c_int) -> *const c_char;
 type WriteLoan = unsafe extern "C" fn(*mut c_void, *mut *mut c_void, f64) -> c_int;
 type WriteEnd = unsafe extern "C" fn(*mut c_void) -> c_int;
 
-/// ln_read_borrow, ln_read_release, ln_write, ln_strerror, ln_write_loan, ln_write_commit and
-/// ln_write_abort of the caller's libln (this order: native.py's LnFns).
-#[repr(C)]
-#[derive(Clone, Copy)]
-pub struct LnFns {
-    pub read_borrow: ReadBorrow,
-    pub read_release: ReadRelease,
-    pub write: Write,
-    pub strerror: StrError,
-    pub write_loan: WriteLoan,
-    pub write_commit: WriteEnd,
-    pub write_abort: WriteEnd,
+/// Declares the table and FN_NAMES, its field names in order, from one list.
+macro_rules! fn_table {
+    ($($name:ident: $ty:ty),* $(,)?) => {
+        /// The functions `ln_<field>` of the caller's libln, in this order; the Python side
+        /// builds its struct from FN_NAMES (lnz_libln_functions), so the order lives here.
+        #[repr(C)]
+        #[derive(Clone, Copy)]
+        pub struct LnFns {
+            $(pub $name: $ty,)*
+        }
+
+        /// The fields of LnFns, space-separated, NUL-terminated.
+        pub const FN_NAMES: &str = concat!($(stringify!($name), " ",)* "\0");
+    };
+}
+
+fn_table! {
+    read_borrow: ReadBorrow,
+    read_release: ReadRelease,
+    write: Write,
+    strerror: StrError,
+    write_loan: WriteLoan,
+    write_commit: WriteEnd,
+    write_abort: WriteEnd,
 }
 
 impl LnFns {
@@ -59,3 +69,16 @@ pub struct Port(pub *mut c_void);
 // "one at a time" (one reader thread per outbound port, the write lock of an inbound topic).
 unsafe impl Send for Port {}
 unsafe impl Sync for Port {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fn_names_follow_the_struct() {
+        let names: Vec<&str> = FN_NAMES.trim_end_matches('\0').split_whitespace().collect();
+        assert_eq!(names, ["read_borrow", "read_release", "write", "strerror", "write_loan",
+                           "write_commit", "write_abort"]);
+        assert_eq!(std::mem::size_of::<LnFns>(), names.len() * std::mem::size_of::<usize>());
+    }
+}

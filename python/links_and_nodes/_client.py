@@ -26,9 +26,8 @@ from contextlib import contextmanager
 from typing import Any, NoReturn
 
 from . import _clientlib as C
-from . import _services
+from . import _services, transports
 from . import _waits as W
-from . import transports
 from ._libln import ERROR_CLASSES, ERRORS_BY_CODE, error_from_code
 from ._services import Handler, provided_service, service
 from .md_loader import message_class

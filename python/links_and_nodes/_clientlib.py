@@ -10,7 +10,7 @@ from __future__ import annotations
 import ctypes
 from typing import Any
 
-from ._libln import _declare, error_from_code
+from ._libln import ERRORS_BY_CODE, _declare, error_from_code
 
 c_double, c_int, c_size_t, c_uint32, c_uint64 = (
     ctypes.c_double, ctypes.c_int, ctypes.c_size_t, ctypes.c_uint32, ctypes.c_uint64)
@@ -44,9 +44,17 @@ def _check(result: int, func: Any, args: tuple[Any, ...]) -> int:
     return result
 
 
-LN_EAGAIN = -4
-LN_ETIMEOUT = -3
-LN_EOVERRUN = -15
+def _error_code(name: str) -> int:
+    """The code of LN_<name> in libln's error table (as loaded: _libln.ERRORS_BY_CODE)."""
+    code = next((code for code, cls in ERRORS_BY_CODE.items() if cls.name == name), None)
+    if code is None:
+        raise ImportError(f"libln's error table has no LN_{name}")
+    return code
+
+
+LN_EAGAIN = _error_code("EAGAIN")
+LN_ETIMEOUT = _error_code("ETIMEOUT")
+LN_EOVERRUN = _error_code("EOVERRUN")
 LN_PUBLISH_WAIT_FOR_SUBSCRIBERS = 0x1
 LN_CLIENT_NO_RECONNECT = 0x1
 LN_SUBSCRIBE_UDP = 0x100
@@ -86,7 +94,7 @@ ln_control = _declare("ln_control", c_int, [c_void_p, c_char_p, ctypes.POINTER(c
 ln_free = _declare("ln_free", None, [c_void_p])
 
 # ---- services ----------------------------------------------------------------------------
-LN_EINTR = -21
+LN_EINTR = _error_code("EINTR")
 # int handler(ln_client*, ln_service_request*, void* user_data); ctypes takes the GIL for it,
 # so libln's pool threads may run Python handlers.
 SERVICE_HANDLER = ctypes.CFUNCTYPE(c_int, c_void_p, c_void_p, c_void_p)

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from . import _eventlib as E
-from ._libln import ERROR_CLASSES, ERRORS_BY_CODE
 from ._handles import CallerHandle, HandlerHandle, handling, keep_for_wait
+from ._libln import ERROR_CLASSES, ERRORS_BY_CODE
 from ._services import _name_arg, _timeout, error_text
 from .md_loader import message_class
 from .md_types import LnStruct, own_dynamic_data

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from . import _clientlib as C
 from . import _waits as W
-from ._handles import CallerHandle, HandlerHandle, thread_state, handling, keep_for_wait
+from ._handles import CallerHandle, HandlerHandle, handling, keep_for_wait, thread_state
 from ._libln import ERROR_CLASSES, error_from_code
 from .md_loader import message_class
 from .md_types import LnStruct, own_dynamic_data

@@ -26,14 +26,8 @@
 
 /* client.c stops and frees service groups on destroy; these tests link no service code and
  * create no groups. */
-void ln_svc_client_stop_pools(ln_client* c)
-{
-    (void)c;
-}
-void ln_svc_client_free(ln_client* c)
-{
-    (void)c;
-}
+void ln_svc_client_stop_pools(ln_client* c) { (void)c; }
+void ln_svc_client_free(ln_client* c) { (void)c; }
 
 #include "ln_test.h"
 
@@ -44,15 +38,15 @@ void ln_svc_client_free(ln_client* c)
 
 struct fake {
     int listen_fd, port;
-    char address[32];     /* "127.0.0.1:PORT" */
+    char address[32]; /* "127.0.0.1:PORT" */
     pthread_t thread;
     void (*script)(struct fake* f, int fd);
-    int variant;          /* for scripts that come in several flavours */
-    int sessions;         /* connections to accept (fake_start: 1) */
-    int session;          /* the one the script runs for, from 0 */
-    sem_t go;             /* posted by the test to let a stalled script continue */
-    sem_t reached;        /* posted by a script to tell the test where it is */
-    int errors;           /* checks that failed inside the fake (read after fake_stop) */
+    int variant;   /* for scripts that come in several flavours */
+    int sessions;  /* connections to accept (fake_start: 1) */
+    int session;   /* the one the script runs for, from 0 */
+    sem_t go;      /* posted by the test to let a stalled script continue */
+    sem_t reached; /* posted by a script to tell the test where it is */
+    int errors;    /* checks that failed inside the fake (read after fake_stop) */
     int connected, saw_eof;
     uint32_t hello_magic, hello_pid, hello_flags;
     uint16_t hello_version;
@@ -62,13 +56,12 @@ struct fake {
     uint8_t rx[65536];
 };
 
-#define FAKE_CHECK(f, cond)                                                                   \
-    do {                                                                                      \
-        if (!(cond)) {                                                                        \
-            fprintf(stderr, "%s:%d: fake manager: check failed: %s\n", __FILE__, __LINE__,   \
-                    #cond);                                                                   \
-            (f)->errors++;                                                                    \
-        }                                                                                     \
+#define FAKE_CHECK(f, cond)                                                                        \
+    do {                                                                                           \
+        if (!(cond)) {                                                                             \
+            fprintf(stderr, "%s:%d: fake manager: check failed: %s\n", __FILE__, __LINE__, #cond); \
+            (f)->errors++;                                                                         \
+        }                                                                                          \
     } while (0)
 
 /* 0 once all len bytes arrived, -1 at EOF (the client closed), -2 on an error or when
@@ -277,8 +270,8 @@ FAKE_FN void fake_start_sessions(struct fake* f, void (*script)(struct fake*, in
     sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     socklen_t len = sizeof sa;
     f->listen_fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (f->listen_fd < 0 || bind(f->listen_fd, (struct sockaddr*)&sa, sizeof sa) != 0
-        || listen(f->listen_fd, 4) != 0 || getsockname(f->listen_fd, (struct sockaddr*)&sa, &len)) {
+    if (f->listen_fd < 0 || bind(f->listen_fd, (struct sockaddr*)&sa, sizeof sa) != 0 ||
+        listen(f->listen_fd, 4) != 0 || getsockname(f->listen_fd, (struct sockaddr*)&sa, &len)) {
         perror("fake manager: cannot listen");
         exit(2);
     }

@@ -15,31 +15,31 @@ static inline void ln_test_fail(const char* file, int line, const char* what)
     ln_test_failures++;
 }
 
-#define LN_CHECK(cond)                                                                        \
-    do {                                                                                      \
-        if (!(cond))                                                                          \
-            ln_test_fail(__FILE__, __LINE__, #cond);                                          \
+#define LN_CHECK(cond)                                                                             \
+    do {                                                                                           \
+        if (!(cond))                                                                               \
+            ln_test_fail(__FILE__, __LINE__, #cond);                                               \
     } while (0)
 
 /* Integers of any width and signedness, printed as long long. */
-#define LN_CHECK_EQ(a, b)                                                                     \
-    do {                                                                                      \
-        long long ln_a_ = (long long)(a), ln_b_ = (long long)(b);                             \
-        if (ln_a_ != ln_b_) {                                                                 \
-            ln_test_fail(__FILE__, __LINE__, #a " == " #b);                                   \
-            fprintf(stderr, "    %lld != %lld\n", ln_a_, ln_b_);                              \
-        }                                                                                     \
+#define LN_CHECK_EQ(a, b)                                                                          \
+    do {                                                                                           \
+        long long ln_a_ = (long long)(a), ln_b_ = (long long)(b);                                  \
+        if (ln_a_ != ln_b_) {                                                                      \
+            ln_test_fail(__FILE__, __LINE__, #a " == " #b);                                        \
+            fprintf(stderr, "    %lld != %lld\n", ln_a_, ln_b_);                                   \
+        }                                                                                          \
     } while (0)
 
 /* Strings; NULL compares equal only to NULL. */
-#define LN_CHECK_STREQ(a, b)                                                                  \
-    do {                                                                                      \
-        const char *ln_a_ = (a), *ln_b_ = (b);                                                \
-        if (ln_a_ == NULL || ln_b_ == NULL ? ln_a_ != ln_b_ : strcmp(ln_a_, ln_b_) != 0) {    \
-            ln_test_fail(__FILE__, __LINE__, #a " == " #b);                                   \
-            fprintf(stderr, "    \"%s\" != \"%s\"\n", ln_a_ ? ln_a_ : "(null)",               \
-                    ln_b_ ? ln_b_ : "(null)");                                                \
-        }                                                                                     \
+#define LN_CHECK_STREQ(a, b)                                                                       \
+    do {                                                                                           \
+        const char *ln_a_ = (a), *ln_b_ = (b);                                                     \
+        if (ln_a_ == NULL || ln_b_ == NULL ? ln_a_ != ln_b_ : strcmp(ln_a_, ln_b_) != 0) {         \
+            ln_test_fail(__FILE__, __LINE__, #a " == " #b);                                        \
+            fprintf(stderr, "    \"%s\" != \"%s\"\n", ln_a_ ? ln_a_ : "(null)",                    \
+                    ln_b_ ? ln_b_ : "(null)");                                                     \
+        }                                                                                          \
     } while (0)
 
 static inline void ln_test_run(const char* name, void (*test)(void))

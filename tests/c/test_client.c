@@ -121,10 +121,7 @@ static void test_refused_with_other_code(void)
     LN_CHECK(error_has("too many clients"));
 }
 
-static void script_close_after_hello(struct fake* f, int fd)
-{
-    fake_hello(f, fd);
-}
+static void script_close_after_hello(struct fake* f, int fd) { fake_hello(f, fd); }
 
 static void test_manager_closes_during_handshake(void)
 {

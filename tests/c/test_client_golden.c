@@ -14,7 +14,7 @@
 #define MAX_LINE 4096
 
 struct vector {
-    int line;               /* of the `TYPE field=value ...` line */
+    int line; /* of the `TYPE field=value ...` line */
     char spec[MAX_LINE];
     uint8_t frame[MAX_LINE];
     size_t frame_len;
@@ -101,8 +101,8 @@ static int next_token(const char** p, char* out, size_t* len, int* quoted)
         *quoted = 1;
         for (s++; *s != '"' && *s != '\0'; s++) {
             if (*s == '\\' && s[1] == 'x') {
-                out[(*len)++] = (char)(hex_digit((unsigned char)s[2]) << 4
-                                       | hex_digit((unsigned char)s[3]));
+                out[(*len)++] =
+                    (char)(hex_digit((unsigned char)s[2]) << 4 | hex_digit((unsigned char)s[3]));
                 s += 3;
             } else {
                 if (*s == '\\')
@@ -154,11 +154,20 @@ static int fill(const ln_wire_msg_info* info, const char* spec, unsigned char* m
         long long n = strtoll(value, NULL, 0);
         unsigned long long u = strtoull(value, NULL, 0);
         switch (f->kind) {
-        case 'w': *(uint16_t*)(void*)at = (uint16_t)u; break;
-        case 'd': *(uint32_t*)(void*)at = (uint32_t)u; break;
-        case 'q': *(uint64_t*)(void*)at = (uint64_t)u; break;
-        case 'i': *(int32_t*)(void*)at = (int32_t)n; break;
-        default: return 0;
+        case 'w':
+            *(uint16_t*)(void*)at = (uint16_t)u;
+            break;
+        case 'd':
+            *(uint32_t*)(void*)at = (uint32_t)u;
+            break;
+        case 'q':
+            *(uint64_t*)(void*)at = (uint64_t)u;
+            break;
+        case 'i':
+            *(int32_t*)(void*)at = (int32_t)n;
+            break;
+        default:
+            return 0;
         }
     }
     return k == info->field_count;

@@ -13,8 +13,8 @@ static int unused_port(void)
     sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     socklen_t len = sizeof sa;
     int fd = socket(AF_INET, SOCK_STREAM, 0);
-    LN_CHECK(fd >= 0 && bind(fd, (struct sockaddr*)&sa, sizeof sa) == 0
-             && getsockname(fd, (struct sockaddr*)&sa, &len) == 0);
+    LN_CHECK(fd >= 0 && bind(fd, (struct sockaddr*)&sa, sizeof sa) == 0 &&
+             getsockname(fd, (struct sockaddr*)&sa, &len) == 0);
     close(fd);
     return ntohs(sa.sin_port);
 }
@@ -102,8 +102,9 @@ static void test_program_name_override(void)
 
 static void test_bad_addresses(void)
 {
-    const char* bad[] = {"nohost", "host:", "host:0", "host:65536", "host:123456", "host:12a",
-                         "host:+80", "host: 80", "::1:5555", "[::1]", ":", ""};
+    const char* bad[] = {"nohost",      "host:",    "host:0",   "host:65536",
+                         "host:123456", "host:12a", "host:+80", "host: 80",
+                         "::1:5555",    "[::1]",    ":",        ""};
     unsetenv("LN_MANAGER");
     for (size_t i = 0; i < LN_ARRAY_SIZE(bad); i++) {
         ln_client_options o;

@@ -20,10 +20,7 @@ static const struct entry table[] = {
 };
 enum { ENTRIES = sizeof(table) / sizeof(table[0]) };
 
-static void test_count_matches_header(void)
-{
-    LN_CHECK_EQ(ln_error_count(), ENTRIES);
-}
+static void test_count_matches_header(void) { LN_CHECK_EQ(ln_error_count(), ENTRIES); }
 
 static void test_codes_negative_unique_contiguous(void)
 {

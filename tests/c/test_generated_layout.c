@@ -75,9 +75,9 @@ static void test_service(void)
 static int service_arguments(const char* md_name, uint64_t layout_hash, const char* signature)
 {
     LN_CHECK(layout_hash != 0);
-    return strcmp(md_name, ROBOT_SET_GAINS_MD_NAME) == 0
-           && layout_hash == ROBOT_SET_GAINS_LAYOUT_HASH
-           && strcmp(signature, ROBOT_SET_GAINS_SIGNATURE) == 0;
+    return strcmp(md_name, ROBOT_SET_GAINS_MD_NAME) == 0 &&
+           layout_hash == ROBOT_SET_GAINS_LAYOUT_HASH &&
+           strcmp(signature, ROBOT_SET_GAINS_SIGNATURE) == 0;
 }
 
 static void test_service_arguments(void)

@@ -12,10 +12,10 @@
 #include "robot_messages.h"
 #include "robot_messages.hpp"
 
-#define CHECK_SAME_FIELD(c_type, cpp_type, field)                                             \
-    do {                                                                                      \
-        LN_CHECK_EQ(offsetof(c_type, field), offsetof(cpp_type, field));                      \
-        LN_CHECK_EQ(sizeof(c_type::field), sizeof(cpp_type::field));                          \
+#define CHECK_SAME_FIELD(c_type, cpp_type, field)                                                  \
+    do {                                                                                           \
+        LN_CHECK_EQ(offsetof(c_type, field), offsetof(cpp_type, field));                           \
+        LN_CHECK_EQ(sizeof(c_type::field), sizeof(cpp_type::field));                               \
     } while (0)
 
 #define CHECK_SAME_STRING(a, b) LN_CHECK(std::string(a) == std::string(b))

@@ -39,8 +39,15 @@ static void test_refusal(void)
 
 static void test_malformed(void)
 {
-    const char* bad[] = {"", "[]", "{", "{\"ok\"", "{\"ok\" true}", "{\"a\": \"x, \"ok\": true",
-                         "{\"a\": [1, 2, \"ok\": true}", "null", "{\"ok\": tru"};
+    const char* bad[] = {"",
+                         "[]",
+                         "{",
+                         "{\"ok\"",
+                         "{\"ok\" true}",
+                         "{\"a\": \"x, \"ok\": true",
+                         "{\"a\": [1, 2, \"ok\": true}",
+                         "null",
+                         "{\"ok\": tru"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
         LN_CHECK_EQ(ln_json_bool(bad[i], "ok"), -1);
     char out[8];

@@ -37,14 +37,14 @@ static int uri_is(ln_ndn_bytes name, const char* uri)
  * with payload 00..17, its digest computed independently (Python's hashlib). */
 #define GOLD_INTEREST "051c0711080272740807636d645f76656c3a0204d20a04010203040c0164"
 #define GOLD_SYNC "05220713080272740807636d645f76656c080473796e63210012000a04010203040c0164"
-#define GOLD_DATA                                                                          \
-    "065d0711080272740807636d645f76656c3a0204d21407180100190203e8151800010203040506070809" \
-    "0a0b0c0d0e0f101112131415161716031b010017201209acce45ef7fac036a0d57cf4ddfa4a2705526ad" \
+#define GOLD_DATA                                                                                  \
+    "065d0711080272740807636d645f76656c3a0204d21407180100190203e8151800010203040506070809"         \
+    "0a0b0c0d0e0f101112131415161716031b010017201209acce45ef7fac036a0d57cf4ddfa4a2705526ad"         \
     "5aca2db9528c597bae7e45"
 /* The same Data as our encoder writes it (ContentType BLOB omitted), digest from hashlib. */
-#define OUR_DATA                                                                           \
-    "065a0711080272740807636d645f76656c3a0204d21404190203e8151800010203040506070809" \
-    "0a0b0c0d0e0f101112131415161716031b01001720b61930501be4a69bd020ead27f168ebdc929b8" \
+#define OUR_DATA                                                                                   \
+    "065a0711080272740807636d645f76656c3a0204d21404190203e8151800010203040506070809"               \
+    "0a0b0c0d0e0f101112131415161716031b01001720b61930501be4a69bd020ead27f168ebdc929b8"             \
     "7a947a81660e76d1eb1570057b"
 
 static void test_golden_interests(void)
@@ -138,8 +138,12 @@ static void test_varnum_edges(void)
     static const struct {
         uint64_t v;
         const char* hex;
-    } cases[] = {{0, "00"}, {252, "fc"}, {253, "fd00fd"}, {65535, "fdffff"},
-                 {65536, "fe00010000"}, {0xffffffffu, "feffffffff"},
+    } cases[] = {{0, "00"},
+                 {252, "fc"},
+                 {253, "fd00fd"},
+                 {65535, "fdffff"},
+                 {65536, "fe00010000"},
+                 {0xffffffffu, "feffffffff"},
                  {0x100000000ull, "ff0000000100000000"}};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         uint8_t b[16];
@@ -256,15 +260,15 @@ static int interest_with(const char* before_nonce, const char* after_nonce)
 static void test_critical_rule(void)
 {
     LN_CHECK_EQ(interest_with("", ""), LN_NDN_OK);
-    LN_CHECK_EQ(interest_with("8000", ""), LN_NDN_OK);          /* unknown even: skipped */
-    LN_CHECK_EQ(interest_with("8100", ""), LN_NDN_ECRITICAL);   /* unknown odd */
-    LN_CHECK_EQ(interest_with("1000", ""), LN_NDN_ECRITICAL);   /* unknown below 32 */
-    LN_CHECK_EQ(interest_with("fd01f400", ""), LN_NDN_OK);      /* 500, even */
+    LN_CHECK_EQ(interest_with("8000", ""), LN_NDN_OK);        /* unknown even: skipped */
+    LN_CHECK_EQ(interest_with("8100", ""), LN_NDN_ECRITICAL); /* unknown odd */
+    LN_CHECK_EQ(interest_with("1000", ""), LN_NDN_ECRITICAL); /* unknown below 32 */
+    LN_CHECK_EQ(interest_with("fd01f400", ""), LN_NDN_OK);    /* 500, even */
     LN_CHECK_EQ(interest_with("fd01f500", ""), LN_NDN_ECRITICAL);
-    LN_CHECK_EQ(interest_with("", "2100"), LN_NDN_ECRITICAL);   /* CanBePrefix out of order */
-    LN_CHECK_EQ(interest_with("", "0c0164"), LN_NDN_OK);        /* in order */
+    LN_CHECK_EQ(interest_with("", "2100"), LN_NDN_ECRITICAL);         /* CanBePrefix out of order */
+    LN_CHECK_EQ(interest_with("", "0c0164"), LN_NDN_OK);              /* in order */
     LN_CHECK_EQ(interest_with("", "0c01640c0164"), LN_NDN_ECRITICAL); /* repeated: critical */
-    LN_CHECK_EQ(interest_with("", "220120220120"), LN_NDN_OK);   /* HopLimit twice: even */
+    LN_CHECK_EQ(interest_with("", "220120220120"), LN_NDN_OK);        /* HopLimit twice: even */
     LN_CHECK_EQ(interest_with("", "0a0401020304"), LN_NDN_ECRITICAL); /* a second Nonce */
     LN_CHECK_EQ(interest_with("", "0c0300000a"), LN_NDN_EMALFORMED);  /* 3-byte integer */
     LN_CHECK_EQ(interest_with("2101ff", ""), LN_NDN_EMALFORMED);      /* a flag with a value */
@@ -279,24 +283,42 @@ static void test_critical_rule(void)
     LN_CHECK_EQ(ln_ndn_decode(b, unhex("07030801ff", b), &p), LN_NDN_EUNSUPPORTED);
     /* Data: unknown critical element in MetaInfo and in SignatureInfo, a missing signature */
     uint8_t d[128];
-    size_t n = unhex("06160703080161" "14038101ff" "150161" "16031b0100" "1700", d);
+    size_t n = unhex("06160703080161"
+                     "14038101ff"
+                     "150161"
+                     "16031b0100"
+                     "1700",
+                     d);
     d[1] = (uint8_t)(n - 2);
     LN_CHECK_EQ(ln_ndn_decode(d, n, &p), LN_NDN_ECRITICAL);
     d[7 + 2] = 0x80; /* 0x81 -> 0x80: skipped */
     LN_CHECK_EQ(ln_ndn_decode(d, n, &p), LN_NDN_OK);
-    n = unhex("06110703080161" "150161" "16031b0100", d); /* no SignatureValue */
+    n = unhex("06110703080161"
+              "150161"
+              "16031b0100",
+              d); /* no SignatureValue */
     d[1] = (uint8_t)(n - 2);
     LN_CHECK_EQ(ln_ndn_decode(d, n, &p), LN_NDN_EMALFORMED);
-    n = unhex("06110703080161" "150161" "1603810100" "1700", d); /* no SignatureType */
+    n = unhex("06110703080161"
+              "150161"
+              "1603810100"
+              "1700",
+              d); /* no SignatureType */
     d[1] = (uint8_t)(n - 2);
     LN_CHECK_EQ(ln_ndn_decode(d, n, &p), LN_NDN_ECRITICAL);
     /* pull content: unknown even skipped, odd critical */
     ln_ndn_pull_content c;
-    ln_ndn_bytes x = {d, unhex("800107" "880100" "86026869", d)};
+    ln_ndn_bytes x = {d, unhex("800107"
+                               "880100"
+                               "86026869",
+                               d)};
     LN_CHECK_EQ(ln_ndn_decode_pull_content(x, &c), LN_NDN_OK);
     LN_CHECK_EQ(c.latest_seq, 7);
     LN_CHECK_EQ(c.payload.size, 2);
-    x.size = unhex("800107" "870100" "86026869", d);
+    x.size = unhex("800107"
+                   "870100"
+                   "86026869",
+                   d);
     LN_CHECK_EQ(ln_ndn_decode_pull_content(x, &c), LN_NDN_ECRITICAL);
     LN_CHECK_EQ(c.latest_seq, 0);
 }
@@ -356,7 +378,11 @@ static void test_lp(void)
 
     /* Nack header with reason NoRoute (150); unknown ignorable header TxSequence 0x0348 */
     char hex[200];
-    snprintf(hex, sizeof hex, "64%02x" "fd0348020001" "fd032005fd03210196" "50%02x" GOLD_INTEREST,
+    snprintf(hex, sizeof hex,
+             "64%02x"
+             "fd0348020001"
+             "fd032005fd03210196"
+             "50%02x" GOLD_INTEREST,
              (unsigned)(6 + 9 + 2 + n), (unsigned)n);
     size = (int)unhex(hex, lp);
     LN_CHECK_EQ(ln_ndn_decode(lp, (size_t)size, &p), LN_NDN_OK);
@@ -369,14 +395,21 @@ static void test_lp(void)
     LN_CHECK_EQ(ln_ndn_decode(lp, (size_t)size, &p), LN_NDN_ECRITICAL);
     /* a Nack around Data; an LpPacket with no Fragment; two fragments needed */
     n = unhex(GOLD_DATA, b);
-    snprintf(hex, sizeof hex, "64%02x" "fd032000" "50%02x", (unsigned)(4 + 2 + n), (unsigned)n);
+    snprintf(hex, sizeof hex,
+             "64%02x"
+             "fd032000"
+             "50%02x",
+             (unsigned)(4 + 2 + n), (unsigned)n);
     size = (int)unhex(hex, lp);
     memcpy(lp + size, b, n);
     LN_CHECK_EQ(ln_ndn_decode(lp, (size_t)size + n, &p), LN_NDN_EMALFORMED);
     LN_CHECK_EQ(ln_ndn_decode(lp, unhex("6403510100", lp), &p), LN_NDN_EUNSUPPORTED);
     n = unhex(GOLD_INTEREST, b);
-    snprintf(hex, sizeof hex, "64%02x" "530102" "50%02x" GOLD_INTEREST, (unsigned)(3 + 2 + n),
-             (unsigned)n);
+    snprintf(hex, sizeof hex,
+             "64%02x"
+             "530102"
+             "50%02x" GOLD_INTEREST,
+             (unsigned)(3 + 2 + n), (unsigned)n);
     LN_CHECK_EQ(ln_ndn_decode(lp, unhex(hex, lp), &p), LN_NDN_EUNSUPPORTED);
 }
 
@@ -387,8 +420,10 @@ static void test_names(void)
     ln_ndn_bytes name, prefix;
     ln_ndn_component c;
     int n;
-    static const char* bad[] = {"", "a", "//", "/a//b", "/%zz", "/%4", "/seq=", "/seq=x1",
-                                "/seq=18446744073709551616", "/..", "/a b", "/0=x",
+    static const char* bad[] = {"",        "a",       "//",
+                                "/a//b",   "/%zz",    "/%4",
+                                "/seq=",   "/seq=x1", "/seq=18446744073709551616",
+                                "/..",     "/a b",    "/0=x",
                                 "/65536=x"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         if (ln_ndn_name_from_uri(b, sizeof b, bad[i]) != LN_NDN_ENAME)
@@ -424,7 +459,8 @@ static void test_names(void)
     /* components */
     ln_ndn_bytes rest = name;
     LN_CHECK_EQ(ln_ndn_name_next(&rest, &c), 1);
-    LN_CHECK(c.type == LN_NDN_T_GENERIC && same(c.value.data, c.value.size, (const uint8_t*)"ln", 2));
+    LN_CHECK(c.type == LN_NDN_T_GENERIC &&
+             same(c.value.data, c.value.size, (const uint8_t*)"ln", 2));
     LN_CHECK_EQ(ln_ndn_name_next(&rest, &c), 1);
     LN_CHECK_EQ(ln_ndn_name_next(&rest, &c), 1);
     LN_CHECK_EQ(ln_ndn_name_next(&rest, &c), 1);
@@ -450,7 +486,8 @@ static void test_names(void)
     LN_CHECK_EQ(n, 3 + 4);
     name.size = (size_t)n;
     LN_CHECK(uri_is(name, "/t/seq=256"));
-    LN_CHECK_EQ(ln_ndn_name_append(b, 9, 7, LN_NDN_T_GENERIC, (const uint8_t*)"x", 1), LN_NDN_ESPACE);
+    LN_CHECK_EQ(ln_ndn_name_append(b, 9, 7, LN_NDN_T_GENERIC, (const uint8_t*)"x", 1),
+                LN_NDN_ESPACE);
     LN_CHECK_EQ(ln_ndn_name_append(b, 10, 7, LN_NDN_T_GENERIC, (const uint8_t*)"x", 1), 10);
     LN_CHECK_EQ(ln_ndn_name_append(b, 64, 7, 0, NULL, 0), LN_NDN_ENAME);
     LN_CHECK_EQ(ln_ndn_name_append(b, 64, 7, 0x10000, NULL, 0), LN_NDN_ENAME);
@@ -468,8 +505,8 @@ static uint32_t rnd(void)
 
 static size_t random_name(uint8_t* b, size_t cap)
 {
-    static const uint32_t types[] = {LN_NDN_T_GENERIC, LN_NDN_T_GENERIC, LN_NDN_T_SEQUENCE_NUM,
-                                     1, 2, 0x32, 0xfd, 0xffff};
+    static const uint32_t types[] = {
+        LN_NDN_T_GENERIC, LN_NDN_T_GENERIC, LN_NDN_T_SEQUENCE_NUM, 1, 2, 0x32, 0xfd, 0xffff};
     size_t size = 0;
     int parts = 1 + (int)(rnd() % 5), r;
     for (int i = 0; i < parts; i++, size = r < 0 ? size : (size_t)r) { /* full: stop growing */
@@ -499,7 +536,8 @@ static void test_round_trip(void)
         /* URI round trip */
         int n = ln_ndn_name_to_uri(uri, sizeof uri, nb);
         LN_CHECK(n > 0);
-        LN_CHECK(same(again, (size_t)ln_ndn_name_from_uri(again, sizeof again, uri), name, nb.size));
+        LN_CHECK(
+            same(again, (size_t)ln_ndn_name_from_uri(again, sizeof again, uri), name, nb.size));
         /* Interest */
         ln_ndn_interest in;
         memset(&in, 0, sizeof in);

@@ -38,8 +38,8 @@ static void test_json_reader(void)
     LN_CHECK_EQ(ln_pj_next_member(&p, &first, key, sizeof key), 0);
     LN_CHECK_STREQ(ln_pj_ws(p), "tail");
 
-    const char* bad[] = {"[1,]", "{\"a\" 1}", "[01]", "[1.]", "\"\\x\"", "{\"a\":1,}", "[",
-                         "\"abc", "-", "1e", "nul"};
+    const char* bad[] = {"[1,]", "{\"a\" 1}", "[01]", "[1.]", "\"\\x\"", "{\"a\":1,}",
+                         "[",    "\"abc",     "-",    "1e",   "nul"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         const char* q = bad[i];
         LN_CHECK_EQ(ln_pj_skip(&q), -1);
@@ -74,7 +74,7 @@ static void test_json_writer(void)
 
 struct vars {
     double kp_in[3], kp[3];
-    double gain;      /* no input: its default */
+    double gain; /* no input: its default */
     float f;
     int32_t i32;
     uint8_t flag;
@@ -109,10 +109,19 @@ static ln_parameter_block* make_block(struct vars* v)
     snprintf(v->label, sizeof v->label, "init");
     ln_parameter_block* b = ln_param_new(NULL, "gains", "test.parameters.gains");
     ln_parameter_desc d[] = {
-        {.name = "kp", .type = "double", .count = 3, .input = v->kp_in, .output = v->kp,
-         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX, .min = 0, .max = 100,
+        {.name = "kp",
+         .type = "double",
+         .count = 3,
+         .input = v->kp_in,
+         .output = v->kp,
+         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX,
+         .min = 0,
+         .max = 100,
          .description = "stiffness"},
-        {.name = "gain", .type = "float64_t", .output = &v->gain, .flags = LN_PARAMETER_MAX,
+        {.name = "gain",
+         .type = "float64_t",
+         .output = &v->gain,
+         .flags = LN_PARAMETER_MAX,
          .max = 1},
         {.name = "f", .type = "float", .output = &v->f},
         {.name = "i32", .type = "int", .output = &v->i32},
@@ -120,8 +129,7 @@ static ln_parameter_block* make_block(struct vars* v)
         {.name = "big", .type = "uint64_t", .output = &v->big},
         {.name = "small", .type = "int8_t", .output = &v->small},
         {.name = "label", .type = "char", .count = 8, .output = v->label},
-        {.name = "fixed", .type = "int16_t", .output = &v->fixed,
-         .flags = LN_PARAMETER_READ_ONLY},
+        {.name = "fixed", .type = "int16_t", .output = &v->fixed, .flags = LN_PARAMETER_READ_ONLY},
     };
     for (size_t i = 0; i < sizeof d / sizeof d[0]; i++)
         LN_CHECK_EQ(ln_parameter_block_add(b, &d[i]), (long long)i);
@@ -308,15 +316,15 @@ static void test_set_update_reset(void)
 
     /* the change stream: every change since a generation, with the values of a set */
     LN_CHECK_EQ(req(b, "changes", "", "{\"since\": 2}", &err, &result), 0);
-    LN_CHECK(strstr(result, "{\"generation\": 7, \"oldest\": 1, \"changes\": [{\"generation\": 3, ")
-             != NULL);
+    LN_CHECK(
+        strstr(result, "{\"generation\": 7, \"oldest\": 1, \"changes\": [{\"generation\": 3, ") !=
+        NULL);
     LN_CHECK(strstr(result, "\"op\": \"reset\", \"parameters\": [\"kp\"]}") != NULL);
     LN_CHECK(strstr(result, "\"generation\": 2,") == NULL);
     free(result);
     LN_CHECK_EQ(req(b, "changes", "", "", &err, &result), 0);
     LN_CHECK(strstr(result, "\"op\": \"set\", \"parameters\": [\"kp\", \"i32\"], "
-                            "\"values\": {\"kp\": [7.0, 8.0, 9.0], \"i32\": 5}}")
-             != NULL);
+                            "\"values\": {\"kp\": [7.0, 8.0, 9.0], \"i32\": 5}}") != NULL);
     free(result);
     LN_CHECK_EQ(req(b, "changes", "", "{\"since\": -1}", &err, NULL), -1);
     LN_CHECK_STREQ(err.kind, "bad_request");
@@ -326,8 +334,8 @@ static void test_set_update_reset(void)
     LN_CHECK_EQ(req(b, "list", "gain", "", &err, &result), 0);
     LN_CHECK(strstr(result, "\"name\": \"gain\", \"type\": \"double\", \"count\": 1") != NULL);
     LN_CHECK(strstr(result, "\"max\": 1.0") != NULL);
-    LN_CHECK(strstr(result, "\"overridden\": true, \"override\": 1.0, \"source\": \"set\"")
-             != NULL);
+    LN_CHECK(strstr(result, "\"overridden\": true, \"override\": 1.0, \"source\": \"set\"") !=
+             NULL);
     LN_CHECK(strstr(result, "\"pending\": true") != NULL);
     free(result);
     ln_parameter_block_update(b);
@@ -368,8 +376,8 @@ static void* reader(void* arg)
     for (int k = 0; k < 200; k++) {
         ln_param_err err;
         char* result = NULL;
-        if (req(r->b, "get", "", "{\"wait\": 1}", &err, &result) != 0
-            || strstr(result, "\"live\": true") == NULL)
+        if (req(r->b, "get", "", "{\"wait\": 1}", &err, &result) != 0 ||
+            strstr(result, "\"live\": true") == NULL)
             r->failed++;
         free(result);
     }
@@ -414,7 +422,8 @@ static void test_initial_overrides(void)
 {
     setenv("LN_PARAMETERS",
            "{\"other\": {\"x\": 1}, \"gains\": {\"gain\": 0.75, \"kp\": [9, 9, 900], "
-           "\"nope\": 1, \"label\": \"cfg\", \"i32\": 13}}", 1);
+           "\"nope\": 1, \"label\": \"cfg\", \"i32\": 13}}",
+           1);
     struct vars v;
     ln_parameter_block* b = make_block(&v);
     unsetenv("LN_PARAMETERS");
@@ -486,8 +495,7 @@ static void test_update_makes_no_syscall(void)
     int status = 0;
     LN_CHECK_EQ(waitpid(child, &status, 0), child);
     if (WIFSIGNALED(status))
-        fprintf(stderr, "    update() made a system call: killed by signal %d\n",
-                WTERMSIG(status));
+        fprintf(stderr, "    update() made a system call: killed by signal %d\n", WTERMSIG(status));
     LN_CHECK(WIFEXITED(status));
     LN_CHECK_EQ(WEXITSTATUS(status), 0);
     ln_parameter_block_destroy(b);

@@ -24,8 +24,10 @@ static void test_integers(void)
     ln_wbuf_u32(&b, 0x03040506);
     ln_wbuf_u64(&b, 0x0708090a0b0c0d0eull);
     ln_wbuf_i32(&b, -2);
-    LN_CHECK(bytes_equal(&b, "\x02\x01\x06\x05\x04\x03\x0e\x0d\x0c\x0b\x0a\x09\x08\x07"
-                             "\xfe\xff\xff\xff", 18));
+    LN_CHECK(bytes_equal(&b,
+                         "\x02\x01\x06\x05\x04\x03\x0e\x0d\x0c\x0b\x0a\x09\x08\x07"
+                         "\xfe\xff\xff\xff",
+                         18));
     ln_rbuf r;
     ln_rbuf_init(&r, b.data, b.len);
     LN_CHECK_EQ(ln_rbuf_u16(&r), 0x0102);
@@ -123,20 +125,20 @@ static void test_bad_utf8_rejected(void)
         const char* bytes;
         size_t len;
     } bad[] = {
-        {"\x80", 1},                 /* lone continuation byte */
-        {"\xc0\x80", 2},             /* overlong NUL */
-        {"\xc1\xbf", 2},             /* overlong ASCII */
-        {"\xe0\x80\xaf", 3},         /* overlong 3-byte */
-        {"\xf0\x80\x80\xaf", 4},     /* overlong 4-byte */
-        {"\xed\xa0\x80", 3},         /* UTF-16 surrogate U+D800 */
-        {"\xed\xbf\xbf", 3},         /* surrogate U+DFFF */
-        {"\xf4\x90\x80\x80", 4},     /* U+110000 */
-        {"\xf5\x80\x80\x80", 4},     /* lead byte beyond U+10FFFF */
+        {"\x80", 1},             /* lone continuation byte */
+        {"\xc0\x80", 2},         /* overlong NUL */
+        {"\xc1\xbf", 2},         /* overlong ASCII */
+        {"\xe0\x80\xaf", 3},     /* overlong 3-byte */
+        {"\xf0\x80\x80\xaf", 4}, /* overlong 4-byte */
+        {"\xed\xa0\x80", 3},     /* UTF-16 surrogate U+D800 */
+        {"\xed\xbf\xbf", 3},     /* surrogate U+DFFF */
+        {"\xf4\x90\x80\x80", 4}, /* U+110000 */
+        {"\xf5\x80\x80\x80", 4}, /* lead byte beyond U+10FFFF */
         {"\xff", 1},
-        {"\xe2\x82", 2},             /* truncated sequence */
-        {"ok\xe2\x82", 4},           /* truncated at the end of the field */
-        {"\xe2\x28\xa1", 3},         /* bad continuation */
-        {"a\0b", 3},                 /* NUL: valid UTF-8 but never in a str */
+        {"\xe2\x82", 2},     /* truncated sequence */
+        {"ok\xe2\x82", 4},   /* truncated at the end of the field */
+        {"\xe2\x28\xa1", 3}, /* bad continuation */
+        {"a\0b", 3},         /* NUL: valid UTF-8 but never in a str */
     };
     for (size_t i = 0; i < LN_ARRAY_SIZE(bad); i++) {
         ln_wbuf b;
@@ -198,12 +200,17 @@ static void build_publish(ln_wbuf* b)
     LN_CHECK_EQ(ln_proto_frame_end(b, start), LN_OK);
 }
 
-static const char publish_bytes[] =
-    "\x24\x00\x00\x00" "\x0a\x00"          /* length 36, type 10 */
-    "\x07\x00\x00\x00"                     /* request id */
-    "\x03\x00" "a.b" "\x03\x00" "x/y"      /* topic, md_name */
-    "\x88\x77\x66\x55\x44\x33\x22\x11"     /* layout hash */
-    "\x40\x00\x00\x00" "\x01\x00\x00\x00" "\x00\x00\x00\x00";
+static const char publish_bytes[] = "\x24\x00\x00\x00"
+                                    "\x0a\x00"         /* length 36, type 10 */
+                                    "\x07\x00\x00\x00" /* request id */
+                                    "\x03\x00"
+                                    "a.b"
+                                    "\x03\x00"
+                                    "x/y"                              /* topic, md_name */
+                                    "\x88\x77\x66\x55\x44\x33\x22\x11" /* layout hash */
+                                    "\x40\x00\x00\x00"
+                                    "\x01\x00\x00\x00"
+                                    "\x00\x00\x00\x00";
 #define PUBLISH_LEN (sizeof publish_bytes - 1)
 
 /* Parses a PUBLISH body completely: LN_OK or LN_EPROTOCOL. */
@@ -392,13 +399,18 @@ static void test_text_fields(void)
 
 /* A protocol-3 HELLO by hand: magic, version, pid, client name, libln version, host id,
  * flags. */
-static const char hello_bytes[] =
-    "\x21\x00\x00\x00" "\x01\x00"          /* length 33, type 1 */
-    "\x4c\x4e\x4d\x50" "\x03\x00"          /* "LNMP", version 3 */
-    "\x39\x30\x00\x00"                     /* pid 12345 */
-    "\x03\x00" "cam" "\x05\x00" "0.1.0"    /* client name, libln version */
-    "\x03\x00" "h/1"                       /* host id */
-    "\x01\x00\x00\x00";                    /* flags: LN_PROTO_HELLO_RECONNECT */
+static const char hello_bytes[] = "\x21\x00\x00\x00"
+                                  "\x01\x00" /* length 33, type 1 */
+                                  "\x4c\x4e\x4d\x50"
+                                  "\x03\x00"         /* "LNMP", version 3 */
+                                  "\x39\x30\x00\x00" /* pid 12345 */
+                                  "\x03\x00"
+                                  "cam"
+                                  "\x05\x00"
+                                  "0.1.0" /* client name, libln version */
+                                  "\x03\x00"
+                                  "h/1"               /* host id */
+                                  "\x01\x00\x00\x00"; /* flags: LN_PROTO_HELLO_RECONNECT */
 #define HELLO_LEN (sizeof hello_bytes - 1)
 
 static void test_hello_has_host_id(void)
@@ -449,12 +461,12 @@ static void test_check_fields(void)
     ln_rbuf_init(&more, longer, body.left + 1);
     LN_CHECK_EQ(ln_proto_check_fields(LN_MSG_PUBLISH, &more), LN_EPROTOCOL);
     /* (the manager's messages are checked end to end by test_client_request.c) */
-    LN_CHECK(ln_proto_to_client(LN_MSG_WELCOME) && ln_proto_to_client(LN_MSG_ERROR)
-             && ln_proto_to_client(LN_MSG_PORT_OK) && ln_proto_to_client(LN_MSG_OK)
-             && ln_proto_to_client(LN_MSG_TOPIC_INFO_OK));
-    LN_CHECK(!ln_proto_to_client(LN_MSG_HELLO) && !ln_proto_to_client(LN_MSG_PUBLISH)
-             && !ln_proto_to_client(LN_MSG_SUBSCRIBE) && !ln_proto_to_client(LN_MSG_CLOSE_PORT)
-             && !ln_proto_to_client(LN_MSG_TOPIC_INFO) && !ln_proto_to_client(99));
+    LN_CHECK(ln_proto_to_client(LN_MSG_WELCOME) && ln_proto_to_client(LN_MSG_ERROR) &&
+             ln_proto_to_client(LN_MSG_PORT_OK) && ln_proto_to_client(LN_MSG_OK) &&
+             ln_proto_to_client(LN_MSG_TOPIC_INFO_OK));
+    LN_CHECK(!ln_proto_to_client(LN_MSG_HELLO) && !ln_proto_to_client(LN_MSG_PUBLISH) &&
+             !ln_proto_to_client(LN_MSG_SUBSCRIBE) && !ln_proto_to_client(LN_MSG_CLOSE_PORT) &&
+             !ln_proto_to_client(LN_MSG_TOPIC_INFO) && !ln_proto_to_client(99));
 }
 
 int main(void)

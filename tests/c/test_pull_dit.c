@@ -183,8 +183,8 @@ static void test_naive_sequence(void)
     SYNC(&s, 100, 10);
     LN_CHECK(nrx == 1 && rx[0] == 10);
     LN_CHECK_EQ(s.t_ms, 2000);
-    LN_CHECK(ntx == 2 && !tx[1].sync && tx[1].seq == 11 && tx[1].lifetime == 2000 &&
-             !tx[1].cbp && !tx[1].mbf);
+    LN_CHECK(ntx == 2 && !tx[1].sync && tx[1].seq == 11 && tx[1].lifetime == 2000 && !tx[1].cbp &&
+             !tx[1].mbf);
     /* replies 50 ms after each Interest: t halves while 50 < t/4: 1000 500 250 125, then stays */
     static const uint32_t want_t[] = {1000, 500, 250, 125, 125, 125};
     uint32_t now = 100;
@@ -373,9 +373,9 @@ static void skip_old_case(uint16_t flags, int want_retransmit)
     o.t_max_ms = 100;
     o.flags = flags;
     start(&s, &o, 0);
-    SYNC(&s, 0, 5);                           /* 6 and 7 pending since 0 */
+    SYNC(&s, 0, 5); /* 6 and 7 pending since 0 */
     int before = ntx;
-    DATA(&s, 20, 7, 7);                       /* 20*4 < 100: t = 50 */
+    DATA(&s, 20, 7, 7); /* 20*4 < 100: t = 50 */
     LN_CHECK_EQ(s.t_ms, 50);
     if (want_retransmit) { /* 6 stays pending: 8 sent at 20; at 50 6 times out: t = 100 */
         LN_CHECK(ntx == before + 1 && tx[before].seq == 8);
@@ -506,12 +506,12 @@ static void test_sync_quarter_and_karn(void)
         o.flags = karn ? LN_PULL_KARN : 0;
         o.boot_after = 3;
         start(&s, &o, 0);
-        SYNC(&s, 0, 5);         /* /seq=6 at 0 */
-        ln_pull_poll(&s, 400);  /* timeout: t 400 (cap), retransmitted at 400 */
+        SYNC(&s, 0, 5);        /* /seq=6 at 0 */
+        ln_pull_poll(&s, 400); /* timeout: t 400 (cap), retransmitted at 400 */
         LN_CHECK_EQ(s.slots[0].retries, 1);
-        DATA(&s, 401, 6, 6);    /* 1*4 < 400 */
+        DATA(&s, 401, 6, 6); /* 1*4 < 400 */
         LN_CHECK_EQ(s.t_ms, karn ? 400 : 200);
-        DATA(&s, 402, 7, 7);    /* a first transmission: halves either way */
+        DATA(&s, 402, 7, 7); /* a first transmission: halves either way */
         LN_CHECK_EQ(s.t_ms, karn ? 200 : 100);
     }
 }
@@ -630,13 +630,13 @@ static void test_refresh(void)
     /* a refreshed reply is not a retransmission: its Δ counts from the refresh */
     DATA(&s, 25, 12, 12); /* 13 was refreshed already, 14 only 5 ms ago: none; 15 at 25 */
     LN_CHECK(s.stats.refreshes == 2 && tx[ntx - 1].seq == 15);
-    LN_CHECK_EQ(s.t_ms, 25); /* Δ = 25 - 20: 5*4 < 50 */
+    LN_CHECK_EQ(s.t_ms, 25);              /* Δ = 25 - 20: 5*4 < 50 */
     LN_CHECK_EQ(s.period_ewma_us, 18125); /* 20 - (20-5)/8 */
     DATA(&s, 45, 13, 13); /* 14 (20 at 25 ms) and 15 (at 20 ms) >= P̂/2: both; then 16 */
     LN_CHECK_EQ(s.stats.refreshes, 4);
     LN_CHECK(tx[ntx - 3].seq == 14 && tx[ntx - 2].seq == 15 && tx[ntx - 1].seq == 16);
     LN_CHECK_EQ(s.t_ms, 25); /* Δ = 45 - 20 = 25: not quick */
-    DATA(&s, 50, 14, 14); /* Δ = 5: t = 12; 16 (sent at 45) too recent; 17 at 50 */
+    DATA(&s, 50, 14, 14);    /* Δ = 5: t = 12; 16 (sent at 45) too recent; 17 at 50 */
     LN_CHECK(s.t_ms == 12 && s.stats.refreshes == 4 && tx[ntx - 1].seq == 17);
     /* a seq published before a new Interest could get there ((seq - newest)·P̂ <= SRTT) is
        not refreshed: with SRTT 30 ms and P̂ = 17.1 ms, 17 (2 ahead of 15) is, 16 is not */
@@ -744,22 +744,22 @@ static void test_start_name(void)
     ln_pull_options_hardened(&o, 100);
     reset();
     int n = ln_ndn_name_from_uri(name, sizeof name, TOPIC);
-    LN_CHECK_EQ(ln_pull_start_name(&s, name, (size_t)n, &o, on_send, on_data, on_event, NULL, 0,
-                                   7), LN_NDN_OK);
+    LN_CHECK_EQ(ln_pull_start_name(&s, name, (size_t)n, &o, on_send, on_data, on_event, NULL, 0, 7),
+                LN_NDN_OK);
     LN_CHECK(ntx == 1 && tx[0].sync && tx[0].lifetime == 100);
     LN_CHECK_EQ(ln_pull_start(&u, TOPIC, &o, on_send, on_data, on_event, NULL, 0, 7), LN_NDN_OK);
     LN_CHECK(ntx == 2 && tx[1].nonce == tx[0].nonce);
     LN_CHECK(memcmp(&s, &u, sizeof s) == 0); /* the same subscription either way */
     SYNC(&s, 5, 9);
     LN_CHECK(rx[nrx - 1] == 9 && s.window == 4 && tx[ntx - 1].seq == 13); /* ceil(5/20) + 3 */
-    LN_CHECK_EQ(ln_pull_start_name(&s, name, 0, &o, on_send, NULL, NULL, NULL, 0, 7),
-                LN_NDN_ENAME);
+    LN_CHECK_EQ(ln_pull_start_name(&s, name, 0, &o, on_send, NULL, NULL, NULL, 0, 7), LN_NDN_ENAME);
     name[1] = 200; /* a component longer than the name */
     LN_CHECK_EQ(ln_pull_start_name(&s, name, (size_t)n, &o, on_send, NULL, NULL, NULL, 0, 7),
                 LN_NDN_ENAME);
     memset(name, 0, sizeof name);
-    LN_CHECK_EQ(ln_pull_start_name(&s, name, LN_PULL_MAX_NAME + 1, &o, on_send, NULL, NULL,
-                                   NULL, 0, 7), LN_NDN_ESPACE);
+    LN_CHECK_EQ(
+        ln_pull_start_name(&s, name, LN_PULL_MAX_NAME + 1, &o, on_send, NULL, NULL, NULL, 0, 7),
+        LN_NDN_ESPACE);
     LN_CHECK_EQ(ln_pull_start_name(&s, NULL, 4, &o, on_send, NULL, NULL, NULL, 0, 7),
                 LN_NDN_EINVAL);
 }
@@ -781,7 +781,7 @@ static void test_polling(void)
     SYNC(&s, 1060, 3);
     SYNC(&s, 1061, 3); /* the same sample again: not delivered twice */
     LN_CHECK(nrx == 1 && rx[0] == 3);
-    LN_CHECK_EQ(ntx, 2); /* replies send nothing: only the clock does */
+    LN_CHECK_EQ(ntx, 2);                     /* replies send nothing: only the clock does */
     LN_CHECK_EQ(ln_pull_poll(&s, 1130), 20); /* late poll at 1130: the schedule stays 1100+50k */
     LN_CHECK_EQ(ntx, 3);
     LN_CHECK_EQ(s.stats.timeouts, 1);

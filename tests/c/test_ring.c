@@ -241,7 +241,7 @@ static void test_retire_moves_to_successor(void)
     LN_CHECK_EQ(atomic_load(&s.hdr->readers[5].buffers), 2);
     uint8_t buf[MSG];
     LN_CHECK_EQ(read_sample(&r, &c, buf), 1); /* the old ring's samples are still readable */
-    write_sample(&s, 3);                     /* sequence numbers continue in the successor */
+    write_sample(&s, 3);                      /* sequence numbers continue in the successor */
     LN_CHECK_EQ(read_sample(&r, &c, buf), 2);
     LN_CHECK_EQ(read_sample(&r, &c, buf), 0);
     LN_CHECK_EQ(read_sample(&s, &c, buf), 3);
@@ -363,7 +363,7 @@ static void test_large_ring_has_no_page_faults_per_sample(void)
     long faults = minor_faults() - before;
     LN_CHECK_EQ(sum, SAMPLES);
 #ifndef __SANITIZE_ADDRESS__ /* ASan's shadow of the new mappings faults in on first use */
-    if (faults > 4) /* 2 pages x 8 slots x 2 mappings = 32 without filled page tables */
+    if (faults > 4)          /* 2 pages x 8 slots x 2 mappings = 32 without filled page tables */
         fprintf(stderr, "%ld minor page faults in %d samples\n", faults, (int)SAMPLES);
     LN_CHECK(faults <= 4);
 #else

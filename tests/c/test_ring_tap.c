@@ -219,8 +219,9 @@ static void reader_child(const char* name, uint64_t newest)
     uint64_t got = port_read(&r, &latest, NULL) + port_read(&r, &queued, NULL);
     ln_deadline d = ln_deadline_in(0);
     int waited = ln_ring_wait_data(&r, latest.next, &d);
-    _exit(got == 0 && latest.next == newest + 1 && queued.pending == 1 &&
-          waited == LN_ETIMEOUT ? 0 : 3);
+    _exit(got == 0 && latest.next == newest + 1 && queued.pending == 1 && waited == LN_ETIMEOUT
+              ? 0
+              : 3);
 }
 
 static void test_writer_dead_in_newest_slot_does_not_hang_readers(void)
@@ -468,8 +469,7 @@ static void test_open_checks(void)
     LN_CHECK(strstr(ln_last_error(), "test/tap") != NULL);
     LN_CHECK_EQ(ln_ring_tap_open(&t, seg_name, HASH, MSG + 8, LN_TAP_EVERY), LN_ELAYOUT);
     LN_CHECK_EQ(ln_ring_tap_open(&t, seg_name, HASH, MSG, 4), LN_EINVAL);
-    LN_CHECK_EQ(ln_ring_tap_open(&t, seg_name, HASH, MSG, 4 | LN_TAP_INCLUDE_NEWEST),
-                LN_EINVAL);
+    LN_CHECK_EQ(ln_ring_tap_open(&t, seg_name, HASH, MSG, 4 | LN_TAP_INCLUDE_NEWEST), LN_EINVAL);
     LN_CHECK_EQ(ln_ring_tap_open(&t, NULL, HASH, MSG, LN_TAP_EVERY), LN_EINVAL);
     LN_CHECK_EQ(ln_ring_tap_open(NULL, seg_name, HASH, MSG, LN_TAP_EVERY), LN_EINVAL);
     LN_CHECK_EQ(ln_ring_tap_open(&t, "/ln.taptest.no.such.ring", HASH, MSG, LN_TAP_EVERY),

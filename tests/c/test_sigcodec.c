@@ -492,8 +492,7 @@ static void test_limits(void)
 
     /* Decoding: the input itself, and the data allocated for it. */
     LN_CHECK_EQ(encode(sresp, &resp, &out), LN_OK);
-    LN_CHECK_EQ(ln_sig_decode(sresp, out.data, out.len, &resp, &arena, out.len - 1),
-                LN_ETOOBIG);
+    LN_CHECK_EQ(ln_sig_decode(sresp, out.data, out.len, &resp, &arena, out.len - 1), LN_ETOOBIG);
     LN_CHECK_EQ(ln_arena_held(&arena), 0);
     /* 1000 empty strings: 4 wire bytes each but 12 in memory. */
     ln_wbuf_reset(&out);

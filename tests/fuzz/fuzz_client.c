@@ -59,9 +59,9 @@ static void start_manager(void)
     socklen_t len = sizeof a;
     pthread_t thread;
     listen_fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (listen_fd < 0 || bind(listen_fd, (struct sockaddr*)&a, sizeof a) != 0
-        || listen(listen_fd, 4) != 0 || getsockname(listen_fd, (struct sockaddr*)&a, &len) != 0
-        || sem_init(&served, 0, 0) != 0 || pthread_create(&thread, NULL, manager, NULL) != 0)
+    if (listen_fd < 0 || bind(listen_fd, (struct sockaddr*)&a, sizeof a) != 0 ||
+        listen(listen_fd, 4) != 0 || getsockname(listen_fd, (struct sockaddr*)&a, &len) != 0 ||
+        sem_init(&served, 0, 0) != 0 || pthread_create(&thread, NULL, manager, NULL) != 0)
         abort();
     snprintf(address, sizeof address, "127.0.0.1:%u", (unsigned)ntohs(a.sin_port));
 }

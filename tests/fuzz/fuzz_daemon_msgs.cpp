@@ -42,10 +42,7 @@ void round_trip(const Request &req, Encode encode, Decode decode_again)
     (void)ok;
 }
 
-void encode_logger_topic(proto::Writer &w, const LoggerTopicRequest &req)
-{
-    wire::encode(w, req);
-}
+void encode_logger_topic(proto::Writer &w, const LoggerTopicRequest &req) { wire::encode(w, req); }
 
 // One request body, decoded as Server::handle_hello / handle_request, NetCommands and
 // Loggers do.
@@ -64,11 +61,12 @@ void decode(uint8_t type, proto::Reader &r)
             env_default(req.env, "LN_HOST_ID", "fuzzhost");
             LaunchSpec launch;
             ProcessConfig config;
-            std::string error;
-            if (!check_spawn(req, launch, config, error))
-                assert(!error.empty());
-            round_trip(req, [](proto::Writer &w, const SpawnRequest &q) { wire::encode(w, q); },
-                       decode_spawn);
+            Outcome o = check_spawn(req, launch, config);
+            assert(!o.failed() || !o.text.empty());
+            (void)o;
+            round_trip(
+                req, [](proto::Writer &w, const SpawnRequest &q) { wire::encode(w, q); },
+                decode_spawn);
         }
         break;
     }
@@ -153,9 +151,9 @@ void decode(uint8_t type, proto::Reader &r)
     case Msg::logger_enable: {
         LoggerEnableRequest req;
         if (decode_logger_enable(r, req))
-            round_trip(req,
-                       [](proto::Writer &w, const LoggerEnableRequest &q) { wire::encode(w, q); },
-                       decode_logger_enable);
+            round_trip(
+                req, [](proto::Writer &w, const LoggerEnableRequest &q) { wire::encode(w, q); },
+                decode_logger_enable);
         break;
     }
     case Msg::logger_fetch: {

@@ -99,8 +99,7 @@ static void decode_one(const uint8_t* data, size_t size)
         assert(n > 0);
         int rc = ln_ndn_decode(out, (size_t)n, &q);
         assert(rc == LN_NDN_OK && same(q.data.name, p.data.name) &&
-               same(q.data.content, p.data.content) &&
-               q.data.content_type == p.data.content_type &&
+               same(q.data.content, p.data.content) && q.data.content_type == p.data.content_type &&
                q.data.freshness_ms == p.data.freshness_ms &&
                ln_ndn_verify(&q.data, &digest) == LN_NDN_OK);
         (void)rc;
@@ -113,7 +112,7 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     static ln_pull_sub sub;
     ln_pull_options o;
     uint32_t now = 0xfffff000u; /* wraps during longer inputs */
-    decode_one(data, size); /* the whole input as one packet as well */
+    decode_one(data, size);     /* the whole input as one packet as well */
     if (size < 1)
         return 0;
     uint8_t mode = data[0];
@@ -159,7 +158,9 @@ static size_t reply(uint8_t* out, size_t cap, const char* uri, uint64_t seq, uin
     ln_ndn_pull_content c;
     ln_ndn_data d;
     ln_ndn_signer s = {hmac ? LN_NDN_SIG_HMAC_SHA256 : LN_NDN_SIG_DIGEST_SHA256,
-                       (const uint8_t*)"key", 3, {NULL, 0}};
+                       (const uint8_t*)"key",
+                       3,
+                       {NULL, 0}};
     int n = ln_ndn_name_from_uri(name, sizeof name, uri);
     if (seq)
         n = ln_ndn_name_append_seq(name, sizeof name, (size_t)n, seq);

@@ -39,9 +39,9 @@ static void read_ring(ln_ring* ring, ln_ring_cursor* c, int steps)
         uint64_t word;
         if (ln_ring_pick(ring, c, &slot, &word) != LN_OK)
             continue;
-        assert((uint8_t*)slot >= ring->slots
-               && (uint8_t*)ln_ring_payload(slot) + ring->message_size
-                      <= ring->slots + (uint64_t)ring->slot_count * ring->stride);
+        assert((uint8_t*)slot >= ring->slots &&
+               (uint8_t*)ln_ring_payload(slot) + ring->message_size <=
+                   ring->slots + (uint64_t)ring->slot_count * ring->stride);
         memcpy(copy, ln_ring_payload(slot), ring->message_size);
         ln_ring_finish(ring, c, slot, word, 1);
     }
@@ -59,8 +59,8 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     snprintf(name, sizeof name, "/ln-fuzz-ring-%d", (int)getpid());
     ln_ring_admin_unlink(name); /* left over by a crashed run */
     ln_ring_admin* admin;
-    if (ln_ring_admin_create(&admin, name, "topic", "md", LAYOUT_HASH, message_size, slots)
-        != LN_OK)
+    if (ln_ring_admin_create(&admin, name, "topic", "md", LAYOUT_HASH, message_size, slots) !=
+        LN_OK)
         abort();
     ln_ring_admin_close(admin);
 
@@ -105,8 +105,8 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         ln_ring_follow(&ring); /* no valid successor: refused */
         ln_ring_cursor latest = {.next = take(&in, 8), .buffers = 1, .reader = -1};
         read_ring(&ring, &latest, 8);
-        ln_ring_cursor queued = {.next = take(&in, 8), .buffers = 2 + (uint32_t)take(&in, 1) % 16,
-                                 .reader = -1};
+        ln_ring_cursor queued = {
+            .next = take(&in, 8), .buffers = 2 + (uint32_t)take(&in, 1) % 16, .reader = -1};
         read_ring(&ring, &queued, 8);
         ln_ring_detach(&ring);
     }

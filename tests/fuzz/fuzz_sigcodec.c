@@ -13,9 +13,10 @@
 /* the records of lntest/inner, middle and outer, each without its " SIZE COUNT" */
 #define INNER "[int16_t 2 1,float 4 2,char 1 4]"
 #define MIDDLE "[uint8_t 1 1," INNER " 14 1," INNER " 14 3,uint32_t 4 1," INNER "* 14 1]"
-#define OUTER "[[int64_t 8 1,uint32_t 4 1] 12 1," MIDDLE " 69 1," MIDDLE " 69 2,"                \
-              "[double 8 3,double 8 4] 56 1,uint32_t 4 1," MIDDLE "* 69 1,uint32_t 4 1,"     \
-              "char* 1 1,double 8 1]"
+#define OUTER                                                                                      \
+    "[[int64_t 8 1,uint32_t 4 1] 12 1," MIDDLE " 69 1," MIDDLE " 69 2,"                            \
+    "[double 8 3,double 8 4] 56 1,uint32_t 4 1," MIDDLE "* 69 1,uint32_t 4 1,"                     \
+    "char* 1 1,double 8 1]"
 
 static const char* const signatures[] = {
     "", /* a request without fields */
@@ -95,10 +96,7 @@ static void put_u32(uint8_t* p, uint32_t v)
     memcpy(p, &v, 4); /* the packed structs are little-endian, like the wire */
 }
 
-static void put_ptr(uint8_t* p, const void* v)
-{
-    memcpy(p, &v, sizeof v);
-}
+static void put_ptr(uint8_t* p, const void* v) { memcpy(p, &v, sizeof v); }
 
 static void emit_encoded(ln_fuzz_emit* emit, const char* name, unsigned pick, const void* msg)
 {

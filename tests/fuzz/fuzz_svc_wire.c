@@ -15,8 +15,9 @@
 #define LAYOUT_HASH 0x5eed5eed5eed5eedull
 #define SERVICE "planner"
 #define REQUEST_SIG "double 8 7,double 8 1,uint32_t 4 1,[uint32_t 4 1,char* 1 1]* 12 1"
-#define RESPONSE_SIG "uint32_t 4 1,[double 8 1,uint32_t 4 1,double 8 7,double 8 7,double 8 7]* " \
-                     "180 1,int32_t 4 1,uint32_t 4 1,char* 1 1"
+#define RESPONSE_SIG                                                                               \
+    "uint32_t 4 1,[double 8 1,uint32_t 4 1,double 8 7,double 8 7,double 8 7]* "                    \
+    "180 1,int32_t 4 1,uint32_t 4 1,char* 1 1"
 
 static int handler(ln_client* clnt, ln_service_request* req, void* user_data)
 {
@@ -71,8 +72,8 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         snprintf(p.name, sizeof p.name, SERVICE);
         snprintf(p.md_name, sizeof p.md_name, "robot/plan_path");
         p.layout_hash = LAYOUT_HASH;
-        if (ln_sig_parse(REQUEST_SIG, &p.req_sig) != LN_OK
-            || ln_sig_parse(RESPONSE_SIG, &p.resp_sig) != LN_OK)
+        if (ln_sig_parse(REQUEST_SIG, &p.req_sig) != LN_OK ||
+            ln_sig_parse(RESPONSE_SIG, &p.resp_sig) != LN_OK)
             abort();
         p.request_size = ln_sig_size(p.req_sig);
         p.response_size = ln_sig_size(p.resp_sig);

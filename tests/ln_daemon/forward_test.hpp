@@ -41,8 +41,8 @@ public:
         name_ = "/ln.fwdtest" + std::to_string(::getpid()) + "." +
                 std::to_string(counter.fetch_add(1)) + ".0";
         ln_ring_admin_unlink(name_.c_str());
-        int rc = ln_ring_admin_create(&admin_, name_.c_str(), "fwd.topic", "test/fwd",
-                                      layout_hash, message_size, slots);
+        int rc = ln_ring_admin_create(&admin_, name_.c_str(), "fwd.topic", "test/fwd", layout_hash,
+                                      message_size, slots);
         LN_CHECK_EQ(rc, LN_OK);
         if (rc != LN_OK)
             std::fprintf(stderr, "    %s\n", ln_last_error());
@@ -114,8 +114,7 @@ class Publisher {
 public:
     explicit Publisher(const TestRing &ring)
         : tap_(open_tap(ring, LN_TAP_NEWEST)), buf_(ring.size())
-    {
-    }
+    {}
     int publish(uint64_t seq)
     {
         fill(buf_.data(), buf_.size(), seq);
@@ -130,9 +129,7 @@ private:
 // Reads every sample a ring gets, like a queued subscriber.
 class Reader {
 public:
-    explicit Reader(const TestRing &ring) : buf(ring.size()), tap_(open_tap(ring, LN_TAP_EVERY))
-    {
-    }
+    explicit Reader(const TestRing &ring) : buf(ring.size()), tap_(open_tap(ring, LN_TAP_EVERY)) {}
     // LN_OK with info and buf filled, or LN_ETIMEOUT.
     int read(double timeout) { return ln_ring_tap_read(tap_.get(), buf.data(), &info, timeout); }
 
@@ -144,7 +141,8 @@ private:
 };
 
 // Polls `done` until it holds or `seconds` passed (then the caller's check fails).
-template <class F> bool wait_until(F done, double seconds = 30)
+template <class F>
+bool wait_until(F done, double seconds = 30)
 {
     auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (!done()) {
@@ -244,8 +242,7 @@ class UdpRelay {
 public:
     UdpRelay(uint16_t target, std::function<int(uint64_t)> copies)
         : target_(target), copies_(std::move(copies)), thread_([this] { run(); })
-    {
-    }
+    {}
     ~UdpRelay()
     {
         stop_ = true;

@@ -61,8 +61,8 @@ public:
 
     void raw(const void *data, size_t size)
     {
-        ssize_t n = ::sendto(fd_.get(), data, size, 0, reinterpret_cast<sockaddr *>(&to_),
-                             sizeof to_);
+        ssize_t n =
+            ::sendto(fd_.get(), data, size, 0, reinterpret_cast<sockaddr *>(&to_), sizeof to_);
         LN_CHECK_EQ(n, static_cast<ssize_t>(size));
     }
 

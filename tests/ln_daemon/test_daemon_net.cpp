@@ -219,12 +219,12 @@ void test_names()
     CHECK_STR(ring_prefix("a.b"), "/ln.a_b.");
 
     std::string error;
-    LN_CHECK(ring_in_namespace("lab", "/ln.lab.3.1", error));
-    LN_CHECK(ring_in_namespace("a.b", "/ln.a_b.3.1", error));
+    LN_CHECK(passed(ring_in_namespace("lab", "/ln.lab.3.1"), error));
+    LN_CHECK(passed(ring_in_namespace("a.b", "/ln.a_b.3.1"), error));
     for (const char *bad : {"/ln.lab.", "/ln.lab", "/ln.laboratory.3.1", "/ln.other.3.1",
                             "ln.lab.3.1", "/ln.lab.3/1", "/ln.lab.3.1/"}) {
         error.clear();
-        LN_CHECK(!ring_in_namespace("lab", bad, error));
+        LN_CHECK(!passed(ring_in_namespace("lab", bad), error));
         LN_CHECK(error.find("not in the namespace of instance lab") != std::string::npos);
     }
 }
@@ -262,53 +262,51 @@ void test_ring_table()
     req.message_size = 64;
     req.slots = 4;
     std::string error;
-    bool limit = true;
     uint64_t purged = 0;
     {
         RingTable table;
-        LN_CHECK(table.create(instance, req, limit, error));
-        LN_CHECK(!limit);
+        LN_CHECK(passed(table.create(instance, req), error));
         LN_CHECK_EQ(shm_size(req.name), ln_ring_segment_size(64, 4));
-        LN_CHECK(!table.create(instance, req, limit, error)); // exists, no adopt
+        LN_CHECK(!passed(table.create(instance, req), error)); // exists, no adopt
         CHECK_STR(error, "ring " + req.name + " exists already");
         req.adopt = true;
-        LN_CHECK(table.create(instance, req, limit, error)); // held: fine
+        LN_CHECK(passed(table.create(instance, req), error)); // held: fine
         LN_CHECK_EQ(table.size(), 1);
         // Unlinked by someone else: the stale handle gives way to a new segment.
         LN_CHECK_EQ(ln_ring_admin_unlink(req.name.c_str()), LN_OK);
         req.adopt = false;
-        LN_CHECK(table.create(instance, req, limit, error));
+        LN_CHECK(passed(table.create(instance, req), error));
         LN_CHECK_EQ(shm_size(req.name), ln_ring_segment_size(64, 4));
         LN_CHECK_EQ(table.size(), 1);
         req.adopt = true;
 
         RingCountsRequest counts{req.name, 1, 2};
-        LN_CHECK(table.counts(instance, counts, error));
-        LN_CHECK(!table.counts("other", counts, error));
+        LN_CHECK(passed(table.counts(instance, counts), error));
+        LN_CHECK(!passed(table.counts("other", counts), error));
         LN_CHECK(error.find("not in the namespace of instance other") != std::string::npos);
         RingReaderRequest reader{req.name, 0, static_cast<int32_t>(::getpid()), 2, true};
-        LN_CHECK(table.reader(instance, reader, error));
+        LN_CHECK(passed(table.reader(instance, reader), error));
         reader.buffers = 4; // as many as the ring has slots: libln refuses
-        LN_CHECK(!table.reader(instance, reader, error));
+        LN_CHECK(!passed(table.reader(instance, reader), error));
         LN_CHECK(error.find("reserving reader slot 0 of " + req.name + ": EINVAL: ") == 0);
         uint64_t seq = 99;
-        LN_CHECK(table.write_seq(instance, req.name, seq, error));
+        LN_CHECK(passed(table.write_seq(instance, req.name, seq), error));
         LN_CHECK_EQ(seq, 0);
-        LN_CHECK(!table.write_seq(instance, prefix + "9.9", seq, error));
+        LN_CHECK(!passed(table.write_seq(instance, prefix + "9.9", seq), error));
         LN_CHECK(error.find("holds no ring") != std::string::npos);
 
         RingCreateRequest next = req;
         next.name = prefix + "1.2";
         next.slots = 8;
         next.adopt = false;
-        LN_CHECK(table.create(instance, next, limit, error));
+        LN_CHECK(passed(table.create(instance, next), error));
         RingRetireRequest retire{req.name, next.name, NAN};
-        LN_CHECK(!table.retire(instance, retire, error));
+        LN_CHECK(!passed(table.retire(instance, retire), error));
         retire.timeout = 1.0;
-        LN_CHECK(table.retire(instance, retire, error));
-        LN_CHECK(table.remove(instance, req.name, error));
+        LN_CHECK(passed(table.retire(instance, retire), error));
+        LN_CHECK(passed(table.remove(instance, req.name), error));
         LN_CHECK_EQ(shm_size(req.name), 0);
-        LN_CHECK(table.remove(instance, req.name, error)); // gone already is fine
+        LN_CHECK(passed(table.remove(instance, req.name), error)); // gone already is fine
         LN_CHECK_EQ(table.size(), 1);
     } // the table closes its handles but leaves the segments
     LN_CHECK_EQ(shm_size(prefix + "1.2"), ln_ring_segment_size(64, 8));
@@ -318,20 +316,20 @@ void test_ring_table()
         again.name = prefix + "1.2";
         again.slots = 8;
         again.adopt = false;
-        LN_CHECK(!table.create(instance, again, limit, error));
+        LN_CHECK(!passed(table.create(instance, again), error));
         LN_CHECK(error.find("creating segment " + again.name) == 0);
         again.adopt = true;
         again.slots = 16; // not the geometry of the segment
-        LN_CHECK(!table.create(instance, again, limit, error));
+        LN_CHECK(!passed(table.create(instance, again), error));
         LN_CHECK(error.find("exists with") != std::string::npos);
         again.slots = 8;
         again.layout_hash = 8; // another layout
-        LN_CHECK(!table.create(instance, again, limit, error));
+        LN_CHECK(!passed(table.create(instance, again), error));
         LN_CHECK(error.find("adopting segment " + again.name + ": ELAYOUT: ") == 0);
         again.layout_hash = 7;
-        LN_CHECK(table.create(instance, again, limit, error));
+        LN_CHECK(passed(table.create(instance, again), error));
         LN_CHECK_EQ(table.size(), 1);
-        LN_CHECK(table.purge(instance, purged, error));
+        LN_CHECK(passed(table.purge(instance, purged), error));
         LN_CHECK_EQ(purged, 1);
         LN_CHECK_EQ(table.size(), 0);
     }

@@ -30,15 +30,13 @@ public:
 
     double monotonic() noexcept override { return now; }
     double wall() noexcept override { return 1e9 + now; }
-    bool launch(const LaunchSpec &spec, Launched &out, std::string &error) override
+    Outcome launch(const LaunchSpec &spec, Launched &out) override
     {
-        if (fail_launch) {
-            error = "cannot fork: fake";
-            return false;
-        }
+        if (fail_launch)
+            return outcome::error(proto::Err::spawn_failed, "cannot fork: fake");
         out.keeper = next_keeper++;
         calls.push_back("launch " + spec.argv[0]);
-        return true;
+        return outcome::ok();
     }
     int kill(pid_t pid, int sig) noexcept override
     {
@@ -73,17 +71,18 @@ public:
 class RecordingSink final : public Sink {
 public:
     std::vector<std::string> events;
-    void spawn_result(const Process &p, bool ok, proto::Err code,
-                      const std::string &error) override
+    void spawn_result(const Process &p, const Outcome &result) override
     {
-        events.push_back(ok ? "spawned " + p.name() + " pid " + std::to_string(p.pid())
-                            : "refused " + p.name() + " " +
-                                  std::to_string(static_cast<int>(code)) + ": " + error);
+        events.push_back(!result.failed()
+                             ? "spawned " + p.name() + " pid " + std::to_string(p.pid())
+                             : "refused " + p.name() + " " +
+                                   std::to_string(static_cast<int>(result.code)) + ": " +
+                                   result.text);
     }
     void line(const Process &p, const Line &line) override
     {
-        events.push_back("line " + p.name() + " " +
-                         std::to_string(static_cast<int>(line.stream)) + " " + line.text);
+        events.push_back("line " + p.name() + " " + std::to_string(static_cast<int>(line.stream)) +
+                         " " + line.text);
     }
     void state_changed(const Process &p) override
     {
@@ -127,7 +126,7 @@ Process *start(Fixture &f, const std::string &instance, const SpawnRequest &req,
     proto::Err code;
     std::string error;
     pid_t keeper = f.os.next_keeper;
-    if (!f.sup.spawn(instance, req, 7, code, error)) {
+    if (!passed(f.sup.spawn(instance, req, 7), code, error)) {
         std::fprintf(stderr, "    spawn refused: %s\n", error.c_str());
         return nullptr;
     }
@@ -182,10 +181,10 @@ void test_stop_then_sigkill_after_timeout()
     f.os.take_calls();
     proto::Err code;
     std::string error;
-    LN_CHECK(p->stop(code, error));
+    LN_CHECK(passed(p->stop(), code, error));
     CHECK_STR(f.os.take_calls(), "kill -50 2");
     CHECK_STR(f.sink.take(), "state b stopping");
-    LN_CHECK(p->stop(code, error)); // a second STOP is harmless
+    LN_CHECK(passed(p->stop(), code, error)); // a second STOP is harmless
     CHECK_STR(f.os.take_calls(), "");
 
     f.os.now += 4.9;
@@ -220,7 +219,7 @@ void test_stop_main_exits_leftovers_get_term()
     f.os.take_calls();
     proto::Err code;
     std::string error;
-    p->stop(code, error);
+    passed(p->stop(), code, error);
     CHECK_STR(f.os.take_calls(), "kill -60 15");
     // The group obeyed; members that left the group (setsid) get the term signal now.
     p->on_report({KeeperReport::main_exit, signal_status(SIGTERM), 0, 0});
@@ -241,7 +240,7 @@ void test_exec_failure_is_a_spawn_error()
     proto::Err code;
     std::string error;
     pid_t keeper = f.os.next_keeper;
-    LN_CHECK(f.sup.spawn("inst", request("d", "no-such-cmd"), 7, code, error));
+    LN_CHECK(passed(f.sup.spawn("inst", request("d", "no-such-cmd"), 7), code, error));
     Process *p = f.sup.find_keeper(keeper);
     LN_CHECK(p != nullptr);
     if (!p)
@@ -270,7 +269,7 @@ void test_keeper_dies_before_start()
     proto::Err code;
     std::string error;
     pid_t keeper = f.os.next_keeper;
-    LN_CHECK(f.sup.spawn("inst", request("e"), 7, code, error));
+    LN_CHECK(passed(f.sup.spawn("inst", request("e"), 7), code, error));
     f.os.exits.push_back({keeper, signal_status(SIGKILL)});
     f.sup.reap();
     std::string events = f.sink.take();
@@ -287,21 +286,21 @@ void test_names_and_forget()
         return;
     proto::Err code;
     std::string error;
-    LN_CHECK(!f.sup.spawn("inst", request("f"), 8, code, error));
+    LN_CHECK(!passed(f.sup.spawn("inst", request("f"), 8), code, error));
     LN_CHECK_EQ(code, proto::Err::already_running);
     CHECK_STR(error, "process f is already running (pid 80)");
-    LN_CHECK(!f.sup.forget("inst", "f", code, error));
+    LN_CHECK(!passed(f.sup.forget("inst", "f"), code, error));
     LN_CHECK_EQ(code, proto::Err::still_running);
-    LN_CHECK(!f.sup.forget("inst", "nope", code, error));
+    LN_CHECK(!passed(f.sup.forget("inst", "nope"), code, error));
     LN_CHECK_EQ(code, proto::Err::unknown_process);
 
     p->on_report({KeeperReport::main_exit, exit_status(0), 0, 0});
     f.os.exits.push_back({1000, 0});
     f.sup.reap();
     LN_CHECK(p->state() == State::exited);
-    LN_CHECK(!p->stop(code, error));
+    LN_CHECK(!passed(p->stop(), code, error));
     LN_CHECK_EQ(code, proto::Err::not_running);
-    LN_CHECK(!p->send_signal(SIGUSR1, false, code, error));
+    LN_CHECK(!passed(p->send_signal(SIGUSR1, false), code, error));
     LN_CHECK_EQ(code, proto::Err::not_running);
     // Spawning the name again replaces the exited record.
     Process *again = start(f, "inst", request("f"), 81);
@@ -315,7 +314,7 @@ void test_names_and_forget()
     g->on_report({KeeperReport::main_exit, exit_status(1), 0, 0});
     f.os.exits.push_back({1002, 0});
     f.sup.reap();
-    LN_CHECK(f.sup.forget("inst", "g", code, error));
+    LN_CHECK(passed(f.sup.forget("inst", "g"), code, error));
     LN_CHECK_EQ(f.sup.list("inst").size(), 1);
 }
 
@@ -328,11 +327,11 @@ void test_instances_are_separate()
     LN_CHECK_EQ(f.sup.list("one").size(), 1);
     LN_CHECK_EQ(f.sup.list("two").size(), 2);
     LN_CHECK_EQ(f.sup.list("three").size(), 0);
-    proto::Err code;
-    std::string error;
-    LN_CHECK(f.sup.find("one", "q", code, error) == nullptr);
-    LN_CHECK_EQ(code, proto::Err::unknown_process);
-    Process *p = f.sup.find("one", "p", code, error);
+    Process *p = nullptr;
+    Outcome o = f.sup.find("one", "q", p);
+    LN_CHECK(o.failed() && p == nullptr);
+    LN_CHECK_EQ(o.code, proto::Err::unknown_process);
+    LN_CHECK(!f.sup.find("one", "p", p).failed());
     LN_CHECK(p != nullptr && p->pid() == 90);
 }
 
@@ -346,10 +345,10 @@ void test_signals()
     f.os.take_calls();
     proto::Err code;
     std::string error;
-    LN_CHECK(p->send_signal(SIGUSR1, false, code, error));
-    LN_CHECK(p->send_signal(SIGUSR2, true, code, error));
+    LN_CHECK(passed(p->send_signal(SIGUSR1, false), code, error));
+    LN_CHECK(passed(p->send_signal(SIGUSR2, true), code, error));
     CHECK_STR(f.os.take_calls(), "kill 100 10; kill -100 12");
-    LN_CHECK(!p->send_signal(NSIG, false, code, error));
+    LN_CHECK(!passed(p->send_signal(NSIG, false), code, error));
     LN_CHECK_EQ(code, proto::Err::bad_request);
 }
 
@@ -399,7 +398,7 @@ void test_output_before_start_waits_for_the_reply()
     proto::Err code;
     std::string error;
     pid_t keeper = f.os.next_keeper;
-    LN_CHECK(f.sup.spawn("inst", request("early"), 7, code, error));
+    LN_CHECK(passed(f.sup.spawn("inst", request("early"), 7), code, error));
     Process *p = f.sup.find_keeper(keeper);
     LN_CHECK(p != nullptr);
     if (!p)
@@ -407,8 +406,7 @@ void test_output_before_start_waits_for_the_reply()
     p->on_output(proto::Stream::pty, "hello\n", 6);
     CHECK_STR(f.sink.take(), "");
     p->on_report({KeeperReport::started, 120, 0, 0});
-    CHECK_STR(f.sink.take(),
-                   "spawned early pid 120; state early running; line early 0 hello");
+    CHECK_STR(f.sink.take(), "spawned early pid 120; state early running; line early 0 hello");
 }
 
 void test_shutdown_kills()
@@ -440,7 +438,7 @@ void test_second_shutdown_signal_kills_a_process_still_starting()
     pid_t keeper = f.os.next_keeper;
     SpawnRequest req = request("late");
     req.term_timeout = 1e6;
-    LN_CHECK(f.sup.spawn("inst", req, 7, code, error));
+    LN_CHECK(passed(f.sup.spawn("inst", req, 7), code, error));
     Process *p = f.sup.find_keeper(keeper);
     LN_CHECK(p != nullptr);
     if (!p)
@@ -460,7 +458,7 @@ void test_launch_failure()
     f.os.fail_launch = true;
     proto::Err code;
     std::string error;
-    LN_CHECK(!f.sup.spawn("inst", request("l"), 7, code, error));
+    LN_CHECK(!passed(f.sup.spawn("inst", request("l"), 7), code, error));
     LN_CHECK_EQ(code, proto::Err::spawn_failed);
     CHECK_STR(error, "cannot fork: fake");
     LN_CHECK_EQ(f.sup.size(), 0);
@@ -470,8 +468,8 @@ std::string check(SpawnRequest req)
 {
     LaunchSpec launch;
     ProcessConfig config;
-    std::string error;
-    return check_spawn(req, launch, config, error) ? "ok" : error;
+    Outcome o = check_spawn(req, launch, config);
+    return o.failed() ? o.text : "ok";
 }
 
 void test_spawn_checks()
@@ -492,8 +490,7 @@ void test_spawn_checks()
     CHECK_STR(check(r), "nice value -21 is out of range for SCHED_OTHER (-20..19)");
     r = request("x");
     r.rlimits = {{"nofile", 100, 50}};
-    CHECK_STR(check(r),
-                   "resource limit nofile: soft limit 100 is above the hard limit 50");
+    CHECK_STR(check(r), "resource limit nofile: soft limit 100 is above the hard limit 50");
     r.rlimits = {{"RLIMIT_NOFILE", 50, -1}, {"core", -1, -1}};
     CHECK_STR(check(r), "ok");
     r.rlimits = {{"bogus", 1, 1}};
@@ -534,17 +531,15 @@ void test_failure_texts()
     };
     CHECK_STR(text(Stage::exec, ENOENT), "command not found: prog");
     CHECK_STR(text(Stage::chdir, ENOENT),
-                   "cannot change directory to '/nowhere': No such file or directory");
+              "cannot change directory to '/nowhere': No such file or directory");
     CHECK_STR(text(Stage::rlimit, EPERM),
-                   "cannot set resource limit nofile (soft 10, hard 20): Operation not permitted");
+              "cannot set resource limit nofile (soft 10, hard 20): Operation not permitted");
     LN_CHECK(text(Stage::scheduler, EPERM)
                  .find("cannot set scheduling policy SCHED_FIFO with priority 80: Operation not "
                        "permitted (needs root") == 0);
-    CHECK_STR(text(Stage::affinity, EINVAL),
-                   "cannot set CPU affinity to [1,3]: Invalid argument");
+    CHECK_STR(text(Stage::affinity, EINVAL), "cannot set CPU affinity to [1,3]: Invalid argument");
     s.argv = {"/opt/prog"};
-    CHECK_STR(text(Stage::exec, EACCES),
-                   "cannot execute '/opt/prog': Permission denied");
+    CHECK_STR(text(Stage::exec, EACCES), "cannot execute '/opt/prog': Permission denied");
 }
 
 } // namespace

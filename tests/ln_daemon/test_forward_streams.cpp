@@ -39,27 +39,27 @@ void test_refused_specs()
     auto send = send_spec(kToken, ring, Transport::udp, 9);
     auto bad = send;
     bad.token = 0;
-    LN_CHECK(contains(f.set_send(bad), "token 0"));
+    LN_CHECK(contains(f.set_send(bad).text, "token 0"));
     bad = send;
     bad.ring = "/ln.fwdtest-no-such-ring";
-    LN_CHECK(contains(f.set_send(bad), "no-such-ring"));
+    LN_CHECK(contains(f.set_send(bad).text, "no-such-ring"));
     bad = send;
     bad.layout_hash = kHash + 1;
-    LN_CHECK(contains(f.set_send(bad), "hash"));
+    LN_CHECK(contains(f.set_send(bad).text, "hash"));
     bad = send;
     bad.message_size = 65;
-    LN_CHECK(!f.set_send(bad).empty());
+    LN_CHECK(!f.set_send(bad).text.empty());
     bad = send;
     bad.host = "";
-    LN_CHECK(contains(f.set_send(bad), "host"));
+    LN_CHECK(contains(f.set_send(bad).text, "host"));
     bad = send;
     bad.port = 0;
-    LN_CHECK(contains(f.set_send(bad), "port"));
+    LN_CHECK(contains(f.set_send(bad).text, "port"));
     TestRing big(4096, 4);
-    LN_CHECK(contains(f.set_send(send_spec(kToken, big, Transport::tcp, 9)), "TCP queue"));
+    LN_CHECK(contains(f.set_send(send_spec(kToken, big, Transport::tcp, 9)).text, "TCP queue"));
     auto recv = recv_spec(kToken, ring, Transport::udp);
     recv.ring = "/ln.fwdtest-no-such-ring";
-    LN_CHECK(contains(f.set_recv(recv), "no-such-ring"));
+    LN_CHECK(contains(f.set_recv(recv).text, "no-such-ring"));
     LN_CHECK(f.stats().empty());
     LN_CHECK(!f.remove(kToken));
 
@@ -90,14 +90,14 @@ void test_replace()
 {
     TestRing src(64, 8), dst1(64, 8), dst2(64, 8), dst3(64, 8);
     Forwarder rx1(local_options()), rx2(local_options()), tx(local_options());
-    CHECK_STR(rx1.set_recv(recv_spec(kToken, dst1, Transport::udp)), "");
-    CHECK_STR(rx2.set_recv(recv_spec(kToken, dst2, Transport::udp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx1.data_port())), "");
+    CHECK_STR(rx1.set_recv(recv_spec(kToken, dst1, Transport::udp)).text, "");
+    CHECK_STR(rx2.set_recv(recv_spec(kToken, dst2, Transport::udp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx1.data_port())).text, "");
     Publisher pub(src);
     LN_CHECK_EQ(pub.publish(1), LN_OK);
     LN_CHECK(wait_until([&] { return dst1.newest() == 1; }));
 
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx2.data_port())), "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx2.data_port())).text, "");
     LN_CHECK_EQ(pub.publish(2), LN_OK);
     LN_CHECK(wait_until([&] { return dst2.newest() == 2; }));
     LN_CHECK_EQ(dst1.newest(), 1);
@@ -105,7 +105,7 @@ void test_replace()
     LN_CHECK_EQ(all.size(), 1);
     CHECK_STR(all.at(0).peer, "127.0.0.1:" + std::to_string(rx2.data_port()));
 
-    CHECK_STR(rx2.set_recv(recv_spec(kToken, dst3, Transport::udp)), "");
+    CHECK_STR(rx2.set_recv(recv_spec(kToken, dst3, Transport::udp)).text, "");
     LN_CHECK_EQ(pub.publish(3), LN_OK);
     LN_CHECK(wait_until([&] { return dst3.newest() == 3; }));
     LN_CHECK_EQ(dst2.newest(), 2);
@@ -113,13 +113,13 @@ void test_replace()
     CHECK_STR(rx2.stats().at(0).ring, dst3.name());
 
     // Replacing UDP by TCP (and back) on both ends.
-    CHECK_STR(rx2.set_recv(recv_spec(kToken, dst3, Transport::tcp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx2.data_port())), "");
+    CHECK_STR(rx2.set_recv(recv_spec(kToken, dst3, Transport::tcp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx2.data_port())).text, "");
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
     LN_CHECK_EQ(pub.publish(4), LN_OK);
     LN_CHECK(wait_until([&] { return dst3.newest() == 4; }));
-    CHECK_STR(rx2.set_recv(recv_spec(kToken, dst3, Transport::udp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx2.data_port())), "");
+    CHECK_STR(rx2.set_recv(recv_spec(kToken, dst3, Transport::udp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx2.data_port())).text, "");
     LN_CHECK_EQ(pub.publish(5), LN_OK);
     LN_CHECK(wait_until([&] { return dst3.newest() == 5; }));
 }
@@ -130,10 +130,10 @@ void test_remove()
 {
     TestRing src(64, 8), dst(64, 8), tsrc(64, 8), tdst(64, 8);
     Forwarder rx(local_options()), tx(local_options());
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)), "");
-    CHECK_STR(rx.set_recv(recv_spec(kToken + 1, tdst, Transport::tcp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx.data_port())), "");
-    CHECK_STR(tx.set_send(send_spec(kToken + 1, tsrc, Transport::tcp, rx.data_port())), "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken + 1, tdst, Transport::tcp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx.data_port())).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken + 1, tsrc, Transport::tcp, rx.data_port())).text, "");
     LN_CHECK(wait_until([&] { return stats_of(rx, kToken + 1, false).connected; }));
     LN_CHECK_EQ(tx.stats().size(), 2);
 
@@ -183,10 +183,10 @@ void test_destroy_while_running()
     for (size_t i = 0; i < pairs.size(); ++i) {
         Forwarder &from = i % 2 ? *a : *b, &to = i % 2 ? *b : *a;
         uint64_t token = kToken + 100 + i;
-        CHECK_STR(to.set_recv(recv_spec(token, *pairs[i].dst, pairs[i].transport)), "");
-        CHECK_STR(from.set_send(send_spec(token, *pairs[i].src, pairs[i].transport,
-                                          to.data_port())),
-                  "");
+        CHECK_STR(to.set_recv(recv_spec(token, *pairs[i].dst, pairs[i].transport)).text, "");
+        CHECK_STR(
+            from.set_send(send_spec(token, *pairs[i].src, pairs[i].transport, to.data_port())).text,
+            "");
     }
     std::atomic<bool> stop{false};
     std::thread publisher([&] {

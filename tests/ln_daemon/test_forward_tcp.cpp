@@ -26,8 +26,7 @@ constexpr uint64_t kToken = 0x5555666677778888ull;
 // connection, reads the hello and accepts the stream, then never reads again.
 class StuckReceiver {
 public:
-    explicit StuckReceiver(bool answer)
-        : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0))
+    explicit StuckReceiver(bool answer) : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0))
     {
         int small = 4096;
         ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
@@ -114,8 +113,8 @@ void every_sample_in_order(unsigned spin_us, uint64_t size = 256, uint64_t kSamp
     if (socket_buffer)
         o.socket_buffer = socket_buffer;
     Forwarder rx(o), tx(o);
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())), "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())).text, "");
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
     Reader reader(dst);
     Publisher pub(src);
@@ -150,16 +149,10 @@ void every_sample_in_order(unsigned spin_us, uint64_t size = 256, uint64_t kSamp
     LN_CHECK(r.peer.rfind("127.0.0.1:", 0) == 0);
 }
 
-void test_every_sample_in_order()
-{
-    every_sample_in_order(0);
-}
+void test_every_sample_in_order() { every_sample_in_order(0); }
 
 // The same with the threads polling before they sleep (--spin-us).
-void test_every_sample_in_order_polling()
-{
-    every_sample_in_order(200);
-}
+void test_every_sample_in_order_polling() { every_sample_in_order(200); }
 
 // Samples far larger than the socket buffers: the reader's direct send on an idle
 // connection writes only part of a frame, and the writer must finish exactly that frame
@@ -179,7 +172,7 @@ void test_receiver_never_answers()
     Options o = local_options();
     o.tcp_queue_samples = 8;
     Forwarder tx(o);
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port())), "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port())).text, "");
     Publisher pub(src);
     for (uint64_t seq = 1; seq <= 100; ++seq)
         LN_CHECK_EQ(pub.publish(seq), LN_OK);
@@ -201,7 +194,7 @@ void test_receiver_stops_reading()
     o.tcp_queue_samples = kQueue;
     o.socket_buffer = 4096;
     Forwarder tx(o);
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port())), "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port())).text, "");
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
     Publisher pub(src);
     for (uint64_t seq = 1; seq <= kSamples; ++seq)
@@ -231,8 +224,8 @@ void test_reconnect()
     auto rx = std::make_unique<Forwarder>(ro);
     uint16_t port = rx->data_port();
     Forwarder tx(local_options());
-    CHECK_STR(rx->set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, port)), "");
+    CHECK_STR(rx->set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, port)).text, "");
     Reader reader(dst);
     Publisher pub(src);
     for (uint64_t seq = 1; seq <= 10; ++seq)
@@ -248,7 +241,7 @@ void test_reconnect()
 
     ro.data_port = port;
     rx = std::make_unique<Forwarder>(ro);
-    CHECK_STR(rx->set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
+    CHECK_STR(rx->set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
     LN_CHECK_EQ(pub.publish(21), LN_OK);
     LN_CHECK(wait_until([&] { return dst.newest() == 21; }));
@@ -268,26 +261,25 @@ void test_refused_streams()
 {
     TestRing src(128, 8), dst(128, 8), udp_dst(128, 8);
     Forwarder rx(local_options()), tx(local_options());
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())), "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())).text, "");
     LN_CHECK(wait_until([&] { return rx.totals().unknown_stream >= 1; }));
     LN_CHECK(wait_until([&] {
         return stats_of(tx, kToken, true).last_error.find("no TCP stream") != std::string::npos;
     }));
-    CHECK_STR(rx.set_recv(recv_spec(kToken, udp_dst, Transport::udp)), ""); // wrong transport
+    CHECK_STR(rx.set_recv(recv_spec(kToken, udp_dst, Transport::udp)).text, ""); // wrong transport
     uint64_t unknown = rx.totals().unknown_stream;
     LN_CHECK(wait_until([&] { return rx.totals().unknown_stream > unknown; }));
     LN_CHECK(!stats_of(tx, kToken, true).connected);
 
     auto spec = recv_spec(kToken, dst, Transport::tcp);
-    CHECK_STR(rx.set_recv(spec), "");
+    CHECK_STR(rx.set_recv(spec).text, "");
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
     // The receiver's ring has another layout than the sender's: refused, counted there.
     TestRing other(128, 8, kHash + 1);
-    CHECK_STR(rx.set_recv(recv_spec(kToken, other, Transport::tcp)), "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, other, Transport::tcp)).text, "");
     LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).invalid >= 1; }));
-    LN_CHECK(wait_until([&] {
-        return stats_of(tx, kToken, true).last_error.find("layout") != std::string::npos;
-    }));
+    LN_CHECK(wait_until(
+        [&] { return stats_of(tx, kToken, true).last_error.find("layout") != std::string::npos; }));
     LN_CHECK(!stats_of(tx, kToken, true).connected);
     LN_CHECK_EQ(other.newest(), 0);
 }
@@ -298,7 +290,7 @@ void test_bad_hello_and_frames()
 {
     TestRing dst(128, 8);
     Forwarder rx(local_options());
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)), "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
     {
         Client c(rx.data_port());
         uint8_t junk[wire::kHelloSize];

@@ -62,8 +62,8 @@ void small_samples_keep_seq_and_timestamp(unsigned spin_us)
     Options o = local_options();
     o.spin_us = spin_us;
     Forwarder rx(o), tx(o);
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx.data_port())), "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx.data_port())).text, "");
     Reader reader(dst);
     Publisher pub(src);
     std::vector<double> one_way_us;
@@ -117,8 +117,8 @@ void big_sample(uint64_t size, size_t payload)
     so.udp_max_rate = 50e6;
     ro.socket_buffer = so.socket_buffer = 212992;
     Forwarder rx(ro), tx(so);
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx.data_port())), "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, rx.data_port())).text, "");
     Reader reader(dst);
     Publisher pub(src);
     bool arrived = false;
@@ -145,28 +145,18 @@ void big_sample(uint64_t size, size_t payload)
     LN_CHECK(wait_until([&] { return rx.totals().reassembly_bytes == 0; }));
 }
 
-void test_small_samples_keep_seq_and_timestamp()
-{
-    small_samples_keep_seq_and_timestamp(0);
-}
+void test_small_samples_keep_seq_and_timestamp() { small_samples_keep_seq_and_timestamp(0); }
 
 // The same with sender and receiver polling before they sleep (--spin-us).
-void test_small_samples_polling()
-{
-    small_samples_keep_seq_and_timestamp(200);
-}
+void test_small_samples_polling() { small_samples_keep_seq_and_timestamp(200); }
 
-void test_8mib_sample()
-{
-    big_sample(8u << 20, 1400);
-}
+void test_8mib_sample() { big_sample(8u << 20, 1400); }
 
 void test_64mib_sample()
 {
     big_sample(64u << 20, 1400);
     big_sample(64u << 20, 60000); // a receiver with the default 1400 takes any chunk size
 }
-
 
 // Every 13th datagram is lost on the way; samples of 10 fragments.  Exactly the samples
 // hit lose, each counted once in drops; the reassembly budget (two samples) is what limits
@@ -193,8 +183,8 @@ void test_lossy_link()
     so.udp_payload = kChunk;
     Forwarder rx(ro), tx(so);
     UdpRelay relay(rx.data_port(), [](uint64_t n) { return n % kEvery == 0 ? 0 : 1; });
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)), "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, relay.port())), "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::udp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::udp, relay.port())).text, "");
     Reader reader(dst);
     Publisher pub(src);
     for (uint64_t seq = 1; seq <= samples; ++seq) {
@@ -226,10 +216,10 @@ void test_duplicated_datagrams()
     TestRing src1(64, 4), dst1(64, 256), src2(5000, 4), dst2(5000, 256);
     Forwarder rx(local_options()), tx(local_options());
     UdpRelay relay(rx.data_port(), [](uint64_t) { return 2; });
-    CHECK_STR(rx.set_recv(recv_spec(1, dst1, Transport::udp)), "");
-    CHECK_STR(rx.set_recv(recv_spec(2, dst2, Transport::udp)), "");
-    CHECK_STR(tx.set_send(send_spec(1, src1, Transport::udp, relay.port())), "");
-    CHECK_STR(tx.set_send(send_spec(2, src2, Transport::udp, relay.port())), "");
+    CHECK_STR(rx.set_recv(recv_spec(1, dst1, Transport::udp)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(2, dst2, Transport::udp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(1, src1, Transport::udp, relay.port())).text, "");
+    CHECK_STR(tx.set_send(send_spec(2, src2, Transport::udp, relay.port())).text, "");
     Reader reader1(dst1), reader2(dst2);
     Publisher pub1(src1), pub2(src2);
     for (uint64_t seq = 1; seq <= 200; ++seq) {
@@ -257,8 +247,8 @@ void test_reordered_datagrams()
 {
     TestRing small(64, 64), big(3000, 64);
     Forwarder rx(local_options());
-    CHECK_STR(rx.set_recv(recv_spec(1, small, Transport::udp)), "");
-    CHECK_STR(rx.set_recv(recv_spec(2, big, Transport::udp)), "");
+    CHECK_STR(rx.set_recv(recv_spec(1, small, Transport::udp)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(2, big, Transport::udp)).text, "");
     Reader small_reader(small), big_reader(big);
     UdpSocket sock;
     auto send = [&](const std::vector<uint8_t> &d) {
@@ -306,35 +296,35 @@ void test_garbage_datagrams()
 {
     TestRing ring(3000, 8), tcp_ring(3000, 8);
     Forwarder rx(local_options());
-    CHECK_STR(rx.set_recv(recv_spec(7, ring, Transport::udp)), "");
-    CHECK_STR(rx.set_recv(recv_spec(8, tcp_ring, Transport::tcp)), "");
+    CHECK_STR(rx.set_recv(recv_spec(7, ring, Transport::udp)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(8, tcp_ring, Transport::tcp)).text, "");
     UdpSocket sock;
     auto send = [&](std::vector<uint8_t> d) { sock.send_to(rx.data_port(), d.data(), d.size()); };
     namespace wire = lnd::fwd::wire;
 
-    send(std::vector<uint8_t>(10, 0xab));          // too short
+    send(std::vector<uint8_t>(10, 0xab)); // too short
     auto d = datagram(7, 1, 3000, 1000, 0);
-    d[0] = 'X';                                    // magic
+    d[0] = 'X'; // magic
     send(d);
     d = datagram(7, 1, 3000, 1000, 0);
-    d[4] = 2;                                      // version
+    d[4] = 2; // version
     send(d);
     d = datagram(7, 1, 3000, 1000, 0);
     d[5] = static_cast<uint8_t>(wire::Kind::hello); // kind
     send(d);
-    send(datagram(9, 1, 3000, 1000, 0));            // no such stream
-    send(datagram(8, 1, 3000, 1000, 0));            // a TCP stream
-    send(datagram(7, 1, 2999, 1000, 0));            // sample size
+    send(datagram(9, 1, 3000, 1000, 0)); // no such stream
+    send(datagram(8, 1, 3000, 1000, 0)); // a TCP stream
+    send(datagram(7, 1, 2999, 1000, 0)); // sample size
     d = datagram(7, 1, 3000, 1000, 0);
-    d[40] = 3;                                      // index 3 of 3
+    d[40] = 3; // index 3 of 3
     send(d);
     d = datagram(7, 1, 3000, 1000, 1);
-    d.pop_back();                                   // chunk shorter than its index needs
+    d.pop_back(); // chunk shorter than its index needs
     send(d);
     d = datagram(7, 1, 3000, 1000, 0);
-    d[44] = 4;                                      // count does not fit size and chunk
+    d[44] = 4; // count does not fit size and chunk
     send(d);
-    send(datagram(7, 0, 3000, 1000, 0));            // sequence number 0
+    send(datagram(7, 0, 3000, 1000, 0)); // sequence number 0
     LN_CHECK(wait_until([&] { return stats_of(rx, 7, false).invalid >= 5; }));
 
     Reader reader(ring);

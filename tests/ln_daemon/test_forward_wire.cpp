@@ -56,9 +56,9 @@ void test_tcp_messages_layout()
 {
     uint8_t hello[wire::kHelloSize];
     wire::encode_hello(hello, {0x0102030405060708ull, 64, 0xa1a2a3a4a5a6a7a8ull});
-    const uint8_t want[32] = {'L', 'N', 'F', '1', 1, 1, 0, 0, 8, 7, 6, 5, 4, 3, 2, 1,
-                              64,  0,   0,   0,   0, 0, 0, 0, 0xa8, 0xa7, 0xa6, 0xa5,
-                              0xa4, 0xa3, 0xa2, 0xa1};
+    const uint8_t want[32] = {'L', 'N', 'F',  '1',  1,    1,    0,    0,    8,    7,   6,
+                              5,   4,   3,    2,    1,    64,   0,    0,    0,    0,   0,
+                              0,   0,   0xa8, 0xa7, 0xa6, 0xa5, 0xa4, 0xa3, 0xa2, 0xa1};
     LN_CHECK(std::memcmp(hello, want, sizeof want) == 0);
     wire::Hello h;
     LN_CHECK(wire::decode_hello(hello, h));
@@ -80,9 +80,8 @@ void test_tcp_messages_layout()
 
     uint8_t frame[wire::kFrameHeaderSize];
     wire::encode_frame_header(frame, {5, -1, 300});
-    const uint8_t want_frame[24] = {5,    0,    0,    0,    0,    0,    0,    0,
-                                    0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,
-                                    0x2c, 1,    0,    0,    0,    0,    0,    0};
+    const uint8_t want_frame[24] = {5,    0,    0,    0,    0,    0, 0, 0, 0xff, 0xff, 0xff, 0xff,
+                                    0xff, 0xff, 0xff, 0xff, 0x2c, 1, 0, 0, 0,    0,    0,    0};
     LN_CHECK(std::memcmp(frame, want_frame, sizeof want_frame) == 0);
     wire::FrameHeader fh = wire::decode_frame_header(frame);
     LN_CHECK_EQ(fh.seq, 5);

@@ -148,8 +148,8 @@ void test_pull_list()
         LN_CHECK_EQ(t[0].history, 64);
         LN_CHECK_EQ(t[0].latest_seq, 99);
         const PullTopicCounters &c = t[0].counters;
-        LN_CHECK(c.interests == 1 && c.syncs == 2 && c.data == 3 && c.nacks == 4 &&
-                 c.parked == 5 && c.expired == 6 && c.duplicates == 7 && c.overflow == 8);
+        LN_CHECK(c.interests == 1 && c.syncs == 2 && c.data == 3 && c.nacks == 4 && c.parked == 5 &&
+                 c.expired == 6 && c.duplicates == 7 && c.overflow == 8);
         CHECK_STR(t[1].topic, "b");
     }
     for (size_t n = 0; n < b.size(); ++n) {

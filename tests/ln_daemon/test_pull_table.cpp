@@ -40,23 +40,22 @@ PullTopicRequest request(const std::string &topic, const TestRing &ring,
     return q;
 }
 
-NetOutcome send(Pulls &pulls, proto::Msg type, const std::string &payload,
-                const std::string &instance = kInstance)
+Outcome send(Pulls &pulls, proto::Msg type, const std::string &payload,
+             const std::string &instance = kInstance)
 {
     proto::Reader r(payload.data(), payload.size());
-    return pulls.handle(instance, static_cast<uint8_t>(type), r);
+    return pulls.handle(Request{instance, static_cast<uint8_t>(type), 1, r});
 }
 
-NetOutcome configure(Pulls &pulls, const PullTopicRequest &q,
-                     const std::string &instance = kInstance)
+Outcome configure(Pulls &pulls, const PullTopicRequest &q, const std::string &instance = kInstance)
 {
     proto::Writer w;
     encode_pull_topic(w, q);
     return send(pulls, proto::Msg::pull_topic, w.buffer(), instance);
 }
 
-NetOutcome named(Pulls &pulls, proto::Msg type, const std::string &topic,
-                 const std::string &instance = kInstance)
+Outcome named(Pulls &pulls, proto::Msg type, const std::string &topic,
+              const std::string &instance = kInstance)
 {
     proto::Writer w;
     w.str(topic);
@@ -71,22 +70,19 @@ struct List {
 List status(Pulls &pulls, const std::string &topic = "", const std::string &instance = kInstance)
 {
     List l;
-    NetOutcome o = named(pulls, proto::Msg::pull_status, topic, instance);
-    LN_CHECK(o.kind == NetOutcome::Kind::reply && o.type == proto::Msg::pull_list);
+    Outcome o = named(pulls, proto::Msg::pull_status, topic, instance);
+    LN_CHECK(o.kind == Outcome::Kind::reply && o.type == proto::Msg::pull_list);
     proto::Reader r(o.payload.data(), o.payload.size());
     LN_CHECK(decode_pull_list(r, l.ports, l.topics));
     return l;
 }
 
-bool is_ok(const NetOutcome &o)
-{
-    return o.kind == NetOutcome::Kind::reply && o.type == proto::Msg::ok;
-}
+bool is_ok(const Outcome &o) { return o.kind == Outcome::Kind::reply && o.type == proto::Msg::ok; }
 
 // The refusal's text if `o` is a refusal with error 16, else "".
-std::string refusal(const NetOutcome &o)
+std::string refusal(const Outcome &o)
 {
-    if (o.kind != NetOutcome::Kind::error || o.code != proto::Err::pull_failed)
+    if (o.kind != Outcome::Kind::error || o.code != proto::Err::pull_failed)
         return "";
     return o.text;
 }
@@ -125,8 +121,12 @@ void test_refusals()
     refused([](PullTopicRequest &b) { b.key = "k"; }, "a key is given");
     refused([](PullTopicRequest &b) { b.signature = 1; }, "unknown signature type 1");
     refused([](PullTopicRequest &b) { b.address = "localhost"; }, "not a numeric IPv4 or IPv6");
-    refused([](PullTopicRequest &b) { b.history = 65536; b.message_size = 8000; },
-            "bytes for pull histories are free");
+    refused(
+        [](PullTopicRequest &b) {
+            b.history = 65536;
+            b.message_size = 8000;
+        },
+        "bytes for pull histories are free");
     LN_CHECK(has(refusal(named(pulls, proto::Msg::pull_remove, "nope")),
                  "no pull topic 'nope' in instance " + kInstance));
     LN_CHECK(has(refusal(named(pulls, proto::Msg::pull_status, "nope")), "no pull topic 'nope'"));
@@ -148,7 +148,7 @@ void test_refusals()
     proto::Writer w;
     encode_pull_topic(w, request("a", ring));
     w.u8(0);
-    LN_CHECK(send(pulls, proto::Msg::pull_topic, w.buffer()).kind == NetOutcome::Kind::malformed);
+    LN_CHECK(send(pulls, proto::Msg::pull_topic, w.buffer()).kind == Outcome::Kind::malformed);
 }
 
 void test_shared_port_update_move_remove()

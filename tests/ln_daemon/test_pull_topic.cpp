@@ -44,12 +44,9 @@ PullConfig config_for(const std::string &ring, uint32_t history, const std::stri
 
 // A topic served on its own port from its own ring, with a consumer pointed at it.
 struct Served {
-    explicit Served(uint32_t history, const std::string &key = "")
-        : ring(kSize, 8), pub(ring)
+    explicit Served(uint32_t history, const std::string &key = "") : ring(kSize, 8), pub(ring)
     {
-        std::string error;
-        port = PullPort::open("127.0.0.1", 0, error);
-        CHECK_STR(error, "");
+        CHECK_STR(PullPort::open("127.0.0.1", 0, port).text, "");
         topic = std::make_unique<PullTopic>(config_for(ring.name(), history, key), "unit");
         port->attach(topic.get());
         topic->start(port->fd());
@@ -290,7 +287,7 @@ void test_bad_packets()
 {
     Served s(8);
     s.publish_to(2);
-    const uint8_t garbage[] = {0x05, 0xff, 0x01}; // cut off
+    const uint8_t garbage[] = {0x05, 0xff, 0x01};                        // cut off
     const uint8_t critical[] = {0x05, 0x08, 0x07, 0x03, 0x08, 0x01, 'x', // unknown type 13
                                 0x0d, 0x01, 0x00};
     s.consumer->raw(garbage, sizeof garbage);
@@ -336,9 +333,8 @@ void test_published_before_served()
     Publisher pub(ring);
     LN_CHECK_EQ(pub.publish(1), LN_OK);
     LN_CHECK_EQ(pub.publish(2), LN_OK);
-    std::string error;
-    auto port = PullPort::open("127.0.0.1", 0, error);
-    CHECK_STR(error, "");
+    std::unique_ptr<PullPort> port;
+    CHECK_STR(PullPort::open("127.0.0.1", 0, port).text, "");
     auto topic = std::make_unique<PullTopic>(config_for(ring.name(), 8), "unit early");
     port->attach(topic.get());
     topic->start(port->fd());
@@ -367,17 +363,17 @@ void test_ring_appears_later()
 {
     const std::string ring = "/ln.pulltest" + std::to_string(::getpid()) + ".1.0";
     ln_ring_admin_unlink(ring.c_str());
-    std::string error;
-    auto port = PullPort::open("127.0.0.1", 0, error);
+    std::unique_ptr<PullPort> port;
+    CHECK_STR(PullPort::open("127.0.0.1", 0, port).text, "");
     auto topic = std::make_unique<PullTopic>(config_for(ring, 8), "unit late");
     port->attach(topic.get());
     topic->start(port->fd());
     LN_CHECK(topic->status().last_error.find("cannot open ring '" + ring + "'") !=
              std::string::npos);
     ln_ring_admin *admin = nullptr;
-    LN_CHECK_EQ(ln_ring_admin_create(&admin, ring.c_str(), "t", "test/fwd", fwdtest::kHash, kSize,
-                                     4),
-                LN_OK);
+    LN_CHECK_EQ(
+        ln_ring_admin_create(&admin, ring.c_str(), "t", "test/fwd", fwdtest::kHash, kSize, 4),
+        LN_OK);
     LN_CHECK(wait_until([&] { return topic->status().last_error.empty(); }));
     ln_ring_tap *tap = nullptr;
     LN_CHECK_EQ(ln_ring_tap_open(&tap, ring.c_str(), fwdtest::kHash, kSize, LN_TAP_NEWEST), LN_OK);

@@ -29,9 +29,9 @@ extern "C" {
 
 #define LN_STRINGIFY_(x) #x
 #define LN_STRINGIFY(x) LN_STRINGIFY_(x)
-#define LN_VERSION_STRING                                                                     \
-    LN_STRINGIFY(LN_VERSION_MAJOR) "." LN_STRINGIFY(LN_VERSION_MINOR) "." LN_STRINGIFY(      \
-        LN_VERSION_PATCH)
+#define LN_VERSION_STRING                                                                          \
+    LN_STRINGIFY(LN_VERSION_MAJOR)                                                                 \
+    "." LN_STRINGIFY(LN_VERSION_MINOR) "." LN_STRINGIFY(LN_VERSION_PATCH)
 
 /* ---- errors ------------------------------------------------------------------------------
  * Every libln function that can fail returns LN_OK (0) or one negative code of this table.
@@ -39,28 +39,28 @@ extern "C" {
  * ln_error_name() and, through the Python bindings, one exception class per entry.
  * Codes are contiguous from -1 downwards and never change meaning once released; new
  * entries are appended at the end. */
-#define LN_ERRNO_MAP(XX)                                                                      \
-    XX(EINVAL, -1, "invalid argument")                                                        \
-    XX(ENOMEM, -2, "out of memory")                                                           \
-    XX(ETIMEOUT, -3, "timed out")                                                             \
-    XX(EAGAIN, -4, "operation would block")                                                   \
-    XX(ECONNECTION, -5, "manager unreachable or connection lost")                             \
-    XX(EPROTOCOL, -6, "malformed protocol frame")                                             \
-    XX(EVERSION, -7, "protocol or library version mismatch")                                  \
-    XX(ELAYOUT, -8, "message layout hash mismatch")                                           \
-    XX(ENOTFOUND, -9, "not found")                                                            \
-    XX(EEXIST, -10, "already exists")                                                         \
-    XX(ELIMIT, -11, "configured limit reached")                                               \
-    XX(ETOOBIG, -12, "data too big")                                                          \
-    XX(ECLOSED, -13, "closed")                                                                \
-    XX(EBUSY, -14, "resource busy")                                                           \
-    XX(EOVERRUN, -15, "reader overrun, messages were lost")                                   \
-    XX(ESYS, -16, "system call failed")                                                       \
-    XX(EPERM, -17, "permission denied")                                                       \
-    XX(EMD, -18, "bad message definition")                                                    \
-    XX(ESERVICE, -19, "service provider answered with an error")                              \
-    XX(EBADHANDLE, -20, "invalid or destroyed handle")                                        \
-    XX(EINTR, -21, "interrupted")                                                             \
+#define LN_ERRNO_MAP(XX)                                                                           \
+    XX(EINVAL, -1, "invalid argument")                                                             \
+    XX(ENOMEM, -2, "out of memory")                                                                \
+    XX(ETIMEOUT, -3, "timed out")                                                                  \
+    XX(EAGAIN, -4, "operation would block")                                                        \
+    XX(ECONNECTION, -5, "manager unreachable or connection lost")                                  \
+    XX(EPROTOCOL, -6, "malformed protocol frame")                                                  \
+    XX(EVERSION, -7, "protocol or library version mismatch")                                       \
+    XX(ELAYOUT, -8, "message layout hash mismatch")                                                \
+    XX(ENOTFOUND, -9, "not found")                                                                 \
+    XX(EEXIST, -10, "already exists")                                                              \
+    XX(ELIMIT, -11, "configured limit reached")                                                    \
+    XX(ETOOBIG, -12, "data too big")                                                               \
+    XX(ECLOSED, -13, "closed")                                                                     \
+    XX(EBUSY, -14, "resource busy")                                                                \
+    XX(EOVERRUN, -15, "reader overrun, messages were lost")                                        \
+    XX(ESYS, -16, "system call failed")                                                            \
+    XX(EPERM, -17, "permission denied")                                                            \
+    XX(EMD, -18, "bad message definition")                                                         \
+    XX(ESERVICE, -19, "service provider answered with an error")                                   \
+    XX(EBADHANDLE, -20, "invalid or destroyed handle")                                             \
+    XX(EINTR, -21, "interrupted")                                                                  \
     XX(EREFUSED, -22, "refused by the manager")
 
 enum ln_error {
@@ -91,7 +91,6 @@ LN_EXPORT const char* ln_version(void);
 LN_EXPORT int ln_version_check(int major, int minor);
 #define LN_VERSION_CHECK() ln_version_check(LN_VERSION_MAJOR, LN_VERSION_MINOR)
 
-
 /* ==== clients, topics ======================================================================
  * Ownership: a client owns its ports; ln_client_destroy() closes every port it still has, so
  * port handles must not be used after their client is gone.  Setup calls (create, publish,
@@ -116,8 +115,8 @@ typedef struct ln_client_options {
     const char* manager; /* "HOST:PORT" or ":PORT"; NULL: -ln_manager in argv, then $LN_MANAGER */
     int argc;            /* argv to search for "-ln_manager HOST:PORT" (may be 0/NULL) */
     char** argv;
-    double timeout;      /* seconds for connecting and for each manager request (default 10) */
-    uint32_t flags;      /* LN_CLIENT_* (default 0: reconnect) */
+    double timeout; /* seconds for connecting and for each manager request (default 10) */
+    uint32_t flags; /* LN_CLIENT_* (default 0: reconnect) */
 } ln_client_options;
 
 LN_EXPORT void ln_client_options_init(ln_client_options* opts);
@@ -172,19 +171,18 @@ LN_EXPORT void ln_port_options_init(ln_port_options* opts);
  * ln_client_destroy do it. */
 LN_EXPORT int ln_publish(ln_client* clnt, ln_outport** out, const char* topic, const char* md_name,
                          uint64_t layout_hash, size_t message_size, const ln_port_options* opts);
-LN_EXPORT int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic,
-                           const char* md_name, uint64_t layout_hash, size_t message_size,
-                           const ln_port_options* opts);
+LN_EXPORT int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char* md_name,
+                           uint64_t layout_hash, size_t message_size, const ln_port_options* opts);
 LN_EXPORT int ln_unpublish(ln_outport* port);
 LN_EXPORT int ln_unsubscribe(ln_inport* port);
 
 /* What a read returns besides the data. */
 typedef struct ln_sample_info {
-    uint64_t seq;          /* publish sequence number of the topic, from 1; gap-free on the
+    uint64_t seq;         /* publish sequence number of the topic, from 1; gap-free on the
                             * publisher's host, on other hosts samples lost on the network
                             * leave gaps (a queued port counts them in overruns) */
-    int64_t timestamp_ns;  /* CLOCK_REALTIME when it was published */
-    uint64_t overruns;     /* samples this port lost since its previous read */
+    int64_t timestamp_ns; /* CLOCK_REALTIME when it was published */
+    uint64_t overruns;    /* samples this port lost since its previous read */
 } ln_sample_info;
 
 /* Copy `size` bytes (must equal the message size) into the topic.  Never blocks unless the
@@ -251,8 +249,7 @@ typedef struct ln_service_request ln_service_request;   /* one call, inside a ha
  * so a restarted provider is found by itself. */
 LN_EXPORT int ln_get_service(ln_client* clnt, ln_service** out, const char* name,
                              const char* md_name, uint64_t layout_hash, const char* signature);
-LN_EXPORT int ln_service_call(ln_service* svc, const void* request, void* response,
-                              double timeout);
+LN_EXPORT int ln_service_call(ln_service* svc, const void* request, void* response, double timeout);
 /* Largest message (wire bytes and decoded dynamic data) this caller encodes as a request or
  * accepts as a response. */
 LN_EXPORT int ln_service_set_max_size(ln_service* svc, size_t max_bytes);
@@ -276,9 +273,9 @@ LN_EXPORT int ln_service_release(ln_service* svc);
  * handler; the provider keeps serving every other caller. */
 typedef int (*ln_service_handler)(ln_client* clnt, ln_service_request* req, void* user_data);
 
-LN_EXPORT int ln_get_service_provider(ln_client* clnt, ln_service_provider** out,
-                                      const char* name, const char* md_name,
-                                      uint64_t layout_hash, const char* signature);
+LN_EXPORT int ln_get_service_provider(ln_client* clnt, ln_service_provider** out, const char* name,
+                                      const char* md_name, uint64_t layout_hash,
+                                      const char* signature);
 LN_EXPORT int ln_service_provider_set_handler(ln_service_provider* provider,
                                               ln_service_handler handler, void* user_data);
 /* Largest message (wire bytes and decoded dynamic data) this provider accepts as a request or
@@ -330,7 +327,7 @@ typedef struct ln_event ln_event;                 /* a caller's handle */
 typedef struct ln_event_handler ln_event_handler; /* a connected handler */
 typedef struct ln_event_request ln_event_request; /* one call, inside a handler */
 
-#define LN_EVENT_MAX_NAME 160         /* bytes of an event name */
+#define LN_EVENT_MAX_NAME 160          /* bytes of an event name */
 #define LN_EVENT_MAX_CONNECT_SIZE 1024 /* bytes of a connect struct in wire form */
 #define LN_EVENT_MAX_HANDLERS 256      /* handlers connected to one event */
 
@@ -349,9 +346,9 @@ typedef int (*ln_event_handler_fn)(ln_client* clnt, ln_event_request* call, void
  * over LN_EVENT_MAX_CONNECT_SIZE wire bytes with LN_ETOOBIG.  ln_client_destroy disconnects
  * the handlers a client still has. */
 LN_EXPORT int ln_event_connect(ln_client* clnt, ln_event_handler** out, const char* event,
-                               const char* md_name, uint64_t layout_hash,
-                               const char* signature, const void* connect,
-                               ln_event_handler_fn handler, void* user_data, const char* group);
+                               const char* md_name, uint64_t layout_hash, const char* signature,
+                               const void* connect, ln_event_handler_fn handler, void* user_data,
+                               const char* group);
 /* Unregisters the handler and frees it; waits for a call of it running in another thread,
  * LN_EBUSY from inside its own handler. */
 LN_EXPORT int ln_event_disconnect(ln_event_handler* handler);
@@ -389,8 +386,8 @@ typedef struct ln_event_result {
  * call with that code (nothing is sent). */
 typedef int (*ln_event_filter)(const void* connect, void* user_data);
 
-LN_EXPORT int ln_get_event(ln_client* clnt, ln_event** out, const char* event,
-                           const char* md_name, uint64_t layout_hash, const char* signature);
+LN_EXPORT int ln_get_event(ln_client* clnt, ln_event** out, const char* event, const char* md_name,
+                           uint64_t layout_hash, const char* signature);
 LN_EXPORT int ln_event_set_filter(ln_event* ev, ln_event_filter filter, void* user_data);
 LN_EXPORT int ln_event_call(ln_event* ev, const void* call, double timeout);
 /* The results of the last call, one per handler it was sent to, ordered by handler name; they
@@ -484,8 +481,7 @@ LN_EXPORT int ln_parameter_block_create(ln_client* clnt, ln_parameter_block** ou
  * output are kept and must stay valid while the block exists. */
 LN_EXPORT int ln_parameter_block_add(ln_parameter_block* blk, const ln_parameter_desc* desc);
 LN_EXPORT int ln_parameter_block_set_validator(ln_parameter_block* blk,
-                                               ln_parameter_validator validator,
-                                               void* user_data);
+                                               ln_parameter_validator validator, void* user_data);
 /* Takes the initial overrides of $LN_PARAMETERS (those it refuses are printed on stderr and
  * listed by the tools) and registers the block's service.  From now on overrides may come.
  * After a failure (e.g. LN_ECONNECTION) it may be called again; LN_EBUSY once registered. */

@@ -22,7 +22,8 @@ namespace ln {
 // md name and layout hash of a generated message type, plus signature, request_type and
 // response_type for a service type, signature, connect_type and call_type for an event type;
 // ln_generate's C++ headers specialise it.
-template <typename T> struct md_traits;
+template <typename T>
+struct md_traits;
 
 class error : public std::runtime_error {
 public:
@@ -46,12 +47,18 @@ namespace detail {
 using client_ptr = std::shared_ptr<ln_client>;
 }
 
-template <typename T> class outport;
-template <typename T> class inport;
-template <typename T> class service;
-template <typename T> class service_provider;
-template <typename T> class event;
-template <typename T> class event_handler;
+template <typename T>
+class outport;
+template <typename T>
+class inport;
+template <typename T>
+class service;
+template <typename T>
+class service_provider;
+template <typename T>
+class event;
+template <typename T>
+class event_handler;
 
 class client {
 public:
@@ -76,7 +83,8 @@ public:
     detail::client_ptr share() const noexcept { return c_; }
     std::string name() const { return ln_client_name(c_.get()); }
 
-    template <typename T> outport<T> publish(const std::string& topic, unsigned flags = 0)
+    template <typename T>
+    outport<T> publish(const std::string& topic, unsigned flags = 0)
     {
         return outport<T>(c_, topic, md_traits<T>::md_name, md_traits<T>::layout_hash, flags);
     }
@@ -90,16 +98,18 @@ public:
     }
 
     // Services: T is a generated service type (e.g. robot::set_gains_t).
-    template <typename T> service<T> get_service(const std::string& name)
+    template <typename T>
+    service<T> get_service(const std::string& name)
     {
         return service<T>(c_, name);
     }
     // The handler gets a service_provider<T>::call; see there.  The provider is registered in
     // `group` ("" = default) and serves until it is destroyed.
     template <typename T>
-    std::unique_ptr<service_provider<T>> provide_service(
-        const std::string& name, std::function<void(typename service_provider<T>::call&)> handler,
-        const std::string& group = "")
+    std::unique_ptr<service_provider<T>>
+    provide_service(const std::string& name,
+                    std::function<void(typename service_provider<T>::call&)> handler,
+                    const std::string& group = "")
     {
         return std::unique_ptr<service_provider<T>>(
             new service_provider<T>(c_, name, std::move(handler), group));
@@ -119,17 +129,18 @@ public:
     }
 
     // Events (docs/events.md): T is a generated event type (e.g. robot::fault_event_t).
-    template <typename T> event<T> get_event(const std::string& name)
+    template <typename T>
+    event<T> get_event(const std::string& name)
     {
         return event<T>(c_, name);
     }
     // The handler gets an event_handler<T>::call; it is connected with `connect` in `group`
     // ("" = default) and receives calls until it is destroyed.
     template <typename T>
-    std::unique_ptr<event_handler<T>> connect_event(
-        const std::string& name, const typename md_traits<T>::connect_type& connect,
-        std::function<void(typename event_handler<T>::call&)> handler,
-        const std::string& group = "")
+    std::unique_ptr<event_handler<T>>
+    connect_event(const std::string& name, const typename md_traits<T>::connect_type& connect,
+                  std::function<void(typename event_handler<T>::call&)> handler,
+                  const std::string& group = "")
     {
         return std::unique_ptr<event_handler<T>>(
             new event_handler<T>(c_, name, connect, std::move(handler), group));
@@ -139,7 +150,8 @@ private:
     detail::client_ptr c_;
 };
 
-template <typename T> class outport {
+template <typename T>
+class outport {
     static_assert(std::is_trivially_copyable<T>::value, "messages are plain packed structs");
 
 public:
@@ -208,7 +220,8 @@ private:
     ln_outport* p_ = nullptr;
 };
 
-template <typename T> class inport {
+template <typename T>
+class inport {
     static_assert(std::is_trivially_copyable<T>::value, "messages are plain packed structs");
 
 public:
@@ -302,7 +315,8 @@ private:
 // A caller: fill req, call(), read resp.  Dynamic fields of resp point into memory of this
 // object until the next call.  Failures (including a provider's error text, LN_ESERVICE, and
 // a timeout) throw ln::error.  Movable, not copyable.
-template <typename T> class service {
+template <typename T>
+class service {
     using traits = md_traits<T>;
 
 public:
@@ -318,7 +332,8 @@ public:
                              traits::signature));
     }
     service(service&& o) noexcept
-        : req(o.req), resp(o.resp), c_(std::move(o.c_)), s_(std::exchange(o.s_, nullptr)) {}
+        : req(o.req), resp(o.resp), c_(std::move(o.c_)), s_(std::exchange(o.s_, nullptr))
+    {}
     service& operator=(service&& o) noexcept
     {
         if (this != &o) {
@@ -355,7 +370,8 @@ private:
 // respond() or respond_error(); an exception answers an error with its what() text.  Handlers
 // run on the thread that handles the group (wait_and_handle_service_group_requests or a pool).
 // Not movable: libln holds a pointer to it.
-template <typename T> class service_provider {
+template <typename T>
+class service_provider {
     using traits = md_traits<T>;
 
 public:
@@ -433,7 +449,8 @@ private:
 // An event caller (docs/events.md): call() sends a call struct to every handler connected
 // at that moment and returns how many received it; results() says what happened at each.
 // Failures of the call as a whole throw ln::error.  Movable, not copyable.
-template <typename T> class event {
+template <typename T>
+class event {
     using traits = md_traits<T>;
 
 public:
@@ -456,7 +473,8 @@ public:
                            traits::signature));
     }
     event(event&& o) noexcept
-        : c_(std::move(o.c_)), e_(std::exchange(o.e_, nullptr)), filter_(std::move(o.filter_)) {}
+        : c_(std::move(o.c_)), e_(std::exchange(o.e_, nullptr)), filter_(std::move(o.filter_))
+    {}
     event& operator=(event&& o) noexcept
     {
         if (this != &o) {
@@ -501,9 +519,8 @@ private:
     static int filter_trampoline(const void* connect, void* f)
     {
         try {
-            return (*static_cast<filter_type*>(f))(*static_cast<const connect_type*>(connect))
-                       ? 1
-                       : 0;
+            return (*static_cast<filter_type*>(f))(*static_cast<const connect_type*>(connect)) ? 1
+                                                                                               : 0;
         } catch (...) {
             return LN_EINVAL; // the call stops, nothing is sent
         }
@@ -523,7 +540,8 @@ private:
 // (`data`); it may reply() with a call struct or reply_error(); returning without either
 // delivers the call without a reply, an exception answers an error with its what() text.
 // Handlers run on the thread that handles the group.  Not movable: libln holds a pointer to it.
-template <typename T> class event_handler {
+template <typename T>
+class event_handler {
     using traits = md_traits<T>;
 
 public:
@@ -558,9 +576,8 @@ public:
                   std::function<void(call&)> handler, const std::string& group)
         : c_(std::move(c)), handler_(std::move(handler))
     {
-        check(ln_event_connect(c_.get(), &h_, name.c_str(), traits::md_name,
-                               traits::layout_hash, traits::signature, &connect, &trampoline,
-                               this, group.c_str()));
+        check(ln_event_connect(c_.get(), &h_, name.c_str(), traits::md_name, traits::layout_hash,
+                               traits::signature, &connect, &trampoline, this, group.c_str()));
     }
     event_handler(const event_handler&) = delete;
     event_handler& operator=(const event_handler&) = delete;
@@ -591,6 +608,6 @@ private:
     ln_event_handler* h_ = nullptr;
 };
 
-}  // namespace ln
+} // namespace ln
 
-#endif  // LN_LN_HPP
+#endif // LN_LN_HPP

@@ -23,40 +23,78 @@ namespace ln {
 namespace parameters {
 
 namespace detail {
-template <typename T> struct md_type;
-template <> struct md_type<char> { static constexpr const char* name = "char"; };
-template <> struct md_type<std::int8_t> { static constexpr const char* name = "int8_t"; };
-template <> struct md_type<std::uint8_t> { static constexpr const char* name = "uint8_t"; };
-template <> struct md_type<std::int16_t> { static constexpr const char* name = "int16_t"; };
-template <> struct md_type<std::uint16_t> { static constexpr const char* name = "uint16_t"; };
-template <> struct md_type<std::int32_t> { static constexpr const char* name = "int32_t"; };
-template <> struct md_type<std::uint32_t> { static constexpr const char* name = "uint32_t"; };
-template <> struct md_type<std::int64_t> { static constexpr const char* name = "int64_t"; };
-template <> struct md_type<std::uint64_t> { static constexpr const char* name = "uint64_t"; };
-template <> struct md_type<float> { static constexpr const char* name = "float"; };
-template <> struct md_type<double> { static constexpr const char* name = "double"; };
+template <typename T>
+struct md_type;
+template <>
+struct md_type<char> {
+    static constexpr const char* name = "char";
+};
+template <>
+struct md_type<std::int8_t> {
+    static constexpr const char* name = "int8_t";
+};
+template <>
+struct md_type<std::uint8_t> {
+    static constexpr const char* name = "uint8_t";
+};
+template <>
+struct md_type<std::int16_t> {
+    static constexpr const char* name = "int16_t";
+};
+template <>
+struct md_type<std::uint16_t> {
+    static constexpr const char* name = "uint16_t";
+};
+template <>
+struct md_type<std::int32_t> {
+    static constexpr const char* name = "int32_t";
+};
+template <>
+struct md_type<std::uint32_t> {
+    static constexpr const char* name = "uint32_t";
+};
+template <>
+struct md_type<std::int64_t> {
+    static constexpr const char* name = "int64_t";
+};
+template <>
+struct md_type<std::uint64_t> {
+    static constexpr const char* name = "uint64_t";
+};
+template <>
+struct md_type<float> {
+    static constexpr const char* name = "float";
+};
+template <>
+struct md_type<double> {
+    static constexpr const char* name = "double";
+};
 
 // Element type and count of a parameter variable.
-template <typename T> struct shape {
+template <typename T>
+struct shape {
     using element = T;
     static constexpr std::uint32_t count = 1;
 };
-template <typename T, std::size_t N> struct shape<T[N]> {
+template <typename T, std::size_t N>
+struct shape<T[N]> {
     using element = T;
     static constexpr std::uint32_t count = N;
 };
-template <typename T, std::size_t N> struct shape<std::array<T, N>> {
+template <typename T, std::size_t N>
+struct shape<std::array<T, N>> {
     using element = T;
     static constexpr std::uint32_t count = N;
 };
-}  // namespace detail
+} // namespace detail
 
 constexpr double no_limit = std::numeric_limits<double>::quiet_NaN();
 
 // One parameter: `in` is the program's variable (nullptr: none, the value without an
 // override is then *out as it is when registered), `out` what update() writes.  min and max
 // (NaN: none) bound every element; a read-only parameter is shown, never overridden.
-template <typename T> struct port_description {
+template <typename T>
+struct port_description {
     std::string name;
     std::string description;
     const T* in = nullptr;
@@ -89,15 +127,13 @@ public:
     // Runs on libln's service thread.
     using validator = std::function<std::string(const std::string& name, const void* value)>;
 
-    parameter_block(const ln::client& clnt, const std::string& group_name)
-        : c_(clnt.share())
+    parameter_block(const ln::client& clnt, const std::string& group_name) : c_(clnt.share())
     {
         ln::check(ln_parameter_block_create(c_.get(), &b_, group_name.c_str()));
     }
     parameter_block(const ln::client* clnt, const std::string& group_name)
         : parameter_block(*clnt, group_name)
-    {
-    }
+    {}
     ~parameter_block()
     {
         if (b_ != nullptr)
@@ -108,13 +144,15 @@ public:
     parameter_block& operator=(const parameter_block&) = delete;
 
     // Adds every parameter, then registers the block: callable once.
-    template <typename... T> void register_parameters(const port_description<T>&... ports)
+    template <typename... T>
+    void register_parameters(const port_description<T>&... ports)
     {
         (add(ports), ...);
         do_register();
     }
     // The same in steps: add() parameters, then do_register().  add returns the index.
-    template <typename T> int add(const port_description<T>& p)
+    template <typename T>
+    int add(const port_description<T>& p)
     {
         using element = typename detail::shape<T>::element;
         static_assert(std::is_trivially_copyable<T>::value, "parameters are plain values");
@@ -125,7 +163,7 @@ public:
         d.description = p.description.c_str();
         d.input = p.in;
         d.output = p.out;
-        if (p.min == p.min) {  // not NaN
+        if (p.min == p.min) { // not NaN
             d.flags |= LN_PARAMETER_MIN;
             d.min = p.min;
         }
@@ -144,8 +182,8 @@ public:
     void set_validator(validator v)
     {
         validator_ = std::move(v);
-        ln::check(ln_parameter_block_set_validator(b_, validator_ ? &call_validator : nullptr,
-                                                   this));
+        ln::check(
+            ln_parameter_block_set_validator(b_, validator_ ? &call_validator : nullptr, this));
     }
 
     // The loop's update point: how many parameters changed (set or reset) since the last one.
@@ -161,7 +199,8 @@ public:
     std::string service_name() const { return ln_parameter_block_service_name(b_); }
     ln_parameter_block* get() const noexcept { return b_; }
 
-    template <typename T> static T value_as(const void* value)
+    template <typename T>
+    static T value_as(const void* value)
     {
         T v;
         std::memcpy(&v, value, sizeof v);
@@ -192,7 +231,7 @@ private:
     std::vector<std::string> names_;
 };
 
-}  // namespace parameters
-}  // namespace ln
+} // namespace parameters
+} // namespace ln
 
-#endif  // LN_PARAMETERS_HPP
+#endif // LN_PARAMETERS_HPP

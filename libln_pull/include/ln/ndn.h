@@ -20,15 +20,15 @@ extern "C" {
 #endif
 
 /* ---- errors: every function that can fail returns >= 0 or one code of this table --------- */
-#define LN_NDN_ERRNO_MAP(XX)                                                                  \
-    XX(ETRUNCATED, -1, "truncated TLV")                                                       \
-    XX(EMALFORMED, -2, "malformed TLV")                                                       \
-    XX(ECRITICAL, -3, "unknown critical TLV element")                                         \
-    XX(ESPACE, -4, "output buffer too small")                                                 \
-    XX(EUNSUPPORTED, -5, "not an Interest or Data packet")                                    \
-    XX(ENAME, -6, "bad name")                                                                 \
-    XX(ESIGNATURE, -7, "signature does not verify")                                           \
-    XX(EINVAL, -8, "invalid argument")                                                        \
+#define LN_NDN_ERRNO_MAP(XX)                                                                       \
+    XX(ETRUNCATED, -1, "truncated TLV")                                                            \
+    XX(EMALFORMED, -2, "malformed TLV")                                                            \
+    XX(ECRITICAL, -3, "unknown critical TLV element")                                              \
+    XX(ESPACE, -4, "output buffer too small")                                                      \
+    XX(EUNSUPPORTED, -5, "not an Interest or Data packet")                                         \
+    XX(ENAME, -6, "bad name")                                                                      \
+    XX(ESIGNATURE, -7, "signature does not verify")                                                \
+    XX(EINVAL, -8, "invalid argument")                                                             \
     XX(EDEPTH, -9, "TLV nested too deep")
 
 enum ln_ndn_error {
@@ -41,23 +41,39 @@ LN_NDN_EXPORT const char* ln_ndn_strerror(int code);
 
 /* ---- TLV type numbers (NDN packet format 0.3, NDNLPv2) ------------------------------------ */
 enum {
-    LN_NDN_T_INTEREST = 0x05, LN_NDN_T_DATA = 0x06, LN_NDN_T_NAME = 0x07,
-    LN_NDN_T_GENERIC = 0x08, LN_NDN_T_IMPLICIT_DIGEST = 0x01, LN_NDN_T_PARAMS_DIGEST = 0x02,
+    LN_NDN_T_INTEREST = 0x05,
+    LN_NDN_T_DATA = 0x06,
+    LN_NDN_T_NAME = 0x07,
+    LN_NDN_T_GENERIC = 0x08,
+    LN_NDN_T_IMPLICIT_DIGEST = 0x01,
+    LN_NDN_T_PARAMS_DIGEST = 0x02,
     LN_NDN_T_SEQUENCE_NUM = 0x3a,
-    LN_NDN_T_CAN_BE_PREFIX = 0x21, LN_NDN_T_MUST_BE_FRESH = 0x12, LN_NDN_T_FORWARDING_HINT = 0x1e,
-    LN_NDN_T_NONCE = 0x0a, LN_NDN_T_INTEREST_LIFETIME = 0x0c, LN_NDN_T_HOP_LIMIT = 0x22,
+    LN_NDN_T_CAN_BE_PREFIX = 0x21,
+    LN_NDN_T_MUST_BE_FRESH = 0x12,
+    LN_NDN_T_FORWARDING_HINT = 0x1e,
+    LN_NDN_T_NONCE = 0x0a,
+    LN_NDN_T_INTEREST_LIFETIME = 0x0c,
+    LN_NDN_T_HOP_LIMIT = 0x22,
     LN_NDN_T_APP_PARAMETERS = 0x24,
-    LN_NDN_T_META_INFO = 0x14, LN_NDN_T_CONTENT = 0x15, LN_NDN_T_SIGNATURE_INFO = 0x16,
-    LN_NDN_T_SIGNATURE_VALUE = 0x17, LN_NDN_T_CONTENT_TYPE = 0x18,
-    LN_NDN_T_FRESHNESS_PERIOD = 0x19, LN_NDN_T_FINAL_BLOCK_ID = 0x1a,
-    LN_NDN_T_SIGNATURE_TYPE = 0x1b, LN_NDN_T_KEY_LOCATOR = 0x1c,
-    LN_NDN_T_LP_PACKET = 0x64, LN_NDN_T_LP_FRAGMENT = 0x50, LN_NDN_T_LP_PIT_TOKEN = 0x62,
-    LN_NDN_T_LP_NACK = 0x0320, LN_NDN_T_LP_NACK_REASON = 0x0321,
+    LN_NDN_T_META_INFO = 0x14,
+    LN_NDN_T_CONTENT = 0x15,
+    LN_NDN_T_SIGNATURE_INFO = 0x16,
+    LN_NDN_T_SIGNATURE_VALUE = 0x17,
+    LN_NDN_T_CONTENT_TYPE = 0x18,
+    LN_NDN_T_FRESHNESS_PERIOD = 0x19,
+    LN_NDN_T_FINAL_BLOCK_ID = 0x1a,
+    LN_NDN_T_SIGNATURE_TYPE = 0x1b,
+    LN_NDN_T_KEY_LOCATOR = 0x1c,
+    LN_NDN_T_LP_PACKET = 0x64,
+    LN_NDN_T_LP_FRAGMENT = 0x50,
+    LN_NDN_T_LP_PIT_TOKEN = 0x62,
+    LN_NDN_T_LP_NACK = 0x0320,
+    LN_NDN_T_LP_NACK_REASON = 0x0321,
     /* Pull-topic content header (application types 128..252, even: non-critical) */
-    LN_NDN_T_PULL_LATEST = 0x80,    /* NonNegativeInteger: the producer's newest seq */
-    LN_NDN_T_PULL_TIME = 0x82,      /* NonNegativeInteger: publish time, µs (CLOCK_REALTIME) */
-    LN_NDN_T_PULL_PERIOD = 0x84,    /* NonNegativeInteger: mean publish period, µs */
-    LN_NDN_T_PULL_PAYLOAD = 0x86,   /* the sample's bytes (the md layout) */
+    LN_NDN_T_PULL_LATEST = 0x80,  /* NonNegativeInteger: the producer's newest seq */
+    LN_NDN_T_PULL_TIME = 0x82,    /* NonNegativeInteger: publish time, µs (CLOCK_REALTIME) */
+    LN_NDN_T_PULL_PERIOD = 0x84,  /* NonNegativeInteger: mean publish period, µs */
+    LN_NDN_T_PULL_PAYLOAD = 0x86, /* the sample's bytes (the md layout) */
 };
 enum { LN_NDN_CONTENT_BLOB = 0, LN_NDN_CONTENT_NACK = 3 };
 enum { LN_NDN_SIG_DIGEST_SHA256 = 0, LN_NDN_SIG_HMAC_SHA256 = 4 };
@@ -88,24 +104,24 @@ typedef struct ln_ndn_interest {
  * freshness_ms and content are read, the signature fields are filled in by the signer). */
 typedef struct ln_ndn_data {
     ln_ndn_bytes name;
-    uint32_t content_type;        /* LN_NDN_CONTENT_BLOB when absent */
-    uint32_t freshness_ms;        /* 0 when absent */
+    uint32_t content_type; /* LN_NDN_CONTENT_BLOB when absent */
+    uint32_t freshness_ms; /* 0 when absent */
     ln_ndn_bytes content;
     uint32_t signature_type;
-    ln_ndn_bytes key_locator;     /* value of SignatureInfo's KeyLocator, if any */
+    ln_ndn_bytes key_locator; /* value of SignatureInfo's KeyLocator, if any */
     ln_ndn_bytes signature_value;
-    ln_ndn_bytes signed_portion;  /* Name through SignatureInfo: what the signature covers */
+    ln_ndn_bytes signed_portion; /* Name through SignatureInfo: what the signature covers */
 } ln_ndn_data;
 
 /* A received packet: a bare Interest or Data, or one inside an NDNLPv2 LpPacket Fragment
  * (unknown LP headers are skipped by the evolvability rule).  An LpPacket with a Nack header
  * carries the Interest that was refused. */
 typedef struct ln_ndn_packet {
-    uint32_t type;       /* LN_NDN_T_INTEREST or LN_NDN_T_DATA */
-    uint8_t lp;          /* it came in an LpPacket */
-    uint8_t lp_nack;     /* ... with a Nack header */
+    uint32_t type;   /* LN_NDN_T_INTEREST or LN_NDN_T_DATA */
+    uint8_t lp;      /* it came in an LpPacket */
+    uint8_t lp_nack; /* ... with a Nack header */
     uint32_t nack_reason;
-    ln_ndn_bytes pit_token; /* echo it in an LpPacket around the reply when size > 0 */
+    ln_ndn_bytes pit_token;   /* echo it in an LpPacket around the reply when size > 0 */
     ln_ndn_interest interest; /* when type is LN_NDN_T_INTEREST */
     ln_ndn_data data;         /* when type is LN_NDN_T_DATA */
 } ln_ndn_packet;
@@ -168,15 +184,15 @@ LN_NDN_EXPORT int ln_ndn_encode_lp(uint8_t* out, size_t cap, ln_ndn_bytes pit_to
 
 /* Writers of single TLVs, for content headers: the bytes written or an error. */
 LN_NDN_EXPORT int ln_ndn_write_nonneg_tlv(uint8_t* out, size_t cap, uint32_t type, uint64_t v);
-LN_NDN_EXPORT int ln_ndn_write_tlv(uint8_t* out, size_t cap, uint32_t type,
-                                   const uint8_t* value, size_t size);
+LN_NDN_EXPORT int ln_ndn_write_tlv(uint8_t* out, size_t cap, uint32_t type, const uint8_t* value,
+                                   size_t size);
 
 /* ---- pull-topic content: header TLVs then the payload ---------------------------------- */
 typedef struct ln_ndn_pull_content {
-    uint64_t latest_seq;    /* 0 when absent */
-    uint64_t publish_us;    /* 0 when absent */
-    uint64_t period_us;     /* 0 when absent */
-    ln_ndn_bytes payload;   /* absent in a NACK */
+    uint64_t latest_seq;  /* 0 when absent */
+    uint64_t publish_us;  /* 0 when absent */
+    uint64_t period_us;   /* 0 when absent */
+    ln_ndn_bytes payload; /* absent in a NACK */
 } ln_ndn_pull_content;
 LN_NDN_EXPORT int ln_ndn_encode_pull_content(uint8_t* out, size_t cap,
                                              const ln_ndn_pull_content* c);

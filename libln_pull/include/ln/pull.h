@@ -16,32 +16,32 @@
 extern "C" {
 #endif
 
-#define LN_PULL_MAX_WINDOW 16  /* outstanding Interests per subscription, at most */
-#define LN_PULL_MAX_NAME 96    /* bytes of the encoded /<prefix>/<topic> name value */
-#define LN_PULL_TX_BYTES 160   /* the largest Interest it sends */
+#define LN_PULL_MAX_WINDOW 16   /* outstanding Interests per subscription, at most */
+#define LN_PULL_MAX_NAME 96     /* bytes of the encoded /<prefix>/<topic> name value */
+#define LN_PULL_TX_BYTES 160    /* the largest Interest it sends */
 #define LN_PULL_REFRESH_SPAN 64 /* samples after a loss during which REFRESH is on */
 
 /* Hardenings (docs/pull.md); 0 is DIT exactly as the seed defines it. */
 enum {
-    LN_PULL_SLOT_OFFSET = 1 << 0, /* slot j times out after t + (j-1)·P̂ (EWMA of arrivals) */
-    LN_PULL_SKIP_OLD = 1 << 1,    /* abandon a pending seq once a newer one is delivered */
-    LN_PULL_NACK_JUMP = 1 << 2,   /* on a NACK or a newer latest-seq header, jump there */
-    LN_PULL_SYNC_QUARTER = 1 << 3,/* apply the t/4 rule to sync replies too */
-    LN_PULL_KARN = 1 << 4,        /* never halve t on the reply to a retransmission */
-    LN_PULL_SYNC_SLOTS = 1 << 5,  /* while syncing, the slots ask for latest+1.. as well */
-    LN_PULL_REFRESH = 1 << 6,     /* on a sample, send older pending Interests once more
+    LN_PULL_SLOT_OFFSET = 1 << 0,  /* slot j times out after t + (j-1)·P̂ (EWMA of arrivals) */
+    LN_PULL_SKIP_OLD = 1 << 1,     /* abandon a pending seq once a newer one is delivered */
+    LN_PULL_NACK_JUMP = 1 << 2,    /* on a NACK or a newer latest-seq header, jump there */
+    LN_PULL_SYNC_QUARTER = 1 << 3, /* apply the t/4 rule to sync replies too */
+    LN_PULL_KARN = 1 << 4,         /* never halve t on the reply to a retransmission */
+    LN_PULL_SYNC_SLOTS = 1 << 5,   /* while syncing, the slots ask for latest+1.. as well */
+    LN_PULL_REFRESH = 1 << 6,      /* on a sample, send older pending Interests once more
                                      (while a loss was seen in the last LN_PULL_REFRESH_SPAN) */
-    LN_PULL_AUTO_WINDOW = 1 << 7, /* window in effect: ceil(SRTT/P̂) + `window` */
+    LN_PULL_AUTO_WINDOW = 1 << 7,  /* window in effect: ceil(SRTT/P̂) + `window` */
 };
 
 typedef struct ln_pull_options {
-    uint32_t t_min_ms;   /* floor of t (seed: 10) */
-    uint32_t t_max_ms;   /* ceiling and start of t (seed: 2000; hardened: the control deadline) */
-    uint8_t window;      /* k outstanding Interests, 1..LN_PULL_MAX_WINDOW (seed: 1); with
+    uint32_t t_min_ms;  /* floor of t (seed: 10) */
+    uint32_t t_max_ms;  /* ceiling and start of t (seed: 2000; hardened: the control deadline) */
+    uint8_t window;     /* k outstanding Interests, 1..LN_PULL_MAX_WINDOW (seed: 1); with
                             LN_PULL_AUTO_WINDOW the spare ones */
-    uint8_t boot_after;  /* re-bootstrap (sync) after this many consecutive timeouts (seed: 1) */
-    uint16_t flags;      /* LN_PULL_* hardenings */
-    uint32_t poll_ms;    /* > 0: no DIT, a fixed-rate poll of /sync every poll_ms (baseline) */
+    uint8_t boot_after; /* re-bootstrap (sync) after this many consecutive timeouts (seed: 1) */
+    uint16_t flags;     /* LN_PULL_* hardenings */
+    uint32_t poll_ms;   /* > 0: no DIT, a fixed-rate poll of /sync every poll_ms (baseline) */
 } ln_pull_options;
 
 /* The seed's DIT: t in [10 ms, 2 s], k = 1, every timeout re-bootstraps, no hardenings. */
@@ -53,28 +53,28 @@ LN_NDN_EXPORT void ln_pull_options_hardened(ln_pull_options* o, uint32_t deadlin
  * a timeout).  `data` gets each sample once, in increasing seq order (older ones that
  * arrive late are dropped: latest-value semantics). */
 typedef void (*ln_pull_send_fn)(void* user, const uint8_t* packet, size_t size);
-typedef void (*ln_pull_data_fn)(void* user, uint64_t seq, const uint8_t* payload,
-                                size_t size, uint64_t publish_us);
+typedef void (*ln_pull_data_fn)(void* user, uint64_t seq, const uint8_t* payload, size_t size,
+                                uint64_t publish_us);
 enum { LN_PULL_EV_TIMEOUT = 1, LN_PULL_EV_NACK = 2, LN_PULL_EV_SYNC = 3 };
 typedef void (*ln_pull_event_fn)(void* user, int event, uint64_t seq, uint32_t t_ms);
 
 typedef struct ln_pull_stats {
-    uint32_t interests;   /* sent, sync and retransmissions included */
-    uint32_t syncs;       /* sync Interests sent */
-    uint32_t data;        /* samples delivered */
+    uint32_t interests; /* sent, sync and retransmissions included */
+    uint32_t syncs;     /* sync Interests sent */
+    uint32_t data;      /* samples delivered */
     uint32_t timeouts;
     uint32_t nacks;
-    uint32_t late;        /* Data for a seq no longer wanted (dropped) */
-    uint32_t bad;         /* packets that did not decode or did not belong to us */
-    uint32_t refreshes;   /* pending Interests sent once more on a sample (LN_PULL_REFRESH) */
+    uint32_t late;      /* Data for a seq no longer wanted (dropped) */
+    uint32_t bad;       /* packets that did not decode or did not belong to us */
+    uint32_t refreshes; /* pending Interests sent once more on a sample (LN_PULL_REFRESH) */
 } ln_pull_stats;
 
 typedef struct ln_pull_slot {
-    uint64_t seq;     /* the name pending in this slot; 0: free (seqs start at 1) */
+    uint64_t seq; /* the name pending in this slot; 0: free (seqs start at 1) */
     uint32_t sent_ms;
     uint32_t nonce;
-    uint8_t retries;  /* times this name was sent again after a timeout */
-    uint8_t flags;    /* 1: refreshed (LN_PULL_REFRESH); 2: seq was published when sent */
+    uint8_t retries; /* times this name was sent again after a timeout */
+    uint8_t flags;   /* 1: refreshed (LN_PULL_REFRESH); 2: seq was published when sent */
 } ln_pull_slot;
 
 /* One subscription; treat the fields as private (they are public only so that the caller
@@ -87,12 +87,12 @@ typedef struct ln_pull_sub {
     void* user;
     uint8_t name[LN_PULL_MAX_NAME]; /* encoded /<prefix>/<topic> */
     uint16_t name_size;
-    uint8_t syncing;        /* a sync Interest is pending */
+    uint8_t syncing; /* a sync Interest is pending */
     uint8_t timeouts_in_row;
-    uint32_t t_ms;          /* the current DIT timeout */
+    uint32_t t_ms; /* the current DIT timeout */
     uint32_t sync_sent_ms;
     uint32_t sync_nonce;
-    uint32_t period_ewma_us;/* P̂ */
+    uint32_t period_ewma_us; /* P̂ */
     uint32_t last_arrival_ms;
     uint64_t delivered_seq; /* newest seq handed to on_data; 0: none */
     uint64_t next_seq;      /* the next seq to ask for */
@@ -118,8 +118,8 @@ LN_NDN_EXPORT int ln_pull_start(ln_pull_sub* s, const char* uri, const ln_pull_o
  * only this one (no URI parser linked in).  LN_NDN_ENAME for a malformed name. */
 LN_NDN_EXPORT int ln_pull_start_name(ln_pull_sub* s, const uint8_t* name, size_t size,
                                      const ln_pull_options* o, ln_pull_send_fn send,
-                                     ln_pull_data_fn on_data, ln_pull_event_fn on_event,
-                                     void* user, uint32_t now_ms, uint32_t seed);
+                                     ln_pull_data_fn on_data, ln_pull_event_fn on_event, void* user,
+                                     uint32_t now_ms, uint32_t seed);
 /* Takes one received packet: 1 if it was a reply to this subscription, 0 if it was for
  * another name (try the next subscription), or an error (counted in stats.bad). */
 LN_NDN_EXPORT int ln_pull_receive(ln_pull_sub* s, const uint8_t* packet, size_t size,

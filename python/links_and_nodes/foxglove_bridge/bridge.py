@@ -17,8 +17,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..manager.introspection.client import load_md
-from ..manager.introspection.commands import CommandError, topic_layout
+from ..tools.introspection.client import load_md
+from ..tools.introspection.commands import CommandError, topic_layout
 from .config import FoxgloveConfig
 from .front import LEGACY, SDK, Front
 from .link import ManagerLink

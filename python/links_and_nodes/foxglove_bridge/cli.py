@@ -84,8 +84,8 @@ def say(text: str) -> None:
 
 
 def run(config: FoxgloveConfig) -> int:
-    from ..manager.introspection.commands import CommandError
-    from ..manager.frontends.scripting import ManagerError
+    from ..tools.introspection.commands import CommandError
+    from ..tools.scripting import ManagerError
     from .bridge import Bridge
 
     address = config.manager or os.environ.get("LN_MANAGER")

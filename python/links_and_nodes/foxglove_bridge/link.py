@@ -8,8 +8,8 @@ from __future__ import annotations
 import threading
 from typing import Any
 
-from ..manager.introspection.commands import CommandError
-from ..manager.frontends.scripting import Manager, ManagerError
+from ..tools.introspection.commands import CommandError
+from ..tools.scripting import Manager, ManagerError
 
 
 class ManagerLink:

@@ -15,7 +15,7 @@ from typing import Any
 
 from ln_generate import MessageDef
 
-from ..manager.introspection.commands import CommandError, Context, service_call_values
+from ..tools.introspection.commands import CommandError, Context, service_call_values
 from ..zenoh_bridge.config import ServiceRule
 from ..zenoh_bridge.wire import decode_fields
 from .schema import SCHEMA_ENCODING, root_schema

@@ -17,9 +17,9 @@ from typing import Any
 
 from ln_generate import MessageDef
 
-from ..manager.introspection import values as fmt
-from ..manager.introspection.client import TopicReader
-from ..manager.introspection.commands import CommandError, Context, follow, topic_layout
+from ..tools.introspection import values as fmt
+from ..tools.introspection.client import TopicReader
+from ..tools.introspection.commands import CommandError, Context, follow, topic_layout
 from ..zenoh_bridge.config import TopicRule
 from .schema import SCHEMA_ENCODING, root_schema
 

@@ -9,7 +9,7 @@ API for that.  See docs/manager.md and docs/process_management.md."""
 def __getattr__(name: str) -> object:
     # The scripting API without importing the manager's server side (or libln) with it.
     if name in ("connect", "Manager", "ManagerError"):
-        from .frontends import scripting
+        from ..tools import scripting
 
         return getattr(scripting, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

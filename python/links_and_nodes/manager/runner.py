@@ -15,9 +15,10 @@ from collections.abc import Callable
 from typing import Any
 
 from ..addresses import format_address, is_loopback, parse_address
+from ..tools.commands import ControlError
 from .config import ConfigError, load
 from .frontends.console import Console, stdin_reader
-from .frontends.control import Control, ControlError
+from .frontends.control import Control
 from .loggers.loggers import Loggers
 from .network import routes
 from .network.hosts import Network

@@ -124,7 +124,7 @@ class Session:
 
     def __init__(self, args: argparse.Namespace, address: str) -> None:
         import links_and_nodes as ln
-        from links_and_nodes.manager.frontends.scripting import connect
+        from links_and_nodes.tools.scripting import connect
 
         self.args = args
         self.address = address

@@ -80,6 +80,7 @@ def encode_str(value: str | bytes) -> bytes:
 
 Encoder = Callable[[list[bytes], Any, str], None]
 Decoder = Callable[[_Buf, dict[str, Any]], None]
+ValueDecoder = Callable[[_Buf], Any]  # one value of a type (a field's is a Decoder)
 
 
 class Codec:
@@ -185,113 +186,124 @@ class Codec:
 
         return enc, dec_field
 
-    def _value(self, t: sch.Type) -> tuple[Callable[[list[bytes], Any, str], None],
-                                          Callable[[_Buf], Any]]:
-        kind = t.kind
-        if kind in ("int", "f64", "bool"):
-            packer = _PACKERS[t.name]
+    def _value(self, t: sch.Type) -> tuple[Encoder, ValueDecoder]:
+        build = {"int": self._scalar, "f64": self._scalar, "bool": self._scalar,
+                 "str": self._string, "bytes": self._string, "text": self._string,
+                 "fixed": self._fixed, "tail": self._tail, "enum": self._enum,
+                 "record": self._record, "list": self._list}.get(t.kind)
+        if build is None:
+            raise AssertionError(t.kind)
+        return build(t)
 
-            def enc_scalar(out: list[bytes], v: Any, where: str) -> None:
-                try:
-                    out.append(packer.pack(v))
-                except struct.error as e:
-                    raise WireError(f"{where}: {v!r} does not fit {t.name} ({e})") from None
+    def _scalar(self, t: sch.Type) -> tuple[Encoder, ValueDecoder]:
+        packer = _PACKERS[t.name]
 
-            if kind == "bool":
-                def dec_bool(buf: _Buf) -> bool:
-                    v = buf.scalar("bool")
-                    if v > 1:
-                        raise WireError(f"bool of value {v}")
-                    return bool(v)
-                return enc_scalar, dec_bool
-            return enc_scalar, lambda buf: buf.scalar(t.name)
-        if kind in ("str", "bytes", "text"):
-            width = self.schema.str_length if kind == "str" else "u32"
-            counter = _PACKERS[width]
-            limit = t.limit if t.limit is not None else (1 << (8 * counter.size)) - 1
+        def enc_scalar(out: list[bytes], v: Any, where: str) -> None:
+            try:
+                out.append(packer.pack(v))
+            except struct.error as e:
+                raise WireError(f"{where}: {v!r} does not fit {t.name} ({e})") from None
 
-            # encoding checks only a written limit: the frame's is the framing's to check
-            enc_limit = limit if t.explicit else (1 << (8 * counter.size)) - 1
+        if t.kind == "bool":
+            def dec_bool(buf: _Buf) -> bool:
+                v = buf.scalar("bool")
+                if v > 1:
+                    raise WireError(f"bool of value {v}")
+                return bool(v)
+            return enc_scalar, dec_bool
+        return enc_scalar, lambda buf: buf.scalar(t.name)
 
-            def enc_str(out: list[bytes], v: Any, where: str) -> None:
-                b = _to_bytes(v)
-                if len(b) > enc_limit:
-                    raise WireError(f"{where}: {len(b)} bytes, more than {enc_limit}")
-                out.append(counter.pack(len(b)))
-                out.append(b)
+    def _string(self, t: sch.Type) -> tuple[Encoder, ValueDecoder]:
+        width = self.schema.str_length if t.kind == "str" else "u32"
+        counter = _PACKERS[width]
+        limit = t.limit if t.limit is not None else (1 << (8 * counter.size)) - 1
 
-            def dec_str(buf: _Buf) -> Any:
-                n = buf.scalar(width)
-                if n > limit:
-                    raise WireError(f"{n} bytes, more than {limit}")
-                b = buf.take(n)
-                return b if kind == "bytes" else b.decode(errors="replace")
-            return enc_str, dec_str
-        if kind == "fixed":
-            size = t.size or 0
+        # encoding checks only a written limit: the frame's is the framing's to check
+        enc_limit = limit if t.explicit else (1 << (8 * counter.size)) - 1
 
-            def enc_fixed(out: list[bytes], v: Any, where: str) -> None:
-                b = _to_bytes(v)
-                if len(b) != size:
-                    raise WireError(f"{where}: {len(b)} bytes, not {size}")
-                out.append(b)
-            return enc_fixed, lambda buf: buf.take(size)
-        if kind == "tail":
-            def enc_tail(out: list[bytes], v: Any, where: str) -> None:
-                out.append(_to_bytes(v))
+        def enc_str(out: list[bytes], v: Any, where: str) -> None:
+            b = _to_bytes(v)
+            if len(b) > enc_limit:
+                raise WireError(f"{where}: {len(b)} bytes, more than {enc_limit}")
+            out.append(counter.pack(len(b)))
+            out.append(b)
 
-            def dec_tail(buf: _Buf) -> bytes:
-                return buf.take(len(buf.data) - buf.pos)
-            return enc_tail, dec_tail
-        if kind == "enum":
-            e = self.schema.enums[t.ref or ""]
-            cls = self.enums[e.name]
-            packer = _PACKERS[e.base]
+        def dec_str(buf: _Buf) -> Any:
+            n = buf.scalar(width)
+            if n > limit:
+                raise WireError(f"{n} bytes, more than {limit}")
+            b = buf.take(n)
+            return b if t.kind == "bytes" else b.decode(errors="replace")
+        return enc_str, dec_str
 
-            def enc_enum(out: list[bytes], v: Any, where: str) -> None:
-                try:
-                    member = cls[v] if isinstance(v, str) else cls(v)
-                except (KeyError, ValueError):
-                    raise WireError(f"{where}: {v!r} is no {e.name}") from None
-                out.append(packer.pack(member))
+    def _fixed(self, t: sch.Type) -> tuple[Encoder, ValueDecoder]:
+        size = t.size or 0
 
-            def dec_enum(buf: _Buf) -> enum.IntEnum:
-                v = buf.scalar(e.base)
-                try:
-                    return cls(v)
-                except ValueError:
-                    raise WireError(f"{v} is no {e.name}") from None
-            return enc_enum, dec_enum
-        if kind == "record":
-            ref = t.ref or ""
+        def enc_fixed(out: list[bytes], v: Any, where: str) -> None:
+            b = _to_bytes(v)
+            if len(b) != size:
+                raise WireError(f"{where}: {len(b)} bytes, not {size}")
+            out.append(b)
+        return enc_fixed, lambda buf: buf.take(size)
 
-            def enc_record(out: list[bytes], v: Any, where: str) -> None:
-                self._enc[ref](out, v, where)
+    def _tail(self, t: sch.Type) -> tuple[Encoder, ValueDecoder]:
+        def enc_tail(out: list[bytes], v: Any, where: str) -> None:
+            out.append(_to_bytes(v))
 
-            def dec_record(buf: _Buf) -> dict[str, Any]:
-                rec: dict[str, Any] = {}
-                self._dec[ref](buf, rec)
-                return rec
-            return enc_record, dec_record
-        if kind == "list":
-            assert t.item is not None
-            item_enc, item_dec = self._value(t.item)
-            min_item = self.schema.min_size(t.item)
-            count = _PACKERS["u32"]
+        def dec_tail(buf: _Buf) -> bytes:
+            return buf.take(len(buf.data) - buf.pos)
+        return enc_tail, dec_tail
 
-            def enc_list(out: list[bytes], v: Any, where: str) -> None:
-                items = list(v)
-                out.append(count.pack(len(items)))
-                for i, item in enumerate(items):
-                    item_enc(out, item, f"{where}[{i}]")
+    def _enum(self, t: sch.Type) -> tuple[Encoder, ValueDecoder]:
+        e = self.schema.enums[t.ref or ""]
+        cls = self.enums[e.name]
+        packer = _PACKERS[e.base]
 
-            def dec_list(buf: _Buf) -> list[Any]:
-                n = buf.scalar("u32")
-                if min_item and n > (len(buf.data) - buf.pos) // min_item:
-                    raise WireError(f"short payload for a count of {n}")
-                return [item_dec(buf) for _ in range(n)]
-            return enc_list, dec_list
-        raise AssertionError(kind)
+        def enc_enum(out: list[bytes], v: Any, where: str) -> None:
+            try:
+                member = cls[v] if isinstance(v, str) else cls(v)
+            except (KeyError, ValueError):
+                raise WireError(f"{where}: {v!r} is no {e.name}") from None
+            out.append(packer.pack(member))
+
+        def dec_enum(buf: _Buf) -> enum.IntEnum:
+            v = buf.scalar(e.base)
+            try:
+                return cls(v)
+            except ValueError:
+                raise WireError(f"{v} is no {e.name}") from None
+        return enc_enum, dec_enum
+
+    def _record(self, t: sch.Type) -> tuple[Encoder, ValueDecoder]:
+        ref = t.ref or ""
+
+        def enc_record(out: list[bytes], v: Any, where: str) -> None:
+            self._enc[ref](out, v, where)
+
+        def dec_record(buf: _Buf) -> dict[str, Any]:
+            rec: dict[str, Any] = {}
+            self._dec[ref](buf, rec)
+            return rec
+        return enc_record, dec_record
+
+    def _list(self, t: sch.Type) -> tuple[Encoder, ValueDecoder]:
+        assert t.item is not None
+        item_enc, item_dec = self._value(t.item)
+        min_item = self.schema.min_size(t.item)
+        count = _PACKERS["u32"]
+
+        def enc_list(out: list[bytes], v: Any, where: str) -> None:
+            items = list(v)
+            out.append(count.pack(len(items)))
+            for i, item in enumerate(items):
+                item_enc(out, item, f"{where}[{i}]")
+
+        def dec_list(buf: _Buf) -> list[Any]:
+            n = buf.scalar("u32")
+            if min_item and n > (len(buf.data) - buf.pos) // min_item:
+                raise WireError(f"short payload for a count of {n}")
+            return [item_dec(buf) for _ in range(n)]
+        return enc_list, dec_list
 
 
 def _default(schema: sch.Schema, f: sch.Field) -> Any:

@@ -63,17 +63,11 @@ def _read_field(f, schema: Schema) -> str:
     return f"    m->{f.name} = ln_rbuf_{_RW[t.name]}(r);\n"
 
 
-def generate(schema: Schema, header_name: str, prefix: str,
-             skip: set[str]) -> tuple[str, str]:
-    if schema.str_length != "u16":
-        raise ValueError(f"{schema.path}: libln's str is u16 counted, not {schema.str_length}")
+def _header_start(schema: Schema, header_name: str, guard: str, prefix: str,
+                  skip: set[str]) -> list[str]:
+    """The header up to the message structs: constants, the message enum, the message table's
+    types and the check function."""
     msg_enum = schema.message_enum
-    guard = "LN_" + header_name.upper().replace(".", "_").replace("/", "_")
-    messages = [schema.messages[e.name] for e in msg_enum.entries if e.name not in skip]
-    unknown = skip - set(schema.messages)
-    if unknown:
-        raise ValueError(f"--skip names no message: {', '.join(sorted(unknown))}")
-
     h = [_banner(schema, header_name),
          f"#ifndef {guard}\n#define {guard}\n\n#include <stddef.h>\n#include <stdint.h>\n\n"]
     for c in schema.consts.values():
@@ -109,6 +103,21 @@ def generate(schema: Schema, header_name: str, prefix: str,
              " * (else LN_EPROTOCOL); messages that start with a request id also have\n"
              " * _write_after_id / _read_after_id for the rest (the connection owns the id),\n"
              " * and _frame writes a whole frame (LN_OK, the writer's failure or LN_ETOOBIG). */\n")
+    return h
+
+
+def generate(schema: Schema, header_name: str, prefix: str,
+             skip: set[str]) -> tuple[str, str]:
+    if schema.str_length != "u16":
+        raise ValueError(f"{schema.path}: libln's str is u16 counted, not {schema.str_length}")
+    msg_enum = schema.message_enum
+    guard = "LN_" + header_name.upper().replace(".", "_").replace("/", "_")
+    messages = [schema.messages[e.name] for e in msg_enum.entries if e.name not in skip]
+    unknown = skip - set(schema.messages)
+    if unknown:
+        raise ValueError(f"--skip names no message: {', '.join(sorted(unknown))}")
+
+    h = _header_start(schema, header_name, guard, prefix, skip)
     c = [_banner(schema, header_name.replace(".h", ".c")),
          '#include "proto.h"\n\n']
     for s in messages:

@@ -14,9 +14,10 @@ import queue
 import threading
 import time
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
-from .config import BridgeConfig
+from .config import BridgeConfig, ServiceRule, TopicRule
 from .inbound import InRule
 from .mds import LayoutMismatch, MdResolver, MdServer, MdUnavailable
 from .outbound import OutTopic
@@ -61,7 +62,7 @@ class Bridge:
     def start(self) -> bool:
         """Connect everything; False if stopped before the session opened."""
         import links_and_nodes as ln
-        from links_and_nodes.manager.frontends.scripting import connect
+        from links_and_nodes.tools.scripting import connect
 
         native = self._wants_core()
         self.manager = connect(self.address)
@@ -115,8 +116,12 @@ class Bridge:
             if self.config.native == "on":
                 raise RuntimeError(f"native on, but the native core cannot be loaded: {exc}; "
                                    "build it with `scons` (needs cargo)") from None
-            self.say("the native core is not built: topic samples go through Python (slower; "
-                     "`scons` builds it when cargo is installed)")
+            if exc.refused:
+                self.say(f"the native core does not match this bridge: {exc}; topic samples "
+                         "go through Python (slower)")
+            else:
+                self.say("the native core is not built: topic samples go through Python "
+                         "(slower; `scons` builds it when cargo is installed)")
             return False
         return True
 
@@ -206,17 +211,42 @@ class Bridge:
     # ---- outbound discovery ------------------------------------------------------------------------
     def poll(self) -> None:
         """Bridge the topics and services of the manager's lists that outbound rules select."""
-        from links_and_nodes.manager.frontends.scripting import connect
-
         wants_topics = any(r.direction == "out" for r in self.config.topics)
         wants_services = any(r.direction == "out" for r in self.config.services)
         if not (wants_topics or wants_services):
             return
+        listed = self._list(wants_topics, wants_services)
+        if listed is None:
+            return
+        topics, services = listed
+        now = time.monotonic()
+        for entry in topics:
+            name, md_name = str(entry.get("name", "")), str(entry.get("md_name", ""))
+            if name in self.out_topics or name in self.inbound_names or not md_name:
+                continue
+            rule = self.config.topic_rule(name, "out")
+            if rule is not None and self._may_try("topic", name, now):
+                self._bridge_out("topic", name, now,
+                                 partial(self._out_topic, name, md_name, rule))
+        for entry in services:
+            name, md_name = str(entry.get("name", "")), str(entry.get("md_name", ""))
+            if name in self.out_services or name in self.in_services or not md_name:
+                continue
+            srule = self.config.service_rule(name, "out")
+            if srule is not None and self._may_try("service", name, now):
+                self._bridge_out("service", name, now,
+                                 partial(self._out_service, name, md_name, srule))
+
+    def _list(self, topics: bool, services: bool) -> tuple[list[Any], list[Any]] | None:
+        """The manager's topic and service lists (empty where not wanted); None, said once per
+        distinct error, when the manager cannot be asked (the next poll retries)."""
+        from links_and_nodes.tools.scripting import connect
+
         try:
             if self.manager is None:
                 self.manager = connect(self.address)
-            topics = self.manager.topics() if wants_topics else []
-            services = self.manager.services() if wants_services else []
+            listed = (self.manager.topics() if topics else [],
+                      self.manager.services() if services else [])
         except Exception as exc:  # noqa: BLE001 - ManagerError, lost connection: retry
             if self.manager is not None:
                 self.manager.close()
@@ -224,46 +254,38 @@ class Bridge:
             if str(exc) != self._listing_error:
                 self._listing_error = str(exc)
                 self.say(f"cannot list the manager's topics and services (will retry): {exc}")
-            return
+            return None
         self._listing_error = None
-        now = time.monotonic()
-        for entry in topics:
-            name, md_name = str(entry.get("name", "")), str(entry.get("md_name", ""))
-            if (name in self.out_topics or name in self.inbound_names or not md_name
-                    or self._failed.get(f"topic:{name}", 0.0) > now):
-                continue
-            rule = self.config.topic_rule(name, "out")
-            if rule is None:
-                continue
-            if why := bad_name(name):
-                self._give_up("topic", name, f"its name cannot be a key expression: {why}", now)
-                continue
-            try:
-                self.out_topics[name] = OutTopic(self, name, md_name, rule)
-            except Exception as exc:  # noqa: BLE001 - LnError, MdError, dynamic fields
-                self._give_up("topic", name, str(exc), now)
-                continue
-            self.say(f"topic '{name}' ({md_name}, {'queued' if rule.queued else 'latest'}): "
-                     f"bridged out to {self.out_topics[name].key}")
-        for entry in services:
-            name, md_name = str(entry.get("name", "")), str(entry.get("md_name", ""))
-            if (name in self.out_services or name in self.in_services or not md_name
-                    or self._failed.get(f"service:{name}", 0.0) > now):
-                continue
-            srule = self.config.service_rule(name, "out")
-            if srule is None:
-                continue
-            if why := bad_name(name):
-                self._give_up("service", name, f"its name cannot be a key expression: {why}",
-                              now)
-                continue
-            try:
-                self.out_services[name] = OutService(self, name, md_name, srule)
-            except Exception as exc:  # noqa: BLE001 - LnError, MdError
-                self._give_up("service", name, str(exc), now)
-                continue
-            self.say(f"service '{name}' ({md_name}): served as "
-                     f"{self.prefix}/service/{name}")
+        return listed
+
+    def _may_try(self, kind: str, name: str, now: float) -> bool:
+        """Whether `name` may be bridged now: not in its back-off after a failure, and a name
+        that can be part of a key expression (else it is given up, said once)."""
+        if self._failed.get(f"{kind}:{name}", 0.0) > now:
+            return False
+        if why := bad_name(name):
+            self._give_up(kind, name, f"its name cannot be a key expression: {why}", now)
+            return False
+        return True
+
+    def _bridge_out(self, kind: str, name: str, now: float, make: Callable[[], str]) -> None:
+        """Run `make` (which bridges `name` and returns the line saying so); a failure gives
+        the name up for a while."""
+        try:
+            said = make()
+        except Exception as exc:  # noqa: BLE001 - LnError, MdError, dynamic fields
+            self._give_up(kind, name, str(exc), now)
+            return
+        self.say(said)
+
+    def _out_topic(self, name: str, md_name: str, rule: TopicRule) -> str:
+        self.out_topics[name] = OutTopic(self, name, md_name, rule)
+        return (f"topic '{name}' ({md_name}, {'queued' if rule.queued else 'latest'}): "
+                f"bridged out to {self.out_topics[name].key}")
+
+    def _out_service(self, name: str, md_name: str, rule: ServiceRule) -> str:
+        self.out_services[name] = OutService(self, name, md_name, rule)
+        return f"service '{name}' ({md_name}): served as {self.prefix}/service/{name}"
 
     def _give_up(self, kind: str, name: str, why: str, now: float) -> None:
         key = f"{kind}:{name}"

@@ -97,6 +97,13 @@ class BridgeConfig:
         for prefix in [self.prefix, self.remote] + [r.remote for r in self.topics + self.services]:
             if prefix is not None and (why := bad_name(prefix)):
                 raise ConfigError(f"prefix {prefix!r} cannot be a key expression: {why}")
+        self._check_rules()
+        if not self.topics and not self.services:
+            raise ConfigError("nothing to bridge: give topics or services (--out, --in, "
+                              "--service-out, --service-in or a config file)")
+
+    def _check_rules(self) -> None:
+        """ConfigError for a rule that cannot work; inbound rules get the default remote."""
         for rule in self.topics + self.services:
             if rule.direction not in DIRECTIONS:
                 raise ConfigError(f"{rule.pattern}: direction must be out or in, "
@@ -114,9 +121,6 @@ class BridgeConfig:
         for service in self.services:
             if not service.timeout > 0:
                 raise ConfigError(f"{service.pattern}: timeout must be positive")
-        if not self.topics and not self.services:
-            raise ConfigError("nothing to bridge: give topics or services (--out, --in, "
-                              "--service-out, --service-in or a config file)")
 
 
 # ---- the config file ---------------------------------------------------------------------------

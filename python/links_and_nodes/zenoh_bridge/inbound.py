@@ -32,8 +32,15 @@ from typing import Any
 
 from .config import TopicRule
 from .mds import LayoutMismatch, MdUnavailable
-from .wire import Attachment, AttachmentError, decode_attachment, matches, name_in, \
-    pattern_key, topic_key
+from .wire import (
+    Attachment,
+    AttachmentError,
+    decode_attachment,
+    matches,
+    name_in,
+    pattern_key,
+    topic_key,
+)
 
 MD_RETRY = 2.0  # seconds before an md that could not be had is asked for again
 COMPLAIN_EVERY = 5.0  # seconds between log lines about the same kind of bad sample
@@ -132,7 +139,7 @@ class InTopic:
         """Give the topic to the core: in Zenoh's thread right after a sample was published
         inline, or in the topic's thread after it published the queue holding its lock; so
         nothing is left here and the order is kept."""
-        from .native import Counters, CoreError
+        from .native import CoreError, Counters
 
         if self.handed_over or self.md is None:
             return

@@ -9,7 +9,10 @@ and `InRule` are the core's halves of outbound.py's and inbound.py's topics.
 
 The library is found as libln's are (_native.py): $LN_ZENOH_CORE (a file or a directory),
 build/release/ln_zenoh_core/ of the checkout, `links_and_nodes/` beside the libln.so.1 that was
-loaded (where `scons install` puts it), the system loader.
+loaded (where `scons install` puts it), the system loader.  A library is used only if it
+agrees with this side on what is not in the signatures (`check_seam`): the counters' order
+(the core's lnz_counter_names against stats.TopicStats) and the libln function table, which
+is built here from the core's list (lnz_libln_functions).
 """
 
 from __future__ import annotations
@@ -20,10 +23,12 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
 from .. import _native
+from .stats import TopicStats
 
 SONAME = "libln_zenoh_core.so"
 ENV = "LN_ZENOH_CORE"
@@ -40,26 +45,22 @@ SAMPLE_FN = ctypes.CFUNCTYPE(None, c_void_p, ctypes.POINTER(ctypes.c_ubyte), c_s
                              ctypes.POINTER(ctypes.c_ubyte), c_size_t,
                              ctypes.POINTER(ctypes.c_ubyte), ctypes.c_ssize_t)
 
-# The counters the core adds to: the numbers of stats.TopicStats, in this order.
-COUNTER_FIELDS = ("read", "sent", "unmatched", "rate_limited", "overruns", "received",
-                  "published", "bad_attachment", "bad_size", "refused", "md_unavailable",
-                  "superseded", "gaps", "bytes", "errors", "last_seq", "forced")
+# The counters the core adds to: the numbers of stats.TopicStats, in their order there
+# (the core's counters.rs must list them alike: check_seam).
+COUNTER_FIELDS = tuple(f.name for f in fields(TopicStats) if f.type in (int, "int"))
 
 
 class Counters(ctypes.Structure):
     _fields_ = [(name, c_uint64) for name in COUNTER_FIELDS]
 
 
-class LnFns(ctypes.Structure):
-    """The libln functions the core calls (ln_zenoh_core/src/libln.rs)."""
-
-    _fields_ = [("read_borrow", c_void_p), ("read_release", c_void_p), ("write", c_void_p),
-                ("strerror", c_void_p), ("write_loan", c_void_p), ("write_commit", c_void_p),
-                ("write_abort", c_void_p)]
-
-
 class CoreUnavailable(RuntimeError):
-    """The core library cannot be loaded."""
+    """The core library cannot be loaded; `refused` when one was found but does not match
+    this bridge (built from other sources)."""
+
+    def __init__(self, why: str, refused: bool = False) -> None:
+        super().__init__(why)
+        self.refused = refused
 
 
 class CoreError(RuntimeError):
@@ -67,7 +68,7 @@ class CoreError(RuntimeError):
 
 
 _lib: ctypes.CDLL | None = None
-_why_not: str | None = None
+_why_not: CoreUnavailable | None = None
 # Callbacks handed to the core are never freed: one the core is still running when its object
 # closes (Zenoh may finish a delivery after an undeclare) must stay callable.  A few per
 # topic, and topics are closed only when the bridge stops.
@@ -93,25 +94,55 @@ def library() -> ctypes.CDLL:
     if _lib is not None:
         return _lib
     if _why_not is not None:
-        raise CoreUnavailable(_why_not)
+        raise _why_not
     failures = []
+    refused = False
     for candidate in _candidates():
         try:
             lib = ctypes.CDLL(candidate)
         except OSError as exc:
             failures.append(f"{candidate}: {exc}")
             continue
+        try:
+            check_seam(lib)
+        except CoreUnavailable as exc:
+            failures.append(f"{candidate}: {exc}")
+            refused = True
+            continue
         _declare_all(lib)
         _lib = lib
         return lib
-    _why_not = "; ".join(failures) or "nowhere to look"
-    raise CoreUnavailable(_why_not)
+    _why_not = CoreUnavailable("; ".join(failures) or "nowhere to look", refused)
+    raise _why_not
+
+
+def _names(lib: ctypes.CDLL, function: str) -> list[str]:
+    """The space-separated names a core's `function` returns; CoreUnavailable if it has none."""
+    try:
+        fn = getattr(lib, function)
+    except AttributeError:
+        raise CoreUnavailable(f"it has no {function}: built from older sources, rebuild it "
+                              "(scons)") from None
+    fn.restype, fn.argtypes = c_char_p, []
+    return fn().decode().split()
+
+
+def check_seam(lib: ctypes.CDLL) -> None:
+    """CoreUnavailable unless the core counts what stats.TopicStats counts, in its order, and
+    names the libln functions it takes (ln_fns checks that libln has them)."""
+    theirs = _names(lib, "lnz_counter_names")
+    if theirs != list(COUNTER_FIELDS):
+        raise CoreUnavailable(
+            "its counters differ from this bridge's (ln_zenoh_core/src/counters.rs against "
+            f"zenoh_bridge/stats.py TopicStats): core {' '.join(theirs)}; bridge "
+            f"{' '.join(COUNTER_FIELDS)}: rebuild the core from these sources (scons)")
+    if not _names(lib, "lnz_libln_functions"):
+        raise CoreUnavailable("its libln function table is empty")
 
 
 def _declare_all(lib: ctypes.CDLL) -> None:
     d = _native.declare
-    d(lib, "lnz_open", c_void_p, [c_char_p, ctypes.POINTER(LnFns), LOG_FN, c_void_p,
-                                  c_char_p, c_size_t])
+    d(lib, "lnz_open", c_void_p, [c_char_p, c_void_p, LOG_FN, c_void_p, c_char_p, c_size_t])
     d(lib, "lnz_zid", c_int, [c_void_p, c_char_p, c_size_t])
     d(lib, "lnz_close", None, [c_void_p])
     d(lib, "lnz_out_open", c_void_p, [c_void_p, c_char_p, c_void_p, c_size_t, c_char_p,
@@ -130,11 +161,16 @@ def _declare_all(lib: ctypes.CDLL) -> None:
     d(lib, "lnz_in_close", None, [c_void_p])
 
 
-def _ln_fns() -> LnFns:
-    from .. import _libln
-
-    addr = lambda name: ctypes.cast(getattr(_libln.lib, name), c_void_p).value  # noqa: E731
-    return LnFns(*(addr(f"ln_{name}") for name, _ in LnFns._fields_))
+def ln_fns(lib: ctypes.CDLL, libln: Any) -> ctypes.Structure:
+    """The libln function table lnz_open takes: `ln_<name>` of `libln` for each name of the
+    core's lnz_libln_functions, in that order (ln_zenoh_core/src/libln.rs)."""
+    names = _names(lib, "lnz_libln_functions")
+    missing = [name for name in names if not hasattr(libln, f"ln_{name}")]
+    if missing:
+        raise CoreError(f"the native core needs libln functions this libln does not have: "
+                        f"{', '.join('ln_' + n for n in missing)}")
+    table = type("LnFns", (ctypes.Structure,), {"_fields_": [(n, c_void_p) for n in names]})
+    return table(*(ctypes.cast(getattr(libln, f"ln_{n}"), c_void_p).value for n in names))
 
 
 def _err() -> ctypes.Array[ctypes.c_char]:
@@ -169,7 +205,9 @@ class Core:
         self.mode = mode
         self._say = say
         self._log = LOG_FN(lambda _ctx, text: say(text.decode("utf-8", "replace")))
-        self._fns = _ln_fns()
+        from .. import _libln
+
+        self._fns = ln_fns(self.lib, _libln.lib)
         self._dir: str | None = None
         self.socket: str | None = None
         config = json.loads(str(zenoh_config))

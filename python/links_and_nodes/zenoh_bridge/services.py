@@ -21,8 +21,16 @@ from typing import Any
 
 from .config import ServiceRule
 from .mds import LayoutMismatch, MdUnavailable
-from .wire import AttachmentEncoder, AttachmentError, decode_attachment, decode_fields, \
-    encode_fields, live_key, service_info_key, service_key
+from .wire import (
+    AttachmentEncoder,
+    AttachmentError,
+    decode_attachment,
+    decode_fields,
+    encode_fields,
+    live_key,
+    service_info_key,
+    service_key,
+)
 
 GROUP = "ln_zenoh"  # the service group (and thread pool) of inbound services
 POOL_THREADS = 4

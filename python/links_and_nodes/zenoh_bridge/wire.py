@@ -11,7 +11,8 @@ Keys under a bridge's prefix P (default `ln/<instance>`):
     P/@live/topic/<topic>    liveliness token of each topic it publishes
     P/@live/service/<name>   liveliness token of each service it serves
 
-Attachment (little-endian, 29 + N bytes):
+Attachment (little-endian, 29 + N bytes; its layout and constants are read from
+wire/zenoh.schema, the native core's attachment.rs shares its golden vectors):
 
     0   2  magic "LZ"         4  8  seq (u64)             20  8  layout hash (u64)
     2   1  version 1          12 8  publish time (i64 ns) 28  1  N, md name length
@@ -24,12 +25,32 @@ import fnmatch
 import json
 import struct
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
-MAGIC = b"LZ"
-VERSION = 1
-_HEAD = struct.Struct("<2sBBQqQB")
+from ..wire import schema as _schema
+
+SCHEMA = Path(_schema.__file__).with_name("zenoh.schema")
+_SCHEMA = _schema.load(SCHEMA)
+_FIELDS = _SCHEMA.messages["ATTACHMENT"].fields
+_STRUCT_CODES = {"u8": "B", "u64": "Q", "i64": "q"}
+
+
+def _head_format(fields: list[_schema.Field]) -> str:
+    """The struct format of attachment fields: the md name stands for its length byte."""
+    codes = [f"{f.type.size}s" if f.type.kind == "fixed"
+             else _STRUCT_CODES[_SCHEMA.str_length if f.type.kind == "str" else f.type.name]
+             for f in fields]
+    return "<" + "".join(codes)
+
+
+MAGIC = str(_SCHEMA.consts["MAGIC"].value).encode()
+VERSION = int(_SCHEMA.consts["VERSION"].value)
+MAX_MD_NAME = int(_SCHEMA.consts["MAX_MD_NAME"].value)
+_HEAD = struct.Struct(_head_format(_FIELDS))  # "<2sBBQqQB"
 HEAD_SIZE = _HEAD.size  # 29
+# what changes with every sample: the fields before the layout hash
+_SAMPLE_HEAD = struct.Struct(_head_format(_FIELDS[:[f.name for f in _FIELDS].index("layout_hash")]))
 _BAD_KEY_CHARS = set("*$?#")
 
 
@@ -46,8 +67,8 @@ class Attachment:
 
     def encode(self) -> bytes:
         name = self.md_name.encode()
-        if not 0 < len(name) < 256:
-            raise ValueError(f"md name {self.md_name!r} must be 1..255 bytes")
+        if not 0 < len(name) <= MAX_MD_NAME:
+            raise ValueError(f"md name {self.md_name!r} must be 1..{MAX_MD_NAME} bytes")
         return _HEAD.pack(MAGIC, VERSION, 0, self.seq, self.publish_time_ns,
                           self.layout_hash, len(name)) + name
 
@@ -56,7 +77,7 @@ class AttachmentEncoder:
     """Attachments of one topic or service: the md part is packed once."""
 
     __slots__ = ("_tail",)
-    _head = struct.Struct("<2sBBQq")
+    _head = _SAMPLE_HEAD
 
     def __init__(self, md_name: str, layout_hash: int) -> None:
         self._tail = Attachment(0, 0, layout_hash, md_name).encode()[self._head.size:]

@@ -90,8 +90,8 @@ static int on_fault(ln_client* clnt, ln_event_request* call, void* user_data)
     uint32_t n = c.text_len < sizeof reversed ? c.text_len : (uint32_t)sizeof reversed;
     for (uint32_t i = 0; i < n; i++)
         reversed[i] = c.text[n - 1 - i];
-    robot_fault_event_call_t r = {.severity = c.severity + 1, .code = c.code * 2,
-                                  .text_len = n, .text = reversed};
+    robot_fault_event_call_t r = {
+        .severity = c.severity + 1, .code = c.code * 2, .text_len = n, .text = reversed};
     return ln_event_request_reply(call, &r);
 }
 
@@ -186,8 +186,8 @@ static int call_event(ln_client* c, const char* event, int argc, char** argv)
         }
     }
     ln_event* ev;
-    int rc = ln_get_event(c, &ev, event, ROBOT_FAULT_EVENT_MD_NAME, hash,
-                          ROBOT_FAULT_EVENT_SIGNATURE);
+    int rc =
+        ln_get_event(c, &ev, event, ROBOT_FAULT_EVENT_MD_NAME, hash, ROBOT_FAULT_EVENT_SIGNATURE);
     if (rc < 0)
         return fail("get_event", rc);
     uint32_t severity = call.severity;

@@ -30,8 +30,8 @@ static int handle(ln::client& clnt, const char* event, unsigned min_severity, in
     int handled = 0;
     fault::connect_t connect{};
     connect.min_severity = min_severity;
-    auto handler = clnt.connect_event<fault>(
-        event, connect, [&](ln::event_handler<fault>::call& c) {
+    auto handler =
+        clnt.connect_event<fault>(event, connect, [&](ln::event_handler<fault>::call& c) {
             handled++;
             std::string text = text_of(c.data);
             std::printf("{\"event\": \"%s\", \"severity\": %u, \"code\": %d, \"text\": \"%s\"}\n",
@@ -54,8 +54,7 @@ static int handle(ln::client& clnt, const char* event, unsigned min_severity, in
     return 0;
 }
 
-static int call(ln::client& clnt, const char* event, unsigned severity, int code,
-                const char* text)
+static int call(ln::client& clnt, const char* event, unsigned severity, int code, const char* text)
 {
     auto ev = clnt.get_event<fault>(event);
     ev.set_filter([severity](const fault::connect_t& c) { return c.min_severity <= severity; });

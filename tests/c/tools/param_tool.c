@@ -103,24 +103,42 @@ int main(int argc, char** argv)
 
     ln_client* clnt;
     ln_parameter_block* blk;
-    if (ln_client_create(&clnt, "param_tool", NULL) != LN_OK
-        || ln_parameter_block_create(clnt, &blk, block) != LN_OK) {
+    if (ln_client_create(&clnt, "param_tool", NULL) != LN_OK ||
+        ln_parameter_block_create(clnt, &blk, block) != LN_OK) {
         fprintf(stderr, "param_tool: %s\n", ln_last_error());
         return 1;
     }
     const ln_parameter_desc params[] = {
-        {.name = "kp", .type = "double", .count = 7, .input = v.kp_in, .output = v.kp,
-         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX, .min = 0, .max = 1000,
+        {.name = "kp",
+         .type = "double",
+         .count = 7,
+         .input = v.kp_in,
+         .output = v.kp,
+         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX,
+         .min = 0,
+         .max = 1000,
          .description = "stiffness per joint (Nm/rad)"},
-        {.name = "gain", .type = "double", .output = &v.gain,
-         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX, .min = 0, .max = 10,
+        {.name = "gain",
+         .type = "double",
+         .output = &v.gain,
+         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX,
+         .min = 0,
+         .max = 10,
          .description = "overall gain"},
-        {.name = "counter", .type = "uint64_t", .input = &v.counter_in, .output = &v.counter,
+        {.name = "counter",
+         .type = "uint64_t",
+         .input = &v.counter_in,
+         .output = &v.counter,
          .description = "the cycle"},
         {.name = "label", .type = "char", .count = 16, .output = v.label},
         {.name = "mode", .type = "int32_t", .output = &v.mode, .flags = LN_PARAMETER_READ_ONLY},
-        {.name = "limits", .type = "float", .count = 2, .input = v.limits_in,
-         .output = v.limits, .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX, .min = -1,
+        {.name = "limits",
+         .type = "float",
+         .count = 2,
+         .input = v.limits_in,
+         .output = v.limits,
+         .flags = LN_PARAMETER_MIN | LN_PARAMETER_MAX,
+         .min = -1,
          .max = 1},
     };
     const char* names[] = {"kp", "gain", "counter", "label", "mode", "limits"};
@@ -129,8 +147,8 @@ int main(int argc, char** argv)
             fprintf(stderr, "param_tool: %s\n", ln_last_error());
             return 1;
         }
-    if (ln_parameter_block_set_validator(blk, validate, NULL) != LN_OK
-        || ln_parameter_block_register(blk) != LN_OK) {
+    if (ln_parameter_block_set_validator(blk, validate, NULL) != LN_OK ||
+        ln_parameter_block_register(blk) != LN_OK) {
         fprintf(stderr, "param_tool: %s\n", ln_last_error());
         return 1;
     }

@@ -153,8 +153,8 @@ static void* caller_thread(void* arg)
                 k->first_rc = rc;
                 snprintf(k->first_error, sizeof k->first_error, "%s", ln_last_error());
             }
-        } else if (resp.caller != k->index || resp.seq != i || resp.text_len != len
-                   || memcmp(resp.text, text, len) != 0) {
+        } else if (resp.caller != k->index || resp.seq != i || resp.text_len != len ||
+                   memcmp(resp.text, text, len) != 0) {
             k->mismatch++;
         } else {
             k->ok++;
@@ -170,8 +170,11 @@ static int call_many(const char* name, int threads, uint32_t calls, double timeo
 {
     struct caller* k = calloc((size_t)threads, sizeof *k);
     for (int t = 0; t < threads; t++) {
-        k[t] = (struct caller){.index = (uint32_t)t, .calls = calls, .timeout = timeout,
-                               .name = name, .text_bytes = text_bytes};
+        k[t] = (struct caller){.index = (uint32_t)t,
+                               .calls = calls,
+                               .timeout = timeout,
+                               .name = name,
+                               .text_bytes = text_bytes};
         pthread_create(&k[t].thread, NULL, caller_thread, &k[t]);
     }
     uint64_t ok = 0, mismatch = 0, failed = 0;
@@ -184,8 +187,7 @@ static int call_many(const char* name, int threads, uint32_t calls, double timeo
         if (first[0] == '\0' && k[t].failed)
             first = k[t].first_error;
     }
-    printf("{\"ok\":%" PRIu64 ",\"mismatch\":%" PRIu64 ",\"failed\":%" PRIu64
-           ",\"first_error\":",
+    printf("{\"ok\":%" PRIu64 ",\"mismatch\":%" PRIu64 ",\"failed\":%" PRIu64 ",\"first_error\":",
            ok, mismatch, failed);
     put_json(first);
     printf("}\n");
@@ -212,8 +214,7 @@ static int call_once(const char* name, const char* text, uint32_t delay_us, doub
                 delay_us = d;
             }
         }
-        lntest_echo_request_t req = {0, (uint32_t)i, delay_us, (uint32_t)strlen(text),
-                                     (char*)text};
+        lntest_echo_request_t req = {0, (uint32_t)i, delay_us, (uint32_t)strlen(text), (char*)text};
         lntest_echo_response_t resp;
         rc = ln_service_call(svc, &req, &resp, timeout);
         printf("{\"rc\":\"%s\",\"error\":", ln_error_name(rc));
@@ -247,8 +248,8 @@ int main(int argc, char** argv)
         status = call_many(argv[2], atoi(argv[3]), (uint32_t)strtoul(argv[4], NULL, 10),
                            atof(argv[5]), argc > 6 ? (uint32_t)strtoul(argv[6], NULL, 10) : 0);
     else if (strcmp(argv[1], "once") == 0 && argc >= 6)
-        status = call_once(argv[2], argv[3], (uint32_t)strtoul(argv[4], NULL, 10),
-                           atof(argv[5]), argc > 6 ? atoi(argv[6]) : 1);
+        status = call_once(argv[2], argv[3], (uint32_t)strtoul(argv[4], NULL, 10), atof(argv[5]),
+                           argc > 6 ? atoi(argv[6]) : 1);
     ln_client_destroy(clnt);
     return status;
 }

@@ -113,8 +113,11 @@ static int plan_path_handler(ln_client* clnt, ln_service_request* r, void* user_
         pos += c->data_len;
     }
     robot_plan_path_response_t resp = {
-        .waypoints_len = n, .waypoints = waypoints, .status = (int32_t)n,
-        .message_len = (uint32_t)pos, .message = message,
+        .waypoints_len = n,
+        .waypoints = waypoints,
+        .status = (int32_t)n,
+        .message_len = (uint32_t)pos,
+        .message = message,
     };
     rc = ln_service_request_respond(r, &resp);
     free(waypoints);
@@ -152,8 +155,8 @@ static int set_gains_handler(ln_client* clnt, ln_service_request* r, void* user_
     return rc < 0 ? rc : 0;
 }
 
-static int provide(ln_client* c, const char* name, const char* md, const char* group,
-                   unsigned pool, unsigned long count)
+static int provide(ln_client* c, const char* name, const char* md, const char* group, unsigned pool,
+                   unsigned long count)
 {
     ln_service_provider* p;
     ln_service_handler handler;
@@ -186,8 +189,8 @@ static int provide(ln_client* c, const char* name, const char* md, const char* g
         if (pool) {
             struct timespec ms = {0, 1000000};
             nanosleep(&ms, NULL);
-        } else if ((rc = ln_wait_and_handle_service_group_requests(c, group, -1)) < 0
-                   && rc != LN_EINTR) {
+        } else if ((rc = ln_wait_and_handle_service_group_requests(c, group, -1)) < 0 &&
+                   rc != LN_EINTR) {
             return fail("wait_and_handle", rc);
         }
     }
@@ -277,8 +280,8 @@ static int call(ln_client* c, const char* name, const char* md, int argc, char**
     if (!strcmp(md, "robot/plan_path")) {
         if ((rc = ln_get_service(c, &svc, name, ROBOT_PLAN_PATH_SERVICE)) < 0)
             return fail("get_service", rc);
-        robot_plan_path_request_t req = {.max_velocity = max_velocity, .constraints_len = n,
-                                         .constraints = constraints};
+        robot_plan_path_request_t req = {
+            .max_velocity = max_velocity, .constraints_len = n, .constraints = constraints};
         memcpy(req.goal, goal, sizeof goal);
         robot_plan_path_response_t resp;
         if ((rc = ln_service_call(svc, &req, &resp, timeout)) < 0)

@@ -80,8 +80,7 @@ static int sub_joint(ln_client* c, const char* topic, uint64_t count, double tim
     return 0;
 }
 
-static int pub_pattern(ln_client* c, const char* topic, uint64_t count, int wait,
-                       uint64_t first)
+static int pub_pattern(ln_client* c, const char* topic, uint64_t count, int wait, uint64_t first)
 {
     ln_outport* p;
     ln_port_options o;

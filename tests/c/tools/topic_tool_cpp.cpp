@@ -20,8 +20,7 @@ static void print_joint(const robot::joint_state_t& js)
     std::printf("\n");
 }
 
-static int sub_joint(const char* topic, unsigned long long count, double timeout,
-                     unsigned flags)
+static int sub_joint(const char* topic, unsigned long long count, double timeout, unsigned flags)
 {
     ln::client clnt("topic_tool_cpp");
     auto sub = clnt.subscribe<robot::joint_state_t>(topic, 1024, flags);
@@ -43,8 +42,8 @@ static int sub_joint(const char* topic, unsigned long long count, double timeout
             print_joint(js);
         }
     }
-    std::printf("overruns %llu publishers %d\n",
-                static_cast<unsigned long long>(sub.overruns()), sub.publisher_count());
+    std::printf("overruns %llu publishers %d\n", static_cast<unsigned long long>(sub.overruns()),
+                sub.publisher_count());
     return 0;
 }
 

@@ -17,12 +17,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+from polling import free_port, wait_for  # noqa: F401  (the daemon tests import them from here)
 
 from links_and_nodes.manager.processes import daemon_client as dc
 from links_and_nodes.manager.processes import daemon_keys as dk
-from links_and_nodes.wire import codec as wc
 from links_and_nodes.manager.processes import daemon_wire as dw
-from polling import free_port, wait_for  # noqa: F401  (the daemon tests import them from here)
+from links_and_nodes.wire import codec as wc
 
 REPO = Path(__file__).resolve().parents[3]
 DAEMON = REPO / "build" / "release" / "ln_daemon" / "ln_daemon"

@@ -14,8 +14,9 @@ import pytest
 from daemonproc import Daemon, RawConnection, spec
 
 from links_and_nodes.manager.processes import daemon_client as dc
-from links_and_nodes.wire import codec as wc
 from links_and_nodes.manager.processes import daemon_wire as dw
+from links_and_nodes.wire import codec as wc
+
 
 # One well-formed payload per command; the SPAWN would create a file if it ever ran.
 def payloads(marker: Path) -> dict[dw.Msg, bytes]:

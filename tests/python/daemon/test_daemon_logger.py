@@ -23,8 +23,8 @@ from ringtap import Tap, prefix, purge
 
 from links_and_nodes.manager.processes import daemon_client as dc
 from links_and_nodes.manager.processes import daemon_keys as dk
-from links_and_nodes.wire import codec as wc
 from links_and_nodes.manager.processes import daemon_wire as dw
+from links_and_nodes.wire import codec as wc
 
 LAYOUT, SIZE, SLOTS = 0x5EED_0003, 64, 256
 TOPIC, MD = "/arm/state", "lntest/pattern"

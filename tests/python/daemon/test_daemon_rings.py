@@ -18,8 +18,8 @@ from daemonproc import WAIT, Daemon, RawConnection, unique_instance
 from ringtap import Tap, prefix, purge, ring_size, segment_size, segments_of
 
 from links_and_nodes import _adminlib
-from links_and_nodes.wire import codec as wc
 from links_and_nodes.manager.processes import daemon_wire as dw
+from links_and_nodes.wire import codec as wc
 
 LAYOUT, SIZE, SLOTS = 0x5EED_0001, 64, 8
 TOPIC, MD = "/arm/state", "lntest/pattern"

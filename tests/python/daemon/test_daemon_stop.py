@@ -12,8 +12,17 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from daemonproc import (Daemon, alive, descendants, exited, line, next_event, proc_stat, spec,
-                        wait_for)
+from daemonproc import (
+    Daemon,
+    alive,
+    descendants,
+    exited,
+    line,
+    next_event,
+    proc_stat,
+    spec,
+    wait_for,
+)
 
 from links_and_nodes.manager.processes import daemon_wire as dw
 

@@ -21,11 +21,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from polling import free_daemon_port, free_port, wait_for
 
 from links_and_nodes.manager.config import load, model
 from links_and_nodes.manager.frontends.launch import segments
-from links_and_nodes.manager.frontends.scripting import Manager, connect
-from polling import free_daemon_port, free_port, wait_for
+from links_and_nodes.tools.scripting import Manager, connect
 
 REPO = Path(__file__).resolve().parents[3]
 CONFIG = REPO / "examples" / "robot" / "robot.lnc"

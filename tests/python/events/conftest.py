@@ -25,7 +25,7 @@ EVENT_TOOL_CPP = TOOLS / "event_tool_cpp"
 FAULT = "robot/fault_event"
 LIMIT = 60.0  # seconds: an upper bound against hangs, never a pass criterion
 
-ln.add_message_definition_dir(REPO / "tests" / "md" / "events")
+ln.add_message_definition_dir(REPO / "tests" / "fixtures" / "md" / "events")
 
 
 def _tool(path: Path) -> str:

@@ -10,8 +10,7 @@ from typing import Any
 
 from polling import wait_for
 
-from .conftest import (FAULT, LIMIT, Manager, c_call, handlers, next_call, serving,
-                       start_handler)
+from .conftest import FAULT, LIMIT, Manager, c_call, handlers, next_call, serving, start_handler
 
 
 def test_no_handler_is_zero_and_nothing_is_queued(manager: Manager) -> None:

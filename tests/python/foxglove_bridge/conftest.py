@@ -22,15 +22,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-
 from buildtree import build_dir, missing_test_tool
-from links_and_nodes.manager.frontends import scripting
 from polling import free_daemon_port, free_port, pids_with, wait_for
+
+from links_and_nodes.tools import scripting
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[2]
-PROBE = REPO / "tests" / "python" / "introspect" / "probe_publisher.py"
-PROBE_MDS = REPO / "tests" / "md" / "introspect"
+PROBE = REPO / "tests" / "python" / "introspection" / "probe_publisher.py"
+PROBE_MDS = REPO / "tests" / "fixtures" / "md" / "introspect"
 LIMIT = 60.0  # upper bound for anything to happen, never a measurement
 FAST_RATE = 10  # Hz: the rate limit of fx.fast
 QUEUE = 64  # buffers of fx.joint's queued channel

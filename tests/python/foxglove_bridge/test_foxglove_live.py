@@ -31,7 +31,7 @@ def joint_state(i: int) -> dict[str, Any]:
 
 
 def probe(k: int) -> dict[str, Any]:
-    """What tests/python/introspect/probe_publisher.py writes as sample k."""
+    """What tests/python/introspection/probe_publisher.py writes as sample k."""
     return {"count": k, "q": [k + j / 8 for j in range(7)],
             "target": {"position": [float(k), 2.0 * k, 3.0 * k],
                        "orientation": [0.0, 0.0, 0.0, 1.0]},

@@ -15,12 +15,12 @@ import pytest
 
 from links_and_nodes.foxglove_bridge.schema import root_schema
 from links_and_nodes.foxglove_bridge.topics import encode
-from links_and_nodes.manager.introspection import values as introspect
-from links_and_nodes.manager.introspection.client import load_md, md_class
+from links_and_nodes.tools.introspection import values as introspect
+from links_and_nodes.tools.introspection.client import load_md, md_class
 
 from .schema_check import conforms
 
-VALID = str(Path(__file__).resolve().parents[2] / "md" / "valid")
+VALID = str(Path(__file__).resolve().parents[2] / "fixtures" / "md" / "valid")
 
 
 def types_in(schema: Any) -> list[Any]:

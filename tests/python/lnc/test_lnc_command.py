@@ -1,5 +1,5 @@
 """A process's `command` is split into its argv when the configuration is loaded
-(config/command.py): a bad quote is a configuration error at its file:line:col, for
+(config/argv.py): a bad quote is a configuration error at its file:line:col, for
 `ln_manager check` and `ln_manager -c` alike, not a failure when the process starts."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager.config.command import CommandSplitError, split_command
+from links_and_nodes.manager.config.argv import CommandSplitError, split_command
 
 from .helpers import cfg, load_files, write
 

@@ -1,6 +1,6 @@
-"""Broken configurations: every file in tests/lnc/bad starts with `# expect:` lines, and
+"""Broken configurations: every file in tests/fixtures/lnc/bad starts with `# expect:` lines, and
 load() must report exactly those problems, in that order (`[FILE:]LINE:COL: message`,
-FILE relative to tests/lnc/bad and only given for problems in included files).  A
+FILE relative to tests/fixtures/lnc/bad and only given for problems in included files).  A
 `# options: strict` line after them loads the file as `--strict` does."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from links_and_nodes.manager.config import ConfigError, Problem, load
 
 from .helpers import HEAD, cfg, write
 
-BAD = Path(__file__).resolve().parents[2] / "lnc" / "bad"
+BAD = Path(__file__).resolve().parents[2] / "fixtures" / "lnc" / "bad"
 _EXPECT_RE = re.compile(r"# expect: (?:([^:\s]+):)?([0-9]+):([0-9]+): (.*)\Z")
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager.frontends import check
+from links_and_nodes.manager.frontends import config_check as check
 
 REPO = Path(__file__).resolve().parents[3]
 CORPUS = REPO.parent / "shared" / "real_ln" / "lnc"

@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from links_and_nodes.manager.config import Config, model
-from links_and_nodes.manager.processes.daemons import DaemonPool
 from links_and_nodes.manager.network.routes import Hop, NoRoute, host_address, host_of, route
+from links_and_nodes.manager.processes.daemons import DaemonPool
 
 from .helpers import cfg, load_files
 

@@ -9,11 +9,11 @@ import sys
 from collections.abc import Iterator
 
 import pytest
-
-import links_and_nodes as ln
 from buildtree import build_dir
 from process_management import conftest as pm
 from process_management.conftest import LIMIT, Lab
+
+import links_and_nodes as ln
 
 lab = pm.lab  # the same world as process management's tests
 

@@ -13,10 +13,10 @@ import time
 
 import numpy as np
 import pytest
+from polling import wait_for
 
 import links_and_nodes as ln
 from links_and_nodes import logger_files
-from polling import wait_for
 
 TOPIC = "arm.state"
 

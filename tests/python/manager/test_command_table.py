@@ -23,17 +23,18 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-
 from buildtree import missing_test_tool
-from links_and_nodes.manager.frontends import commands as table
-from links_and_nodes.manager.frontends import remote_cli
-from links_and_nodes.manager.frontends.commands import ArgError, check_args, parse_words, to_request
-from links_and_nodes.manager.frontends.commands.check import error_text
-from links_and_nodes.manager.frontends.commands.help import complete, help_command, help_text
-from links_and_nodes.manager.frontends.commands.spec import TYPES
-from links_and_nodes.manager.frontends.commands.views import json_lines
-from links_and_nodes.manager.frontends.scripting import Manager, ManagerError
 from process_management import conftest as pm
+
+from links_and_nodes.manager.frontends import remote_cli
+from links_and_nodes.manager.frontends.commands import phrases
+from links_and_nodes.manager.frontends.commands.help import complete, help_command, help_text
+from links_and_nodes.manager.frontends.commands.views import json_lines
+from links_and_nodes.tools import commands as table
+from links_and_nodes.tools.commands import ArgError, check_args, parse_words, to_request
+from links_and_nodes.tools.commands.arguments import error_text
+from links_and_nodes.tools.commands.spec import TYPES
+from links_and_nodes.tools.scripting import Manager, ManagerError
 
 CHILD = Path(pm.__file__).with_name("child.py")
 LIMIT = pm.LIMIT
@@ -68,16 +69,16 @@ def test_every_entry_has_help_typed_args_and_every_front_end() -> None:
         assert cmd.group in ("processes", "topics", "services", "hosts", "manager")
         assert cmd.script_name and (cmd.console_word or cmd.name == "wait_ready")
         assert cmd.cli_word, cmd.name
-    for verb in table.verbs():
-        assert verb.usage and verb.help and verb.name in cli_help
-        if verb.console is not None:
-            assert f"  {verb.usage[0]}" in console_help
+    for verb in table.verbs():  # the first word of a family of phrases
+        assert verb.help and verb.name in cli_help
+        assert [c for c in table.commands() if c.family == verb.name], verb.name
+        assert help_command(verb.name).startswith(f"usage: {verb.name} ")
 
 
 def test_a_family_of_phrases_is_table_commands(capsys: pytest.CaptureFixture[str]) -> None:
     """`logger NAME add TOPIC`: each command of the family is an entry of the table whose
     words the console and `ln_manager logger` take from it."""
-    family = table.phrases.family("logger")
+    family = phrases.family("logger")
     assert {c.name for c in family} == {"logger_add", "logger_remove", "logger_enable",
                                         "logger_disable", "logger_status", "logger_list",
                                         "logger_save"}
@@ -89,15 +90,15 @@ def test_a_family_of_phrases_is_table_commands(capsys: pytest.CaptureFixture[str
         assert help_command(cmd.phrase.replace(" NAME", "")).startswith(
             "usage: " + cmd.usage("console"))
     assert "--on-manager" in cli_help and "--on-manager" not in help_text()
-    cmd, words = table.phrases.match(["logger", "arm", "add", "a.*", "50", "--span", "2"])
+    cmd, words = phrases.match(["logger", "arm", "add", "a.*", "50", "--span", "2"])
     assert (cmd.name, to_request(cmd, parse_words(cmd, words))) == (
         "logger_add", {"op": "logger_add", "name": "arm", "topic": "a.*", "depth": 50,
                        "divisor": 1, "span": 2.0})
-    cmd, words = table.phrases.match(["logger"])
+    cmd, words = phrases.match(["logger"])
     assert cmd.name == "logger_list" and words == []
     for bad in (["logger", "arm"], ["logger", "arm", "frobnicate"]):
         with pytest.raises(ArgError, match="^usage: logger NAME add TOPIC"):
-            table.phrases.match(bad)
+            phrases.match(bad)
     assert complete("logger arm e") == ["enable"]
 
 
@@ -128,7 +129,8 @@ def _cases() -> Iterator[Any]:
 @pytest.mark.parametrize(("op", "name"), list(_cases()))
 def test_a_bad_value_has_one_text_in_json_and_words(op: str, name: str) -> None:
     """A JSON request with a value of the wrong type and a console/CLI word that does not
-    convert are refused with the same text (the scripting API sends JSON)."""
+    convert are refused with the same text (the scripting API sends JSON); an entry's own
+    text may show the value as given (`-n: '0' is not ...`), then only that differs."""
     cmd = table.command(op)
     assert cmd is not None
     arg = cmd.arg(name)
@@ -136,7 +138,7 @@ def test_a_bad_value_has_one_text_in_json_and_words(op: str, name: str) -> None:
             for a in cmd.args if a.required}
     with pytest.raises(ArgError) as from_json:
         check_args(cmd, {"op": op, **good, name: _bad_json(arg)})
-    assert str(from_json.value) == error_text(arg)
+    assert str(from_json.value) == error_text(arg, _bad_json(arg))
     if arg.type in ("bool", "str"):
         return  # a bool is a flag of no word in the console and the CLI; a word is a str
     words = [str(good[a.name]) for a in cmd.args
@@ -150,7 +152,9 @@ def test_a_bad_value_has_one_text_in_json_and_words(op: str, name: str) -> None:
         words += [arg.option, "?x"]
     with pytest.raises(ArgError) as from_words:
         parse_words(cmd, words)
-    assert str(from_words.value) == str(from_json.value)
+    assert str(from_words.value) == error_text(arg, "?x")
+    if "{value" not in arg.error:
+        assert str(from_words.value) == str(from_json.value)
 
 
 async def test_a_new_command_is_one_entry_and_its_handler(
@@ -160,9 +164,10 @@ async def test_a_new_command_is_one_entry_and_its_handler(
     import io
     from types import SimpleNamespace
 
-    from links_and_nodes.manager.frontends.commands import Arg, Command, register, table as registry
     from links_and_nodes.manager.frontends.console import Console
     from links_and_nodes.manager.frontends.control import Control
+    from links_and_nodes.tools.commands import Arg, Command, register
+    from links_and_nodes.tools.commands import table as registry
 
     async def handler(control: Any, args: dict[str, Any]) -> dict[str, Any]:
         return {"said": args["text"] * args["times"]}
@@ -191,6 +196,72 @@ async def test_a_new_command_is_one_entry_and_its_handler(
     mgr = Manager.__new__(Manager)
     mgr.command = lambda op, wait=None, **args: {"ok": True, "said": f"{op}{args}"}  # type: ignore[method-assign]
     assert mgr.say_demo("x", 2) == {"said": "say_demo{'text': 'x', 'times': 2}"}
+
+
+async def test_a_command_that_runs_in_the_client_streams_its_rows(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Command.run: the command runs where its user is, yielding rows as they come; the
+    console prints them (in the background), a JSON request gets {"rows": [...]}, the
+    scripting method the list (with script_args's Python spelling); a rest argument takes
+    the words left, the family's Verb words a line that names none of its commands, an
+    Arg.error shows the value as typed."""
+    import asyncio
+    import io
+    from types import SimpleNamespace
+
+    from links_and_nodes.manager.frontends.console import Console
+    from links_and_nodes.manager.frontends.control import Control
+    from links_and_nodes.tools.commands import Arg, Command, Local, Verb, register
+    from links_and_nodes.tools.commands import table as registry
+
+    def count(local: Local, args: dict[str, Any]) -> Iterator[dict[str, Any]]:
+        for i in range(args["n"]):
+            if local.stop.is_set():
+                return
+            yield {"i": i, "words": args["words"]}
+
+    def script_args(words: str = "", times: int = 2) -> dict[str, Any]:
+        return {"words": words, "n": times}
+
+    entry = Command("count_demo", "count words", "demo", None,
+                    (Arg("n", "int", "how many rows", default=2, low=1, flag="-n",
+                         error="-n: {value!r} is not a count"),
+                     Arg("words", "str", "the words left", default="", positional=True,
+                         rest="join")),
+                    result="rows: [{i, words}]", phrase="demo count", run=count,
+                    streams=True, script_args=script_args,
+                    console_format=lambda row, args: [f"{row['i']}: {row['words']}"])
+    monkeypatch.setattr(registry, "_commands", dict(registry._commands))
+    monkeypatch.setattr(registry, "_verbs", dict(registry._verbs))
+    register(entry, Verb("demo", "demo commands", "demo", choose="command"))
+
+    cmd, words = phrases.match(["demo", "count", "a", "-b", "-n", "3", "c"], "cli")
+    assert parse_words(cmd, words, "cli") == {"n": 3, "words": "a -b c"}
+    for bad, text in ((["demo"], "demo needs a command (one of: count)"),
+                      (["demo", "x"], "unknown demo command 'x' (one of: count)")):
+        with pytest.raises(ArgError, match=re.escape(text)):
+            phrases.match(bad)
+    with pytest.raises(ArgError, match="^-n: '0' is not a count$"):
+        parse_words(cmd, ["-n", "0"])
+    assert complete("demo ") == ["count"] and complete("demo count -") == ["-n"]
+
+    control = Control(SimpleNamespace(), None, manager_address="127.0.0.1:1")  # type: ignore[arg-type]
+    assert await control.handle({"op": "count_demo", "n": 2, "words": "x"}) == \
+        {"ok": True, "rows": [{"i": 0, "words": "x"}, {"i": 1, "words": "x"}]}
+    out = io.StringIO()
+    console = Console(control, out)
+    await console.execute("demo count hello world -n 2")
+    for _ in range(200):
+        if len(out.getvalue().splitlines()) == 2:
+            break
+        await asyncio.sleep(0.01)
+    assert out.getvalue().splitlines() == ["0: hello world", "1: hello world"]
+
+    mgr = Manager.__new__(Manager)
+    mgr._local = Local(lambda op, **fields: {}, "127.0.0.1:1")
+    assert mgr.count_demo("w", times=1) == [{"i": 0, "words": "w"}]
+    with pytest.raises(ManagerError, match="is not a count"):
+        mgr.count_demo("w", times=0)
 
 
 def test_completion_from_the_table() -> None:
@@ -439,7 +510,7 @@ def test_logger_words_answer_the_same_everywhere(fronts: Fronts) -> None:
     assert fronts.console("logger ctlog add x 0") == [f"error: {text}"]
     done = fronts.cli("logger", "ctlog", "add", "x", "0")
     assert done.returncode == 2 and done.stderr.splitlines() == \
-        [f"ln_manager logger: error: {text}"]
+        [f"ln_manager logger add: error: {text}"]
 
 
 def test_console_on_a_terminal_completes_with_tab(tmp_path: Path) -> None:

@@ -2,7 +2,10 @@
 import cycle that works only in one import order fails here), and imports go one way,
 frontends -> processes/network/loggers/parameters/introspection -> registry -> config,
 with only the composition root (app.py, runner.py, the package's __init__/__main__)
-reaching into frontends/ from outside it."""
+reaching into frontends/ from outside it.  Below them all is links_and_nodes/tools/ (the
+command table the features register into, the clients' side of the protocol, scripting,
+introspection and parameters): it and every other part outside manager/ are clients and
+import none of the manager's insides, only its public `links_and_nodes.manager.connect`."""
 
 from __future__ import annotations
 
@@ -26,21 +29,11 @@ CALLS_THE_ROOT = {("frontends.cli", "app")}  # `ln_manager` parses its arguments
 
 # Imports against the direction that are known and not yet fixed, as (importing module,
 # imported part); a new pair fails the test, and so does one that is gone.
-# - The feature packages register their console/CLI commands in the command table
-#   (frontends/commands), raise frontends.control.ControlError and use the scripting
-#   client's Manager/ManagerError: the fix is moving the table, ControlError and
-#   ManagerError below the feature packages.
-# - config checks parameter values with parameters.tools.parse_value (when a process's
-#   `parameters` key is read): the fix is moving that rule below config/.
-KNOWN = {
-    ("config.process_params", "parameters"),
-    ("introspection.api", "frontends"), ("introspection.args", "frontends"),
-    ("introspection.cli", "frontends"), ("introspection.console", "frontends"),
-    ("introspection.control", "frontends"),
-    ("loggers.commands", "frontends"), ("loggers.views", "frontends"),
-    ("parameters.api", "frontends"), ("parameters.cli", "frontends"),
-    ("parameters.commands", "frontends"), ("parameters.console", "frontends"),
-}
+KNOWN: set[tuple[str, str]] = set()
+
+PACKAGES = REPO / "python" / "links_and_nodes"
+TOOLS = PACKAGES / "tools"
+PUBLIC = {"connect", "Manager", "ManagerError"}  # links_and_nodes.manager's public names
 
 
 def _modules() -> list[str]:
@@ -145,3 +138,64 @@ def test_no_module_imports_itself_through_others() -> None:
 
     for module in MODULES:
         visit(module, [])
+
+
+def _absolute_imports(path: Path) -> set[tuple[str, str]]:
+    """(module, name) of every import in the file at `path` (anywhere in it), relative
+    imports resolved; name is "" for `import module`."""
+    parts = list(path.relative_to(PACKAGES.parent).with_suffix("").parts)
+    package = parts if parts[-1] == "__init__" else parts[:-1]
+    package = [p for p in package if p != "__init__"]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.ImportFrom):
+            base = package[:len(package) + 1 - node.level] if node.level else []
+            module = ".".join(base + ([node.module] if node.module else []))
+            found |= {(module, alias.name) for alias in node.names}
+        elif isinstance(node, ast.Import):
+            found |= {(alias.name, "") for alias in node.names}
+    return found
+
+
+def _outside_manager() -> list[Path]:
+    return [path for path in sorted(PACKAGES.rglob("*.py"))
+            if PACKAGE not in path.parents and "__pycache__" not in path.parts]
+
+
+def test_clients_import_no_manager_insides() -> None:
+    """The bridges, ln_record/ln_play, tools/ and everything else outside manager/ are
+    ordinary clients: of the manager they may import its public connect() only."""
+    wrong = set()
+    for path in _outside_manager():
+        for module, name in _absolute_imports(path):
+            if module == ROOT and (name in PUBLIC or name == ""):
+                continue
+            if module == ROOT or module.startswith(ROOT + ".") \
+                    or (module == "links_and_nodes" and name == "manager"):
+                wrong.add((str(path.relative_to(PACKAGES)), f"{module} {name}".strip()))
+    assert wrong == set(), "modules outside manager/ importing the manager's insides"
+
+
+def test_the_command_table_is_a_leaf() -> None:
+    """tools/commands/ imports nothing of ours outside itself (the features it lists are
+    imported by name when the table is first read)."""
+    table = TOOLS / "commands"
+    wrong = {(path.name, module) for path in sorted(table.glob("*.py"))
+             for module, _name in _absolute_imports(path)
+             if module.startswith("links_and_nodes")
+             and not module.startswith("links_and_nodes.tools.commands")}
+    assert wrong == set()
+
+
+@pytest.mark.parametrize("path", sorted(str(p.relative_to(TOOLS)) for p in TOOLS.rglob("*.py")
+                                        if "__pycache__" not in p.parts))
+def test_tools_module_imports_alone(path: str) -> None:
+    parts = list(Path(path).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    name = ".".join(["links_and_nodes.tools", *parts])
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(REPO / "python"), *filter(None, [os.environ.get("PYTHONPATH")])]))
+    run = subprocess.run([sys.executable, "-c", f"import {name}"], env=env,
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr

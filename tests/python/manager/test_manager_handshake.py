@@ -13,10 +13,10 @@ from mgrproc import Manager, require_manager_library
 require_manager_library()
 
 import links_and_nodes as ln  # noqa: E402  (after the skip check)
-from links_and_nodes.manager.registry import protocol as p  # noqa: E402
 from links_and_nodes.manager.registry.core import Core, HandshakeRefused, Session  # noqa: E402
 from links_and_nodes.manager.registry.model import Registry  # noqa: E402
 from links_and_nodes.manager.registry.services import Services  # noqa: E402
+from links_and_nodes.tools import protocol as p  # noqa: E402
 
 ADDR = r"\(127\.0\.0\.1:\d+\)"
 

@@ -230,7 +230,7 @@ def test_console_script_is_declared_for_pip_and_scons() -> None:
 
 
 def test_table_cells_are_one_line() -> None:
-    from links_and_nodes.manager.registry import protocol as p
+    from links_and_nodes.tools import protocol as p
 
     entry = p.ServiceEntry("s", "m", 1, "a b", "g\nh\t", "", "/x", "::1", 9, 0, 0)
     [header, row] = listing.table((entry,))

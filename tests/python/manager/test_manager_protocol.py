@@ -20,7 +20,7 @@ from lnwire import (
     service_called_body,
 )
 
-from links_and_nodes.manager.registry import protocol as p
+from links_and_nodes.tools import protocol as p
 
 U16 = st.integers(0, 0xFFFF)
 U32 = st.integers(0, 0xFFFFFFFF)

@@ -6,8 +6,8 @@ from __future__ import annotations
 import re
 
 import pytest
-
 from buildtree import REPO
+
 from links_and_nodes import default_ports
 
 

@@ -7,8 +7,8 @@ import os
 import subprocess
 
 import pytest
-
 from buildtree import build_dir
+
 from links_and_nodes import naming
 
 INSTANCES = ["lab", "lab-1_a", "a.b", "a.b/c d", "k\u00e4se", "\u20ac!", "..", "x.y.z",

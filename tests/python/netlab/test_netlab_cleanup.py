@@ -7,9 +7,8 @@ import os
 import subprocess
 from pathlib import Path
 
-import pytest
-
 import netlab as netlab_module
+import pytest
 from netlab import NetLab, namespace_pids, namespaces, sweep_stale
 from polling import wait_for
 

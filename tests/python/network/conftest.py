@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-
-from links_and_nodes.manager import connect
 from netlab import Host, HostProcess, NetLab, in_netns
 from polling import wait_for
+
+from links_and_nodes.manager import connect
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[2]

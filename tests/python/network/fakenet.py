@@ -17,14 +17,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from links_and_nodes import _adminlib
-from links_and_nodes.manager.processes import daemon_wire as dw
-from links_and_nodes.manager.network import hosts as network
-from links_and_nodes.manager.registry import protocol as p
 from links_and_nodes.manager.config import parse_text
-from links_and_nodes.manager.registry.core import Core, Session
+from links_and_nodes.manager.network import limits
 from links_and_nodes.manager.network.hosts import Network
+from links_and_nodes.manager.processes import daemon_wire as dw
+from links_and_nodes.manager.registry.core import Core, Session
 from links_and_nodes.manager.registry.model import Registry
 from links_and_nodes.manager.registry.services import Services
+from links_and_nodes.tools import protocol as p
 
 _serial = itertools.count(1)
 MD = "nettest/sample"
@@ -347,14 +347,14 @@ class World:
         self._pid = itertools.count(1000)
 
     async def up(self, *names: str) -> None:
-        """One round of the host monitor (Network._monitor) for each host (all by
+        """One round of the host monitor (monitor.HostMonitor.run) for each host (all by
         default)."""
         for name in names or tuple(self.net.hosts):
             host = self.net.hosts[name]
             try:
-                await self.net._check(host)
+                await self.net.monitor.check(host)
             except Exception as exc:
-                await self.net._down(host, network._reason(exc))
+                await self.net.monitor.down(host, limits.reason(exc))
 
     def state(self, name: str) -> str:
         return self.net.hosts[name].state
@@ -390,7 +390,7 @@ class World:
     def ring_seg(self, host: str, topic: str) -> Seg:
         """The segment the manager uses for `topic` on `host` now."""
         tid = self.topic_id(topic)
-        rings = self.net._rings_of(host)
+        rings = self.net.clients.rings_of(host)
         assert rings is not None and rings.has(tid), f"no ring of {topic} on {host}"
         return self.daemons[host].shm[rings.current(tid)]
 

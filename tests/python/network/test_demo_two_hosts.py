@@ -11,8 +11,9 @@ import re
 import sys
 from pathlib import Path
 
-from .conftest import DAEMON_PORT, ROOT, System
 from polling import wait_for
+
+from .conftest import DAEMON_PORT, ROOT, System
 
 SINGLE = ROOT / "examples" / "robot" / "robot.lnc"
 SPLIT = ROOT / "examples" / "robot" / "robot_two_hosts.lnc"
@@ -56,8 +57,9 @@ def test_demo_runs_split_over_two_hosts(system: System) -> None:
     wait_for(lambda: "processes ready" in system.log("manager.log")
              or manager.poll() is not None, "the split demo to get ready", timeout=90)
     assert "all 3 processes ready" in system.log("manager.log"), system.log("manager.log")
-    from links_and_nodes.manager import connect
     from netlab import in_netns
+
+    from links_and_nodes.manager import connect
 
     address = f"{robot.address}:{DAEMON_PORT + 100}"
     system.mgr = in_netns(robot.netns, lambda: connect(address))

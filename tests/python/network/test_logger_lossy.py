@@ -5,9 +5,9 @@ b's daemon): the capture happens before the network (docs/logging.md)."""
 from __future__ import annotations
 
 import numpy as np
+from polling import wait_for
 
 import links_and_nodes as ln
-from polling import wait_for
 
 from .conftest import HERE, System
 from .test_multihost import RELAY_PORT, TIMEOUT, _consecutive, _start_relay

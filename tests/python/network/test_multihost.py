@@ -9,8 +9,9 @@ from __future__ import annotations
 import json
 import sys
 
-from .conftest import DAEMON_PORT, HERE, System
 from polling import wait_for
+
+from .conftest import DAEMON_PORT, HERE, System
 
 TIMEOUT = 60.0
 RELAY_PORT = 54400

@@ -1,4 +1,4 @@
-"""The manager's rings and streams on other hosts (network.py, rings.py, core.py) against
+"""The manager's rings and streams on other hosts (network/, rings.py, core.py) against
 fake daemons (fakenet.py), with the reconciler, the host monitors and client requests
 interleaved step by step: rings that go and come back, gateways, publishers that come
 back, daemons that were away, shutdown.  What is checked is the state the daemons are
@@ -10,7 +10,8 @@ import asyncio
 
 import pytest
 
-from links_and_nodes.manager.network import hosts as network
+from links_and_nodes.manager.network import limits
+from links_and_nodes.manager.processes import daemon_wire as dw
 
 from .fakenet import GATEWAY, World
 
@@ -231,7 +232,7 @@ async def test_a_daemon_silent_while_it_is_adopted_again_does_not_hold_up_client
         monkeypatch: pytest.MonkeyPatch) -> None:
     """b's daemon restarted and stops answering while the manager re-adopts its rings
     (which keeps client requests out): the monitor gives up on it, and requests go on."""
-    monkeypatch.setattr(network, "PING_TIMEOUT", 0.05)
+    monkeypatch.setattr(limits, "PING_TIMEOUT", 0.05)
     w = World()
     await w.up()
     await w.publish(w.client("a"), "t")
@@ -261,14 +262,14 @@ async def test_a_host_lost_while_a_stream_is_set_up_holds_up_no_other_stream() -
     release.set()
     await reconcile
     assert w.streams("t1")[("a", "b")].error
-    assert [s.ring for s in _send(w, "c")] == [w.net._rings_of("c").current(w.topic_id("t2"))]
+    assert [s.ring for s in _send(w, "c")] == [w.net.clients.rings_of("c").current(w.topic_id("t2"))]
 
 
 async def test_a_stream_refused_by_a_daemon_is_tried_again(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """A daemon refuses to set up a stream once (nothing else changes afterwards): the
     reconciler tries it again by itself."""
-    monkeypatch.setattr(network, "POLL_INTERVAL", 0.01)
+    monkeypatch.setattr(limits, "POLL_INTERVAL", 0.01)
     w = World()
     await w.up()
     refused = asyncio.Event()
@@ -277,7 +278,7 @@ async def test_a_stream_refused_by_a_daemon_is_tried_again(
     async def refuse_once(*args: object, **kwargs: object) -> None:
         if not refused.is_set():
             refused.set()
-            raise network.dc.DaemonError("cannot open the ring", 14)
+            raise dw.DaemonError("cannot open the ring", 14)
         await real(*args, **kwargs)
 
     w.daemons["b"].stream_recv = refuse_once  # type: ignore[method-assign]

@@ -8,8 +8,8 @@ from __future__ import annotations
 from typing import Any
 
 from links_and_nodes.manager.config import parse_text
-from links_and_nodes.manager.registry.core import Core
 from links_and_nodes.manager.network.hosts import SUBSCRIBE_TCP, SUBSCRIBE_UDP, Network
+from links_and_nodes.manager.registry.core import Core
 from links_and_nodes.manager.registry.model import PortKind, PortRequest, Registry
 from links_and_nodes.manager.registry.services import Services
 

@@ -20,7 +20,7 @@ import pytest
 from polling import wait_for
 from topics.conftest import TOOLS, Manager, manager  # noqa: F401 - fixture
 
-from links_and_nodes.manager.frontends.scripting import connect
+from links_and_nodes.tools.scripting import connect
 
 REPO = Path(__file__).resolve().parents[3]
 PARAM_TOOL = TOOLS / "param_tool"

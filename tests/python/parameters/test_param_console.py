@@ -22,7 +22,7 @@ import pytest
 from polling import free_daemon_port, free_port, pids_with
 
 from links_and_nodes.manager.frontends.launch import segments
-from links_and_nodes.manager.frontends.scripting import connect
+from links_and_nodes.tools.scripting import connect
 
 from .conftest import LIMIT, PARAM_TOOL
 

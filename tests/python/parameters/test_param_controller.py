@@ -14,7 +14,7 @@ import textwrap
 import pytest
 from polling import wait_for
 
-from links_and_nodes.manager.frontends.scripting import ManagerError
+from links_and_nodes.tools.scripting import ManagerError
 
 from .conftest import LIMIT, PYTHONPATH, Lab
 
@@ -174,7 +174,7 @@ def test_initial_overrides_from_the_environment(lab: Lab) -> None:
 
 SETTER = textwrap.dedent("""
     import sys
-    from links_and_nodes.manager.frontends.scripting import connect
+    from links_and_nodes.tools.scripting import connect
     who, count = sys.argv[1], int(sys.argv[2])
     with connect() as mgr:
         for k in range(1, count + 1):

@@ -11,7 +11,7 @@ import pytest
 from demo.test_robot_lnc import Demo, demo, wait_for_output  # noqa: F401 - fixture
 from polling import wait_for
 
-from links_and_nodes.manager.frontends.scripting import ManagerError, connect
+from links_and_nodes.tools.scripting import ManagerError, connect
 
 from .conftest import LIMIT
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from links_and_nodes.manager.config import ConfigError, load
-from links_and_nodes.manager.parameters.tools import to_json
+from links_and_nodes.tools.parameters.values import to_json
 
 HEAD = "instance\nname: demo\nmanager: :54414\n"
 

@@ -12,7 +12,7 @@ import pytest
 from polling import wait_for
 
 import links_and_nodes as ln
-from links_and_nodes.manager.frontends.scripting import ManagerError
+from links_and_nodes.tools.scripting import ManagerError
 
 from .conftest import Lab
 

@@ -12,7 +12,7 @@ from polling import free_port, wait_for
 
 from links_and_nodes.manager.frontends import launch
 from links_and_nodes.manager.frontends.launch import segments
-from links_and_nodes.manager.frontends.scripting import ManagerError, connect
+from links_and_nodes.tools.scripting import ManagerError, connect
 
 from .conftest import LIMIT, start_controller
 

@@ -16,14 +16,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-
-from links_and_nodes.manager.frontends import scripting
 from polling import (  # noqa: F401  (shared with the tests of this package)
     free_daemon_port,
     free_port,
     pids_with,
     wait_for,
 )
+
+from links_and_nodes.tools import scripting
 
 LIMIT = 60.0  # upper bound for anything to happen, never a measurement
 REPO = Path(__file__).resolve().parents[3]

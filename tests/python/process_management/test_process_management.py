@@ -14,9 +14,9 @@ from pathlib import Path
 
 from links_and_nodes.manager.processes import daemon_keys as dk
 from links_and_nodes.manager.processes import daemon_launch as dl
-from links_and_nodes.manager.frontends.scripting import Manager
+from links_and_nodes.tools.scripting import Manager
 
-from .conftest import REPO, LIMIT, Lab, free_daemon_port, parent, pids_with, wait_for
+from .conftest import LIMIT, REPO, Lab, free_daemon_port, parent, pids_with, wait_for
 
 CHILD = Path(__file__).with_name("child.py")
 

@@ -11,7 +11,6 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-
 from loggers import conftest as lc
 from loggers.conftest import LogLab
 from network import conftest as nc

@@ -7,8 +7,9 @@ from __future__ import annotations
 
 import random
 
-import links_and_nodes as ln
 from polling import wait_for
+
+import links_and_nodes as ln
 
 from . import ndn_wire as w
 from .conftest import PullLab

@@ -9,11 +9,10 @@ import asyncio
 from pathlib import Path
 from typing import Any
 
-
-from links_and_nodes.manager.processes import daemon_wire as dw
-from links_and_nodes.manager.network import daemon_pull as dp
 from links_and_nodes.manager.config import load
+from links_and_nodes.manager.network import daemon_pull as dp
 from links_and_nodes.manager.network.pull import PullTopics
+from links_and_nodes.manager.processes import daemon_wire as dw
 from links_and_nodes.manager.registry.model import Client, Port, PortKind, Topic
 
 

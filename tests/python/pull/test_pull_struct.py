@@ -10,8 +10,8 @@ import subprocess
 from pathlib import Path
 
 import pytest
-
 from buildtree import REPO
+
 from links_and_nodes import _pull_lib as P
 
 from .ndn_ctypes import STRUCTS

@@ -5,11 +5,11 @@ the producer's counters under host a."""
 
 from __future__ import annotations
 
-import links_and_nodes as ln
 from netlab import in_netns
+from network.conftest import HERE, System
 from polling import wait_for
 
-from network.conftest import HERE, System
+import links_and_nodes as ln
 
 PORT = 6363  # every host has its own network stack: the default port is free on each
 

@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-
 from buildtree import SANITIZED, build_dir
 from network.conftest import System
 from polling import wait_for

@@ -26,13 +26,13 @@ from topics.conftest import TOOLS, wait_ready  # noqa: E402
 
 import links_and_nodes as ln  # noqa: E402
 from links_and_nodes.manager.frontends import launch  # noqa: E402
-from links_and_nodes.manager.frontends import scripting  # noqa: E402
 from links_and_nodes.manager.frontends.launch import ManagerProcess, segments  # noqa: E402
+from links_and_nodes.tools import scripting  # noqa: E402
 
 LIMIT = 60.0  # seconds: an upper bound against hangs, never a pass criterion
 
-ln.add_message_definition_dir(REPO / "tests" / "md" / "topics")
-ln.add_message_definition_dir(REPO / "tests" / "md" / "services")
+ln.add_message_definition_dir(REPO / "tests" / "fixtures" / "md" / "topics")
+ln.add_message_definition_dir(REPO / "tests" / "fixtures" / "md" / "services")
 
 
 @dataclass

@@ -14,6 +14,7 @@ from links_and_nodes.manager.frontends.launch import segments
 
 from .conftest import LIMIT, Restarts, read_until
 
+
 def test_provider_before_restart_is_called_after(restarts: Restarts) -> None:
     restarts.tool("service_tool", "provide", "rc.plan")
     before = restarts.services()["rc.plan"]

@@ -14,12 +14,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from buildtree import missing_test_tool
+from polling import wait_for
 
 import links_and_nodes as ln
 from links_and_nodes.manager.frontends import launch
 from links_and_nodes.manager.frontends.launch import ManagerProcess, segments
-from buildtree import missing_test_tool
-from polling import wait_for
 
 HERE = Path(__file__).resolve().parent
 MD_DIR = HERE / "md"  # rectest/sample, rectest/tool (imports robot/pose and rectest/stamp)
@@ -96,8 +96,8 @@ def pypi_mcap() -> Any:
     """The PyPI `mcap` package (the reference Python reader); buildtree.missing_test_tool
     says what happens where it is not installed."""
     try:
-        import mcap.stream_reader  # noqa: F401
         import mcap.reader  # noqa: F401
+        import mcap.stream_reader  # noqa: F401
     except ImportError:
         missing_test_tool("the PyPI package mcap (requirements-dev.txt)")
     import mcap

@@ -14,7 +14,6 @@ import subprocess
 from pathlib import Path
 from typing import Any, NoReturn
 
-
 from buildtree import missing_test_tool
 
 HERE = Path(__file__).resolve().parent / "mcap_js"

@@ -8,10 +8,11 @@ from __future__ import annotations
 import signal
 from pathlib import Path
 
-from links_and_nodes.mcap_format import McapReader, iter_mcap
 from polling import wait_for
 
-from .conftest import Lab, pypi_messages, pypi_mcap, pypi_stream, wait_subscribed
+from links_and_nodes.mcap_format import McapReader, iter_mcap
+
+from .conftest import Lab, pypi_mcap, pypi_messages, pypi_stream, wait_subscribed
 from .mcap_js import js_read
 from .recording import expected, publish, read_all, stop, summary
 

@@ -7,9 +7,8 @@ from __future__ import annotations
 import struct
 from pathlib import Path
 
+from links_and_nodes.tools.scripting import connect
 from ln_generate import MdRegistry
-
-from links_and_nodes.manager.frontends.scripting import connect
 
 from .conftest import MD_CHANGED, Lab, wait_subscribed
 from .mcap_js import js_rejects

@@ -7,8 +7,9 @@ from __future__ import annotations
 
 import signal
 
-from links_and_nodes.mcap_format import McapReader
 from polling import wait_for
+
+from links_and_nodes.mcap_format import McapReader
 
 from .conftest import Lab, wait_subscribed
 from .recording import publish, stop, summary

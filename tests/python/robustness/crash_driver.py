@@ -31,15 +31,17 @@ for _p in (REPO / "python", REPO, REPO / "tests" / "python"):
     if str(_p) not in sys.path:
         sys.path.insert(0, str(_p))
 
-from links_and_nodes.manager.frontends import scripting  # noqa: E402
-from links_and_nodes.manager.frontends.launch import segments  # noqa: E402
 from polling import free_daemon_port, free_port, pids_with  # noqa: E402
+
+from links_and_nodes.manager.frontends.launch import segments  # noqa: E402
+from links_and_nodes.tools import scripting  # noqa: E402
 
 if TYPE_CHECKING:
     from netlab import DaemonProc, NetLab
 
 NODE = Path(__file__).with_name("crash_node.py")
-MD_DIRS = os.pathsep.join(str(REPO / "tests" / "md" / d) for d in ("topics", "services"))
+MD_DIRS = os.pathsep.join(str(REPO / "tests" / "fixtures" / "md" / d)
+                          for d in ("topics", "services"))
 KINDS = ("publisher", "subscriber", "provider", "caller", "manager", "daemon")
 WEIGHTS = {"publisher": 4, "subscriber": 4, "provider": 3, "caller": 3, "manager": 1,
            "daemon": 1}

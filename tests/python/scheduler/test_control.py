@@ -11,12 +11,12 @@ from types import SimpleNamespace
 
 import pytest
 
-from links_and_nodes.manager.registry import protocol as p
 from links_and_nodes.manager.frontends.console import Console
 from links_and_nodes.manager.frontends.control import Control
-from links_and_nodes.manager.processes.states import ProcState as S
 from links_and_nodes.manager.processes.scheduler import Scheduler
-from links_and_nodes.manager.frontends.scripting import Manager, ManagerError
+from links_and_nodes.manager.processes.states import ProcState as S
+from links_and_nodes.tools import protocol as p
+from links_and_nodes.tools.scripting import Manager, ManagerError
 
 from .fake_daemon import FakeDaemon, FakeRegistry, backend
 from .test_scheduler import LIMIT, config, proc

@@ -17,8 +17,8 @@ from types import SimpleNamespace
 import pytest
 
 from links_and_nodes.manager.config import model
-from links_and_nodes.manager.processes.states import ProcState as S
 from links_and_nodes.manager.processes.scheduler import Backend, Scheduler, StartError, Transition
+from links_and_nodes.manager.processes.states import ProcState as S
 
 from .fake_daemon import (
     Exit,
@@ -267,7 +267,7 @@ async def test_groups_and_all(world_factory: list[World]) -> None:
 
 async def test_start_rate_limit_spaces_starts(monkeypatch: pytest.MonkeyPatch) -> None:
     """Five starts at 20/s on a frozen clock: each waits 50 ms longer than the one before."""
-    from links_and_nodes.manager.processes import scheduler as sched_mod
+    from links_and_nodes.manager.processes import spawning as sched_mod
 
     slept: list[float] = []
 
@@ -327,10 +327,10 @@ async def test_old_ready_period_does_not_reset_the_restart_count(
     """"Stayed ready for 10 s" is about the run that just ended: a process that was ready
     once and then keeps failing before it gets ready again still gives up.  The scheduler's
     monotonic clock is the test's: every failure advances it by 6 s."""
-    from links_and_nodes.manager.processes import scheduler as sched_mod
+    from links_and_nodes.manager.processes import managed
 
     now = [0.0]
-    monkeypatch.setattr(sched_mod, "time",
+    monkeypatch.setattr(managed, "time",
                         SimpleNamespace(time=time.time, monotonic=lambda: now[0]))
     marker, gate = tmp_path / "ran", tmp_path / "gate"
     cmd = (f"sh -c 'if [ -e {marker} ]; then exit 1; fi; touch {marker}; echo up; "
@@ -691,7 +691,8 @@ async def test_close_ends_every_task(world_factory: list[World], tmp_path: Path)
     await w.sched.wait(["b"], {S.STOPPING}, LIMIT)
     await w.sched.close()
     left = [t for t in asyncio.all_tasks()
-            if t.get_coro().__qualname__.startswith("Scheduler.")  # type: ignore[union-attr]
+            if t.get_coro().__qualname__.startswith(  # type: ignore[union-attr]
+                ("Scheduler.", "ManagedProcess.", "StateCommands."))
             and not t.done()]
     assert left == []
 
@@ -700,9 +701,9 @@ async def test_ready_time_does_not_depend_on_the_wall_clock(
         world_factory: list[World], monkeypatch: pytest.MonkeyPatch) -> None:
     """ready_time counts on the monotonic clock: a wall clock set back meanwhile (here: one
     that stands still) does not keep the process from getting ready."""
-    from links_and_nodes.manager.processes import scheduler as sched_mod
+    from links_and_nodes.manager.processes import managed
 
-    monkeypatch.setattr(sched_mod, "time",
+    monkeypatch.setattr(managed, "time",
                         SimpleNamespace(time=lambda: 1e9, monotonic=time.monotonic))
     w = make(world_factory, proc("p", ready_time=0.05))
     w.sched.start("p")

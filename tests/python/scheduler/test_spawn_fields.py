@@ -1,4 +1,4 @@
-"""How a configured process becomes a SPAWN request (scheduler.spawn_fields): the fields
+"""How a configured process becomes a SPAWN request (spawning.spawn_fields): the fields
 whose shape differs are converted, every other SPAWN field of the schema is taken from the
 process's attribute of the same name, so a key the daemon applies needs no scheduler line."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 from links_and_nodes.manager.config import model
-from links_and_nodes.manager.processes import scheduler as sched
+from links_and_nodes.manager.processes import spawning as sched
 from links_and_nodes.manager.processes.daemon_wire import SpawnSpec
 
 

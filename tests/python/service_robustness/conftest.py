@@ -13,10 +13,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from buildtree import build_dir
 
 from links_and_nodes.manager.frontends import launch
 from links_and_nodes.manager.frontends.launch import ManagerProcess
-from buildtree import build_dir
 
 REPO = Path(__file__).resolve().parents[3]
 STRESS = build_dir() / "tests" / "c" / "tools" / "service_stress"

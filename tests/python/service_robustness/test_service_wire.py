@@ -17,7 +17,7 @@ from links_and_nodes._libln import ln_error_name
 
 from .conftest import LIMIT, REPO, Setup, stop
 
-md_loader.add_message_definition_dir(REPO / "tests" / "md" / "services")
+md_loader.add_message_definition_dir(REPO / "tests" / "fixtures" / "md" / "services")
 ECHO_HASH = md_loader.message_class("lntest/echo").LAYOUT_HASH
 MAGIC = 0x56534E4C
 HELLO, WELCOME, REQUEST, RESPONSE, ERROR = 1, 2, 3, 4, 5

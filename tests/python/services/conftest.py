@@ -20,8 +20,8 @@ import links_and_nodes as ln
 REPO = Path(__file__).resolve().parents[3]
 SERVICE_TOOL = TOOLS / "service_tool"
 
-ln.add_message_definition_dir(REPO / "tests" / "md" / "services")
-ln.add_message_definition_dir(REPO / "tests" / "md" / "valid")
+ln.add_message_definition_dir(REPO / "tests" / "fixtures" / "md" / "services")
+ln.add_message_definition_dir(REPO / "tests" / "fixtures" / "md" / "valid")
 
 LIMIT = 60.0  # seconds: an upper bound against hangs, never a pass criterion
 GOAL = [0.1 * j - 0.3 for j in range(7)]  # a plan_path goal with inexact binary fractions

@@ -11,8 +11,7 @@ import pytest
 
 import links_and_nodes as ln
 
-from .conftest import (GOAL, LIMIT, Manager, c_call, plan, plan_path_handler, serving,
-                       start_provider)
+from .conftest import GOAL, LIMIT, Manager, c_call, plan, plan_path_handler, serving, start_provider
 
 CONSTRAINTS = ["joint_limits", "tcp \u00e9 \"quoted\" \\ ", "", "collision,self"]
 

@@ -13,15 +13,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+from buildtree import build_dir
 
 import links_and_nodes as ln
 from links_and_nodes.manager.frontends import launch
 from links_and_nodes.manager.frontends.launch import ManagerProcess, segments
-from buildtree import build_dir
 
 REPO = Path(__file__).resolve().parents[3]
 TOOLS = build_dir() / "tests" / "c" / "tools"
-TOPIC_MDS = REPO / "tests" / "md" / "topics"
+TOPIC_MDS = REPO / "tests" / "fixtures" / "md" / "topics"
 
 ln.add_message_definition_dir(TOPIC_MDS)
 

@@ -14,7 +14,6 @@ import sys
 import time
 
 import pytest
-
 from buildtree import build_dir
 
 from .conftest import REPO, Manager

@@ -13,7 +13,6 @@ from pathlib import Path
 
 from .conftest import Manager, segments, start_manager, wait_ready
 
-
 FINAL_FIRST = 10**12  # values of the last publisher's samples, never written by the others
 
 

@@ -18,7 +18,6 @@ from polling import wait_for
 
 import links_and_nodes as ln
 
-
 from .conftest import REPO, Manager, wait_ready
 
 LIMIT = 60.0  # seconds: an upper bound against hangs, never a pass criterion

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+
 import pytest
 
 from links_and_nodes.manager.frontends.webui import http as h
@@ -155,8 +156,8 @@ async def test_oversized_length_refused_before_reading_it() -> None:
 def test_a_client_frame_never_starts_like_an_http_request() -> None:
     """The manager's port tells the two apart by the first 4 bytes: a frame's little-endian
     length is at most MAX_LENGTH < 2**24, so its 4th byte is 0; no request line's is."""
-    from links_and_nodes.manager.registry import protocol as p
     from links_and_nodes.manager.frontends.webui import REQUEST_LINE_STARTS
+    from links_and_nodes.tools import protocol as p
 
     assert p.HEADER_SIZE == 4 and p.MAX_LENGTH < 1 << 24
     assert all(len(start) == 4 and start[3] != 0 for start in REQUEST_LINE_STARTS)

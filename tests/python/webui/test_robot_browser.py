@@ -22,8 +22,8 @@ from typing import Any
 from buildtree import not_under_sanitizers
 from demo.test_robot_lnc import CONFIG, Demo, demo  # noqa: F401 - fixture
 
-from links_and_nodes.manager.frontends.scripting import connect
 from links_and_nodes.manager.frontends.webui.auth import hash_password
+from links_and_nodes.tools.scripting import connect
 
 from .browser import LIMIT, chromium, screenshot, until
 

@@ -16,12 +16,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import pytest
-
 from buildtree import missing_test_tool
+
 from links_and_nodes.manager.frontends.control import Control
-from links_and_nodes.manager.registry.server import listen_socket
 from links_and_nodes.manager.frontends.webui import WebUI
 from links_and_nodes.manager.frontends.webui.auth import hash_password
+from links_and_nodes.manager.registry.server import listen_socket
 
 try:
     import websockets

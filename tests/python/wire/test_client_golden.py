@@ -1,4 +1,4 @@
-"""The manager's client <-> manager codec (manager/registry/protocol.py, built from
+"""The manager's client <-> manager codec (tools/protocol.py, built from
 wire/client.schema) against tests/wire/client_golden.txt, the golden frames libln's generated
 C codec must produce too (tests/c/test_client_golden.c): each message encodes to exactly its
 frame and decodes back to itself; the schema-driven wire.codec agrees; every type is there."""
@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from links_and_nodes.manager.registry import protocol as p
+from links_and_nodes.tools import protocol as p
 from links_and_nodes.wire import codec, schema
 
 GOLDEN = Path(__file__).resolve().parents[2] / "wire" / "client_golden.txt"

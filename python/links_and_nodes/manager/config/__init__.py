@@ -14,7 +14,6 @@ import socket
 from collections.abc import Mapping
 from pathlib import Path
 
-from .commands import SHELL_TIMEOUT
 from .errors import ConfigError, LineError, Problem, sort_problems
 from .expand import BUILTINS, Evaluator
 from .language import LANGUAGE_VERSION
@@ -22,6 +21,7 @@ from .model import Config, Location
 from .parser import Parser
 from .resolve import build
 from .sections import DEFINE_NAME_RE
+from .shell import SHELL_TIMEOUT
 from .text import Value
 from .values import parse_address
 

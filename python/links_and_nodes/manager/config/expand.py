@@ -15,9 +15,9 @@ import sys
 import zlib
 from collections.abc import Mapping
 
-from .commands import SHELL_TIMEOUT, CommandError, run_command
 from .errors import LineError, Problem, did_you_mean, shift
 from .model import Location
+from .shell import SHELL_TIMEOUT, CommandError, run_command
 from .text import split_args, unescape, unquote
 
 MAX_DEPTH = 16  # nesting of %( ) calls

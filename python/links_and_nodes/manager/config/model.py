@@ -202,7 +202,7 @@ class Process:
     location: Location  # of the section header
     command: str
     node: str = "localhost"  # "localhost": the manager's host
-    # The command split into words (config/command.py), empty with start_in_shell.
+    # The command split into words (config/argv.py), empty with start_in_shell.
     argv: list[str] = field(default_factory=list, compare=False)  # derived: not compared
     environment: dict[str, str] = field(default_factory=dict)
     pass_environment: list[str] = field(default_factory=list)  # names copied from the manager

@@ -30,7 +30,7 @@ def _entry(v: Value) -> tuple[str, str, object]:
                       "a parameter name of A-Z a-z 0-9 _ . -)")
     if not text.strip():
         raise fail(v, f"'parameters': no value for {name.strip()}")
-    from ..parameters.tools import ParamError, parse_value
+    from ...tools.parameters.values import ParamError, parse_value
 
     try:
         value = parse_value(text.strip())

@@ -11,7 +11,7 @@ from __future__ import annotations
 import fnmatch
 from collections.abc import Iterable, Mapping
 
-from .command import CommandSplitError, split_command
+from .argv import CommandSplitError, split_command
 from .drafts import Drafts, GroupDraft, MemberRef, NetworkDraft, ProcessDraft, Ref
 from .errors import Problem, did_you_mean
 from .model import Config, Instance, Interface, Location, OutputLog, Policy, Process

@@ -1,1 +1,2 @@
-"""The front ends: command table, console, CLI, CONTROL frames, scripting API, web UI."""
+"""The front ends: console, CLI, CONTROL frames, web UI, and their share of the command
+table (commands/); the table itself and the scripting client are in tools/."""

@@ -5,7 +5,7 @@ until SIGTERM/SIGINT (or `quit`), then closes every connection and unlinks every
 of the instance.  With `-c FILE` it also runs the configuration's processes through the
 ln_daemons (scheduler.py) with a console on stdin; `ln_manager status|start|stop|...`
 talk to a running manager instead (remote_cli.py); `ln_manager check FILE` only
-validates a configuration (check.py).  This module reads the command line; app.py
+validates a configuration (config_check.py).  This module reads the command line; app.py
 builds the manager's objects and runs them."""
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ from typing import Any
 
 from ...addresses import AddressError, parse_address
 from ...naming import runtime_dir
-from . import remote_cli
 from ..registry.model import Limits
 from ..registry.runtime import InstanceLock, RuntimeDirError, prepare
 from ..registry.services import DEFAULT_LIMIT as SERVICE_LIMIT
+from . import remote_cli
 
 log = logging.getLogger("ln_manager")
 
@@ -128,8 +128,8 @@ def _webui_plan(args: argparse.Namespace, config: Any) -> None:
 def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
     """Read -c FILE (exit 2 with every error on failure) and fill --instance/--port/--host
     from its instance section where the command line did not give them."""
-    from .check import parse_defines
     from ..config import ConfigError, load
+    from .config_check import parse_defines
 
     defines = parse_defines(parser, args.define)
     try:
@@ -173,7 +173,7 @@ def _spans_hosts(config: Any) -> bool:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv and argv[0] == "check":
-        from . import check
+        from . import config_check as check
 
         return check.main(argv[1:])
     if argv and argv[0] in remote_cli.names():  # the command table (commands/)

@@ -12,10 +12,12 @@ import threading
 from collections.abc import Callable
 from typing import Any, TextIO
 
-from .commands import ArgError, Verb, console_entry, parse_words, phrases, to_request
+from ...tools.commands import ArgError, ControlError, console_entry, parse_words, to_request
+from . import console_run
+from .commands import phrases
 from .commands.help import complete, help_command, help_text
 from .commands.views import format_network, format_status, json_lines, table
-from .control import Control, ControlError
+from .control import Control
 
 __all__ = ["Console", "complete", "format_network", "format_status", "stdin_reader", "table"]
 
@@ -25,7 +27,7 @@ class Console:
         self.control = control
         self.out = out or sys.stdout
         self._follow: Callable[[str, Any], None] | None = None
-        # ends the topic echo/hz/bw printing in the background (introspection/console.py)
+        # ends the printing of a streaming command in the background (console_run.py)
         self._stop_watch: Callable[[], None] | None = None
 
     def say(self, text: str) -> None:
@@ -78,11 +80,10 @@ class Console:
             entry = console_entry(word)
         if entry is None:
             raise ControlError(f"unknown command {word!r} (try help)")
-        if isinstance(entry, Verb):
-            assert entry.console is not None
-            await entry.console(self, words)
-            return False
         args = parse_words(entry, words)
+        if entry.run is not None:
+            await console_run.execute(self, entry, args)
+            return False
         if entry.console_run is not None:
             return bool(await entry.console_run(self, args))
         result = await self.control.handle(to_request(entry, args))
@@ -103,7 +104,7 @@ class Console:
         self.control.scheduler.output_listeners.append(follow_line)
 
     def hold_watch(self, stop: Callable[[], None] | None) -> None:
-        """End the topic echo/hz/bw printing in the background, if one does; hold `stop` of
+        """End a streaming command printing in the background, if one does; hold `stop` of
         the next one (None: none).  Its thread ends within a read slice, closing its client
         on its own: never waited for here, since its goodbye to the manager needs this
         loop."""
@@ -112,7 +113,7 @@ class Console:
         self._stop_watch = stop
 
     def _unfollow(self) -> None:
-        self.hold_watch(None)  # a topic echo/hz/bw
+        self.hold_watch(None)  # a streaming command (topic echo, ...)
         if self._follow is not None and self.control.scheduler is not None:
             self.control.scheduler.output_listeners.remove(self._follow)
         self._follow = None

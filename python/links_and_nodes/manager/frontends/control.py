@@ -1,6 +1,6 @@
 """Control commands of a running manager: what the console, `ln_manager status|start|...`,
 the scripting API (links_and_nodes.manager.connect) and the web UI ask for, as JSON objects
-in CONTROL frames (or WebSocket messages).  The command table (commands/) says which
+in CONTROL frames (or WebSocket messages).  The command table (tools/commands/) says which
 commands there are and checks their arguments; the process commands' handlers are the
 methods here, each returning a JSON-able dict (docs/process_management.md, "Control
 requests")."""
@@ -16,10 +16,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from ... import logger_files
-from .commands import ArgError, check_args, table
-from ..registry.core import Core
+from ...tools.commands import ArgError, Command, ControlError, Local, check_args, table
+from ...tools.commands.from_thread import CONTROL_WAIT, loop_control
+from ...tools.commands.local import answer, full_args, strict_json
 from ..loggers.loggers import LoggerError, Loggers
 from ..processes.scheduler import Scheduler, StartError
+from ..registry.core import Core
 
 if TYPE_CHECKING:
     from ..registry.services import Service
@@ -41,36 +43,6 @@ class PullView(Protocol):
     def listing(self) -> list[dict[str, Any]]: ...
     async def status(self) -> list[dict[str, Any]]: ...
 
-
-class ControlError(Exception):
-    """A command that cannot be carried out; the text goes back as {"error": TEXT}, with
-    {"code": "ELIMIT"} etc. when an LN_E* name says more than "refused"."""
-
-    def __init__(self, text: str, code: str = "") -> None:
-        super().__init__(text)
-        self.code = code
-
-
-
-CONTROL_WAIT = 60.0  # seconds a worker thread waits for the loop to answer a CONTROL command
-
-
-def loop_control(control: Any, loop: asyncio.AbstractEventLoop,
-                 error: type[Exception]) -> Callable[..., dict[str, Any]]:
-    """control(op, **fields) for a worker thread (the web UI's, the console's introspection):
-    Control.handle run on `loop`; a refusal or no answer in time raises `error`."""
-
-    def call(op: str, **fields: Any) -> dict[str, Any]:
-        future = asyncio.run_coroutine_threadsafe(control.handle({"op": op, **fields}), loop)
-        try:
-            return future.result(CONTROL_WAIT)
-        except ControlError as exc:
-            raise error(str(exc)) from None
-        except TimeoutError:
-            future.cancel()
-            raise error(f"no answer to {op} from the manager in time") from None
-
-    return call
 
 class Control:
     def __init__(self, core: Core, scheduler: Scheduler | None,
@@ -112,7 +84,7 @@ class Control:
 
     @staticmethod
     def describe() -> list[dict[str, Any]]:
-        """Every command of the table as JSON (commands/table.py describe())."""
+        """Every command of the table as JSON (tools/commands/table.py describe())."""
         return table.describe()
 
     async def handle(self, command: dict[str, Any], session: Any = None) -> dict[str, Any]:
@@ -125,6 +97,8 @@ class Control:
             known = ", ".join(c.name for c in table.commands())
             raise ControlError(f"unknown command {op!r}; known: {known}")
         try:
+            if cmd.run is not None:
+                return {"ok": True, **await self._run_here(cmd, full_args(cmd, command))}
             args = check_args(cmd, command)
             if cmd.session:
                 if session is None:
@@ -145,6 +119,29 @@ class Control:
             log.exception("control command %r failed", op)
             raise ControlError(f"internal error: {exc}") from None
         return {"ok": True, **result}
+
+    async def _run_here(self, cmd: Command, args: dict[str, Any]) -> dict[str, Any]:
+        """A command that runs in a client (Command.run), asked for by a JSON request: run in
+        a worker thread of the manager with libln clients connected to its own port; one
+        that streams is answered with its rows of at most CONTROL_WAIT - 5 seconds."""
+        if not self.manager_address:
+            raise ControlError("this manager has no address for its own clients")
+        loop = asyncio.get_running_loop()
+        local = Local(loop_control(self, loop, ControlError), self.manager_address,
+                      "ln_manager")
+        timer = loop.call_later(CONTROL_WAIT - 5, local.stop.set) if cmd.streams else None
+
+        def work() -> dict[str, Any]:
+            try:
+                return answer(cmd, local, args)
+            finally:
+                local.close()  # here: a libln client's goodbye needs the loop
+
+        try:
+            return dict(strict_json(await asyncio.to_thread(work)))
+        finally:
+            if timer is not None:
+                timer.cancel()
 
     # ---- helpers -------------------------------------------------------------------------
     def _sched(self) -> Scheduler:

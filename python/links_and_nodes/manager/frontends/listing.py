@@ -13,7 +13,8 @@ from typing import Any
 
 from ... import __version__
 from ...addresses import format_address, parse_manager_address
-from ..registry import protocol as p
+from ...tools import protocol as p
+from ...tools.framing import receive
 
 CLIENT_NAME = "ln_services"
 TIMEOUT = 10.0  # seconds for connecting and for each answer, as libln's default
@@ -34,29 +35,9 @@ def _error_name(code: int) -> str:
         return f"error {code}"
 
 
-def _exactly(sock: socket.socket, count: int, error: type[Exception]) -> bytes:
-    data = bytearray()
-    while len(data) < count:
-        chunk = sock.recv(min(count - len(data), 1 << 16))
-        if not chunk:
-            raise error("the manager closed the connection")
-        data += chunk
-    return bytes(data)
-
-
-def receive(sock: socket.socket, error: type[Exception] = ListingError) -> p.Message:
-    """The next message from the manager on a blocking socket; `error` with the reason when
-    the connection ends or the frame is malformed (socket errors and timeouts pass)."""
-    try:
-        length = p.frame_length(_exactly(sock, p.HEADER_SIZE, error))
-        return p.decode_payload(_exactly(sock, length, error))
-    except p.ProtocolError as exc:
-        raise error(f"malformed answer from the manager: {exc}") from None
-
-
 def _answer(sock: socket.socket, request: p.Message, expected: type[p.Message]) -> Any:
     sock.sendall(p.encode(request))
-    reply = receive(sock)
+    reply = receive(sock, ListingError)
     if isinstance(reply, p.Error):
         raise ListingError(f"the manager refused {request.TYPE.name}: "
                            f"{_error_name(reply.code)}: {reply.text}")

@@ -1,10 +1,13 @@
-"""The manager's side of live introspection (docs/introspection.md): CONTROL commands that
-describe a topic, a service or a message definition from what the manager knows.
+"""Live introspection in the command table (docs/introspection.md): `topic echo|hz|bw|info`,
+`md show`, `service call`.  Answered here, from what the manager knows:
 
     topic_info {"name"}             md, layout, ring, publishers and subscribers with their
                                     clients and hosts, transports, forwarding rates
     service_info {"name"}           the service as `services` lists it, plus md_dirs
     md_show {"name", "recursive"}   the md's text (and of the mds it uses), its file
+
+`topic echo|hz|bw` and `service call` run in the client (tools/introspection/commands.py),
+with their own libln client; echo, hz and bw stream.
 
 Each answer carries `md_dirs`, the manager's md search path (the configuration's
 `add_message_definition_dir` directories, then the built-in ones and the manager's
@@ -13,19 +16,30 @@ LN_MESSAGE_DEFINITION_DIRS), so a client decodes with the mds the system was bui
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from ... import transports
-from ..registry import protocol as p
-from ..frontends.commands import Arg, Command, Verb, register
+from ...tools import protocol as p
+from ...tools.commands import Arg, Command, Verb, register
+from ...tools.introspection import commands as run
+from ...tools.introspection import views
+from ...tools.introspection.stats import DEFAULT_WINDOW
 from ..registry.model import Client, Port, PortKind, Topic
 
 if TYPE_CHECKING:
-    from ..frontends.control import Control
+    from ..registry.core import Core
+
+
+class Control(Protocol):
+    """What these handlers use of the manager's Control (frontends/control.py)."""
+
+    core: Core
+    scheduler: Any  # the Scheduler of a configuration, or None
+    network_view: Any  # the hosts of a multi-host configuration, or None
 
 
 def _error(text: str) -> Exception:
-    from ..frontends.control import ControlError
+    from ...tools.commands import ControlError
 
     return ControlError(text)
 
@@ -134,7 +148,7 @@ async def md_show(control: Control, command: dict[str, Any]) -> dict[str, Any]:
     from ln_generate import MdError, MdRegistry
     from ln_generate.lookup import LookupError_, find
 
-    from .client import md_error_text
+    from ...tools.introspection.client import md_error_text
 
     name, recursive = command["name"], command["recursive"]
     dirs = md_dirs(control)
@@ -151,7 +165,8 @@ async def md_show(control: Control, command: dict[str, Any]) -> dict[str, Any]:
             raise _error(f"md {name!r}: {md_error_text(exc)}") from None
         entries += [{"name": dep.name, "path": str(dep.path), "text": _read(dep.path)}
                     for dep in md.dependencies()]
-    return {"name": name, "path": str(path), "mds": entries, "md_dirs": dirs}
+    return {"name": name, "path": str(path), "mds": entries, "md_dirs": dirs,
+            "recursive": recursive}
 
 
 def _read(path: Path) -> str:
@@ -162,34 +177,81 @@ def _read(path: Path) -> str:
 
 
 # ---- the table ---------------------------------------------------------------------------
-async def _console(console: Any, words: list[str]) -> None:
-    from .console import execute
-
-    await execute(console, words)
-
-
-def _cli(argv: list[str]) -> int:
-    from .cli import main
-
-    return main(argv)
-
-
-def _verb(name: str, help_text: str, words: tuple[str, ...]) -> Verb:
-    from .args import SPECS
-
-    usage = tuple(line for key, spec in SPECS.items() if key[0] == name
-                  for line in (spec.usage, "    " + spec.text))
-    return Verb(name, help_text, "introspection", usage,
-                lambda console, rest: _console(console, [name, *rest]), _cli, words)
+def _seconds(what: str, help_text: str, default: float | None = None) -> Arg:
+    option = "--" + what
+    return Arg(what, "float", help_text, default=default, low=1e-6, high=1e9, metavar="S",
+               error=option + ": {value!r} is not a number of seconds above 0")
 
 
 _NAME = Arg("name", "str", "its name", required=True, positional=True, nonempty=True)
+_N = Arg("n", "int", "stop after N samples", low=1, flag="-n", metavar="N",
+         error="-n: {value!r} is not a whole number of at least 1")
+_WINDOW = Arg("window", "int", "statistics over the newest N samples",
+              default=DEFAULT_WINDOW, low=2, metavar="N",
+              error="--window: {value!r} is not a whole number of at least 2")
+_JSON = Arg("json", "bool", "print JSON", default=False, where="text")
+_FULL = Arg("full", "bool", "every value of long arrays", default=False, where="text")
+
+
+def _echo_args(name: str, n: int | None = 1, field: str | None = None,
+               timeout: float | None = run.DEFAULT_TIMEOUT) -> dict[str, Any]:
+    return {"name": name, "n": n, "field": field, "duration": timeout}
+
+
+def _rate_args(name: str, duration: float | None = 2.0, n: int | None = None,
+               window: int = DEFAULT_WINDOW) -> dict[str, Any]:
+    if duration is None and n is None:
+        raise ValueError("give a duration or a number of samples n")
+    return {"name": name, "duration": duration, "n": n, "window": window}
+
+
+def _service_request(value: Any) -> Any:
+    from ...tools.commands import ArgError
+
+    if not isinstance(value, dict | str):
+        raise ArgError('"request" must be an object of field values or request text')
+    return value
+
+
+def _rate(name: str, help_text: str, handler: Any, bandwidth: bool, doc: str) -> Command:
+    word = name.removeprefix("topic_")
+    return Command(
+        name, help_text, "topics", None,
+        (_NAME, _seconds("duration", "stop after S seconds"), _N, _WINDOW), phrase=f"topic {word}",
+        result="rows: [{stats: {samples, periods, missed, span_s, rate_hz, mean_s, min_s, "
+               "max_s, std_s} or null, new, message_size, final}]",
+        run=handler, streams=True, missing_usage=True,
+        console_format=views.bw_lines if bandwidth else views.hz_lines,
+        script_args=_rate_args, script_doc=doc,
+        script_result=lambda rows: views.rate_result(rows, bandwidth))
+
+
 register(
-    Command("topic_info", "md, layout, ring, publishers and subscribers with their clients "
-            "and hosts, transports, forwarding rates", "topics", topic_info, (_NAME,),
+    Command("topic_echo", "print samples decoded by the topic's md", "topics", None,
+            (_NAME, _N, _seconds("duration", "stop after S seconds"),
+             Arg("field", "str", "only this field (a path: q[2], target.position)",
+                 metavar="F", nullable=True),
+             _JSON, _FULL),
+            phrase="topic echo", run=run.echo, streams=True, missing_usage=True,
+            result="rows: [{seq, publish_time, publish_time_ns, data, field}]",
+            console_format=views.echo_lines, script_args=_echo_args,
+            script_doc="The next `n` samples of topic `name` (fewer if `timeout` seconds pass "
+                       "first), each {\"seq\", \"publish_time\" (s), \"publish_time_ns\", "
+                       "\"data\"} with data the decoded sample, or only the value at `field` "
+                       "(e.g. \"target.position[2]\"; then also \"field\")."),
+    _rate("topic_hz", "rate and period statistics from the publish timestamps, every second",
+          run.hz, False,
+          "Rate statistics of topic `name` over `duration` seconds or `n` samples (whichever "
+          "ends first): samples, periods, missed, span_s, rate_hz, mean_s, min_s, max_s, "
+          "std_s (fewer than two samples: rate_hz 0, the rest None)."),
+    _rate("topic_bw", "bytes per second (message size x rate), every second", run.bw, True,
+          "topic_hz's statistics plus message_size and bytes_per_s (size x rate)."),
+    Command("topic_info", "md, layout, ring, publishers and subscribers with clients, hosts, "
+            "transports", "topics", topic_info,
+            (_NAME, Arg("json", "bool", "print JSON", default=False, where="console")),
             result="name, id, md_name, layout_hash, message_size, slots, ring_bytes, "
                    "published, adopted, rings, publishers, subscribers, streams, md_dirs",
-            console=False, cli=False,
+            phrase="topic info", missing_usage=True, console_format=views.info_view,
             script_doc="What the manager knows of topic `name`: md_name, layout_hash "
                        "(\"0x%016x\"), message_size, slots, ring_bytes, published (samples "
                        "so far), rings (host, segment, generations), publishers and "
@@ -199,14 +261,30 @@ register(
     Command("service_info", "a service as `services` lists it, plus md_dirs", "services",
             service_info, (_NAME,), result="name, provider, md_name, layout_hash, calls, "
             "errors, ..., md_dirs", console=False, cli=False),
-    Command("md_show", "a message definition's text (recursive: and the mds it uses)",
+    Command("md_show", "the text of a message definition (with -r also of the mds it uses)",
             "topics", md_show,
             (_NAME, Arg("recursive", "bool", "also the mds it uses", default=False,
-                        flag="-r")),
-            result="name, path, mds: [{name, path, text}], md_dirs", console=False,
-            cli=False),
-    _verb("topic", "samples, rates and what the manager knows of a topic",
-          ("echo", "hz", "bw", "info")),
-    _verb("md", "a message definition's text", ("show",)),
-    _verb("service", "call a service", ("call",)),
+                        short="-r")),
+            result="name, path, mds: [{name, path, text}], md_dirs, recursive",
+            phrase="md show", missing_usage=True, console_format=views.md_lines,
+            script_result=run.md_text,
+            script_doc="The text of md `name` from the manager's md search path; with "
+                       "`recursive` also of every md it uses, each under a `# ==== NAME: "
+                       "PATH` line."),
+    Command("service_call", "call a service with REQUEST fields ('a: 1, b: [1, 2], name: "
+            "\"x\"' or JSON)", "services", None,
+            (_NAME, Arg("request", "json", "the request: field values or request text",
+                        positional=True, rest="join", check=_service_request),
+             _JSON, _FULL, _seconds("timeout", "the longest the call may take", run.DEFAULT_TIMEOUT)),
+            phrase="service call", run=run.service_call, missing_usage=True,
+            changes_state=True, result="response", console_format=views.response_lines,
+            script_result=lambda row: row["response"],
+            script_doc="Call service `name` once: `request` as a dict of request fields "
+                       "(nested dicts, lists) or request text ('a: 1, b: [1, 2]' or JSON); "
+                       "the response as a dict.  An error response raises ManagerError with "
+                       "the provider's text."),
+    Verb("topic", "samples, rates and what the manager knows of a topic", "introspection",
+         choose="command"),
+    Verb("md", "a message definition's text", "introspection", choose="command"),
+    Verb("service", "call a service", "introspection", choose="command"),
 )

@@ -12,7 +12,7 @@ import base64
 from pathlib import Path
 from typing import Any
 
-from ..frontends.commands import Arg, ArgError, Command, Verb, register, to_request
+from ...tools.commands import Arg, ArgError, Command, Verb, register, to_request
 
 FETCH_MAX = 512 * 1024  # logger_files.FETCH_MAX (checked in tests/python/loggers)
 
@@ -129,7 +129,7 @@ def _cli_save(mgr: Any, args: dict[str, Any]) -> list[str]:
     import json
 
     from ... import logger_files
-    from ..frontends.scripting import ManagerError
+    from ...tools.commands import ManagerError
 
     path = Path(args["path"])
     if args["on_manager"]:
@@ -211,5 +211,5 @@ register(
                    "skipped, dropped, first_seq, last_seq, start_seq, count, samples "
                    "(base64)", changes=False),
     _SAVE,
-    Verb("logger", "topic loggers (docs/logging.md)", "loggers", ("logger ...",), None, None),
+    Verb("logger", "topic loggers (docs/logging.md)", "loggers"),
 )

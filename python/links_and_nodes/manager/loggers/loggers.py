@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ... import logger_files
-from ..processes import daemon_wire as dw
 from ..config import model
+from ..processes import daemon_wire as dw
 from ..registry.core import Core
 from ..registry.follow import RegistryFollower
 from ..registry.model import PortKind, Topic, topic_name_problem

@@ -1,15 +1,11 @@
 """The text of the `logger ...` commands' answers in the console and `ln_manager logger ...`
-(docs/logging.md); their words come from the command table (logger_control.py)."""
+(docs/logging.md); their words come from the command table (commands.py)."""
 
 from __future__ import annotations
 
 from typing import Any
 
-
-def table(rows: list[list[str]]) -> list[str]:
-    from ..frontends.console import table as columns  # the console's layout (it imports this module)
-
-    return columns(rows)
+from ...tools.commands.columns import table
 
 
 def format_result(op: str, args: dict[str, Any], result: dict[str, Any]) -> list[str]:

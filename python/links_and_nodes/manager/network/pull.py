@@ -13,12 +13,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..processes import daemon_wire as dw
 from ..config import model
 from ..config.pull_settings import pull_uri
+from ..loggers.loggers import Link, publisher_rings
+from ..processes import daemon_wire as dw
 from ..registry.core import Core
 from ..registry.follow import RegistryFollower
-from ..loggers.loggers import Link, publisher_rings
 
 log = logging.getLogger("ln_manager")
 

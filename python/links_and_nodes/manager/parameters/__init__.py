@@ -1,1 +1,2 @@
-"""Parameter blocks: tools, console and CLI words, scripting methods (docs/parameters.md)."""
+"""Parameter blocks in the manager: the `param ...` entries of the command table
+(docs/parameters.md); the client side they run is tools/parameters/."""

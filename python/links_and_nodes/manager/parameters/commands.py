@@ -1,253 +1,113 @@
-"""The words of `param ...` in the console and of `ln_manager param ...` (docs/parameters.md):
-parsed here and carried out on a param_tools.Session, their output as lines of text or, with
---json, one JSON document.  ParamUsage for words that make no command, ParamError for a
-command that fails."""
+"""The `param ...` commands in the command table (docs/parameters.md): `param list|get|set|
+reset|changes|save|load` and param_blocks, a family of phrases for the console and
+`ln_manager param`, the scripting API's param_* methods and the web UI's parameter view.
+They run in the client, which calls the blocks' services (tools/parameters/commands.py)."""
 
 from __future__ import annotations
 
-import json
-import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from ..frontends.commands import Verb, register
-from .tools import (
-    ParamError,
-    Session,
-    change_text,
-    parse_value,
-    range_text,
-    state_text,
-    type_text,
-    value_text,
+from ...tools.commands import Arg, Command, Verb, register
+from ...tools.parameters import commands as run
+
+_BLOCK = Arg("block", "str", "a parameter block (its id or a unique end of it)",
+             required=True, nonempty=True, positional=True)
+_JSON = Arg("json", "bool", "the answer as JSON", default=False, where="text")
+
+
+def _param(name: str, help_text: str, args: tuple[Arg, ...], result: str, **more: Any) -> Command:
+    return Command(name, help_text, "parameters", None, args, result=result,
+                   run=getattr(run, name), phrase=name.replace("_", " "), **more)
+
+
+def _set_args(block: str, name: str | dict[str, Any], value: Any = None) -> dict[str, Any]:
+    return {"block": block, "values": name if isinstance(name, dict) else {name: value}}
+
+
+def _reset_args(block: str, name: str | list[str] | None = None) -> dict[str, Any]:
+    return {"block": block, "names": name}
+
+
+def _path_args(path: str | Path) -> dict[str, Any]:
+    return {"path": str(path)}
+
+
+_LISTING = "{id, block, client, service, generation, updates, config_errors, parameters}"
+
+register(
+    Command("param_blocks", "the parameter blocks", "parameters", None, (),
+            result="blocks: [{id, service, provider}]", run=run.param_blocks,
+            console=False, cli=False,
+            script_result=lambda answer: [b["id"] for b in answer["blocks"]],
+            script_doc='The ids ("<client>.<block>") of every parameter block.'),
+    _param("param_list", "the blocks, or the parameters of one block",
+           (Arg("block", "str", "a parameter block (none: every block)", default="",
+                positional=True), _JSON),
+           f"{_LISTING} of a block (values as of the loop's last copy), or blocks: [{{block, "
+           "service, client, parameters, overridden, updates}]",
+           console_format=run.list_lines,
+           script_doc="The block's descriptors as its service lists them (values as of the "
+                      "loop's last copy); without a block, every block with its number of "
+                      "parameters, of overrides and of updates."),
+    _param("param_get", "values as the loop has them now",
+           (_BLOCK, Arg("name", "str", "one parameter (none: all)", positional=True,
+                         metavar="PARAM", nullable=True),
+            Arg("wait", "float", "seconds to wait for the loop's update (default 0.25)",
+                low=0, high=10, metavar="S", nullable=True,
+                error="--wait needs a number of seconds 0..10"), _JSON),
+           f"{_LISTING} with the loop's values now, live, values_update",
+           console_format=run.get_lines, script_result=run.values_of, missing_usage=True,
+           script_doc="The value of parameter `name` as the loop has it now (its next "
+                      "update(), at most `wait` s, default 0.25), or {name: value} of every "
+                      "parameter of the block."),
+    _param("param_set", "override (several: all at once or none)",
+           (_BLOCK, Arg("values", "json", "PARAM VALUE pairs; in JSON {parameter: value}",
+                        required=True, positional=True, rest="words", check=run.pairs,
+                        metavar="PARAM VALUE [PARAM VALUE ...]"), _JSON),
+           "id, generation, set: [names]", changes_state=True, console_format=run.set_lines,
+           missing_usage=True, script_args=_set_args,
+           script_result=lambda answer: int(answer["generation"]),
+           script_doc="Override parameter `name` with `value`, or several at once with a "
+                      "dict {name: value} (all or none); visible at the loop's next "
+                      "update().  Returns the block's generation of the change."),
+    _param("param_reset", "back to the program's own value",
+           (_BLOCK, Arg("names", "json", "the parameters (none: every override)",
+                        positional=True, rest="words", check=run.names, metavar="PARAM ..."),
+            _JSON),
+           "id, generation, reset: [names that had an override]", changes_state=True,
+           console_format=run.reset_lines, missing_usage=True, script_args=_reset_args,
+           script_result=lambda answer: answer["reset"],
+           script_doc="Remove the override of `name` (a list of them, or every one); returns "
+                      "the parameters that had one."),
+    _param("param_changes", "the block's last changes (--follow: and new ones as they come)",
+           (_BLOCK, Arg("since", "int", "after this generation", default=0, low=0,
+                        metavar="G"),
+            Arg("follow", "bool", "go on with new ones until stopped", default=False,
+                where="text"), _JSON),
+           "rows: [{generation, time, op, parameters, values}]", streams=True,
+           console_format=run.change_lines, missing_usage=True,
+           script_result=lambda rows: [r for r in rows if "note" not in r],
+           script_doc="The block's remembered changes (its last 64) after generation "
+                      "`since`, oldest first: {\"generation\", \"time\" (s, CLOCK_REALTIME), "
+                      "\"op\" (\"set\", \"config\", \"reset\"), \"parameters\", \"values\" (a "
+                      "set's values, if small)}."),
+    _param("param_save", "every block's settings to a JSON file",
+           (Arg("path", "str", "the file", required=True, nonempty=True, positional=True,
+                metavar="FILE"), _JSON),
+           "path, blocks, parameters", changes_state=True, console_format=run.save_lines,
+           missing_usage=True, script_args=_path_args,
+           script_doc="Write every block's writable values to a JSON file here; {\"path\", "
+                      "\"blocks\", \"parameters\"}."),
+    _param("param_load", "set the values of a file param save wrote",
+           (Arg("path", "str", "the file", required=True, nonempty=True, positional=True,
+                metavar="FILE"), _JSON),
+           "path, loaded: [ids], errors: [texts]", changes_state=True,
+           console_format=run.load_lines, failed=run.load_failed, missing_usage=True,
+           script_args=_path_args,
+           script_doc="Set the values of a file written by param_save, one request per "
+                      "block; {\"path\", \"loaded\": [ids], \"errors\": [texts]} (blocks "
+                      "missing or refusing are only listed)."),
+    Verb("param", "parameter blocks of the processes (docs/parameters.md)", "parameters",
+         choose="command"),
 )
-
-USAGE = """param list [BLOCK]                     blocks, or the parameters of one block
-param get BLOCK [PARAM] [--wait S]     values as the loop has them now
-param set BLOCK PARAM VALUE [PARAM VALUE ...]
-                                       override (several: all at once or none)
-param reset BLOCK [PARAM ...]          back to the program's own value
-param changes BLOCK [--since G] [--follow]
-                                       the block's last changes (--follow: ln_manager only)
-param save FILE | param load FILE      every block's values to / from a JSON file
-(--json: the answer as JSON; VALUE: JSON or 1.5, [1, 2], "text", nan)"""
-
-
-FOLLOW_PERIOD = 0.2  # s between looks of `param changes --follow`
-
-
-class ParamUsage(Exception):
-    """Words that are no param command."""
-
-
-def _options(words: list[str]) -> tuple[list[str], bool, float | None]:
-    rest: list[str] = []
-    as_json, wait = False, None
-    it = iter(words)
-    for word in it:
-        if word == "--json":
-            as_json = True
-        elif word in ("--since", "--follow"):  # param changes reads them
-            rest.append(word)
-            if word == "--since":
-                rest.append(next(it, ""))
-        elif word == "--wait":
-            text = next(it, None)
-            try:
-                wait = float(text) if text is not None else None
-            except ValueError:
-                wait = None
-            if wait is None or not 0 <= wait <= 10:
-                raise ParamUsage("--wait needs a number of seconds 0..10")
-        else:
-            rest.append(word)
-    return rest, as_json, wait
-
-
-def _json(say: Callable[[str], None], value: Any) -> None:
-    for line in json.dumps(value, indent=2, ensure_ascii=False).splitlines():
-        say(line)
-
-
-def _table(rows: list[list[str]]) -> list[str]:
-    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
-    return ["  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
-            for row in rows]
-
-
-def _list(s: Session, args: list[str], say: Callable[[str], None], as_json: bool) -> None:
-    if len(args) > 1:
-        raise ParamUsage("usage: param list [BLOCK]")
-    if args:
-        answer = s.describe(args[0])
-        if as_json:
-            _json(say, answer)
-            return
-        rows = [["parameter", "type", "value", "override", "range", "description"]]
-        for p in answer["parameters"]:
-            rows.append([p["name"], type_text(p), value_text(p, p["value"]), state_text(p),
-                         range_text(p), p["description"]])
-        for line in _table(rows):
-            say(line)
-        for text in answer.get("config_errors", []):
-            say(f"configuration refused: {text}")
-        return
-    found = []
-    for block in s.blocks():
-        answer = s.query(block, "list")
-        found.append({"block": block.id, "service": block.service, "client": block.provider,
-                      "parameters": len(answer["parameters"]),
-                      "overridden": sum(p["overridden"] for p in answer["parameters"]),
-                      "updates": answer["updates"]})
-    if as_json:
-        _json(say, found)
-        return
-    rows = [["block", "service", "parameters", "overridden", "updates"]]
-    rows += [[f["block"], f["service"], str(f["parameters"]), str(f["overridden"]),
-              str(f["updates"])] for f in found]
-    for line in _table(rows):
-        say(line)
-
-
-def _get(s: Session, args: list[str], say: Callable[[str], None], as_json: bool,
-         wait: float | None) -> None:
-    if len(args) not in (1, 2):
-        raise ParamUsage("usage: param get BLOCK [PARAM] [--wait S]")
-    answer = s.describe(args[0], args[1] if len(args) > 1 else None, wait=wait)
-    if as_json:
-        _json(say, answer)
-        return
-    params = answer["parameters"]
-    if len(args) == 2:
-        say(value_text(params[0], params[0]["value"]))
-        return
-    for p in params:
-        line = f"{p['name']}: {value_text(p, p['value'])}"
-        if p["overridden"]:
-            line += f"  (overridden by {p['source']}"
-            line += ", pending)" if p["pending"] else ")"
-        say(line)
-    if not answer["live"]:
-        say(f"(the loop has not updated within the wait: values as of its update "
-            f"{answer['values_update']})")
-
-
-def _set(s: Session, args: list[str], say: Callable[[str], None], as_json: bool) -> None:
-    if len(args) < 3 or len(args) % 2 != 1:
-        raise ParamUsage("usage: param set BLOCK PARAM VALUE [PARAM VALUE ...]")
-    values: dict[str, Any] = {}
-    for name, text in zip(args[1::2], args[2::2], strict=True):
-        if name in values:
-            raise ParamUsage(f"parameter {name!r} is given twice")
-        values[name] = parse_value(text)
-    answer = s.set(args[0], values)
-    if as_json:
-        _json(say, answer)
-        return
-    say(f"{answer['id']}: set {', '.join(answer['set'])} (generation {answer['generation']}; "
-        "in effect at the loop's next update)")
-
-
-def _reset(s: Session, args: list[str], say: Callable[[str], None], as_json: bool) -> None:
-    if not args:
-        raise ParamUsage("usage: param reset BLOCK [PARAM ...]")
-    answer = s.reset(args[0], args[1:])
-    if as_json:
-        _json(say, answer)
-        return
-    say(f"{answer['id']}: reset {', '.join(answer['reset']) or 'nothing (no override)'}")
-
-
-def _changes(s: Session, args: list[str], say: Callable[[str], None], as_json: bool,
-             can_follow: bool, stop: Callable[[], bool]) -> None:
-    usage = "usage: param changes BLOCK [--since GENERATION] [--follow]"
-    since, follow, rest = 0, False, []
-    it = iter(args)
-    for word in it:
-        if word == "--since":
-            text = next(it, "")
-            if not (text.isascii() and text.isdigit()):
-                raise ParamUsage(usage)
-            since = int(text)
-        elif word == "--follow":
-            follow = True
-        else:
-            rest.append(word)
-    if len(rest) != 1:
-        raise ParamUsage(usage)
-    if follow and not can_follow:
-        raise ParamUsage("--follow is for `ln_manager param changes`")
-    while True:
-        answer = s.changes(rest[0], since)
-        if answer["changes"] and since and answer["changes"][0]["generation"] > since + 1:
-            say(f"({answer['changes'][0]['generation'] - since - 1} older changes are "
-                "no longer remembered)")
-        for change in answer["changes"]:
-            say(json.dumps(change, ensure_ascii=False) if as_json else change_text(change))
-        since = answer["generation"]
-        if not follow or stop():
-            return
-        time.sleep(FOLLOW_PERIOD)
-
-
-def _file(s: Session, op: str, args: list[str], say: Callable[[str], None],
-          as_json: bool) -> None:
-    if len(args) != 1:
-        raise ParamUsage(f"usage: param {op} FILE")
-    path = Path(args[0]).expanduser()
-    answer = s.save(path) if op == "save" else s.load(path)
-    if as_json:
-        _json(say, answer)
-    elif op == "save":
-        say(f"saved {answer['parameters']} parameters of {answer['blocks']} blocks to "
-            f"{answer['path']}")
-    else:
-        say(f"loaded {len(answer['loaded'])} blocks from {answer['path']}"
-            + (f": {', '.join(answer['loaded'])}" if answer["loaded"] else ""))
-    if op == "load" and answer["errors"]:
-        raise ParamError("; ".join(answer["errors"]))
-
-
-def run(s: Session, words: list[str], say: Callable[[str], None], can_follow: bool = False,
-        stop: Callable[[], bool] = lambda: False) -> None:
-    """Carry out `param WORDS...` (without the leading "param"); `param changes --follow`
-    (only with can_follow) polls until stop() or Ctrl-C."""
-    args, as_json, wait = _options(words)
-    if not args:
-        raise ParamUsage(USAGE)
-    op, rest = args[0], args[1:]
-    if wait is not None and op != "get":
-        raise ParamUsage("--wait is for param get")
-    if op == "list":
-        _list(s, rest, say, as_json)
-    elif op == "get":
-        _get(s, rest, say, as_json, wait)
-    elif op == "set":
-        _set(s, rest, say, as_json)
-    elif op == "reset":
-        _reset(s, rest, say, as_json)
-    elif op == "changes":
-        _changes(s, rest, say, as_json, can_follow, stop)
-    elif op in ("save", "load"):
-        _file(s, op, rest, say, as_json)
-    else:
-        raise ParamUsage(f"unknown param command {op!r}\n{USAGE}")
-
-
-# ---- the table -------------------------------------------------------------------------------
-async def _console(console: Any, words: list[str]) -> None:
-    from .console import execute
-
-    await execute(console, words)
-
-
-def _cli(argv: list[str]) -> int:
-    from .cli import main
-
-    return main(argv)
-
-
-register(Verb("param", "parameter blocks of the processes (docs/parameters.md)", "parameters",
-              tuple(USAGE.splitlines()), _console, _cli,
-              ("list", "get", "set", "reset", "changes", "save", "load")))

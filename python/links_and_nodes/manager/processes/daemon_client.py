@@ -9,19 +9,49 @@ import contextlib
 import hmac
 import secrets
 import struct
-
 from collections.abc import Callable
 from typing import Any, TypeVar
 
 from ...wire.codec import WireError
 from ..network import daemon_pull
-from .daemon_wire import (DaemonAuthError, DaemonConnectionError, DaemonError, decode,
-                          decode_error, decode_logger_chunk, decode_logger_list,
-                          decode_stream_list, encode, encode_spawn, ErrorCode, EXIT_CODE,
-                          EXIT_SIGNAL, Exited, frame_tag, KEY_BYTES, LoggerChunk, LoggerStatus,
-                          MAGIC, MAX_FRAME, Msg, NetInfo, NONCE_BYTES, OutputLine, process_info,
-                          ProcessInfo, proofs, PROTOCOL_VERSION, SpawnSpec, StateChanged,
-                          STATES, STREAMS, StreamStat, StreamTotals, TAG_BYTES, transport_code)
+from .daemon_wire import (
+    EXIT_CODE,
+    EXIT_SIGNAL,
+    KEY_BYTES,
+    MAGIC,
+    MAX_FRAME,
+    NONCE_BYTES,
+    PROTOCOL_VERSION,
+    STATES,
+    STREAMS,
+    TAG_BYTES,
+    DaemonAuthError,
+    DaemonConnectionError,
+    DaemonError,
+    ErrorCode,
+    Exited,
+    LoggerChunk,
+    LoggerStatus,
+    Msg,
+    NetInfo,
+    OutputLine,
+    ProcessInfo,
+    SpawnSpec,
+    StateChanged,
+    StreamStat,
+    StreamTotals,
+    decode,
+    decode_error,
+    decode_logger_chunk,
+    decode_logger_list,
+    decode_stream_list,
+    encode,
+    encode_spawn,
+    frame_tag,
+    process_info,
+    proofs,
+    transport_code,
+)
 
 _T = TypeVar("_T")
 

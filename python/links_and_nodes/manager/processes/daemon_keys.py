@@ -12,6 +12,7 @@ from pathlib import Path
 from ... import default_ports
 from .daemon_wire import KEY_BYTES, DaemonError
 
+
 class KeyFileError(DaemonError):
     """A key file that is missing, not private or not a key."""
 

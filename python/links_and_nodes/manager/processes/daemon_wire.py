@@ -17,7 +17,7 @@ from typing import Any
 from ... import transports
 from ...wire.codec import DAEMON as _WIRE
 from ...wire.codec import WireError
-from ..config.command import CommandSplitError, split_command
+from ..config.argv import CommandSplitError, split_command
 
 # The constants and numbers of the protocol come from wire/daemon.schema.
 PROTOCOL_VERSION = int(_WIRE.consts["VERSION"])
@@ -70,7 +70,7 @@ _PY_TYPES = {"int": int, "f64": float, "bool": bool, "str": str, "bytes": bytes}
 
 # What to start.  `command` is a shell command line for /bin/sh -c when `shell` is true, else
 # its words are the argv (argv[0] is looked up in env's PATH): `argv` as the configuration
-# split it, or, where not given, split by config.command's rule.  `env` is the complete
+# split it, or, where not given, split by config.argv's rule.  `env` is the complete
 # environment.  rlimits: (name, soft, hard), name like "nofile" or "RLIMIT_NOFILE", None for
 # unlimited.  output_log: (path, size limit in bytes, 0 for none; rotated files kept).  Every
 # other field is the SPAWN field of wire/daemon.schema of that name, with its default there

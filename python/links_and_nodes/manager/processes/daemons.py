@@ -9,13 +9,13 @@ import logging
 import socket
 from pathlib import Path
 
+from ..config import model
+from ..network import routes
 from . import daemon_client as dc
 from . import daemon_keys as dk
 from . import daemon_launch as dl
 from . import daemon_wire as dw
-from ..network import routes
-from ..config import model
-from .scheduler import Backend
+from .backend import Backend
 
 log = logging.getLogger("ln_manager")
 

@@ -8,15 +8,15 @@ ring operation awaits its daemon."""
 
 from __future__ import annotations
 
-import logging
 import asyncio
-from dataclasses import dataclass
+import logging
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
 from ... import _libln
-from . import protocol as p
+from ...tools import protocol as p
 from .model import Client, Port, PortKind, PortPlan, PortRequest, Registry, RequestError, Topic
 from .rings import LocalRings, Rings
 from .runtime import purge_service_sockets, remove_service_socket

@@ -12,7 +12,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any, Protocol
 
 from ...addresses import format_address
-from . import protocol as p
+from ...tools import protocol as p
 from .core import Core, HandshakeRefused, Session
 
 log = logging.getLogger("ln_manager")

@@ -21,9 +21,9 @@ import weakref
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from ....tools.commands.spec import Arg, ArgError, Command
+from ....tools.commands.table import register
 from ...registry.model import topic_name_problem
-from .spec import Arg, ArgError, Command
-from .table import register
 
 if TYPE_CHECKING:
     from ...registry.services import Service
@@ -53,7 +53,7 @@ def _connections(control: Control) -> weakref.WeakKeyDictionary[Service, Connect
 
 
 def _error(text: str, code: str = "") -> Exception:
-    from ..control import ControlError
+    from ....tools.commands import ControlError
 
     return ControlError(text, code)
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import textwrap
 
+from ....tools.commands.spec import SAME, Command
+from ....tools.commands.table import commands, console_entry, verb
 from . import phrases
-from .spec import SAME, Command, Verb
-from .table import commands, console_entry, verbs
 
 WIDTH = 25  # column of the help texts
 LINE = 92  # their right margin
@@ -26,16 +26,13 @@ def help_text() -> str:
     for cmd in commands():
         if cmd.console_word:
             lines += _entry(cmd.usage("console"), cmd.help)
-    for verb in verbs():
-        if verb.console is not None:
-            lines += ["  " + line for line in verb.usage]
     lines += _entry("help [COMMAND]", "this text, or one command with its arguments")
     return "\n".join(lines)
 
 
 def _arg_line(cmd: Command, name: str) -> str:
     arg = cmd.arg(name)
-    spell = arg.word if arg.positional else arg.option
+    spell = arg.word if arg.positional else ", ".join(filter(None, (arg.option, arg.short)))
     default = arg.default if arg.text_default is SAME else arg.text_default
     notes = [arg.type]
     if arg.choices:
@@ -53,17 +50,16 @@ def help_command(word: str) -> str:
         named = [c for c in phrases.family(words[0])
                  if len(words) > 1 and (c.phrase == word or phrases.said(c) == words)]
         if len(named) != 1:
-            return phrases.usage(words[0])
-        entry: Command | Verb | None = named[0]
+            about = verb(words[0])
+            return phrases.usage(words[0]) + (f"\n\n{about.help}" if about else "")
+        entry: Command | None = named[0]
     else:
         word = words[0]
         entry = console_entry(word)
     if entry is None:
         return f"unknown command {word!r} (try help)"
-    if isinstance(entry, Verb):
-        return "\n".join([f"{entry.name}: {entry.help}", *entry.usage])
     lines = [f"usage: {entry.usage('console')}", f"  {entry.help}"]
-    lines += [_arg_line(entry, a.name) for a in entry.args if a.where in ("", "console")]
+    lines += [_arg_line(entry, a.name) for a in entry.args if a.at("console")]
     return "\n".join(lines)
 
 
@@ -75,23 +71,16 @@ def complete(line: str) -> list[str]:
     *before, last = words
     if not before:
         names = [c.console_word for c in commands() if c.console_word]
-        names += [a for c in commands() if c.console_word for a in c.aliases]
-        names += [v.name for v in verbs() if v.console is not None] + ["help"]
+        names += [a for c in commands() if c.console_word for a in c.aliases] + ["help"]
         names = [n.split()[0] for n in names]
         return sorted(n for n in set(names) if n.startswith(last))
     if before[0] == "help" and len(before) == 1:
         return complete(last)
     if before[0] in phrases.families():
-        said = [w for c in phrases.family(before[0]) for w in phrases.said(c)[1:]]
-        options = [a.option for c in phrases.family(before[0]) for a in c.args
-                   if not a.positional and a.where in ("", "console")]
-        return sorted(w for w in set(said + options) if w.startswith(last))
+        return sorted(w for w in set(phrases.following(before)) if w.startswith(last))
     entry = console_entry(before[0])
-    if isinstance(entry, Verb):
-        return sorted(w for w in entry.words if w.startswith(last))
     if isinstance(entry, Command):
-        options = [a.option for a in entry.args
-                   if not a.positional and a.where in ("", "console")]
+        options = [a.option for a in entry.args if not a.positional and a.at("console")]
         choices = [str(c) for a in entry.args if a.positional for c in a.choices]
         return sorted(w for w in options + choices if w.startswith(last))
     return []

@@ -5,8 +5,8 @@ rest is parsed by check.parse_words like any command's words."""
 
 from __future__ import annotations
 
-from .spec import ArgError, Command
-from .table import commands
+from ....tools.commands.spec import ArgError, Command
+from ....tools.commands.table import commands, verb
 
 
 def family(word: str, where: str = "console") -> list[Command]:
@@ -36,10 +36,11 @@ def _fits(cmd: Command, words: list[str], where: str) -> list[str] | None:
     """The words of the line for parse_words when `words` (the family's word first) say
     this command's phrase, else None.  Its options may come anywhere, also inside the
     phrase (`logger --on-manager NAME save FILE`)."""
-    from .check import is_number
+    from ....tools.commands.arguments import is_number
 
     tokens = cmd.phrase.split()[1:]
-    options = {a.option: a for a in cmd.args if not a.positional and a.where in ("", where)}
+    options = {spelling: a for a in cmd.args if not a.positional and a.at(where)
+               for spelling in (a.option, a.short) if spelling}
     placed: list[str] = []
     moved: list[str] = []
     it = iter(words[1:])
@@ -60,16 +61,51 @@ def _fits(cmd: Command, words: list[str], where: str) -> list[str] | None:
     return placed + list(it) + moved
 
 
+def _choose(word: str, words: list[str], where: str) -> None:
+    """The family's own text for a line that names none of its commands (Verb.choose)."""
+    about = verb(word)
+    if about is None or not about.choose:
+        return
+    known = sorted({said(c)[1] for c in family(word, where) if len(said(c)) > 1})
+    rest = [w for w in words[1:] if not w.startswith("-")]
+    got = f"unknown {word} {about.choose} {rest[0]!r}" if rest else \
+        f"{word} needs a {about.choose}"
+    raise ArgError(f"{got} (one of: {', '.join(known)})")
+
+
 def match(words: list[str], where: str = "console") -> tuple[Command, list[str]]:
     """The command a line of a family says (words: the family's word first) and its words
-    for check.parse_words; ArgError with the family's usage when it says none."""
+    for check.parse_words; ArgError with the family's usage (or its Verb.choose text) when
+    it says none."""
     best: tuple[Command, list[str]] | None = None
     for cmd in family(words[0], where):
         rest = _fits(cmd, words, where)
         if rest is not None and (best is None or len(cmd.phrase.split())
                                  > len(best[0].phrase.split())):
             best = (cmd, rest)
+    if best is None:
+        _choose(words[0], words, where)
     if best is None or (best[1] and not any(a.positional for a in best[0].args)):
         code = best[0].code if best else ""
         raise ArgError(usage(words[0], where), code)
     return best
+
+
+def following(before: list[str], where: str = "console") -> list[str]:
+    """What may come after the words `before` (the family's word first) of a line being
+    typed: the next word of the phrases they begin, or the options of the command they
+    say."""
+    found: list[str] = []
+    for cmd in family(before[0], where):
+        tokens = cmd.phrase.split()[1:]
+        words = [w for w in before[1:] if not w.startswith("-")]
+        fits = all(t.isupper() or t == w for t, w in zip(tokens, words, strict=False))
+        if not fits:
+            continue
+        if len(words) < len(tokens):
+            if not tokens[len(words)].isupper():
+                found.append(tokens[len(words)])
+        else:
+            found += [a.option for a in cmd.args if not a.positional and a.at(where)]
+            found += [str(c) for a in cmd.args if a.positional for c in a.choices]
+    return found

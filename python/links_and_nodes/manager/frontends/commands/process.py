@@ -6,9 +6,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from ....tools.commands.spec import Arg, Command
+from ....tools.commands.table import register
 from . import views
-from .spec import Arg, Command
-from .table import register
 
 MAX_OUTPUT_LINES = 10000
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from .spec import Command
-from .table import register
+from ....tools.commands.spec import Command
+from ....tools.commands.table import register
 
 TOPIC_COUNTERS = ("latest_seq", "interests", "syncs", "data", "nacks", "parked", "expired",
                   "duplicates", "overflow")

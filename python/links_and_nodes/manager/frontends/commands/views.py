@@ -7,6 +7,8 @@ import json
 import time
 from typing import Any
 
+from ....tools.commands.columns import table
+
 
 def bytes_text(n: float) -> str:
     for unit in ("B", "KB", "MB"):
@@ -14,15 +16,6 @@ def bytes_text(n: float) -> str:
             return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
         n /= 1000
     return f"{n:.1f} GB"
-
-
-def table(rows: list[list[str]]) -> list[str]:
-    """Rows as columns of text, as wide as their widest cell."""
-    if not rows:
-        return []
-    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
-    return ["  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
-            for row in rows]
 
 
 def format_status(result: dict[str, Any], args: dict[str, Any] | None = None) -> list[str]:

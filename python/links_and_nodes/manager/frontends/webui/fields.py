@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 from ln_generate.model import Struct
 
-from ...introspection.values import _CODES
+from ....tools.introspection.values import _CODES
 
 MAX_FIELDS = 4096  # paths listed per md (arrays beyond are cut)
 

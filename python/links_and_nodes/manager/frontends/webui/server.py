@@ -225,7 +225,7 @@ class WebUI:
         return await self._run(command, None)
 
     async def _run(self, command: dict[str, Any], subs: Subscriptions | None) -> dict[str, Any]:
-        from ..control import ControlError
+        from ....tools.commands import ControlError
 
         command = {k: v for k, v in command.items() if k not in ("csrf", "id")}
         try:
@@ -333,7 +333,7 @@ def _encode(value: Any) -> bytes:
     try:
         return json.dumps(value, separators=(",", ":"), allow_nan=False, default=str).encode()
     except ValueError:
-        from ...introspection.values import jsonable
+        from ....tools.introspection.values import jsonable
 
         return json.dumps(jsonable(value), separators=(",", ":"), default=str).encode()
 

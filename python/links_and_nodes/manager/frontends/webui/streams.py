@@ -2,7 +2,7 @@
 subscribe_output, subscribe_log, subscribe_topic and unsubscribe.  Each subscription of a
 connection answers with what there is now and then sends {"event": KIND, "sub": ID, ...}
 until it is ended or the connection closes.  A topic is read by a worker thread with its
-own latest-mode subscriber (introspect_client.TopicReader); the chosen numeric fields of
+own latest-mode subscriber (tools/introspection/client.py TopicReader); the chosen numeric fields of
 its samples go out in batches every FLUSH seconds, whole decoded samples at most
 VALUES_RATE times a second."""
 
@@ -58,7 +58,7 @@ class LogBuffer(logging.Handler):
 
 
 def _error(text: str) -> Exception:
-    from ..control import ControlError
+    from ....tools.commands import ControlError
 
     return ControlError(text)
 
@@ -155,7 +155,12 @@ class Subscriptions:
         """{"name", "fields": [paths]}: batches {"event": "samples", "t": [publish s],
         "seq": [..], "v": [[field 0 values], ...]}; without "fields": {"event": "sample",
         "seq", "publish_time", "data"} (decoded) at most VALUES_RATE per second."""
-        from ...introspection.commands import CommandError, Context, topic_info, topic_layout
+        from ....tools.introspection.commands import (
+            CommandError,
+            Context,
+            topic_info,
+            topic_layout,
+        )
 
         name = command.get("name")
         if not isinstance(name, str) or not name:
@@ -169,7 +174,7 @@ class Subscriptions:
         if not address:
             raise _error("this manager has no address for its own clients")
         loop = asyncio.get_running_loop()
-        from ..control import loop_control
+        from ....tools.commands.from_thread import loop_control
 
         stop = threading.Event()
         ctx = Context(loop_control(self.control, loop, CommandError), address,
@@ -199,8 +204,8 @@ class Subscriptions:
 
     def _feed(self, ctx: Any, info: dict[str, Any], md: Any, extract: Extractor | None,
               sub: int, loop: asyncio.AbstractEventLoop) -> None:
-        from ...introspection import values as fmt
-        from ...introspection.commands import CommandError, follow, open_reader
+        from ....tools.introspection import values as fmt
+        from ....tools.introspection.commands import CommandError, follow, open_reader
 
         def deliver(event: dict[str, Any]) -> None:
             if not ctx.stop.is_set():
@@ -244,7 +249,7 @@ class Subscriptions:
 def register_streams() -> None:
     """Put the subscriptions into the command table: commands of a live connection (the
     session Control.handle gets is the connection's Subscriptions)."""
-    from ..commands import Arg, Command, command, register
+    from ....tools.commands import Arg, Command, command, register
 
     def entry(name: str, help: str, args: tuple[Any, ...], result: str) -> Command:
         async def handler(control: Any, values: dict[str, Any],

@@ -1,4 +1,5 @@
-// Parameter blocks: list, get (the loop's current values) and set (an override).
+// Parameter blocks: param_blocks, param_get (the loop's current values) and param_set (an
+// override), the command table's entries.
 import {el, fill} from './api.js';
 
 export class Params {
@@ -17,7 +18,7 @@ export class Params {
 
   async refresh() {
     try {
-      const r = await this.api.call('param_list');
+      const r = await this.api.call('param_blocks');
       const chosen = this.select.value;
       this.select.replaceChildren(...r.blocks.map((b) => el('option', {value: b.id}, b.id)));
       if (chosen) this.select.value = chosen;
