@@ -95,6 +95,33 @@ static void store_int(void* dst, const ln_param_type* t, int64_t s, uint64_t u)
     }
 }
 
+/* A signed integer element (1, 2, 4 or 8 bytes, little-endian), sign-extended. */
+static int64_t element_int(const ln_param_type* t, const void* src)
+{
+    switch (t->size) {
+    case 1: {
+        int8_t x;
+        memcpy(&x, src, 1);
+        return x;
+    }
+    case 2: {
+        int16_t x;
+        memcpy(&x, src, 2);
+        return x;
+    }
+    case 4: {
+        int32_t x;
+        memcpy(&x, src, 4);
+        return x;
+    }
+    default: {
+        int64_t x;
+        memcpy(&x, src, 8);
+        return x;
+    }
+    }
+}
+
 /* One element as a double, for the range check and for the JSON of the refusal. */
 static double element_double(const ln_param_type* t, const void* src)
 {
@@ -113,31 +140,7 @@ static double element_double(const ln_param_type* t, const void* src)
         memcpy(&v, src, t->size); /* little-endian: the low bytes */
         return (double)v;
     }
-    int64_t v = 0;
-    switch (t->size) {
-    case 1: {
-        int8_t x;
-        memcpy(&x, src, 1);
-        v = x;
-        break;
-    }
-    case 2: {
-        int16_t x;
-        memcpy(&x, src, 2);
-        v = x;
-        break;
-    }
-    case 4: {
-        int32_t x;
-        memcpy(&x, src, 4);
-        v = x;
-        break;
-    }
-    default:
-        memcpy(&v, src, 8);
-        break;
-    }
-    return (double)v;
+    return (double)element_int(t, src);
 }
 
 /* A number for element `where` (e.g. "kp[3]" or "kp") of type t into dst. */
@@ -401,31 +404,7 @@ static void write_element(ln_pbuf* b, const ln_param_type* t, const void* src)
         memcpy(&v, src, t->size);
         ln_pbuf_add(b, "%" PRIu64, v);
     } else {
-        int64_t v = 0;
-        switch (t->size) {
-        case 1: {
-            int8_t x;
-            memcpy(&x, src, 1);
-            v = x;
-            break;
-        }
-        case 2: {
-            int16_t x;
-            memcpy(&x, src, 2);
-            v = x;
-            break;
-        }
-        case 4: {
-            int32_t x;
-            memcpy(&x, src, 4);
-            v = x;
-            break;
-        }
-        default:
-            memcpy(&v, src, 8);
-            break;
-        }
-        ln_pbuf_add(b, "%" PRId64, v);
+        ln_pbuf_add(b, "%" PRId64, element_int(t, src));
     }
 }
 

@@ -26,6 +26,12 @@ HZ = re.compile(r"^rate: ([0-9.]+) Hz  mean: .+  min: .+  max: .+  std dev: .+  
                 r"window: (\d+) samples, (\d+) periods, (\d+) missed$")
 
 
+def _sigint_default() -> None:
+    """In the child: Ctrl-C as in a terminal, also under a runner that ignores SIGINT (a
+    background job), whose children would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def probe_hash() -> int:
     return load_md("lntest/probe", [str(MDS)]).layout_hash
 
@@ -392,7 +398,7 @@ def test_ctrl_c_ends_a_following_echo_and_its_subscriber(lab: Lab) -> None:
     lab.publisher()
     echo = subprocess.Popen([sys.executable, "-m", "links_and_nodes.manager", "topic", "echo",
                              "probe.state", "--field", "count"], stdout=subprocess.PIPE,
-                            text=True, env=lab.client_env())
+                            text=True, env=lab.client_env(), preexec_fn=_sigint_default)
     lab.procs.append(echo)
     assert echo.stdout is not None
     assert echo.stdout.readline().strip().isdigit()

@@ -21,6 +21,12 @@ from .mcap_js import js_read
 from .recording import expected, publish, read_all, stop, summary
 
 
+def _sigint_default() -> None:
+    """In the child: Ctrl-C as in a terminal, also under a runner that ignores SIGINT (a
+    background job), whose children would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def record_two_topics(lab: Lab, n: int) -> list[tuple[str, int]]:
     """rec.a (rectest/sample) n samples and rec.b (rectest/tool) every third, interleaved;
     the order they were published in as (topic, counter)."""
@@ -158,7 +164,7 @@ def test_loop_plays_again_until_interrupted(lab: Lab) -> None:
             [sys.executable, "-m", "links_and_nodes.record.play_cli", "--md-dir",
              str(Path(__file__).parent / "md"), "--loop", "--rate", "20",
              "--wait-for-subscribers", "--remap", "rec.a=play.a", str(lab.files()[0])],
-            env=lab.env(), stderr=subprocess.PIPE, text=True)
+            env=lab.env(), stderr=subprocess.PIPE, text=True, preexec_fn=_sigint_default)
         got = [m["counter"] for _, m in read_all(sub, 50)]
         assert stop(play) == 0  # type: ignore[arg-type]
         assert got == [i % 20 for i in range(50)]
