@@ -7,22 +7,16 @@ from __future__ import annotations
 
 import json
 import os
-import queue
 import re
-import signal
 import subprocess
-import sys
-import threading
-import time
 import uuid
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-from polling import free_daemon_port, free_port, pids_with
-
-from links_and_nodes.manager.frontends.launch import segments
+from console_manager import Console, console_manager
+from polling import free_daemon_port, free_port
 
 from .conftest import LIMIT, MDS, PERIOD, spawn, stop
 from .probe_publisher import probe_values
@@ -32,33 +26,25 @@ HEADER = re.compile(r"^--- seq (\d+), published \d+\.\d{9}$")
 
 @dataclass
 class ConsoleManager:
-    proc: subprocess.Popen[str]
-    address: str
+    """The console, with the clients' environment and the test processes it started."""
+
+    console: Console
     env: dict[str, str]
-    lines: queue.Queue[str | None] = field(default_factory=queue.Queue)
-    seen: list[str] = field(default_factory=list)
     procs: list[subprocess.Popen[str]] = field(default_factory=list)
 
+    @property
+    def address(self) -> str:
+        return self.console.address
+
+    @property
+    def seen(self) -> list[str]:
+        return self.console.seen
+
     def send(self, line: str) -> None:
-        assert self.proc.stdin is not None
-        self.proc.stdin.write(line + "\n")
-        self.proc.stdin.flush()
+        self.console.send(line)
 
     def expect(self, accept: Callable[[str], bool], what: str) -> list[str]:
-        """Read output lines up to and including the first `accept` takes; those lines."""
-        got: list[str] = []
-        deadline = time.monotonic() + LIMIT
-        while True:
-            try:
-                line = self.lines.get(timeout=max(deadline - time.monotonic(), 0.01))
-            except queue.Empty:
-                pytest.fail(f"gave up waiting for {what}; got {got}")
-            if line is None:
-                pytest.fail(f"the manager ended before {what}; got {got}")
-            got.append(line)
-            self.seen.append(line)
-            if accept(line):
-                return got
+        return self.console.expect(accept, what)
 
     def publisher(self) -> None:
         env = {k: v for k, v in self.env.items() if k != "LN_MESSAGE_DEFINITION_DIRS"}
@@ -81,37 +67,12 @@ def console(tmp_path: Path) -> Iterator[ConsoleManager]:
     env.update(LN_RUNTIME_DIR=str(tmp_path / "run"),
                LN_DAEMON_KEY_FILE=str(tmp_path / "daemon.key"),
                LN_ARBITER_PORT=str(daemon_port), PYTHONUNBUFFERED="1")
-    with open(tmp_path / "manager.log", "w") as log:
-        proc = subprocess.Popen([sys.executable, "-m", "links_and_nodes.manager", "-c",
-                                 str(config)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                stderr=log, text=True, env=env)
-    assert proc.stdout is not None
-    first = proc.stdout.readline()
-    assert "listening on" in first, (tmp_path / "manager.log").read_text()
-    mgr = ConsoleManager(proc, f"127.0.0.1:{port}", {**env, "LN_MANAGER": f"127.0.0.1:{port}"})
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            mgr.lines.put(line.rstrip("\n"))
-        mgr.lines.put(None)
-
-    threading.Thread(target=pump, daemon=True).start()
-    try:
-        yield mgr
-    finally:
-        stop(mgr.procs)
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGTERM)
+    with console_manager(config, instance, port, daemon_port, env, LIMIT) as con:
+        mgr = ConsoleManager(con, {**env, "LN_MANAGER": con.address})
         try:
-            code = proc.wait(LIMIT)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            code = proc.wait()
-        for pid in pids_with(f"--port\0{daemon_port}\0"):  # a daemon it may have started
-            os.kill(pid, signal.SIGKILL)
-    assert code == 0, (tmp_path / "manager.log").read_text()
-    assert segments(instance) == []
+            yield mgr
+        finally:
+            stop(mgr.procs)
 
 
 def test_echo_with_n_prints_decoded_samples(console: ConsoleManager) -> None:
@@ -190,4 +151,4 @@ def test_quit_while_following(console: ConsoleManager) -> None:
     console.send("topic hz probe.state")
     console.expect(lambda line: line.startswith("rate: "), "a rate line")
     console.send("quit")
-    assert console.proc.wait(LIMIT) == 0
+    assert console.console.proc.wait(LIMIT) == 0

@@ -7,52 +7,18 @@ from __future__ import annotations
 
 import json
 import os
-import queue
-import signal
-import subprocess
-import sys
-import threading
 import time
 import uuid
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from polling import free_daemon_port, free_port, pids_with
+from console_manager import Console, console_manager
+from polling import free_daemon_port, free_port
 
-from links_and_nodes.manager.frontends.launch import segments
 from links_and_nodes.tools.scripting import connect
 
 from .conftest import LIMIT, PARAM_TOOL
-
-
-@dataclass
-class Console:
-    proc: subprocess.Popen[str]
-    address: str
-    lines: queue.Queue[str | None] = field(default_factory=queue.Queue)
-
-    def send(self, line: str) -> None:
-        assert self.proc.stdin is not None
-        self.proc.stdin.write(line + "\n")
-        self.proc.stdin.flush()
-
-    def expect(self, accept: Callable[[str], bool], what: str) -> list[str]:
-        """Output lines up to and including the first `accept` takes."""
-        got: list[str] = []
-        deadline = time.monotonic() + LIMIT
-        while True:
-            try:
-                line = self.lines.get(timeout=max(deadline - time.monotonic(), 0.01))
-            except queue.Empty:
-                pytest.fail(f"gave up waiting for {what}; got {got}")
-            if line is None:
-                pytest.fail(f"the manager ended before {what}; got {got}")
-            got.append(line)
-            if accept(line):
-                return got
-
 
 CONFIG = """instance
 name: {instance}
@@ -83,36 +49,9 @@ def console(tmp_path: Path) -> Iterator[Console]:
            "LN_DAEMON_KEY_FILE": str(tmp_path / "daemon.key"),
            "LN_ARBITER_PORT": str(daemon_port), "PYTHONUNBUFFERED": "1"}
     env.pop("LN_MANAGER", None)
-    with open(tmp_path / "manager.log", "w") as log:
-        proc = subprocess.Popen([sys.executable, "-m", "links_and_nodes.manager", "-c",
-                                 str(config)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                stderr=log, text=True, env=env, cwd=tmp_path)
-    assert proc.stdout is not None
-    first = proc.stdout.readline()
-    assert "listening on" in first, (tmp_path / "manager.log").read_text()
-    con = Console(proc, f"127.0.0.1:{port}")
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            con.lines.put(line.rstrip("\n"))
-        con.lines.put(None)
-
-    threading.Thread(target=pump, daemon=True).start()
-    try:
+    with console_manager(config, instance, port, daemon_port, env, LIMIT,
+                         cwd=tmp_path) as con:
         yield con
-    finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGTERM)
-        try:
-            code = proc.wait(LIMIT)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            code = proc.wait()
-        for pid in pids_with(f"--port\0{daemon_port}\0"):  # the daemon it started
-            os.kill(pid, signal.SIGKILL)
-    assert code == 0, (tmp_path / "manager.log").read_text()
-    assert segments(instance) == []
 
 
 def test_lnc_overrides_and_console_commands(console: Console, tmp_path: Path) -> None:
