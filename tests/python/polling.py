@@ -1,12 +1,13 @@
 """Helpers the end-to-end tests share: waiting for a condition with an upper bound (which is
 never a measurement, only how long a test may hang before it fails), a free TCP port, a
-free port for an ln_daemon (with its data port beside it), and the live processes whose
-command line holds a marker."""
+free port for an ln_daemon (with its data port beside it), the live processes whose
+command line holds a marker, and Ctrl-C as in a terminal for a child process."""
 
 from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import socket
 import time
 from collections.abc import Callable
@@ -70,3 +71,9 @@ def pids_with(marker: str | bytes) -> list[int]:
         if needle in raw and stat.rsplit(")", 1)[1].split()[0] != "Z":
             found.append(int(entry))
     return found
+
+
+def sigint_default() -> None:
+    """A child's preexec_fn: Ctrl-C as in a terminal, also under a runner that ignores SIGINT
+    (a background job), whose children would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

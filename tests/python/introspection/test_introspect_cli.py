@@ -12,7 +12,7 @@ import sys
 from typing import Any
 
 import pytest
-from polling import wait_for
+from polling import sigint_default, wait_for
 
 import links_and_nodes as ln
 from links_and_nodes.tools.introspection.client import load_md
@@ -24,12 +24,6 @@ from .probe_publisher import probe_values
 HEADER = re.compile(r"^--- seq (\d+), published (\d+)\.(\d{9})$")
 HZ = re.compile(r"^rate: ([0-9.]+) Hz  mean: .+  min: .+  max: .+  std dev: .+  "
                 r"window: (\d+) samples, (\d+) periods, (\d+) missed$")
-
-
-def _sigint_default() -> None:
-    """In the child: Ctrl-C as in a terminal, also under a runner that ignores SIGINT (a
-    background job), whose children would inherit that."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def probe_hash() -> int:
@@ -398,7 +392,7 @@ def test_ctrl_c_ends_a_following_echo_and_its_subscriber(lab: Lab) -> None:
     lab.publisher()
     echo = subprocess.Popen([sys.executable, "-m", "links_and_nodes.manager", "topic", "echo",
                              "probe.state", "--field", "count"], stdout=subprocess.PIPE,
-                            text=True, env=lab.client_env(), preexec_fn=_sigint_default)
+                            text=True, env=lab.client_env(), preexec_fn=sigint_default)
     lab.procs.append(echo)
     assert echo.stdout is not None
     assert echo.stdout.readline().strip().isdigit()

@@ -12,6 +12,8 @@ import time
 import uuid
 from pathlib import Path
 
+from polling import sigint_default
+
 import links_and_nodes as ln
 from links_and_nodes.manager.frontends import launch
 from links_and_nodes.mcap_format import McapReader
@@ -19,12 +21,6 @@ from links_and_nodes.mcap_format import McapReader
 from .conftest import Lab, pypi_messages, wait_subscribed
 from .mcap_js import js_read
 from .recording import expected, publish, read_all, stop, summary
-
-
-def _sigint_default() -> None:
-    """In the child: Ctrl-C as in a terminal, also under a runner that ignores SIGINT (a
-    background job), whose children would inherit that."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def record_two_topics(lab: Lab, n: int) -> list[tuple[str, int]]:
@@ -164,7 +160,7 @@ def test_loop_plays_again_until_interrupted(lab: Lab) -> None:
             [sys.executable, "-m", "links_and_nodes.record.play_cli", "--md-dir",
              str(Path(__file__).parent / "md"), "--loop", "--rate", "20",
              "--wait-for-subscribers", "--remap", "rec.a=play.a", str(lab.files()[0])],
-            env=lab.env(), stderr=subprocess.PIPE, text=True, preexec_fn=_sigint_default)
+            env=lab.env(), stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default)
         got = [m["counter"] for _, m in read_all(sub, 50)]
         assert stop(play) == 0  # type: ignore[arg-type]
         assert got == [i % 20 for i in range(50)]

@@ -14,19 +14,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from polling import wait_for
+from polling import sigint_default, wait_for
 
 import links_and_nodes as ln
 
 from .conftest import REPO, Manager, wait_ready
 
 LIMIT = 60.0  # seconds: an upper bound against hangs, never a pass criterion
-
-
-def _sigint_default() -> None:
-    """In the child: Ctrl-C as in a terminal, also under a runner that ignores SIGINT (a
-    background job), whose children would inherit that."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def _sleeping(tid: int) -> bool:
@@ -149,7 +143,7 @@ def test_ctrl_c_ends_a_blocking_read(manager: Manager, timeout: str) -> None:
     env = {**manager.env, "PYTHONPATH": os.pathsep.join([str(REPO / "python"), str(REPO)])}
     child = subprocess.Popen([sys.executable, "-c", _CHILD, manager.address, timeout],
                              stdout=subprocess.PIPE, text=True, env=env,
-                             preexec_fn=_sigint_default)
+                             preexec_fn=sigint_default)
     manager.tools.append(child)
     wait_ready(child, LIMIT)
     # the main thread is asleep in the kernel only inside the read

@@ -35,11 +35,11 @@ class _FakeCore:
 
 def test_the_built_core_agrees() -> None:
     require_native_core()
-    lib = native.library()
-    native.check_seam(lib)
-    assert native._names(lib, "lnz_counter_names") == list(native.COUNTER_FIELDS)
-    names = native._names(lib, "lnz_libln_functions")
-    table = native.ln_fns(lib, _libln.lib)
+    core = native.library()
+    native.check_seam(core)
+    assert native._names(core, "lnz_counter_names") == list(native.COUNTER_FIELDS)
+    names = native._names(core, "lnz_libln_functions")
+    table = native.ln_fns(core, _libln.lib)
     assert [name for name, _ in table._fields_] == names
     assert "read_borrow" in names and "write" in names
     for name in names:

@@ -6,7 +6,7 @@ text for the console and `ln_manager param` (--json: the answer as JSON) is here
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +22,9 @@ from .blocks import (
     value_text,
 )
 from .values import parse_value
+
+# a console format of a command: its answer and arguments -> output lines
+LineFormat = Callable[[dict[str, Any], dict[str, Any]], list[str]]
 
 FOLLOW_PERIOD = 0.2  # s between looks of `param changes --follow`
 
@@ -127,6 +130,15 @@ def _json(value: Any) -> list[str]:
     return json.dumps(value, indent=2, ensure_ascii=False).splitlines()
 
 
+def _json_if_asked(text: Callable[[dict[str, Any]], list[str]]) -> LineFormat:
+    """A console format: the answer as JSON with --json, else `text` of it."""
+
+    def lines(answer: dict[str, Any], args: dict[str, Any]) -> list[str]:
+        return _json(answer) if args.get("json") else text(answer)
+
+    return lines
+
+
 def list_lines(answer: dict[str, Any], args: dict[str, Any]) -> list[str]:
     if "parameters" not in answer:  # every block
         if args.get("json"):
@@ -164,16 +176,14 @@ def get_lines(answer: dict[str, Any], args: dict[str, Any]) -> list[str]:
     return lines
 
 
-def set_lines(answer: dict[str, Any], args: dict[str, Any]) -> list[str]:
-    if args.get("json"):
-        return _json(answer)
+@_json_if_asked
+def set_lines(answer: dict[str, Any]) -> list[str]:
     return [f"{answer['id']}: set {', '.join(answer['set'])} (generation "
             f"{answer['generation']}; in effect at the loop's next update)"]
 
 
-def reset_lines(answer: dict[str, Any], args: dict[str, Any]) -> list[str]:
-    if args.get("json"):
-        return _json(answer)
+@_json_if_asked
+def reset_lines(answer: dict[str, Any]) -> list[str]:
     return [f"{answer['id']}: reset {', '.join(answer['reset']) or 'nothing (no override)'}"]
 
 
@@ -183,16 +193,14 @@ def change_lines(row: dict[str, Any], args: dict[str, Any]) -> list[str]:
     return [json.dumps(row, ensure_ascii=False) if args.get("json") else change_text(row)]
 
 
-def save_lines(answer: dict[str, Any], args: dict[str, Any]) -> list[str]:
-    if args.get("json"):
-        return _json(answer)
+@_json_if_asked
+def save_lines(answer: dict[str, Any]) -> list[str]:
     return [f"saved {answer['parameters']} parameters of {answer['blocks']} blocks to "
             f"{answer['path']}"]
 
 
-def load_lines(answer: dict[str, Any], args: dict[str, Any]) -> list[str]:
-    if args.get("json"):
-        return _json(answer)
+@_json_if_asked
+def load_lines(answer: dict[str, Any]) -> list[str]:
     return [f"loaded {len(answer['loaded'])} blocks from {answer['path']}"
             + (f": {', '.join(answer['loaded'])}" if answer["loaded"] else "")]
 
