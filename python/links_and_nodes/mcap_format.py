@@ -25,7 +25,7 @@ import struct
 import tempfile
 import zlib
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -50,6 +50,13 @@ _MSG_BODY = struct.Struct("<HIQQ")
 _IDX = struct.Struct("<QQ")  # message index entry: log_time, offset in the chunk
 _CHUNK_HEAD = struct.Struct("<QQQI")  # start, end, uncompressed size, uncompressed crc
 _U16, _U32, _U64 = struct.Struct("<H"), struct.Struct("<I"), struct.Struct("<Q")
+
+
+def ln_metadata(md_name: str, layout_hash: int, message_size: int, **extra: str
+                ) -> dict[str, str]:
+    """The channel metadata every ln channel carries, whatever its encoding."""
+    return {"md_name": md_name, "layout_hash": f"{layout_hash:016x}",
+            "message_size": str(message_size), **extra}
 
 
 def _s(text: str) -> bytes:
@@ -181,7 +188,7 @@ class McapWriter:
         flags = os.O_WRONLY | os.O_CREAT | os.O_CLOEXEC | (os.O_TRUNC if overwrite else os.O_EXCL)
         self._fd: int | None = os.open(self.path, flags, 0o644)
         self.offset = 0  # bytes in the file
-        self._schemas: dict[tuple[str, bytes], int] = {}
+        self._schemas: dict[tuple[str, str, bytes], int] = {}
         self._schema_records: list[bytes] = []
         self._channel_records: list[bytes] = []
         self._channel_counts: dict[int, int] = {}
@@ -205,24 +212,33 @@ class McapWriter:
 
     def add_topic(self, topic: str, md_name: str, md_text: bytes | str, layout_hash: int,
                   message_size: int) -> int:
-        """Register a topic: its channel id for write().  md_text: the ln-md-text schema
-        (md_schema_text()); topics of one md with the same text share a schema.  The schema
-        and channel records go to the file at once."""
+        """Register a topic recorded as raw ln bytes: its channel id for write().  md_text:
+        the ln-md-text schema (md_schema_text()); topics of one md with the same text share a
+        schema.  The schema and channel records go to the file at once."""
         text = md_text.encode() if isinstance(md_text, str) else bytes(md_text)
+        return self.add_channel(topic, schema_name=md_name, schema_encoding=SCHEMA_ENCODING,
+                                schema_data=text, message_encoding=MESSAGE_ENCODING,
+                                metadata=ln_metadata(md_name, layout_hash, message_size))
+
+    def add_channel(self, topic: str, *, schema_name: str, schema_encoding: str,
+                    schema_data: bytes, message_encoding: str,
+                    metadata: dict[str, str]) -> int:
+        """Register a channel of any encoding (ros2msg/cdr, jsonschema/json, a service's
+        calls, one copied from another file): its id for write().  Equal schemas (name,
+        encoding, data) are written once."""
+        key = (schema_name, schema_encoding, bytes(schema_data))
         records = b""
-        schema_id = self._schemas.get((md_name, text))
+        schema_id = self._schemas.get(key)
         if schema_id is None:
             schema_id = len(self._schemas) + 1
-            self._schemas[(md_name, text)] = schema_id
-            rec = _record(SCHEMA, _U16.pack(schema_id) + _s(md_name) + _s(SCHEMA_ENCODING)
-                          + _U32.pack(len(text)) + text)
+            self._schemas[key] = schema_id
+            rec = _record(SCHEMA, _U16.pack(schema_id) + _s(schema_name) + _s(schema_encoding)
+                          + _U32.pack(len(key[2])) + key[2])
             self._schema_records.append(rec)
             records += rec
         channel = len(self._channel_records) + 1
-        meta = {"md_name": md_name, "layout_hash": f"{layout_hash:016x}",
-                "message_size": str(message_size)}
         rec = _record(CHANNEL, _U16.pack(channel) + _U16.pack(schema_id) + _s(topic)
-                      + _s(MESSAGE_ENCODING) + _str_map(meta))
+                      + _s(message_encoding) + _str_map(metadata))
         self._channel_records.append(rec)
         self._channel_counts[channel] = 0
         self._index[channel] = bytearray()
@@ -362,14 +378,26 @@ class McapTruncatedError(McapError):
 
 @dataclass(frozen=True)
 class TopicInfo:
-    """A recorded topic: its channel and the md its samples have."""
+    """A recorded ln channel (a topic, or a service's calls): the md its samples have and how
+    they are encoded.  `md_text` is the ln-md-text of the md and what it imports: the schema
+    of an "ln-md" channel, the `md_text` metadata entry of other encodings ("" if absent)."""
 
     topic: str
     channel_id: int
     md_name: str
-    md_text: bytes  # the ln-md-text schema: the md and every md it imports
+    md_text: bytes
     layout_hash: int
     message_size: int
+    message_encoding: str = MESSAGE_ENCODING
+    schema_name: str = ""
+    schema_encoding: str = SCHEMA_ENCODING
+    schema_data: bytes = b""
+    metadata: dict[str, str] = field(default_factory=dict, compare=False, hash=False)
+
+    @property
+    def kind(self) -> str:
+        """"topic", or what the channel's `kind` metadata says (e.g. "service")."""
+        return self.metadata.get("kind", "topic")
 
 
 class Sample(NamedTuple):
@@ -443,8 +471,9 @@ class McapReader:
     A file that ends cleanly after a record but without summary and footer (a recorder that
     was killed) is read to its end (`complete` is then False).  One that ends inside a
     record raises McapTruncatedError, unless allow_truncated: then everything before that
-    record is read and `truncated_at` is its offset.  Channels that are not ln topics
-    (other encodings) are skipped."""
+    record is read and `truncated_at` is its offset.  Channels without ln metadata (written
+    by other tools) are skipped; samples come as stored, in their channel's encoding
+    (record.encodings turns them into ln bytes)."""
 
     def __init__(self, path: str | os.PathLike[str], *, allow_truncated: bool = False) -> None:
         self.path = str(path)
@@ -452,7 +481,7 @@ class McapReader:
         self.complete = False  # a footer was read (after a full pass)
         self.truncated_at: int | None = None
         self._topics: dict[int, TopicInfo] = {}
-        self._foreign: set[int] = set()  # channels of other encodings
+        self._foreign: set[int] = set()  # channels without ln metadata
         self._scanned = False  # a full pass has been made: _topics holds every channel
 
     def topics(self) -> dict[str, TopicInfo]:
@@ -620,7 +649,7 @@ class McapReader:
             raise _Bad(f"a message on channel {channel}, which no Channel record before it "
                        "defines")
         data = bytes(body[_MSG_BODY.size:])
-        if len(data) != info.message_size:
+        if len(data) != info.message_size and info.message_encoding == MESSAGE_ENCODING:
             raise _Bad(f"a sample of topic '{info.topic}' has {len(data)} bytes, its md "
                        f"'{info.md_name}' {info.message_size}")
         return info, seq, t_ns, data
@@ -680,11 +709,12 @@ class McapReader:
 
 def _channel_info(cur: _Cursor, schemas: dict[int, tuple[str, str, bytes]]
                   ) -> TopicInfo | None:
-    """The TopicInfo of a Channel record, None for a channel that is not an ln topic."""
+    """The TopicInfo of a Channel record; None for a channel that is not an ln channel (its
+    metadata has no md_name)."""
     channel, schema_id = cur.u(_U16), cur.u(_U16)
     topic, encoding = cur.string(), cur.string()
     meta = cur.str_map()
-    if encoding != MESSAGE_ENCODING:
+    if "md_name" not in meta:
         return None
     schema = schemas.get(schema_id)
     if schema is None:
@@ -698,10 +728,15 @@ def _channel_info(cur: _Cursor, schemas: dict[int, tuple[str, str, bytes]]
     except (KeyError, ValueError) as exc:
         raise _Bad(f"channel {channel} ('{topic}') lacks valid ln metadata "
                    f"(md_name, layout_hash, message_size): {exc}") from None
-    if schema_encoding != SCHEMA_ENCODING or name != md_name:
-        raise _Bad(f"channel {channel} ('{topic}') of md '{md_name}' has schema '{name}' "
-                   f"of encoding '{schema_encoding}', not '{SCHEMA_ENCODING}'")
-    return TopicInfo(topic, channel, md_name, text, layout_hash, message_size)
+    if encoding == MESSAGE_ENCODING:
+        if schema_encoding != SCHEMA_ENCODING or name != md_name:
+            raise _Bad(f"channel {channel} ('{topic}') of md '{md_name}' has schema '{name}' "
+                       f"of encoding '{schema_encoding}', not '{SCHEMA_ENCODING}'")
+        md_text = text
+    else:
+        md_text = meta.get("md_text", "").encode()
+    return TopicInfo(topic, channel, md_name, md_text, layout_hash, message_size, encoding,
+                     name, schema_encoding, text, meta)
 
 
 def iter_mcap(path: str | os.PathLike[str], topics: Any = None, *,
