@@ -60,6 +60,8 @@ struct ln_client {
     pthread_t monitor;
 
     struct ln_svc_state* svc; /* service groups and pools (svc_group.c), created on first use */
+
+    struct ln_replay_clock* _Atomic clock; /* what ln_now follows (clock.c); NULL: realtime */
 };
 
 /* Connects to c->host:c->port, sends HELLO as `name` and takes the WELCOME (client_id, name,

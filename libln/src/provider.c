@@ -29,17 +29,20 @@ static int provider_check(const ln_service_provider* p)
     return LN_OK;
 }
 
-static int64_t now_ns(void)
+static int64_t clock_ns(clockid_t clock)
 {
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
+    clock_gettime(clock, &ts);
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
+
+static int64_t now_ns(void) { return clock_ns(CLOCK_MONOTONIC); }
 
 /* ---- creating ---- */
 
 static void provider_free(ln_service_provider* p)
 {
+    ln_svc_taps_free(p);
     ln_sig_free(p->req_sig);
     ln_sig_free(p->resp_sig);
     free(p->signature);
@@ -153,6 +156,10 @@ int ln_get_service_provider(ln_client* clnt, ln_service_provider** out, const ch
     p->layout_hash = layout_hash;
     p->max_size = LN_SERVICE_DEFAULT_MAX_SIZE;
     atomic_flag_clear(&p->reporting);
+    if ((p->taps = ln_svc_taps_new()) == NULL) {
+        provider_free(p);
+        return ln_set_error(clnt, LN_ENOMEM, "out of memory for service provider \"%s\"", name);
+    }
     rc = ln_svc_parse_signature(clnt, md_name, signature, &p->req_sig, &p->resp_sig);
     if (rc == LN_OK) {
         p->request_size = ln_sig_size(p->req_sig);
@@ -354,6 +361,8 @@ void ln_svc_endpoint_free(ln_svc_endpoint* ep)
 {
     if (ep == NULL)
         return;
+    if (ep->tap_id > 0)
+        ln_svc_tap_hangup(ep->prov, ep->tap_id);
     close(ep->fd);
     free(ep->rx);
     ln_wbuf_free(&ep->tx);
@@ -397,6 +406,8 @@ static int answer_error(ln_service_request* req, int code, const char* text)
     req->answered = 1;
     req->failed = 1;
     atomic_fetch_add(&p->errors, 1);
+    if (atomic_load_explicit(&p->tapped, memory_order_relaxed))
+        ln_svc_tap_call(p, req, code, text, strlen(text));
     return req->ep->broken ? LN_ECONNECTION : LN_OK;
 }
 
@@ -408,6 +419,15 @@ static int handle_hello(ln_svc_endpoint* ep, ln_rbuf* r)
     uint16_t version = ln_rbuf_u16(r);
     ln_rbuf_str(r, name, sizeof name);
     uint64_t hash = ln_rbuf_u64(r);
+    if (r->left > 0 && !r->failed) { /* the caller's name, sent since recording calls */
+        char caller[LN_PROTO_MAX_STR + 1];
+        ln_rbuf_str(r, caller, sizeof caller);
+        size_t n = strnlen(caller, sizeof ep->caller - 1); /* cut: names are short */
+        while (n > 0 && !ln_utf8_valid(caller, n))
+            n--; /* at a character boundary */
+        memcpy(ep->caller, caller, n);
+        ep->caller[n] = '\0';
+    }
     if (ln_rbuf_end(r) != LN_OK || magic != LN_SVC_MAGIC) {
         send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": expected a HELLO frame", p->name);
         return -1;
@@ -437,6 +457,49 @@ static int handle_hello(ln_svc_endpoint* ep, ln_rbuf* r)
     return send_tx(ep);
 }
 
+/* A recorder's TAP: answer TAPPED and hand a duplicate of the socket to the tap's sender; the
+ * endpoint stays in the group only to notice the recorder hanging up. */
+static int handle_tap(ln_svc_endpoint* ep, ln_rbuf* r)
+{
+    ln_service_provider* p = ep->prov;
+    char name[LN_PROTO_MAX_STR + 1], recorder[LN_PROTO_MAX_STR + 1];
+    uint32_t magic = ln_rbuf_u32(r);
+    uint16_t version = ln_rbuf_u16(r);
+    ln_rbuf_str(r, name, sizeof name);
+    ln_rbuf_str(r, recorder, sizeof recorder);
+    if (ln_rbuf_end(r) != LN_OK || magic != LN_SVC_MAGIC) {
+        send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": malformed TAP frame", p->name);
+        return -1;
+    }
+    if (version != LN_SVC_VERSION) {
+        send_error(ep, 0, LN_EVERSION, "service \"%s\" speaks service protocol %d, not %u", p->name,
+                   LN_SVC_VERSION, version);
+        return -1;
+    }
+    if (strcmp(name, p->name) != 0) {
+        send_error(ep, 0, LN_ENOTFOUND, "this socket serves service \"%s\", not \"%s\"", p->name,
+                   name);
+        return -1;
+    }
+    ln_wbuf_reset(&ep->tx);
+    size_t start = ln_proto_frame_begin(&ep->tx, LN_SVC_TAPPED);
+    ln_wbuf_str(&ep->tx, p->md_name);
+    ln_wbuf_u64(&ep->tx, p->layout_hash);
+    const char* provider = ln_client_name(p->clnt);
+    ln_wbuf_str(&ep->tx, provider ? provider : "");
+    ln_wbuf_str(&ep->tx, p->signature);
+    if (ln_svc_frame_end(&ep->tx, start) != LN_OK || send_tx(ep) != LN_OK)
+        return -1;
+    int fd = dup(ep->fd);
+    if (fd < 0)
+        return -1;
+    int64_t id = ln_svc_tap_add(p, fd);
+    if (id < 0)
+        return -1;
+    ep->tap_id = id;
+    return LN_OK;
+}
+
 static int handle_request(ln_svc_endpoint* ep, ln_rbuf* r)
 {
     ln_service_provider* p = ep->prov;
@@ -446,6 +509,12 @@ static int handle_request(ln_svc_endpoint* ep, ln_rbuf* r)
         return -1;
     }
     ln_service_request req = {.prov = p, .ep = ep, .call_id = call_id};
+    if (atomic_load_explicit(&p->tapped, memory_order_relaxed)) {
+        req.wire = r->p;
+        req.wire_len = r->left;
+        req.t_real_ns = clock_ns(CLOCK_REALTIME);
+        req.t_mono_ns = now_ns();
+    }
     atomic_fetch_add(&p->calls, 1);
     if (ep->request == NULL && (ep->request = calloc(1, p->request_size + 1)) == NULL) {
         answer_error(&req, LN_ENOMEM, "provider is out of memory");
@@ -527,7 +596,12 @@ int ln_svc_conn_readable(ln_svc_endpoint* ep)
         ln_rbuf r;
         ln_rbuf_init(&r, ep->rx + used + LN_SVC_HEADER_SIZE, body_len);
         used += LN_SVC_HEADER_SIZE + body_len;
-        if (!ep->greeted) {
+        if (ep->tap_id > 0) {
+            return -1; /* a recorder sends nothing after TAP */
+        } else if (!ep->greeted && type == LN_SVC_TAP) {
+            if (handle_tap(ep, &r) < 0)
+                return -1;
+        } else if (!ep->greeted) {
             if (type != LN_SVC_HELLO) {
                 send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": expected a HELLO frame", p->name);
                 return -1;
@@ -600,6 +674,10 @@ int ln_service_request_respond(ln_service_request* req, const void* response)
                             ln_last_error());
     }
     req->answered = 1;
+    if (atomic_load_explicit(&p->tapped, memory_order_relaxed)) {
+        size_t at = start + LN_SVC_HEADER_SIZE + 4; /* the payload after the call id */
+        ln_svc_tap_call(p, req, 0, ep->tx.data + at, ep->tx.len - at);
+    }
     if (send_tx(ep) != LN_OK)
         return ln_set_error(p->clnt, LN_ECONNECTION,
                             "service \"%s\": the caller is gone, response not delivered", p->name);

@@ -333,6 +333,7 @@ static int connect_service(ln_service* s, const struct timespec* deadline)
     ln_wbuf_u16(&hello, LN_SVC_VERSION);
     ln_wbuf_str(&hello, s->name);
     ln_wbuf_u64(&hello, s->layout_hash);
+    ln_wbuf_str(&hello, ln_client_name(s->clnt)); /* the caller, for recorded calls */
     rc = ln_svc_frame_end(&hello, start);
     if (rc == LN_OK)
         rc = send_buf(s, &hello, deadline);

@@ -18,6 +18,7 @@
 #include "arena.h"
 #include "client_internal.h"
 #include "sigcodec.h"
+#include "svc_tap.h"
 #include "svc_wire.h"
 
 #define LN_SVC_MAX_NAME 255
@@ -41,6 +42,8 @@ typedef struct ln_svc_endpoint {
     ln_wbuf tx;
     ln_arena arena;
     void* request; /* decoded request struct, prov->request_size bytes */
+    char caller[LN_SVC_MAX_NAME + 1]; /* the caller's client name from HELLO ("" if none) */
+    int64_t tap_id;                   /* > 0: a recorder's connection (svc_tap.h) */
 } ln_svc_endpoint;
 
 struct ln_service_provider {
@@ -65,6 +68,8 @@ struct ln_service_provider {
     atomic_uint_fast64_t calls, errors, reported_calls;
     atomic_int_fast64_t last_report_ns; /* CLOCK_MONOTONIC of the last SERVICE_CALLED */
     atomic_flag reporting;
+    atomic_int tapped; /* recorders tapping the calls: the call path's only check */
+    ln_svc_taps* taps; /* svc_tap.c: their queues and sender thread */
 };
 
 struct ln_service_request {
@@ -73,6 +78,10 @@ struct ln_service_request {
     uint32_t call_id;
     int answered; /* 0, or the LN_E* code of a failed answer, or 1 */
     int failed;   /* answered with an error */
+    /* for recorders, set only while tapped: the request's wire form and when it arrived */
+    const uint8_t* wire;
+    size_t wire_len;
+    int64_t t_real_ns, t_mono_ns;
 };
 
 /* ---- svc_group.c ---- */

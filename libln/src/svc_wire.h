@@ -23,11 +23,17 @@
 #define LN_SVC_SEND_TIMEOUT 5.0
 
 enum ln_svc_msg {
-    LN_SVC_HELLO = 1,    /* c -> p: u32 magic, u16 version, str service, u64 layout_hash */
+    LN_SVC_HELLO = 1,    /* c -> p: u32 magic, u16 version, str service, u64 layout_hash,
+                            [str caller]: a provider takes HELLO with or without it */
     LN_SVC_WELCOME = 2,  /* p -> c: (empty) */
     LN_SVC_REQUEST = 3,  /* c -> p: u32 call_id, request payload (the rest of the frame) */
     LN_SVC_RESPONSE = 4, /* p -> c: u32 call_id, response payload (the rest of the frame) */
     LN_SVC_ERROR = 5,    /* p -> c: u32 call_id (0: about the connection), i32 code, str text */
+    /* Recording calls (svc_tap.c): a recorder's first frame instead of HELLO, the provider's
+     * answer, then one CALL per completed call, provider -> recorder only. */
+    LN_SVC_TAP = 6,    /* r -> p: u32 magic, u16 version, str service, str recorder */
+    LN_SVC_TAPPED = 7, /* p -> r: str md_name, u64 layout_hash, str provider, str signature */
+    LN_SVC_CALL = 8,   /* p -> r: see svc_tap.h */
 };
 
 /* Checks a frame header: LN_OK with the body size and type; LN_EPROTOCOL for a length < 2 or

@@ -97,6 +97,18 @@ class client:  # noqa: N801 - the LN name
         self._ports.append(port)
         return port
 
+    def use_clock(self, topic: str | None = None) -> None:
+        """Make now() follow the replay clock of an `ln_play --clock` on `topic` (None:
+        "ln.clock"; docs/recording.md, "Replay control and the replay clock")."""
+        C.ln_client_use_clock(self.handle, None if topic is None else topic.encode())
+
+    def now(self) -> int:
+        """ns since the epoch: CLOCK_REALTIME, or after use_clock() the replay time (0 before
+        the first clock sample; it stands still while the replay is paused).  Never blocks."""
+        ns = ctypes.c_int64()
+        C.ln_now(self.handle, ctypes.byref(ns))
+        return ns.value
+
     @property
     def last_error(self) -> tuple[int, str]:
         """(code, text) of the last error on this client or its ports, from any thread."""

@@ -64,13 +64,14 @@ class logger:  # noqa: N801 - the LN name
         """Counters and gaps of the last download, per topic."""
         return logger_files.describe(getattr(self, "_last", {}))
 
-    def save(self, path: str | Path) -> dict[str, Any]:
-        """Download and write to `path` on this host: .mcap or .npz."""
-        return logger_files.save(self.download_raw(), Path(path))
+    def save(self, path: str | Path, encoding: str | None = None) -> dict[str, Any]:
+        """Download and write to `path` on this host: .mcap (`encoding` "ros2" (None: the
+        default), "json" or "ln", docs/recording.md "Encodings") or .npz."""
+        return logger_files.save(self.download_raw(), Path(path), encoding)
 
-    def save_on_manager(self, path: str) -> dict[str, Any]:
+    def save_on_manager(self, path: str, encoding: str | None = None) -> dict[str, Any]:
         """Let the manager download and write to `path` on the manager's host."""
-        return self._do("logger_save", path=path)
+        return self._do("logger_save", path=path, encoding=encoding)
 
     def remove(self) -> None:
         """Remove the logger and its samples from the manager and every daemon."""

@@ -134,10 +134,23 @@ def describe(download: dict[str, dict[str, Any]]) -> dict[str, Any]:
             for topic, e in download.items()}
 
 
-def save(download: dict[str, dict[str, Any]], path: Path) -> dict[str, Any]:
-    """Write a download to `path` (.mcap or .npz); what was written."""
+#: the encoding of an .mcap when none is asked for: the one viewers decode, as ln_record's
+DEFAULT_ENCODING = "ros2"
+
+
+def save(download: dict[str, dict[str, Any]], path: Path, encoding: str | None = None
+         ) -> dict[str, Any]:
+    """Write a download to `path` (.mcap or .npz); what was written.  encoding: of an .mcap
+    (docs/recording.md, "Encodings"): "ros2" (None: the default), "json" or "ln"; a topic
+    whose md is not here or that the encoding refuses is stored in "ln" (its entry's
+    `encoding` says so).  An .npz holds arrays: encoding None or "ln"."""
     path = Path(path)
     suffix = path.suffix.lower()
+    used: dict[str, str] = {}
+    if encoding is None:
+        encoding = "ln" if suffix == ".npz" else DEFAULT_ENCODING
+    if suffix == ".npz" and encoding != "ln":
+        raise ValueError(f"encoding {encoding!r} is for .mcap files; an .npz holds arrays")
     if suffix == ".npz":
         arrays = {topic: to_array(e) for topic, e in download.items()}
         meta = np.frombuffer(json.dumps(describe(download)).encode(), dtype=np.uint8)
@@ -146,18 +159,45 @@ def save(download: dict[str, dict[str, Any]], path: Path) -> dict[str, Any]:
     elif suffix == ".mcap":
         from .mcap_format import McapWriter
 
+        encoders = {topic: _encoder(e, encoding) for topic, e in download.items()}
         writer = McapWriter(path)
         try:
             for topic, e in download.items():
-                channel = writer.add_topic(topic, e["md_name"], _schema(e["md_name"]),
-                                           e["layout_hash"], e["message_size"])
+                enc = encoders[topic]
+                if enc is None:
+                    channel = writer.add_topic(topic, e["md_name"], _schema(e["md_name"]),
+                                               e["layout_hash"], e["message_size"])
+                else:
+                    channel = enc.add_to(writer, topic)
+                encode = enc.encode if enc is not None else bytes
+                used[topic] = enc.encoding if enc is not None else "ln"
                 for seq, t, data in e["samples"]:
-                    writer.write(channel, seq, t, data)
+                    writer.write(channel, seq, t, encode(data))
         finally:
             writer.close()
     else:
         raise ValueError(f"unknown file type {suffix or '(none)'!r}: name it .mcap or .npz")
-    return {"path": str(path), "topics": describe(download)}
+    topics = describe(download)
+    for topic, enc_name in used.items():
+        topics[topic]["encoding"] = enc_name
+    return {"path": str(path), "topics": topics}
+
+
+def _encoder(entry: dict[str, Any], encoding: str) -> Any:
+    """The ChannelEncoder of a topic in `encoding`; None: raw ln bytes (encoding "ln", or an
+    md this host does not have or the encoding refuses)."""
+    from .record.encodings import ENCODINGS, EncodingError, channel_encoder
+
+    if encoding not in ENCODINGS:
+        raise ValueError(f"unknown encoding {encoding!r}: one of {', '.join(ENCODINGS)}")
+    text = _schema(entry["md_name"])
+    if encoding == "ln" or not text:
+        return None
+    try:
+        return channel_encoder(encoding, entry["md_name"], text, entry["layout_hash"],
+                               entry["message_size"])
+    except EncodingError:
+        return None
 
 
 def _schema(md_name: str) -> bytes:

@@ -14,7 +14,8 @@ every md it imports, so a file decodes without the md files).  Written against t
 spec with Python's own modules only; zstandard and lz4 are needed only for chunks
 compressed with them.  Chunks go to the file whole, in one write each, so a recorder killed
 at any moment leaves a file that readers (this one, and MCAP stream readers) read up to its
-last complete chunk; only the summary and footer are missing.
+last complete chunk; only the summary and footer are missing.  McapReader.blocks() gives
+the chunks still compressed (RawChunk), which McapWriter.copy_chunk() copies as stored.
 """
 
 from __future__ import annotations
@@ -25,9 +26,11 @@ import struct
 import tempfile
 import zlib
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, NamedTuple
+
+from .mcap_chunk import RawChunk, index_record
 
 MAGIC = b"\x89MCAP0\r\n"
 SCHEMA_ENCODING = "ln-md-text"
@@ -220,12 +223,22 @@ class McapWriter:
                                 schema_data=text, message_encoding=MESSAGE_ENCODING,
                                 metadata=ln_metadata(md_name, layout_hash, message_size))
 
+    @property
+    def channel_ids(self) -> frozenset[int]:
+        """The ids of the channels registered so far."""
+        return frozenset(self._channel_counts)
+
     def add_channel(self, topic: str, *, schema_name: str, schema_encoding: str,
                     schema_data: bytes, message_encoding: str,
-                    metadata: dict[str, str]) -> int:
+                    metadata: dict[str, str], channel_id: int | None = None) -> int:
         """Register a channel of any encoding (ros2msg/cdr, jsonschema/json, a service's
         calls, one copied from another file): its id for write().  Equal schemas (name,
-        encoding, data) are written once."""
+        encoding, data) are written once.  channel_id: this id (a copy of another file's
+        channel whose chunks copy_chunk() copies); ValueError if it is taken or not a
+        uint16 above 0.  Default: one more than the highest id so far."""
+        if channel_id is not None and (not 0 < channel_id <= 0xFFFF
+                                       or channel_id in self._channel_counts):
+            raise ValueError(f"channel id {channel_id} is taken or out of range")
         key = (schema_name, schema_encoding, bytes(schema_data))
         records = b""
         schema_id = self._schemas.get(key)
@@ -236,7 +249,8 @@ class McapWriter:
                           + _U32.pack(len(key[2])) + key[2])
             self._schema_records.append(rec)
             records += rec
-        channel = len(self._channel_records) + 1
+        channel = channel_id if channel_id is not None else max(self._channel_counts,
+                                                                 default=0) + 1
         rec = _record(CHANNEL, _U16.pack(channel) + _U16.pack(schema_id) + _s(topic)
                       + _s(message_encoding) + _str_map(metadata))
         self._channel_records.append(rec)
@@ -274,36 +288,70 @@ class McapWriter:
         head = _CHUNK_HEAD.pack(self._t0, self._t1, len(raw), zlib.crc32(raw)) + _s(
             self._compression) + _U64.pack(len(data))
         head = _REC.pack(CHUNK, len(head) + len(data)) + head
+        self._put_chunk(head, data, self._index.items(), self._t0, self._t1,
+                        self._compression, len(data), len(raw))
+        for entries in self._index.values():
+            entries.clear()
+        self._chunk = bytearray()
+
+    def copy_chunk(self, chunk: RawChunk) -> None:
+        """Append a Chunk record of another file as stored (compressed, with its CRC) after
+        the open chunk: its Message Index records and Chunk Index get this file's offsets,
+        the statistics its messages.  Its channels must be channels of this writer with the
+        same ids (add_channel(channel_id=...)); ValueError otherwise or for a chunk without
+        Message Index records.  Its messages keep their log times."""
+        if not chunk.indexes:
+            raise ValueError("a chunk without Message Index records cannot be copied")
+        unknown = sorted(set(chunk.indexes) - set(self._channel_counts))
+        if unknown:
+            raise ValueError(f"the chunk has messages on channels {unknown}, which are not "
+                             "channels of this writer")
+        self.flush()
+        self._put_chunk(chunk.head, chunk, chunk.indexes.items(), chunk.start_ns,
+                        chunk.end_ns, chunk.compression, chunk.compressed_size,
+                        chunk.uncompressed_size)
+
+    def _put_chunk(self, head: bytes, data: Any, indexes: Any, t0: int, t1: int,
+                   compression: str, compressed_size: int, uncompressed_size: int) -> None:
+        """Write a chunk record (`head` and `data`, its rest, or a RawChunk to copy) and
+        the Message Index records of `indexes` ((channel, entries) pairs) in one write (a
+        copy: three); add its Chunk Index."""
         start = self.offset
-        chunk_length = len(head) + len(data)
-        indexes = []
+        chunk_length = len(head) + (data.body_size if isinstance(data, RawChunk)
+                                    else len(data))
+        records = []
         index_offsets = b""
         at = start + chunk_length
         count = 0
-        for channel, entries in self._index.items():
+        for channel, entries in indexes:
             if not entries:
                 continue
             rec = _record(MESSAGE_INDEX, _U16.pack(channel) + _U32.pack(len(entries))
                           + bytes(entries))
             index_offsets += _U16.pack(channel) + _U64.pack(at)
-            indexes.append(rec)
+            records.append(rec)
             at += len(rec)
             n = len(entries) // _IDX.size
             self._channel_counts[channel] += n
             count += n
-            entries.clear()
-        self._write(head, data, b"".join(indexes))
+        if isinstance(data, RawChunk):
+            self._write(head)
+            assert self._fd is not None, "the writer is closed"
+            data.copy_body(self._fd)
+            self.offset += data.body_size
+            self._write(b"".join(records))
+        else:
+            self._write(head, data, b"".join(records))
         self._chunk_indexes.append(_record(CHUNK_INDEX, struct.pack(
-            "<QQQQ", self._t0, self._t1, start, chunk_length)
+            "<QQQQ", t0, t1, start, chunk_length)
             + _U32.pack(len(index_offsets)) + index_offsets
-            + _U64.pack(at - start - chunk_length) + _s(self._compression)
-            + struct.pack("<QQ", len(data), len(raw))))
-        if not self.message_count or self._t0 < self._start:
-            self._start = self._t0
-        self._end = max(self._end, self._t1)
+            + _U64.pack(at - start - chunk_length) + _s(compression)
+            + struct.pack("<QQ", compressed_size, uncompressed_size)))
+        if not self.message_count or t0 < self._start:
+            self._start = t0
+        self._end = max(self._end, t1)
         self.message_count += count
         self.chunk_count += 1
-        self._chunk = bytearray()
 
     def close(self) -> None:
         """Write the last chunk, the summary (schemas, channels, statistics, chunk indexes)
@@ -409,6 +457,19 @@ class Sample(NamedTuple):
     data: bytes
 
 
+class _Skipped(NamedTuple):
+    """A chunk's body left in the file: its first bytes, its size, the file."""
+
+    prefix: bytes
+    size: int
+    file: Any
+
+
+_SKIP_PREFIX = 256  # of a chunk body: enough for its header fields
+
+Message = tuple["TopicInfo", int, int, Any]  # channel, 32-bit sequence, publish time, data
+
+
 class _Bad(Exception):
     """Malformed content inside a record; the reader adds file and offset."""
 
@@ -483,6 +544,13 @@ class McapReader:
         self._topics: dict[int, TopicInfo] = {}
         self._foreign: set[int] = set()  # channels without ln metadata
         self._scanned = False  # a full pass has been made: _topics holds every channel
+        self.library = ""  # the Header's library field: which program wrote the file
+        self._schemas: dict[int, tuple[str, str, bytes]] = {}
+
+    def channel(self, channel_id: int) -> TopicInfo | None:
+        """The ln channel `channel_id` as far as the pass has read the file; None for one
+        not (yet) defined or not an ln channel."""
+        return self._topics.get(channel_id)
 
     def topics(self) -> dict[str, TopicInfo]:
         """The ln topics of the file by name, from its summary when it has one, else from a
@@ -501,6 +569,11 @@ class McapReader:
     def samples(self, topics: Any = None) -> Iterator[Sample]:
         """Every sample of the file in file order (each topic's in its recorded order); only
         those of `topics` (names) when given."""
+        for _info, sample in self.items(topics):
+            yield sample
+
+    def items(self, topics: Any = None) -> Iterator[tuple[TopicInfo, Sample]]:
+        """samples(), each with its channel."""
         wanted = None if topics is None else set(topics)
         last: dict[int, int] = {}
         self._scanned = False
@@ -513,67 +586,171 @@ class McapReader:
                 if seq < prev - (1 << 31):
                     seq += 1 << 32
             last[info.channel_id] = seq
-            yield Sample(info.topic, info.md_name, info.layout_hash, seq, t_ns, data)
+            yield info, Sample(info.topic, info.md_name, info.layout_hash, seq, t_ns,
+                               bytes(data))
         self._scanned = True
 
-    # -- the pass -----------------------------------------------------------------------------
-    def _fail(self, offset: int, what: str) -> McapError:
-        return McapError(self.path, offset, what)
-
-    def _messages(self) -> Iterator[tuple[TopicInfo, int, int, bytes]]:
+    def blocks(self) -> Iterator[RawChunk | Message]:
+        """The data section in one pass, checked like samples() but chunks not decompressed:
+        each Chunk as a RawChunk (give it to chunk_messages() for its messages, or copy
+        it), each Message outside chunks as (channel, sequence, publish time, data).
+        Schema and Channel records update channel() as they come (inside a chunk: once
+        chunk_messages() has read it)."""
         self._topics = {}
         self._foreign = set()
         self.complete = False
         self.truncated_at = None
         schemas: dict[int, tuple[str, str, bytes]] = {}
+        self._schemas = schemas
+        held: RawChunk | None = None
+        records = self._records()
+        while True:
+            try:
+                pos, opcode, body = next(records)
+            except StopIteration:
+                break
+            except McapError:
+                if held is not None:  # what came before the bad record
+                    yield replace(held, indexed=False)
+                raise
+            if opcode == MESSAGE_INDEX and held is not None:
+                index = index_record(body)
+                if index is None:  # not used for reading: only the chunk is not copyable
+                    held = replace(held, indexed=False)
+                else:
+                    held.indexes[index[0]] = index[1]
+                continue
+            if held is not None:
+                yield held
+                held = None
+            if opcode is not None:  # None: the end of the data section
+                block = self._top_record(pos, opcode, body, schemas)
+                if isinstance(block, RawChunk):
+                    held = block
+                elif block is not None:
+                    yield block
+        if held is not None:  # the file ends after it: its indexes may be cut short
+            yield replace(held, indexed=False)
+
+    def _top_record(self, pos: int, opcode: int, body: bytes,
+                    schemas: dict[int, tuple[str, str, bytes]]) -> RawChunk | Message | None:
+        """A record of the data section outside chunks: a chunk or message to yield, or a
+        definition taken in (None)."""
         try:
-            f = open(self.path, "rb", buffering=1 << 20)  # noqa: SIM115 - closed below
+            if opcode == CHUNK:
+                return self._raw_chunk(pos, body, indexed=True)
+            if opcode == MESSAGE:
+                return self._message(body)
+            if opcode in (SCHEMA, CHANNEL):
+                self._definition(opcode, body, schemas)
+            elif opcode == HEADER:
+                self.library = _header_library(body)
+        except _Bad as exc:
+            raise self._fail(pos, f"{_NAMES.get(opcode, opcode)} record: {exc}") from None
+        return None
+
+    def chunk_messages(self, chunk: RawChunk) -> Iterator[Message]:
+        """The messages of `chunk` (one of blocks()) on ln channels, decompressed and checked
+        (CRC, framing); McapError at the chunk's offset if they are not right."""
+        try:
+            yield from self._chunk(chunk, self._schemas)
+        except _Bad as exc:
+            raise self._fail(chunk.offset, f"Chunk record: {exc}") from None
+
+    # -- the pass -----------------------------------------------------------------------------
+    def _fail(self, offset: int, what: str) -> McapError:
+        return McapError(self.path, offset, what)
+
+    def _messages(self) -> Iterator[Message]:
+        for block in self.blocks():
+            if isinstance(block, RawChunk):
+                yield from self.chunk_messages(block)
+            else:
+                yield block
+
+    def _records(self) -> Iterator[tuple[int, int | None, bytes]]:
+        """(offset, opcode, body) of each record of the data section, framing and the data
+        CRC checked; opcode None once for its end (DATA_END or the footer)."""
+        try:
+            # a small buffer: a chunk left in the file is not read into it
+            f = open(self.path, "rb", buffering=1 << 16)  # noqa: SIM115 - closed below
         except OSError as exc:
             raise McapError(self.path, 0, f"cannot open: {exc.strerror}") from None
         with f:
             size = os.fstat(f.fileno()).st_size
-            magic = f.read(len(MAGIC))
-            if magic != MAGIC[:len(magic)] or len(magic) == 0:
-                raise self._fail(0, "not an MCAP file (no MCAP magic at the start)")
-            if len(magic) < len(MAGIC):
-                self._truncated(0, "the file ends inside the MCAP magic")
+            if not self._magic(f):
                 return
-            crc = zlib.crc32(magic)
+            crc: int | None = zlib.crc32(MAGIC)
+            if _stated_data_crc(f, size) == 0:
+                crc = None  # the DATA_END the footer leads to carries no CRC: none to compute
             pos, in_data, first = len(MAGIC), True, True
             while True:
                 if pos == size:
                     return  # no footer: a recording that was not closed
-                head = f.read(_REC.size)
-                if len(head) < _REC.size:
-                    self._truncated(pos, f"the file ends {len(head)} bytes into a record "
-                                    "header")
+                head = self._frame(f, pos, size, first)
+                if head is None:
                     return
+                first = False
                 opcode, length = _REC.unpack(head)
                 name = _NAMES.get(opcode, f"opcode 0x{opcode:02x}")
-                if first and opcode != HEADER:
-                    raise self._fail(pos, f"the first record is {name}, not a Header")
-                first = False
-                if length > size - pos - _REC.size:
-                    self._truncated(pos, f"{name} record of {length} bytes, but the file "
-                                    f"ends {size - pos - _REC.size} bytes after its header")
-                    return
-                body = f.read(length)
+                body = self._body(f, opcode, length, crc)
                 try:
                     if opcode == DATA_END:
-                        expected = _Cursor(body).u(_U32)
-                        if in_data and expected and expected != crc:
-                            raise _Bad(f"data section CRC 0x{expected:08x} does not match "
-                                       f"its bytes (0x{crc:08x})")
+                        if in_data:
+                            _check_data_crc(body, crc)
+                            yield pos, None, b""
                         in_data = False
                     elif opcode == FOOTER:
                         self._footer(f, pos, body, size)
+                        if in_data:
+                            yield pos, None, b""
                         return
                     elif in_data:
-                        crc = zlib.crc32(body, zlib.crc32(head, crc))
-                        yield from self._data_record(opcode, body, pos, schemas)
+                        if crc is not None:
+                            crc = zlib.crc32(body, zlib.crc32(head, crc))
+                        yield pos, opcode, body
+                        f.seek(pos + _REC.size + length)
                 except _Bad as exc:
                     raise self._fail(pos, f"{name} record: {exc}") from None
                 pos += _REC.size + length
+
+    def _body(self, f: Any, opcode: int, length: int, crc: int | None) -> Any:
+        """The body of a record (bytes); of a chunk when no CRC needs its bytes, only its
+        start (the header fields) and where the rest is (_Skipped)."""
+        if opcode != CHUNK or crc is not None or length <= _SKIP_PREFIX:
+            return f.read(length)
+        prefix = f.read(_SKIP_PREFIX)
+        name = _U32.unpack_from(prefix, _CHUNK_HEAD.size)[0]
+        if _CHUNK_HEAD.size + 4 + name + 8 > len(prefix):  # a long compression name
+            return prefix + f.read(length - _SKIP_PREFIX)
+        return _Skipped(prefix, length, f)
+
+    def _frame(self, f: Any, pos: int, size: int, first: bool) -> bytes | None:
+        """The opcode and length of the record at `pos`, checked to fit the file; None where
+        the file ends inside it (allow_truncated)."""
+        head = f.read(_REC.size)
+        if len(head) < _REC.size:
+            self._truncated(pos, f"the file ends {len(head)} bytes into a record header")
+            return None
+        opcode, length = _REC.unpack(head)
+        name = _NAMES.get(opcode, f"opcode 0x{opcode:02x}")
+        if first and opcode != HEADER:
+            raise self._fail(pos, f"the first record is {name}, not a Header")
+        if length > size - pos - _REC.size:
+            self._truncated(pos, f"{name} record of {length} bytes, but the file ends "
+                            f"{size - pos - _REC.size} bytes after its header")
+            return None
+        return head
+
+    def _magic(self, f: Any) -> bool:
+        """Read the magic at the start: False for a file cut short inside it."""
+        magic = f.read(len(MAGIC))
+        if magic != MAGIC[:len(magic)] or len(magic) == 0:
+            raise self._fail(0, "not an MCAP file (no MCAP magic at the start)")
+        if len(magic) < len(MAGIC):
+            self._truncated(0, "the file ends inside the MCAP magic")
+            return False
+        return True
 
     def _truncated(self, offset: int, what: str) -> None:
         if not self.allow_truncated:
@@ -588,28 +765,26 @@ class McapReader:
             raise _Bad("not followed by the closing MCAP magic at the end of the file")
         self.complete = True
 
-    def _data_record(self, opcode: int, body: bytes, pos: int,
-                     schemas: dict[int, tuple[str, str, bytes]]
-                     ) -> Iterator[tuple[TopicInfo, int, int, bytes]]:
-        if opcode == CHUNK:
-            yield from self._chunk(body, pos, schemas)
-        elif opcode == MESSAGE:
-            msg = self._message(body)
-            if msg is not None:
-                yield msg
-        elif opcode in (SCHEMA, CHANNEL):
-            self._definition(opcode, body, schemas)
-
-    def _chunk(self, body: bytes, pos: int, schemas: dict[int, tuple[str, str, bytes]]
-               ) -> Iterator[tuple[TopicInfo, int, int, bytes]]:
-        cur = _Cursor(body)
-        _t0, _t1, usize, ucrc = _CHUNK_HEAD.unpack(cur.take(_CHUNK_HEAD.size))
+    def _raw_chunk(self, pos: int, body: bytes | _Skipped, indexed: bool) -> RawChunk:
+        skipped = body if isinstance(body, _Skipped) else None
+        size = len(body) if skipped is None else skipped.size
+        cur = _Cursor(body if skipped is None else skipped.prefix)  # type: ignore[arg-type]
+        t0, t1, usize, ucrc = _CHUNK_HEAD.unpack(cur.take(_CHUNK_HEAD.size))
         compression = cur.string()
         n = cur.u(_U64)
-        if n != len(body) - cur.pos:
+        if n != size - cur.pos:
             raise _Bad(f"its records field says {n} bytes, the record holds "
-                       f"{len(body) - cur.pos}")
-        raw = _decompress(compression, body[cur.pos:], usize)
+                       f"{size - cur.pos}")
+        if skipped is not None:
+            return RawChunk(pos, _REC.pack(CHUNK, size), size, t0, t1, usize, ucrc,
+                            compression, cur.pos, {}, indexed, None, skipped.file)
+        return RawChunk(pos, _REC.pack(CHUNK, size), size, t0, t1, usize, ucrc, compression,
+                        cur.pos, {}, indexed, body)  # type: ignore[arg-type]
+
+    def _chunk(self, chunk: RawChunk, schemas: dict[int, tuple[str, str, bytes]]
+               ) -> Iterator[Message]:
+        usize, ucrc = chunk.uncompressed_size, chunk.uncompressed_crc
+        raw = _decompress(chunk.compression, memoryview(chunk.body)[chunk.data_at:], usize)
         if len(raw) != usize:
             raise _Bad(f"{len(raw)} bytes uncompressed, the chunk says {usize}")
         if ucrc and zlib.crc32(raw) != ucrc:
@@ -617,21 +792,31 @@ class McapReader:
                        f"the chunk's 0x{ucrc:08x}")
         at = 0
         view = memoryview(raw)
+        topics, unpack_rec, unpack_msg = self._topics, _REC.unpack_from, _MSG_BODY.unpack_from
+        rec_size, msg_end = _REC.size, _REC.size + _MSG_BODY.size
         while at < usize:
-            if usize - at < _REC.size:
+            if usize - at < rec_size:
                 raise _Bad(f"a record header at offset {at} of the records runs past their end")
-            opcode, length = _REC.unpack_from(raw, at)
-            end = at + _REC.size + length
+            opcode, length = unpack_rec(raw, at)
+            end = at + rec_size + length
             if end > usize:
                 raise _Bad(f"the record at offset {at} of the records ({length} bytes) runs "
                            "past their end")
-            try:
+            if opcode == MESSAGE and length >= _MSG_BODY.size:
+                channel, seq, _log_time, t_ns = unpack_msg(raw, at + rec_size)
+                info = topics.get(channel)
+                if info is not None and (end - at - msg_end == info.message_size
+                                         or info.message_encoding != MESSAGE_ENCODING):
+                    yield info, seq, t_ns, view[at + msg_end:end]
+                    at = end
+                    continue
+            try:  # the rare cases, and the errors
                 if opcode == MESSAGE:
-                    msg = self._message(view[at + _REC.size:end])
+                    msg = self._message(view[at + rec_size:end])
                     if msg is not None:
                         yield msg
                 elif opcode in (SCHEMA, CHANNEL):
-                    self._definition(opcode, view[at + _REC.size:end], schemas)
+                    self._definition(opcode, view[at + rec_size:end], schemas)
             except _Bad as exc:
                 raise _Bad(f"{_NAMES.get(opcode, opcode)} at offset {at} of the records: "
                            f"{exc}") from None
@@ -705,6 +890,41 @@ class McapReader:
         except _Bad:
             return None  # a full pass says what is wrong
         return infos
+
+
+def _stated_data_crc(f: Any, size: int) -> int | None:
+    """The CRC of the DATA_END record just before the summary the footer points to (0: the
+    writer computed none); None where there is no such record.  Leaves `f` at the data."""
+    tail = _REC.size + 20 + len(MAGIC)
+    found = None
+    if size >= 2 * len(MAGIC) + tail + _REC.size + 4:
+        f.seek(size - tail)
+        data = f.read(tail)
+        summary = _U64.unpack_from(data, _REC.size)[0]
+        if (data[-len(MAGIC):] == MAGIC and _REC.unpack_from(data) == (FOOTER, 20)
+                and len(MAGIC) + _REC.size + 4 <= summary <= size - tail):
+            f.seek(summary - _REC.size - 4)
+            end = f.read(_REC.size + 4)
+            if _REC.unpack_from(end) == (DATA_END, 4):
+                found = _U32.unpack_from(end, _REC.size)[0]
+    f.seek(len(MAGIC))
+    return found
+
+
+def _check_data_crc(data_end: bytes, crc: int | None) -> None:
+    expected = _Cursor(data_end).u(_U32)
+    if expected and crc is not None and expected != crc:
+        raise _Bad(f"data section CRC 0x{expected:08x} does not match its bytes (0x{crc:08x})")
+
+
+def _header_library(body: bytes) -> str:
+    """The library field of a Header record ("" where it cannot be read)."""
+    try:
+        cur = _Cursor(body)
+        cur.string()
+        return cur.string()
+    except _Bad:
+        return ""
 
 
 def _channel_info(cur: _Cursor, schemas: dict[int, tuple[str, str, bytes]]

@@ -212,6 +212,20 @@ LN_EXPORT int ln_inport_publisher_count(const ln_inport* port);
 /* Total samples this subscriber lost since it subscribed. */
 LN_EXPORT uint64_t ln_inport_overruns(const ln_inport* port);
 
+/* ---- time ----
+ * ln_now gives the time a program should act on, in ns since the epoch: CLOCK_REALTIME, or,
+ * after ln_client_use_clock, the replay time of the ln_play --clock publishing on `topic`
+ * (NULL: "ln.clock"; md ln/clock; docs/recording.md, "Replay control and the replay clock").
+ * Then it is the newest clock sample extrapolated with its rate (using CLOCK_REALTIME since
+ * the sample's stamp) while not paused, and exactly the sample's time while paused; within
+ * one clock epoch (no pause, seek or rate change between) it never decreases.  Before the
+ * first clock sample it is 0 (as ROS's time), LN_OK all the same.  ln_now never blocks and
+ * never allocates, and may be called from any thread.  use_clock is a setup call: the
+ * subscription belongs to the client; LN_EEXIST if it follows another clock topic already
+ * (the same one: LN_OK). */
+LN_EXPORT int ln_client_use_clock(ln_client* clnt, const char* topic);
+LN_EXPORT int ln_now(ln_client* clnt, int64_t* ns);
+
 /* ==== services ==============================================================================
  * A service is a named request/response call typed by a service md (docs/services.md).  The
  * provider registers it with the manager and serves it on its own sockets: a Unix domain socket
@@ -424,7 +438,8 @@ LN_EXPORT int ln_logger_add_topic(ln_logger* lg, const char* topic, uint32_t dep
 LN_EXPORT int ln_logger_enable(ln_logger* lg);
 LN_EXPORT int ln_logger_disable(ln_logger* lg);
 /* Fetch every host's samples and write them, merged in publish order, to `path` on the
- * manager's host: MCAP for *.mcap, numpy arrays for *.npz. */
+ * manager's host: MCAP for *.mcap (samples in the default encoding, ros2/CDR, as MCAP
+ * viewers decode; a topic ros2 cannot carry stays raw ln bytes), numpy arrays for *.npz. */
 LN_EXPORT int ln_logger_save(ln_logger* lg, const char* path);
 LN_EXPORT void ln_logger_close(ln_logger* lg);
 

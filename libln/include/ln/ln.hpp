@@ -83,6 +83,20 @@ public:
     detail::client_ptr share() const noexcept { return c_; }
     std::string name() const { return ln_client_name(c_.get()); }
 
+    // The replay clock: after use_clock(), now() follows the ln_play --clock on `topic`
+    // ("" = "ln.clock"); before that it is CLOCK_REALTIME.  ns since the epoch; 0 before the
+    // first clock sample.  Never blocks (ln.h, ln_now).
+    void use_clock(const std::string& topic = "")
+    {
+        check(ln_client_use_clock(c_.get(), topic.empty() ? nullptr : topic.c_str()));
+    }
+    int64_t now() const
+    {
+        int64_t ns = 0;
+        check(ln_now(c_.get(), &ns));
+        return ns;
+    }
+
     template <typename T>
     outport<T> publish(const std::string& topic, unsigned flags = 0)
     {

@@ -15,11 +15,10 @@ from typing import Any
 
 from ln_generate import MessageDef
 
+from ..md_json import SCHEMA_ENCODING, encode, root_schema
 from ..tools.introspection.commands import CommandError, Context, service_call_values
 from ..zenoh_bridge.config import ServiceRule
 from ..zenoh_bridge.wire import decode_fields
-from .schema import SCHEMA_ENCODING, root_schema
-from .topics import encode
 
 
 class ServiceCallFailed(Exception):

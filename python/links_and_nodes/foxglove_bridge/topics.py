@@ -17,22 +17,13 @@ from typing import Any
 
 from ln_generate import MessageDef
 
+from ..md_json import SCHEMA_ENCODING, encode, root_schema
 from ..tools.introspection import values as fmt
 from ..tools.introspection.client import TopicReader
 from ..tools.introspection.commands import CommandError, Context, follow, topic_layout
 from ..zenoh_bridge.config import TopicRule
-from .schema import SCHEMA_ENCODING, root_schema
 
 RETRY = 1.0  # seconds before a reader that failed subscribes again
-
-
-def encode(value: Any) -> bytes:
-    """Compact JSON of a decoded sample; NaN and infinities as strings (introspect.jsonable)."""
-    try:
-        text = json.dumps(value, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
-    except ValueError:
-        text = json.dumps(fmt.jsonable(value), separators=(",", ":"), ensure_ascii=False)
-    return text.encode()
 
 
 @dataclass

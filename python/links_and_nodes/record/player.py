@@ -1,5 +1,6 @@
-"""What ln_play does: check recordings whole, check every topic's layout, then publish the
-samples again with their recorded relative timing.
+"""What ln_play does before it plays: check recordings whole (decoding every sample to ln
+bytes), check every topic's layout, open the publishers; and the order samples play in
+(playback.py plays them).
 
 Nothing is published before every file has been read once without error and every topic has
 a publisher whose layout matches the recorded one, so a corrupt file or a changed md never
@@ -10,13 +11,13 @@ from __future__ import annotations
 
 import ctypes
 import heapq
-import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple, TypeVar
 
 from .. import md_loader
 from ..mcap_format import McapReader, Sample, TopicInfo, write_md_files
+from .encodings import ln_decoder
 
 REORDER_WINDOW_NS = 1_000_000_000  # how far topics may be out of time order in a file
 
@@ -25,32 +26,88 @@ class PlayError(Exception):
     """Why a recording cannot be played; the text says it all."""
 
 
+Decoder = tuple[TopicInfo, Callable[[bytes], bytes]]  # a file's channel, its ln decoder
+
+
 @dataclass
 class Recording:
-    """The files of one recording, checked: their topics and what they hold."""
+    """The files of one recording, checked: their topics (channels of kind "topic"), the
+    other channels (e.g. service calls, `others`), and what they hold.  `decoders[i]` has,
+    per channel name, file i's channel and the function from its messages to ln bytes."""
 
     readers: list[McapReader]
     topics: dict[str, TopicInfo]
     counts: dict[str, int] = field(default_factory=dict)
-    first_ns: int | None = None
+    first_ns: int | None = None  # of the topics' samples
     last_ns: int | None = None
     notes: list[str] = field(default_factory=list)
+    others: dict[str, TopicInfo] = field(default_factory=dict)
+    decoders: list[dict[str, Decoder]] = field(default_factory=list)
+
+
+def file_decoders(reader: McapReader) -> dict[str, Decoder]:
+    """Per channel of the file: the channel and the function from its stored messages to ln
+    bytes; PlayError naming file and channel for an encoding that cannot be read."""
+    out: dict[str, Decoder] = {}
+    for name, info in reader.topics().items():
+        if info.kind == "service":
+            continue  # recorded calls are not ln samples (service_replay.py reads them)
+        try:
+            out[name] = (info, ln_decoder(info))
+        except Exception as exc:  # noqa: BLE001 - EncodingError & co. carry the reason
+            raise PlayError(f"{reader.path}: channel '{name}': {exc}") from None
+    return out
+
+
+def decode_sample(path: str, decoders: dict[str, Decoder], n: int, sample: Sample) -> Sample:
+    """The sample with its data in ln bytes of the md's size; PlayError with file, channel
+    and sample (its place `n` among the file's samples) for one that does not decode."""
+    info, decode = decoders[sample.topic]
+    try:
+        data = decode(sample.data)
+        if len(data) != info.message_size:
+            raise ValueError(f"{len(data)} bytes decoded, md '{info.md_name}' has "
+                             f"{info.message_size}")
+    except Exception as exc:  # noqa: BLE001 - any decoder's error, with the place added
+        raise PlayError(f"{path}: channel '{sample.topic}' ({info.message_encoding}), sample "
+                        f"{n} of the file (sequence {sample.seq}, time "
+                        f"{sample.publish_time_ns} ns): cannot decode: {exc}") from None
+    return sample._replace(data=bytes(data))
+
+
+class Stored(NamedTuple):
+    """A sample as its file holds it, and where (file index, place in the file), until it is
+    decoded: skipping samples (--start, a seek) costs no decoding."""
+
+    topic: str
+    publish_time_ns: int
+    sample: Sample
+    file: int
+    n: int
 
 
 def check_files(paths: list[str], allow_truncated: bool = False) -> Recording:
-    """Read every file once (framing, CRCs, sizes): McapError for a bad one."""
+    """Read every file once (framing, CRCs, sizes, decoding): McapError or PlayError for a
+    bad one."""
     readers: list[McapReader] = []
     topics: dict[str, TopicInfo] = {}
     rec = Recording(readers, topics)
     for path in paths:
         reader = McapReader(path, allow_truncated=allow_truncated)
-        for sample in reader:
+        decoders = file_decoders(reader)
+        for n, stored in enumerate(reader.samples()):
+            if stored.topic not in decoders:  # a service's calls: counted, not decoded
+                rec.counts[stored.topic] = rec.counts.get(stored.topic, 0) + 1
+                continue
+            sample = decode_sample(reader.path, decoders, n, stored)
             rec.counts[sample.topic] = rec.counts.get(sample.topic, 0) + 1
+            if decoders[sample.topic][0].kind != "topic":
+                continue
             t = sample.publish_time_ns
             rec.first_ns = t if rec.first_ns is None else min(rec.first_ns, t)
             rec.last_ns = t if rec.last_ns is None else max(rec.last_ns, t)
         for name, info in reader.topics().items():
-            known = topics.setdefault(name, info)
+            known = (topics if info.kind == "topic" else rec.others).setdefault(name, info)
             if (known.md_name, known.layout_hash) != (info.md_name, info.layout_hash):
                 raise PlayError(f"topic '{name}' has md '{known.md_name}' (layout hash "
                                 f"{known.layout_hash:016x}) in one file and '{info.md_name}' "
@@ -62,7 +119,27 @@ def check_files(paths: list[str], allow_truncated: bool = False) -> Recording:
             rec.notes.append(f"{path} has no summary (its recorder did not close it): "
                              "playing every complete chunk")
         readers.append(reader)
+        rec.decoders.append(decoders)
     return rec
+
+
+S = TypeVar("S", Sample, Stored)
+
+
+def stored_samples(rec: Recording, wanted: list[str]) -> Iterator[Stored]:
+    """The samples of the `wanted` topics as stored, file after file (read again from the
+    start of the first file on every call)."""
+    wanted_set = set(wanted)
+    for i, reader in enumerate(rec.readers):
+        for n, sample in enumerate(reader.samples()):
+            if sample.topic in wanted_set:
+                yield Stored(sample.topic, sample.publish_time_ns, sample, i, n)
+
+
+def decode_stored(rec: Recording, stored: Stored) -> Sample:
+    """The stored sample in ln bytes (PlayError naming file, channel and sample)."""
+    return decode_sample(rec.readers[stored.file].path, rec.decoders[stored.file], stored.n,
+                         stored.sample)
 
 
 def _installed_hash(md_name: str) -> int | None:
@@ -113,13 +190,13 @@ def resolve_classes(topics: dict[str, TopicInfo], schema_dir: str) -> list[str]:
     return notes
 
 
-def in_time_order(samples: Iterable[Sample], window_ns: int = REORDER_WINDOW_NS
-                  ) -> Iterator[tuple[int, Sample]]:
+def in_time_order(samples: Iterable[S], window_ns: int = REORDER_WINDOW_NS
+                  ) -> Iterator[tuple[int, S]]:
     """(play time, sample) in time order across topics.  A file holds each topic's samples
     in order but topics interleaved as the recorder read them: samples are held back until
     `window_ns` of recording time has passed.  A topic's own order is kept even if its
     clock stepped back (its play time never decreases)."""
-    heap: list[tuple[int, int, Sample]] = []
+    heap: list[tuple[int, int, S]] = []
     last: dict[str, int] = {}
     for n, sample in enumerate(samples):
         t = max(sample.publish_time_ns, last.get(sample.topic, sample.publish_time_ns))
@@ -167,29 +244,3 @@ def open_publishers(client: Any, topics: dict[str, TopicInfo], remap: dict[str, 
             pub.port.close()
         raise
     return ports
-
-
-def play(rec: Recording, ports: dict[str, Publisher], rate: float, start_s: float,
-         loop: bool, on_sample: Callable[[int], None] | None = None) -> int:
-    """Publish the samples of the topics in `ports`, `rate` times as fast as recorded, from
-    `start_s` seconds after the recording's first sample; again and again with `loop`.
-    Returns how many were published (Ctrl-C ends it with KeyboardInterrupt)."""
-    published = 0
-    skip_until = (rec.first_ns or 0) + int(start_s * 1e9)
-    wanted = list(ports)
-    while True:
-        wall0 = t0 = None
-        for t, sample in in_time_order(s for r in rec.readers for s in r.samples(wanted)):
-            if t < skip_until:
-                continue
-            if t0 is None:
-                wall0, t0 = time.monotonic(), t
-            delay = wall0 + (t - t0) / 1e9 / rate - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            ports[sample.topic].write(sample.data)
-            published += 1
-            if on_sample is not None:
-                on_sample(published)
-        if not loop or t0 is None:
-            return published

@@ -1,7 +1,7 @@
 """`ln_record`: record topics into rotating MCAP files (docs/recording.md).
 
     ln_record -o DIR [TOPIC ...] [--all] [--regex RE] [--split-size 1GiB] [--duration S]
-              [--compression zstd|lz4|none] [--manager HOST:PORT]
+              [--compression zstd|lz4|none] [--encoding ros2|json|ln] [--manager HOST:PORT]
 
 Topics named, matching a --regex or (--all) every topic are recorded as soon as the manager
 knows them; its topic list is polled for topics that appear later.  SIGINT and SIGTERM end the
@@ -22,7 +22,9 @@ from pathlib import Path
 from typing import Any
 
 from ..mcap_format import COMPRESSIONS, DEFAULT_CHUNK_SIZE
+from .encodings import DEFAULT_ENCODING, ENCODINGS
 from .recorder import DEFAULT_BUFFER_MEMORY, MAX_BUFFERS, Recorder
+from .service_recording import ServiceRecording
 from .split_writer import SplitWriter
 
 _UNITS = {"": 1, "B": 1, "K": 1000, "KB": 1000, "KIB": 1 << 10, "M": 1000**2, "MB": 1000**2,
@@ -64,6 +66,10 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--duration", type=_seconds, metavar="S", help="stop after S seconds")
     ap.add_argument("--compression", choices=COMPRESSIONS, default="zstd",
                     help="of each chunk (default zstd)")
+    ap.add_argument("--encoding", choices=ENCODINGS, default=DEFAULT_ENCODING,
+                    help="how samples are stored: ros2 (CDR, decoded by Foxglove and "
+                    "Lichtblick), json, or ln (the raw bytes, for any md) (default "
+                    f"{DEFAULT_ENCODING}; docs/recording.md, Encodings)")
     ap.add_argument("--chunk-size", type=parse_size, default=DEFAULT_CHUNK_SIZE,
                     metavar="SIZE", help="samples per chunk, in bytes (default 1MiB)")
     ap.add_argument("--flush-interval", type=_seconds, default=1.0, metavar="S",
@@ -79,6 +85,9 @@ def parser() -> argparse.ArgumentParser:
                     help="the manager (default $LN_MANAGER)")
     ap.add_argument("--md-dir", action="append", default=[], metavar="DIR",
                     help="search DIR for message definitions first (may be repeated)")
+    ap.add_argument("--services", action="append", default=[], metavar="RE",
+                    help="also record the calls of the services whose whole name matches RE "
+                    "(may be repeated; docs/recording.md, Service calls)")
     ap.add_argument("--poll", type=_seconds, default=1.0, metavar="S",
                     help="look for new topics every S seconds (default 1)")
     ap.add_argument("-q", "--quiet", action="store_true",
@@ -136,8 +145,11 @@ class Session:
         prefix = args.prefix or time.strftime("ln_record_%Y%m%d_%H%M%S")
         self.out = SplitWriter(args.output, prefix, args.compression, args.chunk_size,
                                args.split_size)
-        self.recorder = Recorder(self.client, self.out, args.buffers, args.buffer_memory)
+        self.recorder = Recorder(self.client, self.out, args.buffers, args.buffer_memory,
+                                 args.encoding)
         self.tty = sys.stderr.isatty()
+        self.services = (ServiceRecording(self.recorder, address, args.services, self._line)
+                         if args.services else None)
         self._last = (time.monotonic(), 0, 0)
         self._rates = (0.0, 0.0)
 
@@ -185,6 +197,8 @@ class Session:
         sys.stderr.flush()
 
     def finish(self) -> int:
+        if self.services is not None:
+            self.services.stop()
         self.recorder.stop()
         error = self.recorder.error
         try:
@@ -199,11 +213,20 @@ class Session:
         rec = self.recorder
         files = ", ".join(str(p) for p in self.out.files)
         _say(self.args, f"{rec.samples} samples ({_mb(rec.bytes)}) of {len(rec.topics)} topics, "
-             f"{rec.drops} dropped, in {len(self.out.files)} files: {files}")
+             f"{rec.drops} dropped, {_calls(self.services)}in {len(self.out.files)} files: "
+             f"{files}")
         if error:
             print(f"ln_record: error: {error}", file=sys.stderr)
             return 1
         return 0
+
+
+def _calls(services: ServiceRecording | None) -> str:
+    """The summary's part about service calls ("" without --services)."""
+    if services is None:
+        return ""
+    return (f"{services.calls} calls of {len(services.counts)} services "
+            f"({services.drops} dropped), ")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -253,8 +276,13 @@ def run(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     ap = parser()
     args = ap.parse_args(argv)
-    if not (args.topics or args.all or args.regex):
-        ap.error("name topics to record, or give --all or --regex")
+    if not (args.topics or args.all or args.regex or args.services):
+        ap.error("name topics to record, or give --all, --regex or --services")
+    for r in args.services:
+        try:
+            re.compile(r)
+        except re.error as exc:
+            ap.error(f"--services {r!r}: {exc}")
     if args.buffers is not None and not 1 <= args.buffers <= MAX_BUFFERS:
         ap.error(f"--buffers must be 1..{MAX_BUFFERS}")
     for r in args.regex:

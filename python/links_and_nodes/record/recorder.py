@@ -1,8 +1,9 @@
 """The recording loop of ln_record: one queued subscription and one reader thread per topic.
 
-Each thread blocks in its port's read (libln releases the GIL meanwhile) and appends every
-sample, with its sequence number and publish time from the read's sample info, to the shared
-SplitWriter under one lock.  On stop each thread first drains what its queue holds, so a
+Each thread blocks in its port's read (libln releases the GIL meanwhile), encodes every
+sample in the recording's encoding (record/encodings.py; outside the lock, so topics encode
+side by side) and appends it, with its sequence number and publish time from the read's
+sample info, to the shared SplitWriter under one lock.  On stop each thread first drains what its queue holds, so a
 sample published before the stop is recorded.  The overruns a read reports are the samples the ring dropped
 before the recorder got to them: they are counted per topic.
 """
@@ -17,6 +18,7 @@ from typing import Any
 
 from .. import md_loader
 from ..mcap_format import md_schema_text
+from .encodings import DEFAULT_ENCODING, EncodingError, channel_encoder
 from .split_writer import SplitWriter
 
 MAX_BUFFERS = 1024  # libln's limit per port
@@ -41,6 +43,7 @@ class Recorded:
     channel: int
     buffers: int
     port: Any  # links_and_nodes subscriber
+    encode: Callable[[Any], Any]  # the sample's ln bytes -> the bytes stored
     samples: int = 0
     drops: int = 0
     thread: threading.Thread | None = None
@@ -50,8 +53,10 @@ class Recorder:
     """Records topics of `client` into `out` until stop()."""
 
     def __init__(self, client: Any, out: SplitWriter, buffers: int | None = None,
-                 buffer_memory: int = DEFAULT_BUFFER_MEMORY) -> None:
+                 buffer_memory: int = DEFAULT_BUFFER_MEMORY,
+                 encoding: str = DEFAULT_ENCODING) -> None:
         self.client = client
+        self.encoding = encoding
         self.out = out
         self.buffers = buffers
         self.buffer_memory = buffer_memory
@@ -81,6 +86,10 @@ class Recorder:
             return (f"its md '{md_name}' has dynamic fields: a sample holds their pointers, "
                     "not their data")
         size = ctypes.sizeof(cls)
+        try:
+            encoder = channel_encoder(self.encoding, md_name, text, cls.LAYOUT_HASH, size)
+        except EncodingError as exc:
+            return f"encoding {self.encoding} cannot take it: {exc}"
         buffers = buffers_for(size, self.buffers, self.buffer_memory)
         try:
             port = self.client.subscribe(topic, md_name, buffers=buffers)
@@ -88,12 +97,12 @@ class Recorder:
             return str(exc)
         with self.lock:
             try:
-                channel = self.out.add_topic(topic, md_name, text, cls.LAYOUT_HASH, size)
+                channel = self.out.add_channel(topic, encoder)
             except OSError as exc:
                 port.close()
                 self._fail(f"cannot write {self.out.writer.path}: {exc}")
                 return self.error
-        rec = Recorded(topic, md_name, channel, buffers, port)
+        rec = Recorded(topic, md_name, channel, buffers, port, encoder.encode)
         rec.thread = threading.Thread(target=self._run, args=(rec,), daemon=True,
                                       name=f"ln_record {topic}")
         self.topics[topic] = rec
@@ -106,7 +115,7 @@ class Recorder:
         size = ctypes.sizeof(port.packet)
         data = memoryview(port.packet).cast("B")  # read() fills this packet every time
         read: Callable[..., Any] = port.read
-        lock, write, stop = self.lock, self.out.write, self._stop
+        lock, write, stop, encode = self.lock, self.out.write, self._stop, rec.encode
         left = -1  # after stop: how many queued samples may still be drained
         try:
             while left:
@@ -120,8 +129,9 @@ class Recorder:
                     continue
                 if left > 0:
                     left -= 1
+                payload = encode(data)
                 with lock:
-                    write(rec.channel, info.seq, info.timestamp_ns, data)
+                    write(rec.channel, info.seq, info.timestamp_ns, payload)
                     self.samples += 1
                     self.bytes += size
                 rec.samples += 1

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from ..mcap_format import McapWriter
+from .encodings import ChannelEncoder
 
 
 class SplitWriter:
@@ -25,7 +26,7 @@ class SplitWriter:
         self.split_size = split_size
         self.writer_name = writer_name
         self.files: list[Path] = []
-        self._topics: list[tuple[str, str, bytes, int, int]] = []
+        self._channels: list[tuple[str, ChannelEncoder]] = []
         self.bytes_closed = 0  # of the files finished before the current one
         self._writer = self._open()
 
@@ -43,15 +44,22 @@ class SplitWriter:
         writer = McapWriter(path, self.compression, self.chunk_size, writer_name=self.writer_name,
                             overwrite=False)
         self.files.append(path)
-        for topic in self._topics:
-            writer.add_topic(*topic)
+        for topic, encoder in self._channels:
+            encoder.add_to(writer, topic)
         return writer
+
+    def add_channel(self, topic: str, encoder: ChannelEncoder) -> int:
+        """The channel id of a new topic stored as `encoder` says (the same in every file)."""
+        self._channels.append((topic, encoder))
+        return encoder.add_to(self._writer, topic)
 
     def add_topic(self, topic: str, md_name: str, md_text: bytes, layout_hash: int,
                   message_size: int) -> int:
-        """The channel id of a new topic (the same in every file)."""
-        self._topics.append((topic, md_name, md_text, layout_hash, message_size))
-        return self._writer.add_topic(topic, md_name, md_text, layout_hash, message_size)
+        """The channel id of a new topic stored as raw ln bytes (encoding `ln`)."""
+        from .encodings import channel_encoder
+
+        return self.add_channel(topic, channel_encoder("ln", md_name, md_text, layout_hash,
+                                                       message_size))
 
     def write(self, channel: int, seq: int, publish_time_ns: int, data: Any) -> None:
         w = self._writer

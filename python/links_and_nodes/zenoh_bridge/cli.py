@@ -54,7 +54,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--service-in", action="append", default=[], metavar="SPEC",
                     help="services of the remote bridge to provide here (repeatable)")
     ap.add_argument("--ros2", action="store_true", default=None,
-                    help="also publish outbound topics under rmw_zenoh-like keys, as JSON")
+                    help="also publish outbound topics under rmw_zenoh-like keys, as CDR")
     ap.add_argument("--ros2-domain", type=int, metavar="N", help="ROS domain id (default 0)")
     ap.add_argument("--name", help="client name at the manager (default ln_zenoh)")
     ap.add_argument("--md-dir", action="append", default=[], metavar="DIR",

@@ -4,7 +4,7 @@ The thread reads every sample the subscription gives (latest mode: the newest; q
 one) and puts it on `P/topic/<name>` with the attachment (wire.py), but only while a remote
 subscriber matches (Zenoh's matching listener): samples read while none does are counted as
 `unmatched`, samples over the topic's rate limit as `rate_limited`.  With --ros2 each sample
-also goes, as JSON, under the topic's ROS 2 key while a subscriber matches that one.
+also goes, as CDR, under the topic's ROS 2 key while a subscriber matches that one.
 
 With the native core (native.py) and without ROS 2, the core declares the publisher and reads
 the subscription in its own thread, with the same rules and counters; this object keeps the

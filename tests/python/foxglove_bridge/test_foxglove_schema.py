@@ -1,4 +1,4 @@
-"""The JSON Schemas ln_foxglove advertises (foxglove_bridge/schema.py), without a manager:
+"""The JSON Schemas ln_foxglove advertises (md_json.py), without a manager:
 every md type and nesting, dynamic fields in topics and in services, integer ranges, one type
 per field (what Foxglove's and Lichtblick's schema reader takes), and samples decoded as the
 bridge decodes them conforming to their schema."""
@@ -13,8 +13,7 @@ from typing import Any
 
 import pytest
 
-from links_and_nodes.foxglove_bridge.schema import root_schema
-from links_and_nodes.foxglove_bridge.topics import encode
+from links_and_nodes.md_json import encode, root_schema
 from links_and_nodes.tools.introspection import values as introspect
 from links_and_nodes.tools.introspection.client import load_md, md_class
 

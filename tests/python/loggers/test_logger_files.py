@@ -69,3 +69,25 @@ def test_fetch_records_round_trip_and_refuse_a_bad_length() -> None:
     assert lf.unpack_samples(lf.pack_samples(samples), 2) == samples
     with pytest.raises(ValueError, match="no multiple"):
         lf.unpack_samples(lf.pack_samples(samples)[:-1], 2)
+
+
+def test_an_mcap_is_saved_in_ros2_by_default_and_an_npz_in_ln(tmp_path) -> None:
+    from links_and_nodes.mcap_format import read_topics
+    from links_and_nodes.ros2.types import load_md
+
+    md = load_md("robot/joint_state")
+    stats = {"received": 1, "missed": 0, "skipped": 0, "dropped": 0, "start_seq": 0}
+    known = lf.new_entry("robot/joint_state", md.layout_hash, md.struct.size, 1)
+    lf.add_host(known, "h", [(1, 10, bytes(range(md.struct.size)))], stats)
+    unknown = lf.new_entry("nowhere/to_be_found", 1, 3, 1)  # no md here: stays ln
+    lf.add_host(unknown, "h", [(1, 1, b"abc")], stats)
+    download = {"arm.state": known, "other": unknown}
+    result = lf.save(download, tmp_path / "x.mcap")
+    assert {t: r["encoding"] for t, r in result["topics"].items()} == {
+        "arm.state": "ros2", "other": "ln"}
+    topics = read_topics(tmp_path / "x.mcap")
+    assert topics["arm.state"].message_encoding == "cdr"
+    assert topics["other"].message_encoding == "ln-md"
+    assert "encoding" not in lf.save(download, tmp_path / "x.npz")["topics"]["arm.state"]
+    with pytest.raises(ValueError, match="'ros2' is for .mcap files"):
+        lf.save(download, tmp_path / "y.npz", "ros2")

@@ -17,6 +17,8 @@ from polling import wait_for
 
 import links_and_nodes as ln
 from links_and_nodes import logger_files
+from links_and_nodes.mcap_format import iter_mcap, read_topics
+from links_and_nodes.record.encodings import ln_decoder
 
 TOPIC = "arm.state"
 
@@ -157,6 +159,16 @@ def test_topic_appearing_later_and_c_api_and_manager_side_save(loglab, tmp_path)
     assert meta["late.topic"]["samples"] == len(data) >= 200
     assert meta["late.topic"]["gaps"] == meta["late.topic"]["missed"]
     assert np.array_equal(data["cycle"], data["seq"].astype(np.uint32))
+    # an .mcap from the C API gets the default encoding, ros2, and decodes to the same samples
+    mcap = tmp_path / "c_api.mcap"
+    out = loglab.run_tool("logger_tool", "c_api", "-", "0", "0", "stop", str(mcap))
+    assert out.stdout.strip() == "ok", out.stdout + out.stderr
+    info = read_topics(mcap)["late.topic"]
+    assert info.message_encoding == "cdr"
+    to_ln = ln_decoder(info)
+    got = [(s.seq, s.publish_time_ns, to_ln(s.data)) for s in iter_mcap(mcap)]
+    assert [seq for seq, _, _ in got] == data["seq"].tolist()
+    assert got == lg.download_raw()["late.topic"]["samples"]
     refused = loglab.run_tool("logger_tool", "c_api", "late.*", "0", "1", "add")
     assert refused.returncode == 1 and "EINVAL" in refused.stdout
 
@@ -186,8 +198,6 @@ def test_lnc_logger_section_autostarts_and_cli_saves(loglab, tmp_path) -> None:
 
 
 def test_a_saved_mcap_holds_the_download_and_ln_play_reads_it(loglab, tmp_path) -> None:
-    from links_and_nodes.mcap_format import iter_mcap, read_topics
-
     loglab.start()
     loglab.publisher(TOPIC)
     lg = loglab.client().get_logger("tomcap")
@@ -197,14 +207,22 @@ def test_a_saved_mcap_holds_the_download_and_ln_play_reads_it(loglab, tmp_path) 
     lg.disable()
     raw = lg.download_raw()[TOPIC]
     local = tmp_path / "here.mcap"
-    lg.save(local)
+    assert lg.save(local)["topics"][TOPIC]["encoding"] == "ros2"  # the default
     remote = tmp_path / "on_manager.mcap"
-    assert lg.save_on_manager(str(remote))["topics"][TOPIC]["samples"] == len(raw["samples"])
-    for path in (local, remote):
+    saved = lg.save_on_manager(str(remote))["topics"][TOPIC]
+    assert (saved["samples"], saved["encoding"]) == (len(raw["samples"]), "ros2")
+    bitwise = tmp_path / "raw.mcap"
+    assert lg.save(bitwise, encoding="ln")["topics"][TOPIC]["encoding"] == "ln"
+    remote_raw = tmp_path / "on_manager_raw.mcap"
+    assert lg.save_on_manager(str(remote_raw), "ln")["topics"][TOPIC]["encoding"] == "ln"
+    for path, encoding in [(local, "cdr"), (remote, "cdr"), (bitwise, "ln-md"),
+                           (remote_raw, "ln-md")]:
         info = read_topics(path)[TOPIC]
         assert (info.md_name, info.layout_hash) == ("robot/joint_state", raw["layout_hash"])
+        assert info.message_encoding == encoding, path
         assert b"position" in info.md_text  # the md itself travels with the file
-        got = [(s.seq, s.publish_time_ns, bytes(s.data)) for s in iter_mcap(path)]
+        to_ln = ln_decoder(info) if encoding == "cdr" else bytes
+        got = [(s.seq, s.publish_time_ns, to_ln(s.data)) for s in iter_mcap(path)]
         assert got == raw["samples"]
     # ln_play publishes the capture again, value for value, in order
     sub = lg.clnt.subscribe("replayed.state", "robot/joint_state", buffers=len(raw["samples"]))

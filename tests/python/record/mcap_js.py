@@ -1,5 +1,7 @@
 """The second independent MCAP reader of the recording tests: Foxglove's TypeScript library
-(@mcap/core with @mcap/support's decompressors) under Node.js, run by mcap_js/check_mcap.mjs.
+(@mcap/core with @mcap/support's decompressors) under Node.js, run by mcap_js/check_mcap.mjs;
+and Foxglove's ROS 2 decoding (@foxglove/rosmsg, @foxglove/rosmsg2-serialization), run by
+mcap_js/decode_ros2.mjs.
 
 It is installed with npm into build/mcap_js (once; a lock keeps parallel workers from
 installing it twice).  Where Node.js or npm is missing or the install fails,
@@ -44,7 +46,8 @@ def _installed() -> Path:
             if done.returncode != 0:
                 _unavailable(f"npm install failed: {done.stderr.strip()[-2000:]}")
             stamp.write_bytes(wanted)
-        shutil.copy(HERE / "check_mcap.mjs", TARGET / "check_mcap.mjs")
+        for script in HERE.glob("*.mjs"):
+            shutil.copy(script, TARGET / script.name)
     return TARGET
 
 
@@ -56,6 +59,20 @@ def js_read(*files: Path) -> dict[str, Any]:
     done = subprocess.run(["node", str(target / "check_mcap.mjs"), *map(str, files)],
                           capture_output=True, text=True, timeout=300, cwd=target)
     assert done.returncode == 0, f"@mcap/core rejected {files}: {done.stderr}"
+    result: dict[str, Any] = json.loads(done.stdout)
+    return result
+
+
+def js_decode_ros2(*files: Path) -> dict[str, Any]:
+    """The ros2 channels of each file as Foxglove's readers decode them: {path: {topic:
+    {schema, schema_encoding, message_encoding, messages: [[seq, log_time, value,
+    trailing bytes]]}}}, value a dict of the ROS 2 field names (a 64-bit integer exact,
+    -0.0 kept, NaN and ±Infinity as "NaN", "Infinity", "-Infinity"); {path: {"error": text}}
+    for a file, schema or message it cannot read."""
+    target = _installed()
+    done = subprocess.run(["node", str(target / "decode_ros2.mjs"), *map(str, files)],
+                          capture_output=True, text=True, timeout=300, cwd=target)
+    assert done.returncode == 0, f"decode_ros2.mjs failed on {files}: {done.stderr}"
     result: dict[str, Any] = json.loads(done.stdout)
     return result
 

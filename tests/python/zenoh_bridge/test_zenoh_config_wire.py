@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from zenoh_sites import require_zenoh
 
+from links_and_nodes.ros2 import rihs01
 from links_and_nodes.zenoh_bridge import ros2
 from links_and_nodes.zenoh_bridge.config import (
     ConfigError,
@@ -156,12 +157,12 @@ def test_command_line_specs() -> None:
 def test_ros2_mapping_formats() -> None:
     assert ros2.ros_topic("arm.state") == "/arm/state"
     assert ros2.ros_topic("robot/arm-1.state") == "/robot/arm_1/state"
-    assert ros2.ros_type("robot/joint_state") == "robot::msg::dds_::joint_state_"
-    assert ros2.ros_type("a/b/c") == "a_b::msg::dds_::c_"
-    h = ros2.type_hash("robot/joint_state", 1)
-    assert h.startswith("RIHS01_") and len(h) == 7 + 64
-    assert ros2.data_key(0, "arm.state", "robot/joint_state", 1) == \
-        f"0/arm/state/robot::msg::dds_::joint_state_/{h}"
+    assert ros2.ros_type("robot/joint_state") == "robot::msg::dds_::JointState_"
+    assert ros2.ros_type("a/b/c") == "a_b::msg::dds_::C_"
+    h = ros2.type_hash("robot/joint_state")
+    assert h == rihs01("robot/joint_state")
+    assert ros2.data_key(0, "arm.state", "robot/joint_state") == \
+        f"0/arm/state/robot::msg::dds_::JointState_/{h}"
     gid = bytes(range(16))
     data = ros2.encode_attachment(5, 123, gid)
     assert len(data) == ros2.ATTACHMENT_SIZE == 33

@@ -1,11 +1,11 @@
 """Plain Zenoh sessions of the bridge tests (no links_and_nodes client), run inside a lab host:
 
     zb_raw.py bad KEY --connect EP           put malformed samples on KEY (a bridged topic key)
-    zb_raw.py ros2 --connect EP [--count N]  decode what --ros2 publishes, print it as JSON lines
+    zb_raw.py ros2 --connect EP [--count N]  print what --ros2 publishes as JSON lines
 
 `bad` waits until a subscriber matches KEY, puts one sample of each kind of damage, prints
 "sent N" and exits.  `ros2` prints {"token": KEY} per liveliness token under @ros2_lv/ and
-{"key", "encoding", "fields", "seq", "time_ns", "gid"} per sample under <domain>/**.
+{"key", "encoding", "payload" (hex), "seq", "time_ns", "gid"} per sample under <domain>/**.
 """
 
 from __future__ import annotations
@@ -70,7 +70,7 @@ def show_ros2(args: argparse.Namespace) -> None:
     def on_sample(sample: zenoh.Sample) -> None:
         seq, t_ns, gid = ros2.decode_attachment(sample.attachment.to_bytes())
         events.put({"key": str(sample.key_expr), "encoding": str(sample.encoding),
-                    "fields": json.loads(sample.payload.to_bytes()), "seq": seq,
+                    "payload": sample.payload.to_bytes().hex(), "seq": seq,
                     "time_ns": t_ns, "gid": gid.hex()})
 
     with session(args.connect) as s:

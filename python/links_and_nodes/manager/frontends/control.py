@@ -162,10 +162,11 @@ class Control:
                               "ln_daemon)", "ENOTFOUND")
         return self.loggers
 
-    async def _save_logger(self, name: str, path: Path) -> dict[str, Any]:
+    async def _save_logger(self, name: str, path: Path, encoding: str | None = None
+                           ) -> dict[str, Any]:
         data = await self._loggers().download(name)
         try:
-            return await asyncio.to_thread(logger_files.save, data, path)
+            return await asyncio.to_thread(logger_files.save, data, path, encoding)
         except (OSError, ValueError) as exc:
             raise LoggerError(f"cannot save logger {name!r} to {path}: {exc}") from None
 

@@ -100,7 +100,7 @@ async def logger_save(control: Any, c: dict[str, Any]) -> dict[str, Any]:
     if not path.is_absolute():
         raise LoggerError(f"save needs an absolute path on the manager's host, got "
                           f"{str(path)!r}", "EINVAL")
-    return dict(await control._save_logger(c["name"], path))
+    return dict(await control._save_logger(c["name"], path, c["encoding"]))
 
 
 # ---- the console's and the CLI's views --------------------------------------------------------
@@ -133,11 +133,12 @@ def _cli_save(mgr: Any, args: dict[str, Any]) -> list[str]:
 
     path = Path(args["path"])
     if args["on_manager"]:
-        result = mgr.command("logger_save", name=args["name"], path=str(path.absolute()))
+        result = mgr.command("logger_save", name=args["name"], path=str(path.absolute()),
+                             encoding=args["encoding"])
     else:
         data = logger_files.download(lambda o, **a: mgr.command(o, name=args["name"], **a))
         try:
-            result = logger_files.save(data, path)
+            result = logger_files.save(data, path, args["encoding"])
         except (OSError, ValueError) as exc:
             raise ManagerError(f"cannot save {args['path']}: {exc}") from None
     if args.get("json"):
@@ -169,9 +170,12 @@ _SAVE = _logger(
     "logger_save", "write what a logger holds to a file on the manager's host", logger_save,
     _NAME, Arg("path", "str", "an absolute path, .mcap or .npz", required=True, nonempty=True,
                positional=True, metavar="FILE"),
+    Arg("encoding", "str", "of an .mcap: ros2 (CDR, the default, what viewers decode), json "
+        "or ln (raw bytes); a topic whose md is not here or that the encoding refuses stays "
+        "ln", default=None, nullable=True, choices=("ros2", "json", "ln")),
     Arg("on_manager", "bool", "write the file on the manager's host instead of here",
         where="cli"),
-    result="path, topics: {TOPIC: {samples, md_name, missed, dropped, gaps}}",
+    result="path, topics: {TOPIC: {samples, md_name, missed, dropped, gaps, encoding}}",
     phrase="logger NAME save", console_run=_console_save, cli_run=_cli_save)
 
 
