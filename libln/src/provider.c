@@ -411,6 +411,29 @@ static int answer_error(ln_service_request* req, int code, const char* text)
     return req->ep->broken ? LN_ECONNECTION : LN_OK;
 }
 
+/* The checks a HELLO and a TAP share: a whole frame with our magic, our protocol version and
+ * this socket's service; else an ERROR to the peer (`malformed` says which frame) and -1. */
+static int check_greeting(ln_svc_endpoint* ep, ln_rbuf* r, uint32_t magic, uint16_t version,
+                          const char* name, const char* malformed)
+{
+    ln_service_provider* p = ep->prov;
+    if (ln_rbuf_end(r) != LN_OK || magic != LN_SVC_MAGIC) {
+        send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": %s", p->name, malformed);
+        return -1;
+    }
+    if (version != LN_SVC_VERSION) {
+        send_error(ep, 0, LN_EVERSION, "service \"%s\" speaks service protocol %d, not %u", p->name,
+                   LN_SVC_VERSION, version);
+        return -1;
+    }
+    if (strcmp(name, p->name) != 0) {
+        send_error(ep, 0, LN_ENOTFOUND, "this socket serves service \"%s\", not \"%s\"", p->name,
+                   name);
+        return -1;
+    }
+    return 0;
+}
+
 static int handle_hello(ln_svc_endpoint* ep, ln_rbuf* r)
 {
     ln_service_provider* p = ep->prov;
@@ -428,20 +451,8 @@ static int handle_hello(ln_svc_endpoint* ep, ln_rbuf* r)
         memcpy(ep->caller, caller, n);
         ep->caller[n] = '\0';
     }
-    if (ln_rbuf_end(r) != LN_OK || magic != LN_SVC_MAGIC) {
-        send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": expected a HELLO frame", p->name);
+    if (check_greeting(ep, r, magic, version, name, "expected a HELLO frame") < 0)
         return -1;
-    }
-    if (version != LN_SVC_VERSION) {
-        send_error(ep, 0, LN_EVERSION, "service \"%s\" speaks service protocol %d, not %u", p->name,
-                   LN_SVC_VERSION, version);
-        return -1;
-    }
-    if (strcmp(name, p->name) != 0) {
-        send_error(ep, 0, LN_ENOTFOUND, "this socket serves service \"%s\", not \"%s\"", p->name,
-                   name);
-        return -1;
-    }
     if (hash != p->layout_hash) {
         send_error(ep, 0, LN_ELAYOUT,
                    "service \"%s\" has md \"%s\" with layout 0x%016llx, the caller's layout is "
@@ -467,20 +478,8 @@ static int handle_tap(ln_svc_endpoint* ep, ln_rbuf* r)
     uint16_t version = ln_rbuf_u16(r);
     ln_rbuf_str(r, name, sizeof name);
     ln_rbuf_str(r, recorder, sizeof recorder);
-    if (ln_rbuf_end(r) != LN_OK || magic != LN_SVC_MAGIC) {
-        send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": malformed TAP frame", p->name);
+    if (check_greeting(ep, r, magic, version, name, "malformed TAP frame") < 0)
         return -1;
-    }
-    if (version != LN_SVC_VERSION) {
-        send_error(ep, 0, LN_EVERSION, "service \"%s\" speaks service protocol %d, not %u", p->name,
-                   LN_SVC_VERSION, version);
-        return -1;
-    }
-    if (strcmp(name, p->name) != 0) {
-        send_error(ep, 0, LN_ENOTFOUND, "this socket serves service \"%s\", not \"%s\"", p->name,
-                   name);
-        return -1;
-    }
     ln_wbuf_reset(&ep->tx);
     size_t start = ln_proto_frame_begin(&ep->tx, LN_SVC_TAPPED);
     ln_wbuf_str(&ep->tx, p->md_name);

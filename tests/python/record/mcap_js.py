@@ -55,12 +55,7 @@ def js_read(*files: Path) -> dict[str, Any]:
     """What @mcap/core read from each file: {path: {done, leftover, messages: [[topic, seq,
     publish_time, log_time, data hex]], schemas, channels, indexed?}}; fails the test with
     the reader's error when it rejects a file."""
-    target = _installed()
-    done = subprocess.run(["node", str(target / "check_mcap.mjs"), *map(str, files)],
-                          capture_output=True, text=True, timeout=300, cwd=target)
-    assert done.returncode == 0, f"@mcap/core rejected {files}: {done.stderr}"
-    result: dict[str, Any] = json.loads(done.stdout)
-    return result
+    return _node("check_mcap.mjs", files, "@mcap/core rejected")
 
 
 def js_decode_ros2(*files: Path) -> dict[str, Any]:
@@ -69,10 +64,15 @@ def js_decode_ros2(*files: Path) -> dict[str, Any]:
     trailing bytes]]}}}, value a dict of the ROS 2 field names (a 64-bit integer exact,
     -0.0 kept, NaN and ±Infinity as "NaN", "Infinity", "-Infinity"); {path: {"error": text}}
     for a file, schema or message it cannot read."""
+    return _node("decode_ros2.mjs", files, "decode_ros2.mjs failed on")
+
+
+def _node(script: str, files: tuple[Path, ...], failed: str) -> dict[str, Any]:
+    """The JSON that `script` prints for `files`; fails the test with its stderr."""
     target = _installed()
-    done = subprocess.run(["node", str(target / "decode_ros2.mjs"), *map(str, files)],
+    done = subprocess.run(["node", str(target / script), *map(str, files)],
                           capture_output=True, text=True, timeout=300, cwd=target)
-    assert done.returncode == 0, f"decode_ros2.mjs failed on {files}: {done.stderr}"
+    assert done.returncode == 0, f"{failed} {files}: {done.stderr}"
     result: dict[str, Any] = json.loads(done.stdout)
     return result
 
