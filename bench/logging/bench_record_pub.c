@@ -15,8 +15,7 @@
 
 #include "record_messages.h"
 
-static const char usage[] =
-    "usage: bench_record_pub PREFIX N BUFFERS   (manager: $LN_MANAGER)\n";
+static const char usage[] = "usage: bench_record_pub PREFIX N BUFFERS   (manager: $LN_MANAGER)\n";
 
 static uint64_t now_ns(void)
 {

@@ -41,7 +41,7 @@ typedef struct ln_svc_endpoint {
     size_t rx_len, rx_cap;
     ln_wbuf tx;
     ln_arena arena;
-    void* request; /* decoded request struct, prov->request_size bytes */
+    void* request;                    /* decoded request struct, prov->request_size bytes */
     char caller[LN_SVC_MAX_NAME + 1]; /* the caller's client name from HELLO ("" if none) */
     int64_t tap_id;                   /* > 0: a recorder's connection (svc_tap.h) */
 } ln_svc_endpoint;

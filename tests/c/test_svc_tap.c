@@ -27,8 +27,12 @@ static ln_service_provider* provider(void)
 
 static ln_service_request request(ln_service_provider* p, const void* wire, size_t len)
 {
-    ln_service_request r = {.prov = p, .ep = &ep, .wire = wire, .wire_len = len,
-                            .t_real_ns = 1234567890123LL, .t_mono_ns = 1};
+    ln_service_request r = {.prov = p,
+                            .ep = &ep,
+                            .wire = wire,
+                            .wire_len = len,
+                            .t_real_ns = 1234567890123LL,
+                            .t_mono_ns = 1};
     return r;
 }
 
@@ -192,7 +196,7 @@ static void test_free_while_a_write_is_stuck(void)
     ln_service_request r = request(p, big, 1 << 20);
     for (int i = 0; i < 8; i++)
         ln_svc_tap_call(p, &r, 0, "", 0);
-    usleep(20000); /* let the sender block in its write */
+    usleep(20000);       /* let the sender block in its write */
     ln_svc_taps_free(p); /* must return: shutdown() ends the write */
     LN_CHECK(p->taps == NULL);
     free(big);
