@@ -39,9 +39,9 @@ def chunk_bodies(path: Path) -> list[bytes]:
 
 def pypi_records(path: Path) -> list[tuple[int, str, int, int, int, bytes]]:
     """(channel id, topic, sequence, log time, publish time, data): stream reader, CRCs."""
+    records, complete = pypi_stream(path)  # skips or fails first where mcap is missing
     from mcap.records import Channel, Message
 
-    records, complete = pypi_stream(path)
     assert complete
     topics = {r.id: r.topic for r in records if isinstance(r, Channel)}
     return [(r.channel_id, topics[r.channel_id], r.sequence, r.log_time, r.publish_time,
@@ -51,9 +51,9 @@ def pypi_records(path: Path) -> list[tuple[int, str, int, int, int, bytes]]:
 def check_indexed(path: Path) -> None:
     """The PyPI indexed reader: chunk indexes lead to the chunks and their message indexes,
     the statistics count what the file holds."""
+    expected = pypi_records(path)
     from mcap.reader import make_reader
 
-    expected = pypi_records(path)
     with open(path, "rb") as f:
         reader = make_reader(f, validate_crcs=True)
         summary = reader.get_summary()

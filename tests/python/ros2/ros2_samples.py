@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from buildtree import missing_test_tool
 
 from links_and_nodes.ros2.names import field_names
 from ln_generate import MdError, MdRegistry, Struct, default_md_dirs
@@ -187,7 +188,10 @@ def same(a: Any, b: Any) -> bool:
 
 def rosbags_store(schema: str, type_name: str) -> Any:
     """A rosbags type store with the types of a ros2msg schema registered from its text."""
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+    try:
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+    except ImportError:
+        missing_test_tool("the PyPI package rosbags (requirements-dev.txt)")
 
     store = get_typestore(Stores.EMPTY)
     parts = schema.split(SEPARATOR)
@@ -202,8 +206,11 @@ def rosbags_store(schema: str, type_name: str) -> Any:
 
 def mcap_decoder(schema: str, type_name: str) -> Any:
     """mcap-ros2-support's CDR decoder built from the schema, as a viewer would build it."""
-    from mcap.records import Schema
-    from mcap_ros2.decoder import DecoderFactory
+    try:
+        from mcap.records import Schema
+        from mcap_ros2.decoder import DecoderFactory
+    except ImportError:
+        missing_test_tool("the PyPI package mcap-ros2-support (requirements-dev.txt)")
 
     decoder = DecoderFactory().decoder_for(
         "cdr", Schema(id=1, name=type_name, encoding="ros2msg", data=schema.encode()))

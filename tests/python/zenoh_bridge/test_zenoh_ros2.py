@@ -11,9 +11,7 @@ import json
 import re
 from pathlib import Path
 
-from mcap.records import Schema
-from mcap_ros2.decoder import DecoderFactory
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from buildtree import missing_test_tool
 from zenoh_sites import Site, log_text, wait_log
 
 from links_and_nodes import ros2 as ln_ros2
@@ -24,6 +22,12 @@ HASH = r"RIHS01_[0-9a-f]{64}"
 
 def _decoders() -> tuple:  # type: ignore[type-arg]
     """(mcap-ros2-support's decoder, a rosbags type store) of zbtest/sample's ROS 2 type."""
+    try:
+        from mcap.records import Schema
+        from mcap_ros2.decoder import DecoderFactory
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+    except ImportError:
+        missing_test_tool("the PyPI packages mcap-ros2-support and rosbags (requirements-dev.txt)")
     schema = ln_ros2.msg_schema("zbtest/sample", MD_DIRS)
     mcap = DecoderFactory().decoder_for(
         "cdr", Schema(id=1, name="zbtest/msg/Sample", encoding="ros2msg", data=schema.encode()))

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -206,6 +207,11 @@ def main(argv: list[str] | None = None) -> int:
 
         return asyncio.run(serve(args, directory, config))
     finally:
+        # Everything is down once the loop has ended, and it put the default handlers back: a
+        # SIGTERM/SIGINT now (asked to stop while stopping) must not turn this clean exit
+        # into a death by signal.
+        for signum in (signal.SIGTERM, signal.SIGINT):
+            signal.signal(signum, signal.SIG_IGN)
         lock.release()
 
 
