@@ -3,7 +3,8 @@
 Goals (PASS/MISS in the table):
   1. cut, filter, merge and convert each process their input at >= 0.3x the MB/s of
      `cat FILE > /dev/null` measured in the same run on the same file (the floor: reading
-     the bytes and nothing else);
+     the bytes and nothing else); `cp FILE NEW` (reading and writing the bytes, what a
+     tool that writes its output cannot go below) is shown beside it as a second floor;
   2. memory does not grow with the input: each command's peak RSS on the big input is at
      most 1.25x its peak RSS on an input a quarter of that size (plus 8 MB slack).
 Input: a recording written with McapWriter (zstd chunks of 1 MiB, as ln_record writes),
@@ -102,6 +103,15 @@ def cat_seconds(path: Path) -> float:
     return time.perf_counter() - start
 
 
+def cp_seconds(path: Path, tmp: Path) -> float:
+    copy = tmp / "cp.mcap"
+    start = time.perf_counter()
+    subprocess.run(["cp", str(path), str(copy)], check=True)
+    took = time.perf_counter() - start
+    copy.unlink()
+    return took
+
+
 # name -> (path, arguments); path "fast": whole chunks copied, "samples": sample by sample
 CASES = {
     "cut +1 s .. end": ("fast", ["cut", "SRC", "--start", "+1"]),
@@ -139,6 +149,8 @@ def measure(size: int, repeat: int, tmp: Path) -> dict[str, dict[str, float]]:
     cat_seconds(src)  # into the page cache
     results = {"cat": {"mb_s": mb / statistics.median(cat_seconds(src) for _ in range(repeat)),
                        "rss_mb": 0.0},
+               "cp": {"mb_s": mb / statistics.median(cp_seconds(src, tmp)
+                                                     for _ in range(repeat))},
                "start-up": {"s": statistics.median(startup_seconds() for _ in range(repeat))}}
     for name, argv in commands(src, halves, tmp).items():
         runs = [run(argv) for _ in range(repeat)]
@@ -161,6 +173,7 @@ def main() -> int:
         small_r = measure(big // 4, args.repeat, Path(d))
         big_r = measure(big, args.repeat, Path(d))
     cat = big_r["cat"]["mb_s"]
+    cp = big_r["cp"]["mb_s"]
     startup = big_r["start-up"]["s"]
     mb = big / 1e6
     rows = []
@@ -169,19 +182,20 @@ def main() -> int:
         ratio = b["mb_s"] / cat
         mem_ok = b["rss_mb"] <= 1.25 * s["rss_mb"] + 8
         rows.append({"command": name, "path": path, "mb_s": round(b["mb_s"], 1),
-                     "x_cat": round(ratio, 3),
+                     "x_cat": round(ratio, 3), "x_cp": round(b["mb_s"] / cp, 3),
                      "mb_s_in_main": round(mb / b["work_s"], 1),
                      "x_cat_in_main": round(mb / b["work_s"] / cat, 3),
                      "rss_mb": round(b["rss_mb"], 1), "rss_mb_quarter": round(s["rss_mb"], 1),
                      "speed": "PASS" if ratio >= 0.3 else "MISS",
                      "memory": "PASS" if mem_ok else "MISS"})
     lines = [f"ln_bag on a {big // 1_000_000} MB zstd recording (4 KiB samples); "
-             f"`cat > /dev/null`: {cat:.0f} MB/s; Python start-up with ln_bag imported: "
+             f"`cat > /dev/null`: {cat:.0f} MB/s; `cp`: {cp:.0f} MB/s; Python start-up with ln_bag imported: "
              f"{startup:.2f} s", "",
-             "| case | path | MB/s | x cat | goal 0.3x | MB/s in main() | x cat | peak RSS MB "
-             "| on 1/4 input | memory |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "| case | path | MB/s | x cat | goal 0.3x | x cp | MB/s in main() | x cat "
+             "| peak RSS MB | on 1/4 input | memory |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     lines += [f"| {r['command']} | {r['path']} | {r['mb_s']} | {r['x_cat']} | {r['speed']} | "
+              f"{r['x_cp']} | "
               f"{r['mb_s_in_main']} | {r['x_cat_in_main']} | {r['rss_mb']} | "
               f"{r['rss_mb_quarter']} | {r['memory']} |" for r in rows]
     text = "\n".join(lines)
@@ -191,7 +205,7 @@ def main() -> int:
     (out / "bag.md").write_text(text + "\n")
     (out / "bag.json").write_text(json.dumps({
         "goal": GOAL, "quick": args.quick, "input_mb": big / 1e6, "repeat": args.repeat,
-        "cat_mb_s": round(cat, 1), "startup_s": round(startup, 3), "rows": rows, "machine": platform.machine(),
+        "cat_mb_s": round(cat, 1), "cp_mb_s": round(cp, 1), "startup_s": round(startup, 3), "rows": rows, "machine": platform.machine(),
         "cpus": os.cpu_count(), "python": platform.python_version(),
         "self_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}, indent=1)
         + "\n")
