@@ -12,7 +12,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from . import __version__, emit_c, emit_cpp, emit_python
+from . import __version__, emit_c, emit_cpp, emit_python, emit_rust
 from .diagnostics import Diagnostic, MdError
 from .lookup import ENV_DIRS, default_md_dirs
 from .model import MessageDef
@@ -23,14 +23,15 @@ EMITTERS: dict[str, Callable[[list[MessageDef], Path, str], str]] = {
     "c": emit_c.emit,
     "cpp": emit_cpp.emit,
     "python": emit_python.emit,
+    "rust": emit_rust.emit,
 }
-SUFFIX_LANG = {".h": "c", ".hpp": "cpp", ".hh": "cpp", ".hxx": "cpp", ".py": "python"}
+SUFFIX_LANG = {".h": "c", ".hpp": "cpp", ".hh": "cpp", ".hxx": "cpp", ".py": "python", ".rs": "rust"}
 
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="ln_generate",
-        description="Generate C, C++ or Python types from links_and_nodes message definitions.",
+        description="Generate C, C++, Python or Rust types from links_and_nodes message definitions.",
         epilog=f"Definitions are looked up in the --md-dir directories in order, then in the "
         f"built-in message_definitions, then in ${ENV_DIRS} (colon-separated).",
     )
@@ -39,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--md-dir", action="append", default=[], metavar="DIR",
                    help="directory to look up definitions in (repeatable, searched first)")
     p.add_argument("--lang", choices=sorted(EMITTERS),
-                   help="output language (default: from the suffix of -o: .h, .hpp, .py)")
+                   help="output language (default: from the suffix of -o: .h, .hpp, .py, .rs)")
     p.add_argument("--print-deps", action="store_true",
                    help="print the path of every md file the names need, one per line; write nothing")
     p.add_argument("--version", action="version", version=f"ln_generate {__version__}")

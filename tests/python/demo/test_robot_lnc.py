@@ -110,6 +110,7 @@ class Demo:
     manager_port: int
     daemon_port: int
     env: dict[str, str]
+    config: Path = CONFIG
     proc: subprocess.Popen[str] | None = None
 
     @property
@@ -123,7 +124,7 @@ class Demo:
     def start(self) -> None:
         with open(self.tmp / "manager.log", "w") as log:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", "links_and_nodes.manager", "-c", str(CONFIG),
+                [sys.executable, "-m", "links_and_nodes.manager", "-c", str(self.config),
                  "--instance", self.instance, "--start-all", "--wait-ready",
                  "--ready-timeout", str(LIMIT), "--exit-on-failure", "--no-console"],
                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=log, text=True,
@@ -173,8 +174,9 @@ def end(pid: int) -> None:
         os.kill(pid, signal.SIGKILL)
 
 
-@pytest.fixture
-def demo(tmp_path: Path) -> Iterator[Demo]:
+def run_demo(tmp_path: Path, config: Path = CONFIG) -> Iterator[Demo]:
+    """A Demo of `config` (not started) with private ports, key and runtime directory; at
+    the end its manager, daemon and processes are gone, whatever happened."""
     if not DAEMON.exists():
         pytest.fail(f"{DAEMON} is missing: run scons first")
     for exe in ("arm_sensor", "arm_controller"):
@@ -186,7 +188,8 @@ def demo(tmp_path: Path) -> Iterator[Demo]:
            "LN_ARBITER_PORT": str(daemon_port), "LN_DEMO_PORT": str(manager_port),
            "LN_PYTHON": sys.executable}
     env.pop("LN_MANAGER", None)
-    run = Demo(tmp_path, f"robot_demo_{uuid.uuid4().hex[:8]}", manager_port, daemon_port, env)
+    run = Demo(tmp_path, f"robot_demo_{uuid.uuid4().hex[:8]}", manager_port, daemon_port, env,
+               config)
     try:
         yield run
     finally:
@@ -207,6 +210,11 @@ def demo(tmp_path: Path) -> Iterator[Demo]:
             end(pid)
         assert run.daemon_pids() == []
         assert not leftovers, f"processes of the demo left running: {leftovers}"
+
+
+@pytest.fixture
+def demo(tmp_path: Path) -> Iterator[Demo]:
+    yield from run_demo(tmp_path)
 
 
 def first(history: list[dict[str, object]], state: str) -> float:
