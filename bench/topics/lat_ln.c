@@ -1,13 +1,16 @@
 /* lat_ln.c — ping-pong latency through two libln topics between two processes; ping times
  * every round trip.  copy: ln_write/ln_read of the whole sample; zc: loan/commit and
- * borrow/release touching only the first and last 8 bytes.  Manager from $LN_MANAGER. */
+ * borrow/release touching only the first and last 8 bytes; full: zero-copy moving the whole
+ * sample (ping copies its buffer into the loan and the reply out of the borrow, pong copies
+ * the borrowed sample into its loan).  Manager from $LN_MANAGER. */
 #include <inttypes.h>
 
 #include "bench_common.h"
 
 static const char usage[] =
-    "usage: lat_ln pong PREFIX SIZE copy|zc TOTAL [WARMUP]    echo TOTAL samples\n"
-    "       lat_ln ping PREFIX SIZE copy|zc COUNT WARMUP OUT  COUNT round trips (ns) to OUT\n"
+    "usage: lat_ln pong PREFIX SIZE copy|zc|full TOTAL [WARMUP]    echo TOTAL samples\n"
+    "       lat_ln ping PREFIX SIZE copy|zc|full COUNT WARMUP OUT  COUNT round trips (ns) "
+    "to OUT\n"
     "Both print {\"minflt\": faults, \"samples\": n} over the round trips after WARMUP.\n";
 
 typedef struct ends {
@@ -15,10 +18,11 @@ typedef struct ends {
     ln_outport* pub;
     ln_inport* sub;
     size_t size;
-    int zc;
+    int zc;   /* zero-copy (zc or full) */
+    int full; /* full: the whole sample is copied into loans and out of borrows */
 } ends;
 
-static void open_ends(ends* e, const char* prefix, const char* role, size_t size, int zc)
+static void open_ends(ends* e, const char* prefix, const char* role, size_t size, const char* mode)
 {
     bench_md md = bench_md_for(size);
     char out[256], in[256];
@@ -33,7 +37,8 @@ static void open_ends(ends* e, const char* prefix, const char* role, size_t size
     if ((rc = ln_subscribe(e->clnt, &e->sub, in, md.name, md.hash, md.size, NULL)) < 0)
         bench_fail("ln_subscribe", rc);
     e->size = size;
-    e->zc = zc;
+    e->full = strcmp(mode, "full") == 0;
+    e->zc = e->full || strcmp(mode, "zc") == 0;
 }
 
 /* Send sample `i` (copy mode: from buf). */
@@ -49,9 +54,31 @@ static void send_one(const ends* e, uint64_t i, void* buf)
     void* slot;
     if ((rc = ln_write_loan(e->pub, &slot, -1)) < 0)
         bench_fail("ln_write_loan", rc);
-    bench_stamp(slot, e->size, i);
+    if (e->full) {
+        bench_stamp(buf, e->size, i);
+        memcpy(slot, buf, e->size);
+    } else {
+        bench_stamp(slot, e->size, i);
+    }
     if ((rc = ln_write_commit(e->pub)) < 0)
         bench_fail("ln_write_commit", rc);
+}
+
+/* full: copy the borrowed sample whole into `buf` (ping) or into a loan sent back (echo);
+ * returns its counter. */
+static uint64_t receive_full(const ends* e, const void* sample, void* buf, int echo)
+{
+    int rc;
+    void* slot = buf;
+    if (echo && (rc = ln_write_loan(e->pub, &slot, -1)) < 0)
+        bench_fail("ln_write_loan", rc);
+    memcpy(slot, sample, e->size);
+    if ((rc = ln_read_release(e->sub)) < 0)
+        bench_fail("ln_read_release", rc);
+    uint64_t counter = bench_check(slot, e->size, "lat_ln");
+    if (echo && (rc = ln_write_commit(e->pub)) < 0)
+        bench_fail("ln_write_commit", rc);
+    return counter;
 }
 
 /* Receive one sample and return its counter; with `echo` send it straight back. */
@@ -70,6 +97,8 @@ static uint64_t receive_one(const ends* e, void* buf, int echo)
     const void* sample;
     if ((rc = ln_read_borrow(e->sub, &sample, -1, NULL)) < 0)
         bench_fail("ln_read_borrow", rc);
+    if (e->full)
+        return receive_full(e, sample, buf, echo);
     counter = bench_check(sample, e->size, "lat_ln");
     void* slot = NULL;
     if (echo && (rc = ln_write_loan(e->pub, &slot, -1)) < 0)
@@ -102,7 +131,7 @@ int main(int argc, char** argv)
     int ping = strcmp(argv[1], "ping") == 0;
     size_t size = strtoull(argv[3], NULL, 10);
     ends e;
-    open_ends(&e, argv[2], argv[1], size, strcmp(argv[4], "zc") == 0);
+    open_ends(&e, argv[2], argv[1], size, argv[4]);
     uint64_t count = strtoull(argv[5], NULL, 10);
     void* buf = bench_alloc(size);
     if (!ping) {
