@@ -172,6 +172,16 @@ def schema_message_class(md_name: str, schema: bytes) -> Any:
 
 # ---- writer -----------------------------------------------------------------------------------
 
+class SealedChunk(NamedTuple):
+    """A chunk closed for new messages, not written yet: its records (uncompressed), the
+    Message Index entries per channel and its first and last log time."""
+
+    raw: bytearray
+    indexes: list[tuple[int, bytes]]
+    t0: int
+    t1: int
+
+
 class McapWriter:
     """Writes one MCAP file of ln topics.  Not thread-safe: callers serialize.
 
@@ -281,18 +291,31 @@ class McapWriter:
 
     def flush(self) -> None:
         """Compress the open chunk and write it with its message indexes (one write)."""
+        sealed = self._seal()
+        if sealed is not None:
+            self._finish_chunk(sealed)
+
+    def _seal(self) -> SealedChunk | None:
+        """The open chunk, taken out of the writer (a new one is open), or None if empty."""
         raw = self._chunk
         if not raw:
-            return
-        data = self._compress(raw) if self._compress is not None else raw
-        head = _CHUNK_HEAD.pack(self._t0, self._t1, len(raw), zlib.crc32(raw)) + _s(
-            self._compression) + _U64.pack(len(data))
-        head = _REC.pack(CHUNK, len(head) + len(data)) + head
-        self._put_chunk(head, data, self._index.items(), self._t0, self._t1,
-                        self._compression, len(data), len(raw))
+            return None
+        indexes = [(channel, bytes(entries)) for channel, entries in self._index.items()
+                   if entries]
         for entries in self._index.values():
             entries.clear()
         self._chunk = bytearray()
+        return SealedChunk(raw, indexes, self._t0, self._t1)
+
+    def _finish_chunk(self, sealed: SealedChunk) -> None:
+        """Compress a sealed chunk and write it with its message indexes (one write)."""
+        raw = sealed.raw
+        data = self._compress(raw) if self._compress is not None else raw
+        head = _CHUNK_HEAD.pack(sealed.t0, sealed.t1, len(raw), zlib.crc32(raw)) + _s(
+            self._compression) + _U64.pack(len(data))
+        head = _REC.pack(CHUNK, len(head) + len(data)) + head
+        self._put_chunk(head, data, sealed.indexes, sealed.t0, sealed.t1,
+                        self._compression, len(data), len(raw))
 
     def copy_chunk(self, chunk: RawChunk) -> None:
         """Append a Chunk record of another file as stored (compressed, with its CRC) after

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from ..mcap_format import McapWriter
+from .background_writer import BackgroundMcapWriter
 from .encodings import ChannelEncoder
 
 
@@ -41,8 +42,8 @@ class SplitWriter:
 
     def _open(self) -> McapWriter:
         path = self.directory / f"{self.prefix}_{len(self.files):04d}.mcap"
-        writer = McapWriter(path, self.compression, self.chunk_size, writer_name=self.writer_name,
-                            overwrite=False)
+        writer = BackgroundMcapWriter(path, self.compression, self.chunk_size,
+                                      writer_name=self.writer_name, overwrite=False)
         self.files.append(path)
         for topic, encoder in self._channels:
             encoder.add_to(writer, topic)

@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 from cargo_build import RELEASE, cargo_build
 from topics.conftest import Manager, manager, wait_ready  # noqa: F401 - fixture
+from topics.test_topics_cross_language import expected
 
 LIMIT = 60.0  # seconds: an upper bound against hangs, never a pass criterion
 
@@ -39,15 +40,9 @@ def rust_call(mgr: Manager, exe: Path, name: str, *args: str) -> tuple[int, dict
     return done.returncode, json.loads(done.stdout)
 
 
-def joint_state(i: int) -> dict[str, Any]:
+def joint_state(i: int) -> dict[str, object]:
     """robot/joint_state sample i (topic_tool.c and interop.rs `joint`)."""
-    return {
-        "timestamp": i * 0.001,
-        "cycle": i,
-        "position": [i + j / 8.0 for j in range(7)],
-        "velocity": [-i - j / 4.0 for j in range(7)],
-        "effort": [float(i * j) for j in range(7)],
-    }
+    return expected(i)
 
 
 def _pose(i: int, base: float) -> dict[str, list[float]]:
