@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ... import __version__
 from ...addresses import AddressError, parse_address
 from ...naming import runtime_dir
 from ..registry.model import Limits
@@ -45,6 +46,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "`ln_manager check FILE.lnc` validates a configuration without "
                     "starting anything; `ln_manager webui-passwd USER` prints a line for "
                     "the web UI's auth file (docs/webui.md).")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}",
+                        help="print the version of links_and_nodes (ln.h's LN_VERSION_*) "
+                             "and exit")
     parser.add_argument("-c", "--config", metavar="FILE",
                         help="configuration (.lnc) whose processes this manager runs; its "
                              "instance section gives --instance and --port")
