@@ -1,6 +1,7 @@
 """Finds and loads the project's shared objects (libln, libln_pull) for the ctypes layers:
-an explicit path from the environment wins and is never silently replaced; else the
-checkout's release build; else the system loader (ld.so.cache, LD_LIBRARY_PATH, /usr/lib).
+an explicit path from the environment wins and is never silently replaced; else the copy a
+wheel carries inside the package (bundled.py); else the checkout's release build; else the
+system loader (ld.so.cache, LD_LIBRARY_PATH, /usr/lib).
 A private library (the manager's libln_admin.so) is loaded from a directory next to the
 library it belongs to, wherever that one was found."""
 
@@ -10,15 +11,21 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from . import bundled
 from .errors import LibraryNotFoundError
 
 
 def candidates(soname: str, env_override: str, build_dir: str) -> Iterator[str]:
     """Where to look for `soname`: $env_override (a file, or a directory holding it), then
-    build/release/`build_dir` of the checkout, then the system loader."""
+    lib/ of an installed wheel, then build/release/`build_dir` of the checkout, then the
+    system loader."""
     override = os.environ.get(env_override)
     if override:
         yield str(Path(override) / soname) if Path(override).is_dir() else override
+        return
+    in_package = bundled.library(soname)
+    if in_package is not None:
+        yield str(in_package)
         return
     checkout = Path(__file__).resolve().parents[2]  # python/links_and_nodes/ -> checkout
     in_tree = checkout / "build" / "release" / build_dir / soname

@@ -1,4 +1,4 @@
-"""Starting an ln_daemon: which executable (the checkout's build, else PATH), probing
+"""Starting an ln_daemon: which executable (a wheel's, the checkout's build, else PATH), probing
 whether one listens, and starting a local one in the background when none does."""
 
 from __future__ import annotations
@@ -9,16 +9,21 @@ import os
 import shutil
 from pathlib import Path
 
+from ... import bundled
 from .daemon_wire import MAGIC, DaemonError, Msg
 
 # ---- starting a daemon ----------------------------------------------------------------------
 
 
 def daemon_executable() -> str:
-    """$LN_DAEMON, else the release build of this checkout, else `ln_daemon` from PATH."""
+    """$LN_DAEMON, else the one a wheel carries in the package, else the release build of
+    this checkout, else `ln_daemon` from PATH."""
     env = os.environ.get("LN_DAEMON")
     if env:
         return env
+    in_package = bundled.program("ln_daemon")
+    if in_package is not None:
+        return str(in_package)
     in_tree = Path(__file__).resolve().parents[4] / "build" / "release" / "ln_daemon" / "ln_daemon"
     if os.access(in_tree, os.X_OK):
         return str(in_tree)
