@@ -2,8 +2,9 @@
 build_wheel first has SCons build libln, libln_pull, libln_admin.so and ln_daemon (zenoh_core
 and rust off; in a checkout also uPlot, with npm) in build/release of the source tree, or
 takes an already built variant directory from $LN_NATIVE_BUILD_DIR (scripts/build-wheel,
-after running SCons itself); setup.py then copies them into the wheel.  Editable installs stay Python-only and need no
-SCons (docs/install.md)."""
+after running SCons itself); setup.py then copies them into the wheel.  Editable installs,
+and wheels asked for with `-C native=no` or $LN_PYTHON_ONLY=1 (the bindings beside an
+installed libln, e.g. Debian's), stay Python-only and need no SCons (docs/install.md)."""
 
 from __future__ import annotations
 
@@ -31,10 +32,6 @@ TARGETS = ["libln/libln.so.1.0.0", "libln/links_and_nodes/libln_admin.so",
            "libln_pull/libln_pull.so.1.0.0", "ln_daemon/ln_daemon"]
 
 
-def get_requires_for_build_wheel(config_settings: dict[str, Any] | None = None) -> list[str]:
-    return _setuptools.get_requires_for_build_wheel(config_settings) + ["scons>=4.4"]
-
-
 def _scons_build(source: Path) -> Path:
     """build/release of `source` with the wheel's native parts built, by SCons from PyPI."""
     variant = source / "build" / "release"
@@ -49,8 +46,22 @@ def _scons_build(source: Path) -> Path:
     return variant
 
 
+def python_only(config_settings: dict[str, Any] | None) -> bool:
+    """A wheel without the native parts: `-C native=no` or $LN_PYTHON_ONLY=1."""
+    return ((config_settings or {}).get("native") == "no"
+            or os.environ.get("LN_PYTHON_ONLY") == "1")
+
+
+def get_requires_for_build_wheel(config_settings: dict[str, Any] | None = None) -> list[str]:
+    extra = [] if python_only(config_settings) else ["scons>=4.4"]
+    return _setuptools.get_requires_for_build_wheel(config_settings) + extra
+
+
 def build_wheel(wheel_directory: str, config_settings: dict[str, Any] | None = None,
                 metadata_directory: str | None = None) -> str:
+    if python_only(config_settings):
+        os.environ.pop(NATIVE_DIR, None)
+        return _setuptools.build_wheel(wheel_directory, config_settings, metadata_directory)
     given = os.environ.get(NATIVE_DIR)
     variant = Path(given).resolve() if given else _scons_build(Path.cwd())
     missing = [t for t in TARGETS if not (variant / t).is_file()]
