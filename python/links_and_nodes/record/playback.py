@@ -206,7 +206,9 @@ class Playback:
             anchor_t, anchor_wall, rate = self._line
             delay = anchor_wall + (self._next[0] - anchor_t) / 1e9 / rate - now
             if delay > 0 or now - looked > LOOK_S:  # a player behind still takes commands
-                looked = now
                 wait(min(max(delay, 0.0), MAX_WAIT_S))
+                # from the end of the wait: one that took longer than LOOK_S (a loaded
+                # machine) must not make the next turn wait again instead of publishing
+                looked = time.monotonic()
                 continue
             self._publish_next()
