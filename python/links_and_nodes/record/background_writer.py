@@ -27,12 +27,13 @@ class BackgroundMcapWriter(McapWriter):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mcap writer")
         self._flying: deque[tuple[Future[None], int]] = deque()
+        self._flying_bytes = 0  # raw bytes of the chunks in _flying (pending, per write)
         super().__init__(*args, **kwargs)
 
     @property
     def pending(self) -> int:
         """Bytes of messages not in the file yet: the open chunk and those in flight."""
-        return len(self._chunk) + sum(size for _, size in self._flying)
+        return len(self._chunk) + self._flying_bytes
 
     def flush(self) -> None:
         """Seal the open chunk and hand it to the writer thread (returns before it is in the
@@ -42,21 +43,25 @@ class BackgroundMcapWriter(McapWriter):
         if sealed is None:
             return
         while len(self._flying) >= IN_FLIGHT:
-            future, _ = self._flying.popleft()
-            future.result()
+            self._land()
         self._flying.append((self._pool.submit(self._finish_chunk, sealed), len(sealed.raw)))
+        self._flying_bytes += len(sealed.raw)
 
     def drain(self) -> None:
         """Wait until every sealed chunk is in the file; raise the writer thread's error."""
         while self._flying:
-            future, _ = self._flying.popleft()
-            future.result()
+            self._land()
 
     def _reap(self) -> None:
         """Forget the chunks already written; raise the error of one that failed."""
         while self._flying and self._flying[0][0].done():
-            future, _ = self._flying.popleft()
-            future.result()
+            self._land()
+
+    def _land(self) -> None:
+        """Wait for the oldest chunk in flight to be written; raise its error."""
+        future, size = self._flying.popleft()
+        self._flying_bytes -= size
+        future.result()
 
     def add_channel(self, topic: str, **kwargs: Any) -> int:
         self.drain()
@@ -83,4 +88,5 @@ class BackgroundMcapWriter(McapWriter):
             future.cancel()
         self._pool.shutdown(wait=True)
         self._flying.clear()
+        self._flying_bytes = 0
         super()._abandon()
