@@ -117,8 +117,9 @@ def test_hardened_dit_through_loss(system: System, rate_hz: int) -> None:
                                  since_us=windows[loss].start_us)
         assert stuck <= 3, f"{loss:.0%}: {stuck} timeouts in a row at t_max"
         # no unbounded growth: in every second of the second half it catches up again, to
-        # within 40 ms of samples (80 ms under ASan/UBSan, which slow the relay and consumer)
+        # within 80 ms of samples (72 ms seen on a loaded CI run, where the relay, a Python
+        # process, stalls; growth without bound would be seconds), 120 ms under ASan/UBSan
         floors = pm.lag_floors(run, windows[loss])
-        bound = max(3, (80 if SANITIZED else 40) * rate_hz // 1000)
+        bound = max(3, (120 if SANITIZED else 80) * rate_hz // 1000)
         assert max(floors) <= bound, f"{loss:.0%}: lag floors {floors}"
         assert run["stats"]["bad"] == 0, run["stats"]
