@@ -23,7 +23,7 @@ def candidates(soname: str, env_override: str, build_dir: str) -> Iterator[str]:
     if override:
         yield str(Path(override) / soname) if Path(override).is_dir() else override
         return
-    in_package = bundled.library(soname)
+    in_package = bundled.shared_object(soname)
     if in_package is not None:
         yield str(in_package)
         return

@@ -19,7 +19,7 @@ BIN = ROOT / "bin"
 INCLUDE = ROOT / "include"
 
 
-def library(soname: str) -> Path | None:
+def shared_object(soname: str) -> Path | None:
     """lib/`soname` of the package, if it carries one."""
     path = LIB / soname
     return path if path.is_file() else None
@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pull", action="store_true", help="--libs links libln_pull instead")
     parser.add_argument("--daemon", action="store_true", help="the path of ln_daemon")
     args = parser.parse_args(argv)
-    if library("libln.so.1") is None or not (INCLUDE / "ln" / "ln.h").is_file():
+    if shared_object("libln.so.1") is None or not (INCLUDE / "ln" / "ln.h").is_file():
         print(f"links_and_nodes at {ROOT} carries no native parts (a checkout or the Debian "
               "package: use `pkg-config --cflags --libs ln`)", file=sys.stderr)
         return 1

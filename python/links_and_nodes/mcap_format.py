@@ -567,7 +567,7 @@ class McapReader:
         self._topics: dict[int, TopicInfo] = {}
         self._foreign: set[int] = set()  # channels without ln metadata
         self._scanned = False  # a full pass has been made: _topics holds every channel
-        self.library = ""  # the Header's library field: which program wrote the file
+        self.writer_library = ""  # the Header's library field: which program wrote the file
         self._schemas: dict[int, tuple[str, str, bytes]] = {}
 
     def channel(self, channel_id: int) -> TopicInfo | None:
@@ -667,7 +667,7 @@ class McapReader:
             if opcode in (SCHEMA, CHANNEL):
                 self._definition(opcode, body, schemas)
             elif opcode == HEADER:
-                self.library = _header_library(body)
+                self.writer_library = _header_library(body)
         except _Bad as exc:
             raise self._fail(pos, f"{_NAMES.get(opcode, opcode)} record: {exc}") from None
         return None

@@ -30,7 +30,7 @@ class Source:
     @property
     def ln_written(self) -> bool:
         """Written by McapWriter: every message's log time is its publish time."""
-        return self.reader.library.startswith(LN_LIBRARY)
+        return self.reader.writer_library.startswith(LN_LIBRARY)
 
     def __iter__(self) -> Iterator[tuple[TopicInfo, Sample]]:
         self.error = None

@@ -56,6 +56,6 @@ def test_flags(wheel_layout: Path, capsys: pytest.CaptureFixture[str]) -> None:
 
 
 def test_a_checkout_carries_no_native_parts(capsys: pytest.CaptureFixture[str]) -> None:
-    assert bundled.library("libln.so.1") is None and bundled.program("ln_daemon") is None
+    assert bundled.shared_object("libln.so.1") is None and bundled.program("ln_daemon") is None
     assert bundled.main(["--cflags"]) == 1
     assert "carries no native parts" in capsys.readouterr().err
