@@ -16,9 +16,10 @@ import json
 import struct
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
+if TYPE_CHECKING:  # numpy is imported by the functions that build arrays, so that the
+    import numpy as np  # manager, which only collects downloads, starts without it
 
 HEAD_FIELDS = [("seq", "<u8"), ("publish_time", "<i8")]
 SAMPLE_HEAD = struct.Struct("<Qq")
@@ -98,6 +99,8 @@ def download(call: Callable[..., dict[str, Any]]) -> dict[str, dict[str, Any]]:
 def message_dtype(md_name: str, message_size: int) -> np.dtype:
     """The md's fields as a numpy dtype; one opaque `data` field if the md cannot be
     loaded here (or its layout does not have the size the samples have)."""
+    import numpy as np
+
     try:
         from .md_loader import message_class
 
@@ -111,6 +114,8 @@ def message_dtype(md_name: str, message_size: int) -> np.dtype:
 
 def sample_dtype(md_name: str, message_size: int) -> np.dtype:
     """`seq`, `publish_time`, then the md's fields at their offsets + 16."""
+    import numpy as np
+
     inner = message_dtype(md_name, message_size)
     names = [n for n, _ in HEAD_FIELDS] + list(inner.names or ())
     formats = [f for _, f in HEAD_FIELDS] + [inner.fields[n][0] for n in inner.names or ()]
@@ -120,6 +125,8 @@ def sample_dtype(md_name: str, message_size: int) -> np.dtype:
 
 
 def to_array(entry: dict[str, Any]) -> np.ndarray:
+    import numpy as np
+
     dtype = sample_dtype(entry["md_name"], entry["message_size"])
     blob = pack_samples(entry["samples"])
     return np.frombuffer(blob, dtype=dtype).copy() if blob else np.zeros(0, dtype)
@@ -144,6 +151,8 @@ def save(download: dict[str, dict[str, Any]], path: Path, encoding: str | None =
     (docs/recording.md, "Encodings"): "ros2" (None: the default), "json" or "ln"; a topic
     whose md is not here or that the encoding refuses is stored in "ln" (its entry's
     `encoding` says so).  An .npz holds arrays: encoding None or "ln"."""
+    import numpy as np
+
     path = Path(path)
     suffix = path.suffix.lower()
     used: dict[str, str] = {}
@@ -213,6 +222,8 @@ def _schema(md_name: str) -> bytes:
 
 def load_npz(path: Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """The arrays and the description of a saved .npz."""
+    import numpy as np
+
     with np.load(path, allow_pickle=False) as f:
         meta = json.loads(bytes(f["__loggers__"]).decode())
         return {k: f[k] for k in f.files if k != "__loggers__"}, meta

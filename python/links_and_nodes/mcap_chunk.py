@@ -9,6 +9,8 @@ import struct
 from dataclasses import dataclass, field
 from typing import Any
 
+COMPRESSIONS = ("zstd", "lz4", "none")  # of chunks; mcap_format.py compresses them
+DEFAULT_CHUNK_SIZE = 1 << 20  # bytes of records in a chunk before it is written
 _REC_SIZE = 9  # a record's opcode and length
 _IDX_SIZE = 16  # a Message Index entry: log time, offset in the chunk
 

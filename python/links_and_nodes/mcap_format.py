@@ -30,14 +30,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from .mcap_chunk import RawChunk, index_record
+from .mcap_chunk import COMPRESSIONS, DEFAULT_CHUNK_SIZE, RawChunk, index_record
 
 MAGIC = b"\x89MCAP0\r\n"
 SCHEMA_ENCODING = "ln-md-text"
 MESSAGE_ENCODING = "ln-md"
 SCHEMA_MARK = b"--- "  # starts the line before each md of a schema's text
-COMPRESSIONS = ("zstd", "lz4", "none")
-DEFAULT_CHUNK_SIZE = 1 << 20
 
 # opcodes of the MCAP records used here
 HEADER, FOOTER, SCHEMA, CHANNEL, MESSAGE, CHUNK, MESSAGE_INDEX, CHUNK_INDEX = range(1, 9)

@@ -34,9 +34,8 @@ from ..mcap_format import (
     md_schema_text,
     write_md_files,
 )
+from .defaults import ENCODINGS
 
-ENCODINGS = ("ros2", "json", "ln")
-DEFAULT_ENCODING = "ros2"
 ROS2_SCHEMA, ROS2_MESSAGE = "ros2msg", "cdr"
 JSON_SCHEMA, JSON_MESSAGE = md_json.SCHEMA_ENCODING, "json"
 

@@ -19,13 +19,13 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from ..mcap_format import COMPRESSIONS, DEFAULT_CHUNK_SIZE
-from .encodings import DEFAULT_ENCODING, ENCODINGS
-from .recorder import DEFAULT_BUFFER_MEMORY, MAX_BUFFERS, Recorder
-from .service_recording import ServiceRecording
-from .split_writer import SplitWriter
+from ..mcap_chunk import COMPRESSIONS, DEFAULT_CHUNK_SIZE
+from .defaults import DEFAULT_BUFFER_MEMORY, DEFAULT_ENCODING, ENCODINGS, MAX_BUFFERS
+
+if TYPE_CHECKING:
+    from .service_recording import ServiceRecording
 
 _UNITS = {"": 1, "B": 1, "K": 1000, "KB": 1000, "KIB": 1 << 10, "M": 1000**2, "MB": 1000**2,
           "MIB": 1 << 20, "G": 1000**3, "GB": 1000**3, "GIB": 1 << 30, "T": 1000**4,
@@ -134,6 +134,10 @@ class Session:
     def __init__(self, args: argparse.Namespace, address: str) -> None:
         import links_and_nodes as ln
         from links_and_nodes.tools.scripting import connect
+
+        from .recorder import Recorder  # the writer: numpy, ln_generate, libln
+        from .service_recording import ServiceRecording
+        from .split_writer import SplitWriter
 
         self.args = args
         self.address = address

@@ -18,11 +18,10 @@ from typing import Any
 
 from .. import md_loader
 from ..mcap_format import md_schema_text
-from .encodings import DEFAULT_ENCODING, EncodingError, channel_encoder
+from .defaults import DEFAULT_BUFFER_MEMORY, DEFAULT_ENCODING, MAX_BUFFERS
+from .encodings import EncodingError, channel_encoder
 from .split_writer import SplitWriter
 
-MAX_BUFFERS = 1024  # libln's limit per port
-DEFAULT_BUFFER_MEMORY = 64 << 20  # bytes of queued samples per topic, by default
 READ_SLICE = 0.2  # seconds a reader thread waits before it looks at the stop flag
 
 

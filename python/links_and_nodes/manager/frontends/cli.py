@@ -6,27 +6,20 @@ of the instance.  With `-c FILE` it also runs the configuration's processes thro
 ln_daemons (scheduler.py) with a console on stdin; `ln_manager status|start|stop|...`
 talk to a running manager instead (remote_cli.py); `ln_manager check FILE` only
 validates a configuration (config_check.py).  This module reads the command line; app.py
-builds the manager's objects and runs them."""
+builds the manager's objects and runs them.  Reading the command line loads little: what
+a launch, a check or a remote command needs is imported once it is known to be wanted
+(tests/python/manager/test_cli_imports.py keeps it so)."""
 
 from __future__ import annotations
 
 import argparse
-import asyncio
-import logging
-import signal
 import sys
 from pathlib import Path
 from typing import Any
 
 from ... import __version__
-from ...addresses import AddressError, parse_address
-from ...naming import runtime_dir
-from ..registry.model import Limits
-from ..registry.runtime import InstanceLock, RuntimeDirError, prepare
-from ..registry.services import DEFAULT_LIMIT as SERVICE_LIMIT
+from ..registry.defaults import RING_MEMORY_LIMIT, SERVICE_LIMIT, TOPIC_LIMIT
 from . import remote_cli
-
-log = logging.getLogger("ln_manager")
 
 MAX_INSTANCE = 200  # bytes; keeps segment names well below NAME_MAX
 ADOPT_WINDOW = 5.0  # seconds reconnecting clients have to take back what they held
@@ -78,11 +71,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default 127.0.0.1; 0.0.0.0 or :: for "
                              "every interface)")
-    parser.add_argument("--topic-limit", type=int, default=Limits.topics, metavar="N",
-                        help=f"most topics at a time (default {Limits.topics})")
-    parser.add_argument("--ring-memory-limit", type=int, default=Limits.ring_memory,
+    parser.add_argument("--topic-limit", type=int, default=TOPIC_LIMIT, metavar="N",
+                        help=f"most topics at a time (default {TOPIC_LIMIT})")
+    parser.add_argument("--ring-memory-limit", type=int, default=RING_MEMORY_LIMIT,
                         metavar="BYTES",
-                        help=f"most bytes of one topic's ring (default {Limits.ring_memory})")
+                        help=f"most bytes of one topic's ring (default {RING_MEMORY_LIMIT})")
     parser.add_argument("--service-limit", type=int, default=SERVICE_LIMIT, metavar="N",
                         help=f"most services at a time (default {SERVICE_LIMIT})")
     parser.add_argument("--adopt-window", type=float, default=ADOPT_WINDOW, metavar="SECONDS",
@@ -133,6 +126,7 @@ def _webui_plan(args: argparse.Namespace, config: Any) -> None:
 def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
     """Read -c FILE (exit 2 with every error on failure) and fill --instance/--port/--host
     from its instance section where the command line did not give them."""
+    from ...addresses import AddressError, parse_address
     from ..config import ConfigError, load
     from .config_check import parse_defines
 
@@ -192,6 +186,18 @@ def main(argv: list[str] | None = None) -> int:
     config = _load_config(parser, args) if args.config else None
     _check_args(parser, args)
     _webui_plan(args, config)
+    return _serve(args, config)
+
+
+def _serve(args: argparse.Namespace, config: Any) -> int:
+    """Take the instance lock and run the manager until it is asked to stop."""
+    import asyncio
+    import logging
+    import signal
+
+    from ...naming import runtime_dir
+    from ..registry.runtime import InstanceLock, RuntimeDirError, prepare
+
     logging.basicConfig(stream=sys.stderr, level=args.log_level.upper(),
                         format="%(asctime)s ln_manager %(levelname)s: %(message)s")
     try:

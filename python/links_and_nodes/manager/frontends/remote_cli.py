@@ -5,7 +5,8 @@ by the table like a console line's; a family of commands named by phrases (`ln_m
 logger NAME add TOPIC`, `ln_manager topic echo NAME`) takes its words as the console does.
 A command that runs in the client (Command.run) runs in this process, each row printed as
 it comes; Ctrl-C ends one that streams (status 0).  Exit status 0 on success, 1 when the
-manager refuses or cannot be reached, 2 for usage."""
+manager refuses or cannot be reached, 2 for usage.  The client (scripting.py, the protocol's
+codec) is imported when a command runs, so that listing the commands stays light."""
 
 from __future__ import annotations
 
@@ -28,7 +29,6 @@ from ...tools.commands import (
 )
 from ...tools.commands.arguments import from_texts
 from ...tools.commands.local import rows, strict_json
-from ...tools.scripting import ManagerError, connect
 from .commands import phrases
 from .commands.views import json_lines
 
@@ -95,6 +95,8 @@ def _json_view(cmd: Command, result: dict[str, Any]) -> Any:
 
 def _local(mgr: Any) -> Local:
     """How a command that runs here asks the manager: through the connection `mgr`."""
+    from ...tools.scripting import ManagerError
+
     def control(op: str, **fields: Any) -> dict[str, Any]:
         try:
             return dict(mgr.command(op, **fields))
@@ -145,6 +147,8 @@ def _print(prog: str, cmd: Command, address: str | None, args: dict[str, Any],
            as_json: bool) -> int:
     """Run `cmd` against the manager at `address`, printing its lines as they come; the
     exit status."""
+    from ...tools.scripting import ManagerError, connect
+
     try:
         with connect(address) as mgr:
             for line in run(cmd, mgr, args, as_json):

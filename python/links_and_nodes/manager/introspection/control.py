@@ -11,23 +11,25 @@ with their own libln client; echo, hz and bw stream.
 
 Each answer carries `md_dirs`, the manager's md search path (the configuration's
 `add_message_definition_dir` directories, then the built-in ones and the manager's
-LN_MESSAGE_DEFINITION_DIRS), so a client decodes with the mds the system was built with."""
+LN_MESSAGE_DEFINITION_DIRS), so a client decodes with the mds the system was built with.
+
+Registering is light (the table is read by `ln_manager --help`): what the client side runs
+(ln_generate, the libln subscriber) is imported when it runs, what the manager's handlers
+use when they answer."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
-from ... import transports
-from ...tools import protocol as p
 from ...tools.commands import Arg, Command, Verb, register
-from ...tools.introspection import commands as run
-from ...tools.introspection import views
+from ...tools.introspection import DEFAULT_TIMEOUT, views
 from ...tools.introspection.stats import DEFAULT_WINDOW
-from ..registry.model import Client, Port, PortKind, Topic
 
 if TYPE_CHECKING:
     from ..registry.core import Core
+    from ..registry.model import Client, Port, Topic
 
 
 class Control(Protocol):
@@ -67,6 +69,10 @@ def _host(control: Control, client: Client) -> str:
 
 
 def _port(control: Control, port: Port) -> dict[str, Any]:
+    from ... import transports
+    from ...tools import protocol as p
+    from ..registry.model import PortKind
+
     c = port.client
     entry: dict[str, Any] = {"client": c.name, "client_id": c.id, "pid": c.pid,
                              "host": _host(control, c), "host_id": c.host_id,
@@ -102,6 +108,8 @@ async def topic_info(control: Control, command: dict[str, Any]) -> dict[str, Any
     topic = control.core.registry.topics.get(name)
     if topic is None:
         raise _error(f"no topic {name!r}")
+    from ... import transports
+    from ..registry.model import PortKind
     from ..registry.segments import ring_segment_size
 
     ports = sorted(topic.ports.values(), key=lambda port: port.id)
@@ -177,6 +185,18 @@ def _read(path: Path) -> str:
 
 
 # ---- the table ---------------------------------------------------------------------------
+def _run(name: str) -> Callable[..., Any]:
+    """The function `name` of tools/introspection/commands.py (what runs in the client),
+    imported when it is called."""
+    def call(*args: Any) -> Any:
+        from ...tools.introspection import commands as run
+
+        return getattr(run, name)(*args)
+
+    call.__name__ = call.__qualname__ = name
+    return call
+
+
 def _seconds(what: str, help_text: str, default: float | None = None) -> Arg:
     option = "--" + what
     return Arg(what, "float", help_text, default=default, low=1e-6, high=1e9, metavar="S",
@@ -194,7 +214,7 @@ _FULL = Arg("full", "bool", "every value of long arrays", default=False, where="
 
 
 def _echo_args(name: str, n: int | None = 1, field: str | None = None,
-               timeout: float | None = run.DEFAULT_TIMEOUT) -> dict[str, Any]:
+               timeout: float | None = DEFAULT_TIMEOUT) -> dict[str, Any]:
     return {"name": name, "n": n, "field": field, "duration": timeout}
 
 
@@ -232,7 +252,7 @@ register(
              Arg("field", "str", "only this field (a path: q[2], target.position)",
                  metavar="F", nullable=True),
              _JSON, _FULL),
-            phrase="topic echo", run=run.echo, streams=True, missing_usage=True,
+            phrase="topic echo", run=_run("echo"), streams=True, missing_usage=True,
             result="rows: [{seq, publish_time, publish_time_ns, data, field}]",
             console_format=views.echo_lines, script_args=_echo_args,
             script_doc="The next `n` samples of topic `name` (fewer if `timeout` seconds pass "
@@ -240,11 +260,11 @@ register(
                        "\"data\"} with data the decoded sample, or only the value at `field` "
                        "(e.g. \"target.position[2]\"; then also \"field\")."),
     _rate("topic_hz", "rate and period statistics from the publish timestamps, every second",
-          run.hz, False,
+          _run("hz"), False,
           "Rate statistics of topic `name` over `duration` seconds or `n` samples (whichever "
           "ends first): samples, periods, missed, span_s, rate_hz, mean_s, min_s, max_s, "
           "std_s (fewer than two samples: rate_hz 0, the rest None)."),
-    _rate("topic_bw", "bytes per second (message size x rate), every second", run.bw, True,
+    _rate("topic_bw", "bytes per second (message size x rate), every second", _run("bw"), True,
           "topic_hz's statistics plus message_size and bytes_per_s (size x rate)."),
     Command("topic_info", "md, layout, ring, publishers and subscribers with clients, hosts, "
             "transports", "topics", topic_info,
@@ -267,7 +287,7 @@ register(
                         short="-r")),
             result="name, path, mds: [{name, path, text}], md_dirs, recursive",
             phrase="md show", missing_usage=True, console_format=views.md_lines,
-            script_result=run.md_text,
+            script_result=_run("md_text"),
             script_doc="The text of md `name` from the manager's md search path; with "
                        "`recursive` also of every md it uses, each under a `# ==== NAME: "
                        "PATH` line."),
@@ -275,8 +295,8 @@ register(
             "\"x\"' or JSON)", "services", None,
             (_NAME, Arg("request", "json", "the request: field values or request text",
                         positional=True, rest="join", check=_service_request),
-             _JSON, _FULL, _seconds("timeout", "the longest the call may take", run.DEFAULT_TIMEOUT)),
-            phrase="service call", run=run.service_call, missing_usage=True,
+             _JSON, _FULL, _seconds("timeout", "the longest the call may take", DEFAULT_TIMEOUT)),
+            phrase="service call", run=_run("service_call"), missing_usage=True,
             changes_state=True, result="response", console_format=views.response_lines,
             script_result=lambda row: row["response"],
             script_doc="Call service `name` once: `request` as a dict of request fields "

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 
 from ...naming import MAX_NAME, client_name_problem, md_name_problem, topic_name_problem
+from .defaults import RING_MEMORY_LIMIT, TOPIC_LIMIT
 
 MAX_READERS = 64  # reader slots of a ring, hence subscribers of a topic
 
@@ -32,11 +33,11 @@ class PortKind(Enum):
 
 @dataclass(frozen=True)
 class Limits:
-    topics: int = 4096
+    topics: int = TOPIC_LIMIT
     subscribers_per_topic: int = MAX_READERS
     message_size: int = 64 << 20
     buffers: int = 1024
-    ring_memory: int = 1 << 30  # bytes of one topic's ring
+    ring_memory: int = RING_MEMORY_LIMIT  # bytes of one topic's ring
 
     def __post_init__(self) -> None:
         if self.topics < 1:

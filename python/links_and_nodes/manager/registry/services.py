@@ -8,9 +8,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from .defaults import SERVICE_LIMIT as DEFAULT_LIMIT  # services per manager
 from .model import MAX_NAME, Client, RequestError, md_name_problem, topic_name_problem
 
-DEFAULT_LIMIT = 4096  # services per manager
 MAX_SIGNATURE = 1024  # bytes
 MAX_HOST_ID = MAX_NAME  # bytes
 MAX_UNIX_PATH = 107  # bytes: sun_path holds 108 including the terminating NUL

@@ -24,7 +24,6 @@ from .stats import Window
 from .values import IntrospectError
 
 REPORT_EVERY = 1.0  # seconds between the rows of `topic hz` / `topic bw`
-DEFAULT_TIMEOUT = 10.0  # seconds a service call may take
 
 
 class CommandError(ControlError):

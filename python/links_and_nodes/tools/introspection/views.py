@@ -1,19 +1,21 @@
 """What the console and `ln_manager` print of the introspection commands' rows and answers
 (docs/introspection.md): a sample of `topic echo`, a line of `topic hz|bw`, `topic info`,
-`md show`, the response of `service call`; with --json as JSON."""
+`md show`, the response of `service call`; with --json as JSON.  The value formatting
+(values.py, which needs ln_generate) is imported by the views that print values, so that the
+command table, which names these views, stays light."""
 
 from __future__ import annotations
 
 import json
 from typing import Any
 
-from . import values as fmt
-from .commands import md_text
 from .stats import PeriodStats, bw_line, hz_line
 
 
 def echo_lines(record: dict[str, Any], args: dict[str, Any]) -> list[str]:
     """One sample: its header and values (a field's value alone, one line), or JSON."""
+    from . import values as fmt
+
     if args.get("json"):
         return [fmt.json_line(record)]
     value = record["data"]
@@ -54,6 +56,8 @@ def rate_result(rows: list[dict[str, Any]], bandwidth: bool = False) -> dict[str
 
 
 def info_view(result: dict[str, Any], args: dict[str, Any]) -> list[str]:
+    from . import values as fmt
+
     if args.get("json"):
         return json.dumps({k: v for k, v in result.items() if k != "ok"},
                           indent=2).splitlines()
@@ -61,10 +65,14 @@ def info_view(result: dict[str, Any], args: dict[str, Any]) -> list[str]:
 
 
 def md_lines(result: dict[str, Any], args: dict[str, Any]) -> list[str]:
+    from .commands import md_text
+
     return md_text(result).removesuffix("\n").split("\n")
 
 
 def response_lines(row: dict[str, Any], args: dict[str, Any]) -> list[str]:
+    from . import values as fmt
+
     if args.get("json"):
         return [fmt.json_line(row["response"])]
     return fmt.format_block(row["response"], bool(args.get("full"))) or ["{}"]

@@ -21,9 +21,9 @@ import weakref
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from ....naming import topic_name_problem
 from ....tools.commands.spec import Arg, ArgError, Command
 from ....tools.commands.table import register
-from ...registry.model import topic_name_problem
 
 if TYPE_CHECKING:
     from ...registry.services import Service

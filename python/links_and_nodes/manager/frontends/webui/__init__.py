@@ -1,6 +1,8 @@
 """The manager's web UI (docs/webui.md): `ln_manager --webui` (on the manager's port),
 `--webui-port N`, or `webui: on` / `webui_port: N` in the instance section.  setup() turns
-those options into a running WebUI or a WebUIError saying what is wrong."""
+those options into a running WebUI or a WebUIError saying what is wrong.  The server is
+imported on first use of WebUI (module __getattr__), so that `ln_manager --help` and a
+manager without a web UI do not load it."""
 
 from __future__ import annotations
 
@@ -8,10 +10,17 @@ import argparse
 from dataclasses import dataclass
 from typing import Any
 
-from .auth import auth_file_from
-from .server import REQUEST_LINE_STARTS, WebUI, is_loopback
+from ....addresses import is_loopback
 
 __all__ = ["REQUEST_LINE_STARTS", "Plan", "WebUI", "WebUIError", "add_arguments", "plan"]
+
+
+def __getattr__(name: str) -> Any:
+    if name in ("REQUEST_LINE_STARTS", "WebUI"):
+        from . import server
+
+        return getattr(server, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class WebUIError(Exception):
@@ -42,6 +51,8 @@ def plan(args: argparse.Namespace, config: Any) -> Plan | None:
                                                                         None)
     if not (args.webui or port is not None or getattr(inst, "webui", False)):
         return None
+    from .auth import auth_file_from
+
     if port is not None and not 0 <= port <= 65535:
         raise WebUIError(f"web UI port {port} is not a TCP port")
     auth_file = auth_file_from(getattr(inst, "webui_auth_file", None))
