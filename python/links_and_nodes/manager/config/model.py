@@ -222,6 +222,9 @@ class Process:
     policy: Policy = Policy.OTHER
     priority: int = 0  # nice value for SCHED_OTHER, 1..99 for FIFO/RR
     affinity: list[int] | None = None  # CPU numbers
+    # Where each key of the section was written (its value), for checks after the load.
+    key_locations: dict[str, Location] = field(default_factory=dict, compare=False,
+                                               repr=False)
     resource_limits: list[ResourceLimit] = field(default_factory=list)
     output_log: OutputLog | None = None
     max_output_lines: int = 1000  # lines of output kept in memory

@@ -96,6 +96,7 @@ class _Resolver:
             if d.log_keep is not None:
                 log.keep_count = d.log_keep
             p.output_log = log
+        p.key_locations = {key: loc for key, (loc, _) in d.key_locs.items()}
         if {"policy", "priority"} & d.failed:
             return
         if p.policy is Policy.OTHER:

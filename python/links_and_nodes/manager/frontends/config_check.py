@@ -1,5 +1,6 @@
 """`ln_manager check FILE.lnc`: load and validate a configuration without starting
-anything, as a lab runs it in CI.  Prints every warning and error (`file:line:col:`),
+anything, as a lab runs it in CI, and warn where a real-time policy cannot be applied on
+this host (check_realtime).  Prints every warning and error (`file:line:col:`),
 with `--print` the resolved processes as a table or `--json`; exit 0 when it loads, 1 when
 it does not (with `--strict`, also when it has warnings), 2 for bad usage."""
 
@@ -61,6 +62,7 @@ def main(argv: list[str]) -> int:
     try:
         config = load(args.file, **options)
         warnings = config.warnings
+        config, warnings, errors = _host_checks(config, warnings, args.strict)
     except ConfigError as exc:
         errors, warnings = exc.problems, exc.warnings
     except ValueError as exc:  # a bad -D name
@@ -89,6 +91,19 @@ def main(argv: list[str]) -> int:
                   f"{'' if len(config.processes) == 1 else 'es'}, {len(warnings)} warning"
                   f"{'' if len(warnings) == 1 else 's'})", file=sys.stderr)
     return 0 if config is not None else 1
+
+
+def _host_checks(config: Config, warnings: list[Problem], strict: bool
+                 ) -> tuple[Config | None, list[Problem], list[Problem]]:
+    """Add what only this host can tell (check_realtime); with --strict those warnings
+    are errors, as the loader's are."""
+    from .check_realtime import realtime_warnings
+
+    found = realtime_warnings(config)
+    if not strict or not found:
+        return config, [*warnings, *found], []
+    return None, list(warnings), [Problem(w.location, f"{w.message} [warning, an error with "
+                                                      "--strict]") for w in found]
 
 
 def _problem(p: Problem) -> dict[str, Any]:
