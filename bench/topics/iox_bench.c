@@ -1,6 +1,8 @@
-/* iox_bench.c — the iceoryx (1.x/2.0 C binding) peer of lat_ln zc and thr_ln zc: loan a
- * chunk, write its first and last 8 bytes, publish; take, read them, release.  Needs a running
- * iox-roudi with mempools for the size; built only where the iceoryx headers are installed. */
+/* iox_bench.c — the iceoryx (1.x/2.0 C binding) peer of lat_ln zc|full and thr_ln zc|full:
+ * loan a chunk, write its first and last 8 bytes (zc) or copy a whole source buffer into it
+ * (full), publish; take, read them or copy the whole chunk out (the echo: into its own loan),
+ * release.  Needs a running iox-roudi with mempools for the size; built only where the
+ * iceoryx headers are installed. */
 #include <inttypes.h>
 #include <sched.h>
 #include <stdbool.h>
@@ -17,12 +19,14 @@
 #include "bench_common.h"
 
 static const char usage[] =
-    "usage: iox_bench pong NAME SIZE TOTAL WARMUP SPIN_US\n"
-    "       iox_bench ping NAME SIZE COUNT WARMUP OUT SPIN_US   COUNT round trips (ns) to OUT\n"
-    "       iox_bench sub NAME SIZE COUNT BUFFERS WARM SPIN_US  until the last sample or 2 s idle\n"
-    "       iox_bench pub NAME SIZE COUNT WARM SECONDS          wait for the subscriber's queue\n"
-    "Waiting for a chunk spins (sched_yield) SPIN_US, as libln's spin_us, then sleeps in a\n"
-    "WaitSet.  Each prints a JSON line with its minor faults from sample WARM(UP) on.\n";
+    "usage: iox_bench pong NAME SIZE TOTAL WARMUP SPIN_US [zc|full]\n"
+    "       iox_bench ping NAME SIZE COUNT WARMUP OUT SPIN_US [zc|full]   COUNT round trips\n"
+    "       iox_bench sub NAME SIZE COUNT BUFFERS WARM SPIN_US [zc|full]  until the last or 2 s\n"
+    "       iox_bench pub NAME SIZE COUNT WARM SECONDS [zc|full]          waits for the queue\n"
+    "zc (default): the first and last 8 bytes of a chunk; full: the whole payload copied in\n"
+    "and out.  Waiting for a chunk spins (sched_yield) SPIN_US, as libln's spin_us, then\n"
+    "sleeps in a WaitSet.  Each prints a JSON line with its minor faults from sample WARM(UP)\n"
+    "on; ping writes its round trips (ns) to OUT.\n";
 
 typedef struct port {
     iox_pub_storage_t pub_storage;
@@ -33,6 +37,9 @@ typedef struct port {
     iox_ws_t ws;
     size_t size;
     uint64_t spin_ns;
+    int full;      /* the whole payload is copied into loans and out of chunks */
+    uint8_t* src;  /* full: what a sample is copied from (stamped) */
+    uint8_t* copy; /* full: where a received sample is copied to */
 } port;
 
 static void open_pub(port* p, const char* name, const char* event, bool block)
@@ -75,7 +82,7 @@ static void wait_subscribers(const port* p)
         nanosleep(&(struct timespec){0, 1000000}, NULL);
 }
 
-static void send_one(const port* p, uint64_t value)
+static void* loan(const port* p)
 {
     void* chunk;
     enum iox_AllocationResult rc = iox_pub_loan_chunk(p->pub, &chunk, (uint32_t)p->size);
@@ -86,12 +93,23 @@ static void send_one(const port* p, uint64_t value)
                 p->size, (int)rc);
         exit(2);
     }
-    bench_stamp(chunk, p->size, value);
+    return chunk;
+}
+
+static void send_one(const port* p, uint64_t value)
+{
+    void* chunk = loan(p);
+    if (p->full) {
+        bench_stamp(p->src, p->size, value);
+        memcpy(chunk, p->src, p->size);
+    } else {
+        bench_stamp(chunk, p->size, value);
+    }
     iox_pub_publish_chunk(p->pub, chunk);
 }
 
-/* The next sample's value (its chunk released); 0 in *got after `timeout_s` without one. */
-static uint64_t receive_one(const port* p, double timeout_s, int* got)
+/* The next chunk, not yet released; NULL after `timeout_s` without one. */
+static const void* take(const port* p, double timeout_s)
 {
     const void* chunk;
     uint64_t spin_until = 0;
@@ -113,15 +131,49 @@ static uint64_t receive_one(const port* p, double timeout_s, int* got)
         iox_notification_info_t info[1];
         uint64_t missed = 0;
         struct timespec t = {(time_t)timeout_s, (long)((timeout_s - (time_t)timeout_s) * 1e9)};
-        if (iox_ws_timed_wait(p->ws, t, info, 1, &missed) == 0 && !iox_sub_has_chunks(p->sub)) {
-            *got = 0;
-            return 0;
-        }
+        if (iox_ws_timed_wait(p->ws, t, info, 1, &missed) == 0 && !iox_sub_has_chunks(p->sub))
+            return NULL;
     }
-    uint64_t value = bench_check(chunk, p->size, "iox_bench");
+    return chunk;
+}
+
+/* The next sample's value (its chunk released; full: copied out whole first); 0 in *got
+ * after `timeout_s` without one. */
+static uint64_t receive_one(const port* p, double timeout_s, int* got)
+{
+    const void* chunk = take(p, timeout_s);
+    *got = chunk != NULL;
+    if (!chunk)
+        return 0;
+    if (!p->full) {
+        uint64_t value = bench_check(chunk, p->size, "iox_bench");
+        iox_sub_release_chunk(p->sub, chunk);
+        return value;
+    }
+    memcpy(p->copy, chunk, p->size);
     iox_sub_release_chunk(p->sub, chunk);
-    *got = 1;
-    return value;
+    return bench_check(p->copy, p->size, "iox_bench");
+}
+
+/* The echo: the next sample back (full: copied whole into a loan); 0 after 60 s without one. */
+static int echo_one(const port* p)
+{
+    int got;
+    if (!p->full) {
+        uint64_t value = receive_one(p, 60.0, &got);
+        if (got)
+            send_one(p, value);
+        return got;
+    }
+    const void* chunk = take(p, 60.0);
+    if (!chunk)
+        return 0;
+    void* out = loan(p);
+    memcpy(out, chunk, p->size);
+    iox_sub_release_chunk(p->sub, chunk);
+    bench_check(out, p->size, "iox_bench");
+    iox_pub_publish_chunk(p->pub, out);
+    return 1;
 }
 
 static void print_faults(uint64_t since, uint64_t samples)
@@ -145,8 +197,7 @@ static int pingpong(int ping, char** argv, port* p)
         for (uint64_t i = 0; i < count; i++) {
             if (i == warmup)
                 faults = bench_minflt();
-            send_one(p, receive_one(p, 60.0, &got));
-            if (!got)
+            if (!echo_one(p))
                 return 1;
         }
         print_faults(faults, count > warmup ? count - warmup : 0);
@@ -236,6 +287,10 @@ int main(int argc, char** argv)
         const char* role;
         int argc;
     } roles[] = {{"pong", 7}, {"ping", 8}, {"sub", 8}, {"pub", 7}};
+    /* an optional payload mode after the role's arguments */
+    int full = argc > 1 && strcmp(argv[argc - 1], "full") == 0;
+    if (full || (argc > 1 && strcmp(argv[argc - 1], "zc") == 0))
+        argc--;
     int role = -1;
     for (int i = 0; i < 4; i++)
         if (argc == roles[i].argc && strcmp(argv[1], roles[i].role) == 0)
@@ -245,11 +300,16 @@ int main(int argc, char** argv)
         return 2;
     }
     static port p; /* the storages are large */
+    p.full = full;
     p.size = strtoull(argv[3], NULL, 10);
     p.spin_ns = role == 3 ? 0 : strtoull(argv[argc - 1], NULL, 10) * 1000u;
     if (p.size < 16) {
         fputs("iox_bench: SIZE must be at least 16\n", stderr);
         return 2;
+    }
+    if (p.full) { /* touched before timing */
+        p.src = bench_alloc(p.size);
+        p.copy = bench_alloc(p.size);
     }
     char name[64];
     snprintf(name, sizeof name, "iox_bench_%s_%d", roles[role].role, (int)getpid());

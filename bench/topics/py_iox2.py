@@ -1,20 +1,29 @@
-"""iceoryx2 (PyPI `iceoryx2`) peer of `py_ln.py sub|pub ... zc`: zero-copy throughput between
-two Python processes, the publisher loaning a sample and writing its first and last 8 bytes,
-the subscriber reading them.  Same arguments and JSON lines as py_ln.py; see bench_topics.py."""
+"""iceoryx2 (PyPI `iceoryx2`) peer of `py_ln.py sub|pub ... zc|full` and `py_ln.py ping|pong
+... full`: zero-copy throughput and ping-pong latency between two Python processes.  zc: the
+publisher loans a sample and writes its first and last 8 bytes, the subscriber reads them;
+full: a whole bytearray is copied into the loan and the received sample out whole (the echo:
+into its own loan) with ctypes.memmove.  JSON lines and round-trip files as py_ln.py; see
+bench_topics.py."""
 
 from __future__ import annotations
 
 import ctypes
 import json
+import os
 import sys
 import time
+from array import array
 
 import iceoryx2 as iox2
+from payload import Payload
 from receipts import Receipts, minflt
 
-USAGE = """usage: py_iox2.py sub NAME SIZE COUNT BUFFERS WARM | pub NAME SIZE COUNT BUFFERS WARM SECONDS
-The subscriber polls (iceoryx2 publish-subscribe has no blocking receive) until the last
-sample or 2 s without one; the publisher retries until delivered (no loss)."""
+USAGE = """usage: py_iox2.py sub NAME SIZE COUNT BUFFERS WARM [zc|full]
+       | pub NAME SIZE COUNT BUFFERS WARM SECONDS [zc|full]
+       | pong NAME SIZE TOTAL WARMUP [zc|full] | ping NAME SIZE COUNT WARMUP OUT [zc|full]
+A receiver polls (iceoryx2 publish-subscribe has no blocking receive; ping and pong yield
+the CPU between polls) until the last sample or 2 s without one; publishers retry until
+delivered (no loss).  ping writes COUNT round trips (ns) to OUT."""
 U64 = ctypes.c_uint64
 
 
@@ -40,8 +49,9 @@ def open_service(name: str, size: int, buffers: int) -> tuple[iox2.Node, object]
     return node, service
 
 
-def subscriber(name: str, size: int, count: int, buffers: int, warm: int) -> None:
+def subscriber(name: str, size: int, count: int, buffers: int, warm: int, full: bool) -> None:
     _node, service = open_service(name, size, buffers)
+    dst = Payload(size) if full else None
     sub = service.subscriber_builder().buffer_size(buffers).create()
     print("ready", flush=True)
     tally = Receipts(warm)
@@ -55,8 +65,11 @@ def subscriber(name: str, size: int, count: int, buffers: int, warm: int) -> Non
                 break
             continue
         addr = sample.payload_ptr
-        counter = U64.from_address(addr).value
-        end = U64.from_address(addr + tail).value
+        if dst is not None:  # the whole sample out before it is released
+            counter = end = dst.take(addr, "py_iox2")
+        else:
+            counter = U64.from_address(addr).value
+            end = U64.from_address(addr + tail).value
         sample.delete()  # release it to the publisher
         if end != counter:
             sys.exit(f"py_iox2: torn sample {counter}/{end}")
@@ -65,12 +78,17 @@ def subscriber(name: str, size: int, count: int, buffers: int, warm: int) -> Non
     tally.report()
 
 
-def publisher(name: str, size: int, count: int, buffers: int, warm: int,
-              seconds: float) -> None:
+def open_publisher(service: object) -> object:
+    return (service.publisher_builder()  # type: ignore[attr-defined]
+            .backpressure_strategy(iox2.BackpressureStrategy.RetryUntilDelivered)
+            .create())
+
+
+def publisher(name: str, size: int, count: int, buffers: int, warm: int, seconds: float,
+              full: bool) -> None:
     _node, service = open_service(name, size, buffers)
-    pub = (service.publisher_builder()
-           .backpressure_strategy(iox2.BackpressureStrategy.RetryUntilDelivered)
-           .create())
+    pub = open_publisher(service)
+    src = Payload(size) if full else None
     print("ready", flush=True)
     now = time.perf_counter_ns
     t0 = now()
@@ -85,8 +103,12 @@ def publisher(name: str, size: int, count: int, buffers: int, warm: int,
         counter = count - 1 if last else i
         sample = pub.loan_uninit()
         addr = sample.payload_ptr
-        U64.from_address(addr).value = counter
-        U64.from_address(addr + tail).value = counter
+        if src is not None:  # the whole sample from a bytearray into the loan
+            src.stamp(counter)
+            src.into(addr)
+        else:
+            U64.from_address(addr).value = counter
+            U64.from_address(addr + tail).value = counter
         sample.assume_init().send()
         sent += 1
         if last:
@@ -97,15 +119,118 @@ def publisher(name: str, size: int, count: int, buffers: int, warm: int,
                       "fault_samples": max(0, sent - warm)}))
 
 
+class Ends:
+    """Both ends of one side of the ping-pong: a publisher on NAME.ping (ping) or NAME.pong
+    (pong) and a subscriber on the other; each service keeps one sample in flight."""
+
+    def __init__(self, name: str, size: int, ping: bool) -> None:
+        self.size = size
+        self.nodes = []
+        services = {}
+        for way in ("ping", "pong"):
+            node, services[way] = open_service(f"{name}.{way}", size, 1)
+            self.nodes.append(node)
+        out, inp = ("ping", "pong") if ping else ("pong", "ping")
+        self.pub = open_publisher(services[out])
+        self.sub = services[inp].subscriber_builder().buffer_size(1).create()
+
+    def take(self) -> object:
+        """The next sample, polling with sched_yield in between (as the Rust peer)."""
+        receive, yield_cpu = self.sub.receive, os.sched_yield
+        while (sample := receive()) is None:
+            yield_cpu()
+        return sample
+
+    def send(self, src: Payload | None, value: int) -> None:
+        sample = self.pub.loan_uninit()
+        addr = sample.payload_ptr
+        if src is not None:
+            src.stamp(value)
+            src.into(addr)
+        else:
+            U64.from_address(addr).value = value
+            U64.from_address(addr + self.size - 8).value = value
+        sample.assume_init().send()
+
+    def receive(self, dst: Payload | None) -> int:
+        sample = self.take()
+        addr = sample.payload_ptr  # type: ignore[attr-defined]
+        if dst is not None:
+            value = dst.take(addr, "py_iox2")
+        else:
+            value = U64.from_address(addr).value
+            if U64.from_address(addr + self.size - 8).value != value:
+                sys.exit(f"py_iox2: torn sample {value}")
+        sample.delete()  # type: ignore[attr-defined]
+        return value
+
+    def echo(self, full: bool) -> None:
+        """Send the next sample back: (full) copied whole into a loan, else restamped."""
+        sample = self.take()
+        addr = sample.payload_ptr  # type: ignore[attr-defined]
+        loan = self.pub.loan_uninit()
+        if full:
+            ctypes.memmove(loan.payload_ptr, addr, self.size)
+        else:
+            value = U64.from_address(addr).value
+            U64.from_address(loan.payload_ptr).value = value
+            U64.from_address(loan.payload_ptr + self.size - 8).value = value
+        sample.delete()  # type: ignore[attr-defined]
+        loan.assume_init().send()
+
+
+def pong(name: str, size: int, total: int, warmup: int, full: bool) -> None:
+    ends = Ends(name, size, ping=False)
+    print("ready", flush=True)
+    faults = minflt()
+    for i in range(total):
+        if i == warmup:
+            faults = minflt()
+        ends.echo(full)
+    print(json.dumps({"minflt": minflt() - faults, "samples": max(0, total - warmup)}))
+
+
+def ping(name: str, size: int, count: int, warmup: int, out: str, full: bool) -> None:
+    ends = Ends(name, size, ping=True)
+    src, dst = (Payload(size), Payload(size)) if full else (None, None)
+    rtt = array("Q", bytes(8 * count))
+    now = time.perf_counter_ns
+    faults = 0
+    for i in range(warmup + count):
+        if i == warmup:
+            faults = minflt()
+        t0 = now()
+        ends.send(src, i)
+        back = ends.receive(dst)
+        t1 = now()
+        if back != i:
+            sys.exit(f"py_iox2: round trip {i} came back as {back}")
+        if i >= warmup:
+            rtt[i - warmup] = t1 - t0
+    print(json.dumps({"minflt": minflt() - faults, "samples": count}))
+    with open(out, "wb") as f:
+        rtt.tofile(f)
+
+
+ARGC = {"sub": 7, "pub": 8, "pong": 6, "ping": 7}  # arguments before the optional mode
+
+
 def main(argv: list[str]) -> int:
-    if len(argv) < 7 or argv[1] not in ("sub", "pub") or (argv[1] == "pub" and len(argv) < 8):
+    role = argv[1] if len(argv) > 1 else ""
+    full = argv[-1] == "full"
+    args = argv[:-1] if argv[-1] in ("zc", "full") else argv
+    if role not in ARGC or len(args) != ARGC[role]:
         print(USAGE, file=sys.stderr)
         return 2
-    name, size, count, buffers, warm = argv[2], int(argv[3]), int(argv[4]), int(argv[5]), int(argv[6])
-    if argv[1] == "sub":
-        subscriber(name, size, count, buffers, warm)
+    name, size, count = args[2], int(args[3]), int(args[4])
+    if role == "pong":
+        pong(name, size, count, int(args[5]), full)
+    elif role == "ping":
+        ping(name, size, count, int(args[5]), args[6], full)
+    elif role == "sub":
+        subscriber(name, size, count, int(args[5]), int(args[6]), full)
     else:
-        publisher(name, size, count, buffers, warm, float(argv[7]))
+        publisher(name, size, count, int(args[5]), int(args[6]), float(args[7]), full)
     return 0
 
 

@@ -1,7 +1,9 @@
 /* ring_floor.c — the floor under zero-copy topics: rings of N slots in one POSIX shared memory
- * segment, written and read in place (the first and last 8 bytes of a slot), with the
- * notification libln uses (spin with sched_yield, then a futex woken only when someone
- * sleeps).  This process is ping / publisher, a forked child pong / subscriber. */
+ * segment, written and read in place (zc: the first and last 8 bytes of a slot; full: a whole
+ * source buffer copied into the slot, the slot copied out whole, the echo copying a received
+ * slot into its own), with the notification libln uses (spin with sched_yield, then a futex
+ * woken only when someone sleeps).  This process is ping / publisher, a forked child pong /
+ * subscriber. */
 #include <errno.h>
 #include <fcntl.h>
 #include <inttypes.h>
@@ -18,9 +20,11 @@
 #include "bench_common.h"
 
 static const char usage[] =
-    "usage: ring_floor lat SIZE COUNT WARMUP OUT [PONG_CPU]   COUNT round trips (ns) to OUT\n"
-    "       ring_floor thr SIZE COUNT SLOTS WARM SECONDS     publish until COUNT or SECONDS\n"
-    "One JSON line: minor faults of both sides from round trip WARMUP / sample WARM on.\n";
+    "usage: ring_floor lat SIZE COUNT WARMUP OUT [PONG_CPU] [zc|full]  COUNT round trips (ns)\n"
+    "       ring_floor thr SIZE COUNT SLOTS WARM SECONDS [zc|full]  until COUNT or SECONDS\n"
+    "zc (default): the first and last 8 bytes of a slot; full: the whole payload copied in\n"
+    "and out.  One JSON line: minor faults of both sides from round trip WARMUP / sample\n"
+    "WARM on; lat writes its round trips to OUT.\n";
 
 #define SLEEPER 0x80000000u /* in a futex word: someone sleeps on it */
 #define SPIN_NS 20000u      /* as libln's default spin_us */
@@ -78,26 +82,71 @@ static uint8_t* slot(const ring* r, uint32_t n)
     return base + r->offset + (uint64_t)(n % r->slots) * r->stride;
 }
 
-/* Publish `value` in the next slot, waiting while the ring is full. */
-static void put(ring* r, size_t size, uint64_t value)
+/* The slot to write next (a loan), waiting while the ring is full; publish() commits it. */
+static uint8_t* reserve(ring* r)
 {
     uint32_t head = atomic_load_explicit(&r->head, memory_order_relaxed) & ~SLEEPER;
     uint32_t tail = atomic_load_explicit(&r->tail, memory_order_acquire) & ~SLEEPER;
     while (((head - tail) & ~SLEEPER) >= r->slots)
         tail = wait_change(&r->tail, tail);
-    bench_stamp(slot(r, head), size, value);
+    return slot(r, head);
+}
+
+static void publish(ring* r)
+{
+    uint32_t head = atomic_load_explicit(&r->head, memory_order_relaxed) & ~SLEEPER;
     advance(&r->head, (head + 1) & ~SLEEPER);
 }
 
-/* The next sample's value, once there is one; frees its slot. */
-static uint64_t get(ring* r, size_t size)
+/* The next sample's slot (a borrow), once there is one; release() frees it. */
+static const uint8_t* peek(ring* r)
 {
     uint32_t tail = atomic_load_explicit(&r->tail, memory_order_relaxed) & ~SLEEPER;
     if ((atomic_load_explicit(&r->head, memory_order_acquire) & ~SLEEPER) == tail)
         wait_change(&r->head, tail);
-    uint64_t value = bench_check(slot(r, tail), size, "ring_floor");
+    return slot(r, tail);
+}
+
+static void release(ring* r)
+{
+    uint32_t tail = atomic_load_explicit(&r->tail, memory_order_relaxed) & ~SLEEPER;
     advance(&r->tail, (tail + 1) & ~SLEEPER);
-    return value;
+}
+
+/* Publish `value` in the next slot: stamped in place, or (src) copied whole from src after
+ * stamping it there. */
+static void put(ring* r, size_t size, uint64_t value, uint8_t* src)
+{
+    uint8_t* s = reserve(r);
+    if (src) {
+        bench_stamp(src, size, value);
+        memcpy(s, src, size);
+    } else {
+        bench_stamp(s, size, value);
+    }
+    publish(r);
+}
+
+/* The next sample's value; with dst, the whole slot is copied there before it is freed. */
+static uint64_t get(ring* r, size_t size, uint8_t* dst)
+{
+    const uint8_t* s = peek(r);
+    if (dst)
+        memcpy(dst, s, size);
+    uint64_t value = dst ? 0 : bench_check(s, size, "ring_floor");
+    release(r);
+    return dst ? bench_check(dst, size, "ring_floor") : value;
+}
+
+/* The echo of the full mode: the received slot copied whole into the next slot out. */
+static void forward(ring* in, ring* out, size_t size)
+{
+    const uint8_t* s = peek(in);
+    uint8_t* d = reserve(out);
+    memcpy(d, s, size);
+    release(in);
+    bench_check(d, size, "ring_floor");
+    publish(out);
 }
 
 /* One segment for both rings: created, mapped and unlinked at once (the child inherits
@@ -157,7 +206,7 @@ static int reap(pid_t child)
     return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : 1;
 }
 
-static int latency(int argc, char** argv, size_t size)
+static int latency(int argc, char** argv, size_t size, int full)
 {
     uint64_t count = strtoull(argv[3], NULL, 10), warmup = strtoull(argv[4], NULL, 10);
     shared* s = map_segment(size, 2); /* two slots each way, as a latest ln topic */
@@ -169,7 +218,10 @@ static int latency(int argc, char** argv, size_t size)
         for (uint64_t i = 0; i < warmup + count; i++) {
             if (i == warmup)
                 faults = bench_minflt();
-            put(&s->ring[1], size, get(&s->ring[0], size));
+            if (full)
+                forward(&s->ring[0], &s->ring[1], size);
+            else
+                put(&s->ring[1], size, get(&s->ring[0], size, NULL), NULL);
         }
         s->child_faults = bench_minflt() - faults;
         s->child_samples = count;
@@ -177,13 +229,15 @@ static int latency(int argc, char** argv, size_t size)
     }
     /* after the fork, so that writing it does not take copy-on-write faults */
     uint64_t* rtt = bench_alloc((count ? count : 1) * sizeof(uint64_t));
+    uint8_t* src = full ? bench_alloc(size) : NULL;
+    uint8_t* reply = full ? bench_alloc(size) : NULL;
     uint64_t faults = 0;
     for (uint64_t i = 0; rtt && i < warmup + count; i++) {
         if (i == warmup)
             faults = bench_minflt();
         uint64_t t0 = bench_now_ns();
-        put(&s->ring[0], size, i);
-        uint64_t got = get(&s->ring[1], size);
+        put(&s->ring[0], size, i, src);
+        uint64_t got = get(&s->ring[1], size, reply);
         uint64_t t1 = bench_now_ns();
         if (got != i) {
             fprintf(stderr, "ring_floor: round trip %" PRIu64 " came back as %" PRIu64 "\n", i,
@@ -202,7 +256,7 @@ static int latency(int argc, char** argv, size_t size)
     return rc;
 }
 
-static int throughput(char** argv, size_t size)
+static int throughput(char** argv, size_t size, int full)
 {
     uint64_t count = strtoull(argv[3], NULL, 10), warm = strtoull(argv[5], NULL, 10);
     double seconds = atof(argv[6]);
@@ -211,8 +265,9 @@ static int throughput(char** argv, size_t size)
     pid_t sub = spawn();
     if (sub == 0) {
         uint64_t received = 0, faults = 0, counted = 0, t0 = 0, value;
+        uint8_t* dst = full ? bench_alloc(size) : NULL;
         do {
-            value = get(r, size);
+            value = get(r, size, dst);
             if (received++ == 0)
                 t0 = bench_now_ns();
             if (!counted && value >= warm)
@@ -224,13 +279,14 @@ static int throughput(char** argv, size_t size)
         s->child_samples = counted;
         _exit(0);
     }
+    uint8_t* src = full ? bench_alloc(size) : NULL;
     uint64_t t0 = bench_now_ns(), faults = bench_minflt(), sent = 0;
     uint64_t stop_ns = seconds > 0 ? t0 + (uint64_t)(seconds * 1e9) : UINT64_MAX;
     for (uint64_t i = 0; i < count; i++) {
         if (i == warm)
             faults = bench_minflt();
         int last = (i & 15) == 0 && bench_now_ns() > stop_ns;
-        put(r, size, last ? count - 1 : i);
+        put(r, size, last ? count - 1 : i, src);
         sent++;
         if (last)
             break;
@@ -248,6 +304,10 @@ static int throughput(char** argv, size_t size)
 
 int main(int argc, char** argv)
 {
+    /* an optional payload mode after the arguments */
+    int full = argc > 1 && strcmp(argv[argc - 1], "full") == 0;
+    if (full || (argc > 1 && strcmp(argv[argc - 1], "zc") == 0))
+        argc--;
     int lat = argc >= 6 && argc <= 7 && strcmp(argv[1], "lat") == 0;
     int thr = argc == 7 && strcmp(argv[1], "thr") == 0;
     if (!lat && !thr) {
@@ -259,5 +319,5 @@ int main(int argc, char** argv)
         fputs("ring_floor: SIZE must be at least 16\n", stderr);
         return 2;
     }
-    return lat ? latency(argc, argv, size) : throughput(argv, size);
+    return lat ? latency(argc, argv, size, full) : throughput(argv, size, full);
 }

@@ -1,14 +1,15 @@
 /* thr_ln.c — throughput of one libln topic: a publisher writing samples as fast as it can
  * into a queued subscriber in another process, by copy (ln_write/ln_read) or zero-copy
- * (loan/commit, borrow/release, touching the first and last 8 bytes).  One JSON line each. */
+ * (loan/commit, borrow/release; zc touches the first and last 8 bytes, full copies a whole
+ * source buffer into each loan and each borrowed sample out whole).  One JSON line each. */
 #include <inttypes.h>
 
 #include "bench_common.h"
 
 static const char usage[] =
-    "usage: thr_ln sub TOPIC SIZE COUNT BUFFERS [copy|zc WARM]\n"
+    "usage: thr_ln sub TOPIC SIZE COUNT BUFFERS [copy|zc|full WARM]\n"
     "           read until the last sample or 2 s idle\n"
-    "       thr_ln pub TOPIC SIZE COUNT wait|nowait [copy|zc WARM SECONDS]\n"
+    "       thr_ln pub TOPIC SIZE COUNT wait|nowait [copy|zc|full WARM SECONDS]\n"
     "           wait: LN_PUBLISH_WAIT_FOR_SUBSCRIBERS; after SECONDS the next sample is the\n"
     "           last (counter COUNT-1).  Minor faults are counted from sample WARM on.\n";
 
@@ -16,7 +17,8 @@ typedef struct run {
     const char* topic;
     bench_md md;
     uint64_t count, warm;
-    int zc;
+    int zc;   /* zero-copy (zc or full) */
+    int full; /* full: whole payloads into loans and out of borrows */
 } run;
 
 /* One sample into *counter; 1 if read, 0 after the timeout, -1 if a zero-copy sample was
@@ -40,8 +42,13 @@ static int read_one(ln_inport* sub, const run* r, uint8_t* buf, double timeout, 
     if (rc < 0)
         bench_fail("ln_read_borrow", rc);
     uint64_t first, last;
-    memcpy(&first, sample, sizeof first);
-    memcpy(&last, (const uint8_t*)sample + r->md.size - sizeof last, sizeof last);
+    const uint8_t* data = sample;
+    if (r->full) { /* the whole sample out before it is released */
+        memcpy(buf, sample, r->md.size);
+        data = buf;
+    }
+    memcpy(&first, data, sizeof first);
+    memcpy(&last, data + r->md.size - sizeof last, sizeof last);
     rc = ln_read_release(sub);
     if (rc == LN_EOVERRUN)
         return -1;
@@ -64,7 +71,7 @@ static int subscriber(ln_client* clnt, const run* r, uint32_t buffers)
     int rc = ln_subscribe(clnt, &sub, r->topic, r->md.name, r->md.hash, r->md.size, &o);
     if (rc < 0)
         bench_fail("ln_subscribe", rc);
-    uint8_t* buf = r->zc ? NULL : bench_alloc(r->md.size);
+    uint8_t* buf = r->zc && !r->full ? NULL : bench_alloc(r->md.size);
     uint64_t received = 0, disorder = 0, last = 0, first_ns = 0, last_ns = 0;
     uint64_t faults = 0, fault_samples = 0;
     int counting = 0;
@@ -107,7 +114,12 @@ static void write_one(ln_outport* pub, const run* r, uint8_t* buf, uint64_t coun
     void* slot;
     if ((rc = ln_write_loan(pub, &slot, -1)) < 0)
         bench_fail("ln_write_loan", rc);
-    bench_stamp(slot, r->md.size, counter);
+    if (r->full) {
+        bench_stamp(buf, r->md.size, counter);
+        memcpy(slot, buf, r->md.size);
+    } else {
+        bench_stamp(slot, r->md.size, counter);
+    }
     if ((rc = ln_write_commit(pub)) < 0)
         bench_fail("ln_write_commit", rc);
 }
@@ -121,7 +133,7 @@ static int publisher(ln_client* clnt, const run* r, int wait, double seconds)
     int rc = ln_publish(clnt, &pub, r->topic, r->md.name, r->md.hash, r->md.size, &o);
     if (rc < 0)
         bench_fail("ln_publish", rc);
-    uint8_t* buf = r->zc ? NULL : bench_alloc(r->md.size);
+    uint8_t* buf = r->zc && !r->full ? NULL : bench_alloc(r->md.size);
     bench_ready();
     uint64_t t0 = bench_now_ns(), faults = bench_minflt(), sent = 0;
     uint64_t stop_ns = seconds > 0 ? t0 + (uint64_t)(seconds * 1e9) : UINT64_MAX;
@@ -151,8 +163,13 @@ int main(int argc, char** argv)
         fputs(usage, stderr);
         return 2;
     }
-    run r = {argv[2], bench_md_for(strtoull(argv[3], NULL, 10)), strtoull(argv[4], NULL, 10),
-             argc > 7 ? strtoull(argv[7], NULL, 10) : 0, argc > 6 && strcmp(argv[6], "zc") == 0};
+    int full = argc > 6 && strcmp(argv[6], "full") == 0;
+    run r = {argv[2],
+             bench_md_for(strtoull(argv[3], NULL, 10)),
+             strtoull(argv[4], NULL, 10),
+             argc > 7 ? strtoull(argv[7], NULL, 10) : 0,
+             full || (argc > 6 && strcmp(argv[6], "zc") == 0),
+             full};
     ln_client* clnt;
     int rc = ln_client_create(&clnt, "thr_ln", NULL);
     if (rc < 0)

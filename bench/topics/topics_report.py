@@ -207,7 +207,7 @@ def pub_cost_table(cost: Record) -> list[str]:
     return out
 
 
-def _goal(name: str, measured: str, ratio: float | None, limit: float, at_most: bool) -> Record:
+def goal(name: str, measured: str, ratio: float | None, limit: float, at_most: bool) -> Record:
     if ratio is None:
         verdict = "MISS"  # not measured counts as not met
     else:
@@ -229,16 +229,16 @@ def goals(lat: list[Record], thr: list[Record], zc: list[Record], cost: Record
     for pl in PLACEMENTS:
         text, ratio = _lat_ratio(lat, {"size": 64, "transport": "ln_c", "placement": pl},
                                  {"size": 64, "transport": "futex", "placement": pl})
-        result.append(_goal(f"C 64 B p50 <= 1.2x futex floor ({pl})", text, ratio, 1.2, True))
+        result.append(goal(f"C 64 B p50 <= 1.2x futex floor ({pl})", text, ratio, 1.2, True))
         text, ratio = _lat_ratio(lat, {"size": 4 << 20, "transport": "ln_c_zc", "placement": pl},
                                  {"size": 4 << 20, "transport": "iox", "placement": pl})
-        result.append(_goal(f"zero-copy 4 MiB p50 <= iceoryx ({pl})", text, ratio, 1.0, True))
+        result.append(goal(f"zero-copy 4 MiB p50 <= iceoryx ({pl})", text, ratio, 1.0, True))
         text, ratio = _lat_ratio(lat, {"size": 4 << 20, "transport": "ln_c_zc", "placement": pl},
                                  {"size": 64, "transport": "ln_c_zc", "placement": pl})
-        result.append(_goal(f"zero-copy 4 MiB p50 <= 1.5x 64 B ({pl})", text, ratio, 1.5, True))
+        result.append(goal(f"zero-copy 4 MiB p50 <= 1.5x 64 B ({pl})", text, ratio, 1.5, True))
         text, ratio = _lat_ratio(lat, {"size": 64, "transport": "ln_py", "placement": pl},
                                  {"size": 64, "transport": "zmq", "placement": pl})
-        result.append(_goal(f"Python 64 B p50 <= 0.5x pyzmq ({pl})", text, ratio, 0.5, True))
+        result.append(goal(f"Python 64 B p50 <= 0.5x pyzmq ({pl})", text, ratio, 0.5, True))
     ln_ok = [r for r in thr if r["transport"] == "ln_py" and r["size"] == 64
              and "error" not in r and r["lost"] == 0 and r["overruns"] == 0]
     zmq = [r for r in thr if r["transport"] == "zmq" and r["size"] == 64 and "error" not in r]
@@ -246,24 +246,24 @@ def goals(lat: list[Record], thr: list[Record], zc: list[Record], cost: Record
     if ln_ok and zmq:
         best, ref = max(r["recv_rate"] for r in ln_ok), max(r["recv_rate"] for r in zmq)
         text, ratio = f"{best:,.0f} / {ref:,.0f} msg/s", best / ref
-    result.append(_goal("Python 64 B queued >= 2x pyzmq, no loss", text, ratio, 2.0, False))
+    result.append(goal("Python 64 B queued >= 2x pyzmq, no loss", text, ratio, 2.0, False))
     ln_zc, iox2 = find(zc, size=4 << 20, transport="ln_py_zc"), find(zc, size=4 << 20,
                                                                          transport="iox2")
     text, ratio = "not measured", None
     if ln_zc and iox2 and iox2["recv_rate"] > 0:
         text = f"{ln_zc['recv_rate']:,.0f} / {iox2['recv_rate']:,.0f} msg/s"
         ratio = ln_zc["recv_rate"] / iox2["recv_rate"]
-    result.append(_goal("Python zero-copy 4 MiB msg/s >= iceoryx2", text, ratio, 1.0, False))
+    result.append(goal("Python zero-copy 4 MiB msg/s >= iceoryx2", text, ratio, 1.0, False))
     worst, where = worst_faults(lat, zc)
     text, ratio = ("not measured", None) if not where else (f"{worst:.3f}/sample, worst", worst)
-    goal = _goal(f"ln minor faults per sample <= {FAULTS_LIMIT:g}", text, ratio, FAULTS_LIMIT,
-                 True)
-    goal["worst_case"] = where
-    result.append(goal)
+    faults = goal(f"ln minor faults per sample <= {FAULTS_LIMIT:g}", text, ratio, FAULTS_LIMIT,
+                   True)
+    faults["worst_case"] = where
+    result.append(faults)
     idle = cost.get("write_idle_subscriber")
     text, ratio = ("not measured", None) if not idle else (
         f"{idle['median_ns']:.1f} ns", idle["median_ns"] / 100.0)
-    result.append(_goal("publish, no waiting reader <= 100 ns", text, ratio, 1.0, True))
+    result.append(goal("publish, no waiting reader <= 100 ns", text, ratio, 1.0, True))
     return result
 
 
