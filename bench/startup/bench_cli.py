@@ -178,6 +178,9 @@ def measure(args: argparse.Namespace, tmp: Path) -> tuple[dict[str, Record], lis
     token = f"clibench{os.getpid()}"
     env = {**os.environ, "LN_RUNTIME_DIR": str(tmp / "runtime")}  # of the served manager
     env.pop("LN_MANAGER", None)
+    # The warm-up writes the .pyc files of modules changed since the last run, as an
+    # installed package has them; without it every run would compile those again.
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     daemon = Daemon(tmp)
     env.update(LN_ARBITER_PORT=str(daemon.port), LN_DAEMON_KEY_FILE=str(daemon.key_file))
     launch = Launch(tmp, env, token)

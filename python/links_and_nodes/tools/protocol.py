@@ -2,17 +2,20 @@
 message, `encode()` to bytes and `decode_body()` back, validating everything the document
 says a frame must satisfy.  The constants, the message types and every message's fields are
 read from python/links_and_nodes/wire/client.schema at import time (libln's C codec is
-generated from the same file).  A leaf module: no I/O, nothing of ours imported but the
-schema parser."""
+generated from the same file); a message's or record's class is made the first time it is
+used (`p.Hello`, `MESSAGES`, decoding a frame), so that a command line that sends three
+messages does not build all of them.  A leaf module: no I/O, nothing of ours imported but
+the schema parser."""
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import struct
 from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from ..wire import schema as _schema
 
@@ -64,8 +67,9 @@ class Message(Record):
     FROM_CLIENT: ClassVar[bool]
 
 
-def _kind(t: _schema.Type, where: str, records: dict[str, type[Record]]) -> str | type[Record]:
-    """The codec's kind of a schema field type (this protocol uses only these)."""
+def _plain_kind(t: _schema.Type, where: str) -> str:
+    """The codec's kind of a schema field type (this protocol uses only these), "list" for a
+    list of records."""
     if t.kind == "int" and t.name in _FIXED:
         return t.name
     if t.kind == "str" and t.limit == MAX_STR and SCHEMA.str_length == "u16":
@@ -73,15 +77,24 @@ def _kind(t: _schema.Type, where: str, records: dict[str, type[Record]]) -> str 
     if t.kind == "text":
         return "text"
     if t.kind == "list" and t.item is not None and t.item.kind == "record":
-        return records[t.item.ref or ""]
+        return "list"
     raise ImportError(f"{SCHEMA.path}: {where}: {t} is not a type of the client protocol")
 
 
-def _class(struct_: _schema.Struct, base: type[Record], records: dict[str, type[Record]],
-           namespace: dict[str, Any]) -> type[Record]:
+def _kind(t: _schema.Type, where: str) -> str | type[Record]:
+    kind = _plain_kind(t, where)
+    return _record(t.item.ref or "") if kind == "list" and t.item is not None else kind
+
+
+# Every field's type is checked here, at import, though the classes are made later.
+for _struct in (*SCHEMA.records.values(), *SCHEMA.messages.values()):
+    for _field in _struct.fields:
+        _plain_kind(_field.type, f"{_struct.name}.{_field.name}")
+
+
+def _class(struct_: _schema.Struct, base: type[Record], namespace: dict[str, Any]) -> type[Record]:
     """The frozen dataclass of a schema record or message."""
-    kinds = tuple((f.name, _kind(f.type, f"{struct_.name}.{f.name}", records))
-                  for f in struct_.fields)
+    kinds = tuple((f.name, _kind(f.type, f"{struct_.name}.{f.name}")) for f in struct_.fields)
     fields: list[Any] = []
     for f, (_, kind) in zip(struct_.fields, kinds, strict=True):
         annotation = (f"tuple[{kind.__name__}, ...]" if isinstance(kind, type)
@@ -95,24 +108,58 @@ def _class(struct_: _schema.Struct, base: type[Record], records: dict[str, type[
     return cls
 
 
-def _build() -> tuple[dict[str, type[Record]], dict[int, type[Message]]]:
-    records: dict[str, type[Record]] = {}
-    for rec in SCHEMA.records.values():
-        records[rec.name] = _class(rec, Record, records, {})
-    messages: dict[int, type[Message]] = {}
-    for msg in SCHEMA.messages.values():
-        cls = _class(msg, Message, records, {"TYPE": MsgType[msg.name],
-                                             "FROM_CLIENT": msg.sender == "client"})
-        messages[cls.TYPE] = cls  # type: ignore[assignment]
-    return records, messages
+# The classes made so far, by schema name (a record's "ServiceEntry", a message's "HELLO").
+_made: dict[str, type[Record]] = {}
 
 
-_RECORDS, MESSAGES = _build()
+def _record(name: str) -> type[Record]:
+    cls = _made.get(name)
+    if cls is None:
+        cls = _made[name] = _class(SCHEMA.records[name], Record, {})
+    return cls
+
+
+def message_class(type_: int) -> type[Message] | None:
+    """The class of message type `type_` (None if the protocol has no such type)."""
+    try:
+        name = MsgType(type_).name
+    except ValueError:
+        return None
+    cls = _made.get(name)
+    if cls is None:
+        msg = SCHEMA.messages[name]
+        cls = _made[name] = _class(msg, Message, {"TYPE": MsgType[name],
+                                                  "FROM_CLIENT": msg.sender == "client"})
+    return cls  # type: ignore[return-value]
+
+
 # Every message class (Hello, Welcome, Error, Publish, ..., ControlResult) and record class
-# (ServiceEntry) under its CamelCase name: p.Hello(...) and so on.
-globals().update({cls.__name__: cls for cls in (*_RECORDS.values(), *MESSAGES.values())})
-ServiceEntry: type[Record] = _RECORDS["ServiceEntry"]
-ServiceList: type[Message] = MESSAGES[MsgType.SERVICE_LIST]
+# (ServiceEntry) under its CamelCase name: p.Hello(...) and so on, made on first use;
+# MESSAGES (type number -> class) and _RECORDS (schema name -> class) make them all.
+_BY_ATTRIBUTE: dict[str, Any] = {
+    **{rec.type_name: functools.partial(_record, rec.name) for rec in SCHEMA.records.values()},
+    **{msg.type_name: functools.partial(message_class, MsgType[msg.name])
+       for msg in SCHEMA.messages.values()},
+    "MESSAGES": lambda: {MsgType[m.name]: message_class(MsgType[m.name])
+                         for m in SCHEMA.messages.values()},
+    "_RECORDS": lambda: {name: _record(name) for name in SCHEMA.records},
+}
+if TYPE_CHECKING:
+    MESSAGES: dict[int, type[Message]]
+    ServiceEntry: type[Record]
+    ServiceList: type[Message]
+
+
+def __getattr__(name: str) -> Any:
+    make = _BY_ATTRIBUTE.get(name)
+    if make is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = globals()[name] = make()  # from now on an ordinary module attribute
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_BY_ATTRIBUTE})
 
 
 def frame_length(header: bytes) -> int:
@@ -172,11 +219,13 @@ def encoded_size(record: Record) -> int:
     return sum(len(part) for part in _encode_fields(record, type(record).__name__))
 
 
-def service_list(request_id: int, entries: Iterable[ServiceEntry]) -> ServiceList:
+def service_list(request_id: int, entries: Iterable[Record]) -> Message:
     """The SERVICE_LIST of `entries` (in the order given): `total` counts them all, the
     list keeps as many as fit the frame limit, cutting at the end."""
-    room = MAX_LENGTH - 2 - encoded_size(ServiceList(request_id, 0, ()))
-    kept: list[ServiceEntry] = []
+    service_list_cls = message_class(MsgType.SERVICE_LIST)
+    assert service_list_cls is not None
+    room = MAX_LENGTH - 2 - encoded_size(service_list_cls(request_id, 0, ()))
+    kept: list[Record] = []
     total = 0
     full = False
     for entry in entries:
@@ -187,7 +236,7 @@ def service_list(request_id: int, entries: Iterable[ServiceEntry]) -> ServiceLis
             if not full:
                 kept.append(entry)
                 room -= size
-    return ServiceList(request_id, total, tuple(kept))
+    return service_list_cls(request_id, total, tuple(kept))
 
 
 def decode_frame(frame: bytes) -> Message:
@@ -204,7 +253,7 @@ def decode_payload(payload: bytes) -> Message:
     if len(payload) < MIN_LENGTH:
         raise ProtocolError(f"frame of {len(payload)} bytes has no type")
     (type_,) = struct.unpack_from("<H", payload)
-    cls = MESSAGES.get(type_)
+    cls = message_class(type_)
     if cls is None:
         raise ProtocolError(f"unknown frame type {type_}")
     return decode_body(cls, payload[2:])

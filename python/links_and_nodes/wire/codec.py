@@ -1,6 +1,6 @@
 """The Python codec of a wire schema, built from the schema file at import time (no packing
-code per message): `DAEMON.encode("SPAWN", spec) -> bytes`, `DAEMON.decode("SPAWNED",
-payload) -> dict`.
+code per message; a message's encoder and decoder are made when it is first used):
+`DAEMON.encode("SPAWN", spec) -> bytes`, `DAEMON.decode("SPAWNED", payload) -> dict`.
 
 Values: a message or record is a dict (encode also takes any object with the fields as
 attributes); a missing field takes its schema default, else zero / "" / b"" / [].  A flags
@@ -93,10 +93,9 @@ class Codec:
             e.name: enum.IntEnum(e.name, [(x.name, x.value) for x in e.entries])
             for e in schema.enums.values() if e.kind == "enum"}
         self.msg = self.enums[schema.message_enum.name]
-        self._enc: dict[str, Encoder] = {}
-        self._dec: dict[str, Decoder] = {}
-        for s in [*schema.records.values(), *schema.messages.values()]:
-            self._enc[s.name], self._dec[s.name] = self._struct(s)
+        self._structs = {s.name: s for s in [*schema.records.values(),
+                                             *schema.messages.values()]}
+        self._coders: dict[str, tuple[Encoder, Decoder]] = {}  # made on first use
 
     # -- public --
 
@@ -105,7 +104,7 @@ class Codec:
         if message not in self.schema.messages:
             raise WireError(f"no message {message}")
         out: list[bytes] = []
-        self._enc[message](out, {} if obj is None else obj, message)
+        self._coder(message)[0](out, {} if obj is None else obj, message)
         return b"".join(out)
 
     def decode(self, message: str, data: bytes) -> dict[str, Any]:
@@ -114,7 +113,7 @@ class Codec:
             raise WireError(f"no message {message}")
         buf = _Buf(memoryview(data) if not isinstance(data, bytes) else data)
         out: dict[str, Any] = {}
-        self._dec[message](buf, out)
+        self._coder(message)[1](buf, out)
         if buf.pos != len(buf.data):
             raise WireError(f"{message}: {len(buf.data) - buf.pos} bytes left over")
         return out
@@ -131,6 +130,13 @@ class Codec:
             return None
 
     # -- building --
+
+    def _coder(self, name: str) -> tuple[Encoder, Decoder]:
+        """Encoder and decoder of the record or message `name`."""
+        coder = self._coders.get(name)
+        if coder is None:
+            coder = self._coders[name] = self._struct(self._structs[name])
+        return coder
 
     def _struct(self, s: sch.Struct) -> tuple[Encoder, Decoder]:
         parts = [(f, *self._field(s, f)) for f in s.fields]
@@ -278,11 +284,11 @@ class Codec:
         ref = t.ref or ""
 
         def enc_record(out: list[bytes], v: Any, where: str) -> None:
-            self._enc[ref](out, v, where)
+            self._coder(ref)[0](out, v, where)
 
         def dec_record(buf: _Buf) -> dict[str, Any]:
             rec: dict[str, Any] = {}
-            self._dec[ref](buf, rec)
+            self._coder(ref)[1](buf, rec)
             return rec
         return enc_record, dec_record
 

@@ -95,3 +95,28 @@ def test_remote_command_loads_only_the_client(tmp_path: Path, manager: Manager,
     json.loads(stdout)  # the manager's answer
     assert "links_and_nodes.tools.protocol" in modules  # it did talk to the manager
     assert offending(modules, HEAVY + ("ln_generate",)) == []
+
+
+EAGER = """
+import json
+from links_and_nodes.manager.frontends.webui import auth
+from links_and_nodes.tools import protocol as p
+made, hashed = sorted(p._made), auth._dummy.cache_info().currsize
+hello = p.Hello
+same = hello is p.message_class(p.MsgType.HELLO) is p.MESSAGES[p.MsgType.HELLO]
+auth.Sessions({"user": auth.hash_password("pw", n=2)})
+print(json.dumps({"made": made, "hashed": hashed, "same": same,
+                  "hashed_for_sessions": auth._dummy.cache_info().currsize}))
+"""
+
+
+def test_launch_modules_build_nothing_at_import() -> None:
+    """`ln_manager -c` imports the client codec and the web UI's auth module: importing them
+    makes no message class and computes no scrypt hash (each costs milliseconds at every
+    start); a class is made when first used, the same one however it is reached, and the hash
+    unknown users are checked against when the first Sessions with users is made."""
+    done = subprocess.run([sys.executable, "-c", EAGER], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert result == {"made": [], "hashed": 0, "same": True, "hashed_for_sessions": 1}

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import base64
 import binascii
+import functools
 import getpass
 import hashlib
 import hmac
@@ -122,6 +123,8 @@ class Sessions:
         self.users = users
         self.lifetime = lifetime
         self._open: dict[str, Session] = {}
+        if users is not None:
+            _dummy()  # here, not at the first login: that one must cost what the others do
 
     @property
     def open_access(self) -> bool:
@@ -131,7 +134,7 @@ class Sessions:
         """A new session if the credentials are right (checked in constant time per user
         known or not), else None."""
         stored = (self.users or {}).get(user)
-        ok = verify_password(password, stored or _DUMMY)
+        ok = verify_password(password, stored or _dummy())
         if stored is None or not ok:
             return None
         return self.open(user)
@@ -169,7 +172,12 @@ class Sessions:
                 f"Max-Age={int(self.lifetime)}")
 
 
-_DUMMY = hash_password("", n=SCRYPT_N)  # costs an unknown user as much as a known one
+@functools.cache
+def _dummy() -> str:
+    """The hash an unknown user's password is checked against, so that it costs as much as a
+    known one's; made once, when the first Sessions with users is (not at import: scrypt
+    takes tens of milliseconds, and a manager without the web UI's auth never needs it)."""
+    return hash_password("", n=SCRYPT_N)
 
 
 def csrf_ok(session: Session, token: object) -> bool:
