@@ -333,6 +333,7 @@ int ln_subscribe(ln_client* clnt, ln_inport** out, const char* topic, const char
         p->cur.next = atomic_load(&p->c.ring.hdr->readers[p->cur.reader].next_seq);
     else
         p->cur.next = 1; /* latest: the first read returns the newest sample there is */
+    ln_ring_publish_cursor(&p->c.ring, &p->cur); /* hot slots: keep the newest for it */
     if ((rc = adopt_port(&p->c, LN_INPORT_MAGIC, &inport_ops, gen)) == LN_OK)
         *out = p;
     return rc;

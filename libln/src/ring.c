@@ -87,6 +87,11 @@ int ln_ring_attach(ln_ring* ring, const char* name, uint64_t layout_hash, uint64
 
 void ln_ring_detach(ln_ring* ring)
 {
+    if (ring->tap_kind != LN_RING_TAP_NONE && ring->hdr)
+        atomic_fetch_sub_explicit(ring->tap_kind == LN_RING_TAP_EVERY ? &ring->hdr->taps
+                                                                      : &ring->hdr->newest_taps,
+                                  1, memory_order_seq_cst);
+    ring->tap_kind = LN_RING_TAP_NONE;
     ln_shm_unmap(&ring->map);
     ring->hdr = NULL;
     ring->slots = NULL;
@@ -108,6 +113,7 @@ int ln_ring_follow_once(ln_ring* ring)
     int rc = ln_ring_attach(&fresh, next, ring->layout_hash, ring->message_size);
     if (rc != LN_OK)
         return rc;
+    ln_ring_count_tap(&fresh, ring->tap_kind); /* counted there before no longer here */
     ln_ring_detach(ring);
     *ring = fresh;
     return LN_OK;
@@ -126,6 +132,16 @@ int ln_ring_follow(ln_ring* ring)
             return rc;
     }
     return LN_OK;
+}
+
+void ln_ring_count_tap(ln_ring* ring, int kind)
+{
+    if (ring->tap_kind != LN_RING_TAP_NONE || kind == LN_RING_TAP_NONE)
+        return;
+    atomic_fetch_add_explicit(kind == LN_RING_TAP_EVERY ? &ring->hdr->taps
+                                                        : &ring->hdr->newest_taps,
+                              1, memory_order_seq_cst);
+    ring->tap_kind = kind;
 }
 
 const struct timespec* ln_deadline_at(ln_deadline* d)
@@ -169,10 +185,16 @@ static void recover(ln_ring* ring)
     if (atomic_load_explicit(&h->retired, memory_order_acquire))
         return; /* its sequence numbers live on in the successor */
     uint64_t n = atomic_load_explicit(&h->write_seq, memory_order_relaxed) + 1;
-    uint64_t word = atomic_load_explicit(&ln_ring_slot_at(ring, n)->seq, memory_order_acquire);
-    if (word == LN_SLOT_WORD(n, LN_SLOT_COMMITTED)) {
-        atomic_store_explicit(&h->write_seq, n, memory_order_seq_cst);
-        ln_ring_wake_readers(ring);
+    /* It may have died before pointing the directory at the slot: look at every slot. */
+    for (uint32_t i = 0; i < ring->slot_count; i++) {
+        ln_ring_slot* slot = ln_ring_slot_index(ring, i);
+        if (atomic_load_explicit(&slot->seq, memory_order_acquire) ==
+            LN_SLOT_WORD(n, LN_SLOT_COMMITTED)) {
+            atomic_store_explicit(&h->slot_of[n % ring->slot_count], i, memory_order_release);
+            atomic_store_explicit(&h->write_seq, n, memory_order_seq_cst);
+            ln_ring_wake_readers(ring);
+            break;
+        }
     }
     /* A slot left WRITING is rewritten under the same number by the next writer. */
 }
@@ -263,9 +285,109 @@ int ln_ring_sleep_for_space(ln_ring* ring, ln_deadline* d)
     return LN_OK;
 }
 
+static int hot_ring(const ln_ring* ring) { return ring->message_size >= LN_RING_HOT_BYTES; }
+
+/* The first sample number a reader may still want once sample n is written (n > newest): the
+ * samples in [keep, newest] stay where they are (keep = newest + 1: none).  A queued reader
+ * wants what it has not read of its newest `buffers`; a latest reader the newest unless it
+ * has read it (hot rings: else it does not say) and the sample it is reading; a tap that
+ * reads every sample everything the ring can hold, one that reads the newest the newest.
+ * Reader positions only grow, so a stale one keeps more. */
+static uint64_t keep_from(const ln_ring* ring, uint64_t n, uint64_t newest)
+{
+    const ln_ring_header* h = ring->hdr;
+    if (atomic_load_explicit(&h->taps, memory_order_seq_cst) > 0)
+        return n > ring->slot_count ? n - ring->slot_count + 1 : 0;
+    const int hot = hot_ring(ring);
+    uint64_t keep = newest + 1;
+    if (!hot || atomic_load_explicit(&h->newest_taps, memory_order_seq_cst) > 0)
+        keep = newest;
+    for (uint32_t i = 0; i < LN_RING_MAX_READERS; i++) {
+        const ln_ring_reader* r = &h->readers[i];
+        if (!atomic_load_explicit(&r->active, memory_order_acquire))
+            continue;
+        uint32_t buffers = atomic_load_explicit(&r->buffers, memory_order_relaxed);
+        uint64_t next = atomic_load_explicit(&r->next_seq, memory_order_seq_cst);
+        uint64_t from;
+        if (buffers > 1) {
+            from = n >= buffers ? n - buffers + 1 : 0;
+            if (next > from)
+                from = next;
+        } else {
+            from = next <= newest ? newest : newest + 1;
+            uint64_t holding = hot ? atomic_load_explicit(&r->holding, memory_order_seq_cst) : 0;
+            if (holding && holding - 1 < from)
+                from = holding - 1;
+        }
+        if (from < keep)
+            keep = from;
+    }
+    return keep;
+}
+
+/* 1 if a slot whose seq word is `word` may take a new sample: it holds none (fresh: 0), an
+ * unfinished one (WRITING: aborted, or its writer died), or one below `keep` or above `newest`
+ * (committed by a writer that died before announcing it, and given up by recover). */
+static int slot_free(uint64_t word, uint64_t keep, uint64_t newest)
+{
+    uint64_t s = LN_SLOT_SEQ(word);
+    return s == 0 || LN_SLOT_STATE(word) != LN_SLOT_COMMITTED || s < keep || s > newest;
+}
+
+/* The slot for sample n (see ring.h).  The fast case of small samples and of rings whose
+ * readers lag: the slot the directory gives for n's position held n - slot_count, which no
+ * reader can want.  Otherwise (after hot reuse moved samples around) the oldest free slot. */
+static uint32_t choose_slot(const ln_ring* ring, uint64_t n)
+{
+    const ln_ring_header* h = ring->hdr;
+    const uint32_t count = ring->slot_count;
+    uint64_t newest = atomic_load_explicit(&h->write_seq, memory_order_relaxed);
+    uint64_t keep = 0;
+    int keep_known = 0;
+    if (hot_ring(ring) && newest >= 1) {
+        keep = keep_from(ring, n, newest);
+        keep_known = 1;
+        /* the newest sample's slot if nobody wants it any more, else the one before */
+        for (uint64_t s = newest; s + 2 > newest && s >= 1; s--) {
+            uint32_t hot = atomic_load_explicit(&h->slot_of[s % count], memory_order_relaxed);
+            if (s < keep && hot < count &&
+                atomic_load_explicit(&ln_ring_slot_index(ring, hot)->seq, memory_order_relaxed) ==
+                    LN_SLOT_WORD(s, LN_SLOT_COMMITTED))
+                return hot;
+        }
+    }
+    uint32_t at = atomic_load_explicit(&h->slot_of[n % count], memory_order_relaxed);
+    if (at < count) {
+        uint64_t word =
+            atomic_load_explicit(&ln_ring_slot_index(ring, at)->seq, memory_order_relaxed);
+        if (slot_free(word, n >= count ? n - count + 1 : 0, newest))
+            return at;
+    }
+    if (!keep_known)
+        keep = keep_from(ring, n, newest);
+    /* The oldest free sample; if a latest reader holds on to an old one so long that none is
+     * free, the oldest but the newest (that reader's release then says it was overwritten). */
+    uint32_t best = n % count, any = n % count;
+    uint64_t oldest = UINT64_MAX, oldest_any = UINT64_MAX;
+    for (uint32_t i = 0; i < count; i++) {
+        uint64_t word =
+            atomic_load_explicit(&ln_ring_slot_index(ring, i)->seq, memory_order_relaxed);
+        uint64_t s = LN_SLOT_STATE(word) == LN_SLOT_COMMITTED ? LN_SLOT_SEQ(word) : 0;
+        if (slot_free(word, keep, newest) && s < oldest) {
+            oldest = s;
+            best = i;
+        }
+        if (s != newest && s < oldest_any) {
+            oldest_any = s;
+            any = i;
+        }
+    }
+    return oldest != UINT64_MAX ? best : any;
+}
+
 ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq)
 {
-    ln_ring_slot* slot = ln_ring_slot_at(ring, seq);
+    ln_ring_slot* slot = ln_ring_slot_index(ring, choose_slot(ring, seq));
     atomic_store_explicit(&slot->seq, LN_SLOT_WORD(seq, LN_SLOT_WRITING), memory_order_relaxed);
     atomic_thread_fence(memory_order_release);
     return slot;
@@ -273,8 +395,10 @@ ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq)
 
 void ln_ring_commit_seq(ln_ring* ring, ln_ring_slot* slot, uint64_t seq, int64_t timestamp_ns)
 {
+    uint32_t index = (uint32_t)(((uint8_t*)slot - ring->slots) / ring->stride);
     slot->timestamp_ns = timestamp_ns;
     atomic_store_explicit(&slot->seq, LN_SLOT_WORD(seq, LN_SLOT_COMMITTED), memory_order_release);
+    atomic_store_explicit(&ring->hdr->slot_of[seq % ring->slot_count], index, memory_order_release);
     atomic_store_explicit(&ring->hdr->write_seq, seq, memory_order_seq_cst);
     ln_ring_wake_readers(ring);
 }
@@ -319,9 +443,16 @@ int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t
             }
             n = c->next;
         }
-        ln_ring_slot* s = ln_ring_slot_at(ring, n);
+        ln_ring_slot* s = ln_ring_sample_slot(ring, n);
+        if (!s)
+            return ln_set_error(NULL, LN_EPROTOCOL,
+                                "ring '%s' is corrupted: the slot directory entry of sample "
+                                "%llu is out of range",
+                                ring->name, (unsigned long long)n);
         uint64_t got = atomic_load_explicit(&s->seq, memory_order_acquire);
         if (got == LN_SLOT_WORD(n, LN_SLOT_COMMITTED)) {
+            if (c->buffers == 1 && c->reader >= 0 && hot_ring(ring))
+                atomic_store_explicit(&h->readers[c->reader].holding, n + 1, memory_order_seq_cst);
             *slot = s;
             *word = got;
             return LN_OK;
@@ -348,9 +479,16 @@ int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t
 
 void ln_ring_publish_cursor(ln_ring* ring, const ln_ring_cursor* c)
 {
-    if (c->buffers <= 1 || c->reader < 0)
+    if (c->reader < 0)
         return;
     ln_ring_header* h = ring->hdr;
+    if (c->buffers <= 1) { /* only writers choosing a hot slot care where a latest reader is */
+        if (hot_ring(ring)) {
+            atomic_store_explicit(&h->readers[c->reader].next_seq, c->next, memory_order_seq_cst);
+            atomic_store_explicit(&h->readers[c->reader].holding, 0, memory_order_release);
+        }
+        return;
+    }
     atomic_store_explicit(&h->readers[c->reader].next_seq, c->next, memory_order_seq_cst);
     ln_futex_wake_sleepers(&h->space_futex);
 }
@@ -364,6 +502,8 @@ int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_
         if (c->buffers > 1) {
             c->pending += count_loss ? 1 : 0;
             c->next = n + 1;
+        } else if (c->reader >= 0 && hot_ring(ring)) {
+            atomic_store_explicit(&ring->hdr->readers[c->reader].holding, 0, memory_order_release);
         }
         return LN_EOVERRUN;
     }

@@ -2,19 +2,26 @@
  *
  * One segment per topic and generation: a header, then slot_count slots of slot_stride bytes.
  * Every slot starts with a sequence word `seq = (n << 2) | state` (n: publish sequence number,
- * state: COMMITTED or WRITING) followed by the publish timestamp and the payload.
+ * state: COMMITTED or WRITING) followed by the publish timestamp and the payload.  Sample n is
+ * in slot `slot_of[n % slot_count]` of the header (the slot directory): a writer picks the
+ * slot, so that large samples go to the slot written most recently that no reader needs any
+ * more (still in the CPU's caches) instead of rotating through the whole ring.
  *
  * Memory-ordering protocol (a seqlock per slot, C11 atomics):
  *  writer (holding write_lock):  n = write_seq + 1 (a forwarding tap: any n > write_seq);
- *      slot = n % slot_count
+ *      slot = a slot holding no sample a reader may still need (ln_ring_begin_seq)
  *      store(slot.seq, n|WRITING, relaxed); fence(release)      -- readers see WRITING first
  *      copy payload, timestamp
  *      store(slot.seq, n|COMMITTED, release)                     -- payload before seq
+ *      store(slot_of[n % slot_count], slot, release)
  *      store(write_seq, n, seq_cst); if the sleepers bit of data_futex is set (seq_cst load):
  *      change data_futex, clear the bit, FUTEX_WAKE
- *  reader:  w = load(write_seq, acquire); pick n <= w; s1 = load(slot.seq, acquire)
+ *  reader:  w = load(write_seq, acquire); pick n <= w; slot = load(slot_of[n % slot_count],
+ *      acquire); s1 = load(slot.seq, acquire)
  *      s1 must be n|COMMITTED; copy payload; fence(acquire); s2 = load(slot.seq, relaxed)
  *      s1 != s2 means a writer reused the slot meanwhile: the copy is discarded (never torn).
+ * A reader that finds slot_of pointing at a slot that holds another number has lost n (the
+ * writer only reuses a slot once no reader can want its sample, see ln_ring_begin_seq).
  * Sequence numbers are gap-free on the publisher's host.  A ring fed by a forwarding tap
  * (samples from another host) has gaps where the network lost samples: a number below
  * write_seq whose slot does not hold it is simply not there; queued readers count it as lost,
@@ -43,7 +50,7 @@
 #include "shm.h"
 
 #define LN_RING_MAGIC 0x31474e49524e4c00ull /* "\0LNRING1" little-endian */
-#define LN_RING_VERSION 1u
+#define LN_RING_VERSION 2u
 #define LN_RING_MAX_READERS 64u
 #define LN_RING_MAX_SLOTS 1025u /* 1,024 buffers + the one being written */
 #define LN_RING_NAME_MAX 256
@@ -60,7 +67,10 @@ typedef struct ln_ring_reader {
     _Atomic uint32_t buffers;
     uint32_t reserved0;
     _Atomic uint64_t next_seq; /* next sequence number it will read (publishers that wait) */
-    uint8_t reserved[40];
+    /* rings of hot-slot size (LN_RING_HOT_BYTES), latest readers: the sample it copies or
+     * has borrowed + 1 (0: none), so writers leave that slot alone */
+    _Atomic uint64_t holding;
+    uint8_t reserved[32];
 } ln_ring_reader;
 
 typedef struct ln_ring_header {
@@ -85,7 +95,14 @@ typedef struct ln_ring_header {
     alignas(64) _Atomic uint64_t write_seq;   /* last committed sequence number, 0: none yet */
     alignas(64) _Atomic uint32_t data_futex;  /* readers sleep here (futex.h) */
     alignas(64) _Atomic uint32_t space_futex; /* publishers waiting for queued readers */
+    /* taps, which hold no reader slot (ln_ring_count_tap): those reading every sample make
+     * writers keep the ring's whole depth; those reading the newest, the newest */
+    alignas(64) _Atomic uint32_t taps;
+    _Atomic uint32_t newest_taps;
     alignas(64) ln_ring_reader readers[LN_RING_MAX_READERS];
+    /* the slot directory: slot_of[n % slot_count] is the slot of sample n (identity at
+     * creation); written under write_lock, validated by every reader */
+    alignas(64) _Atomic uint32_t slot_of[LN_RING_MAX_SLOTS];
 } ln_ring_header;
 
 typedef struct ln_ring_slot {
@@ -109,8 +126,13 @@ typedef struct ln_ring {
     uint32_t stride;
     uint64_t layout_hash; /* what attach checked, again for successors */
     uint64_t message_size;
+    int tap_kind; /* LN_RING_TAP_*: counted in the header (moves along to successors) */
     char name[LN_RING_NAME_MAX];
 } ln_ring;
+
+/* Samples of at least this many bytes go to the hottest free slot (see ln_ring_begin_seq);
+ * smaller ones rotate through the ring, where a copy costs less than looking for one. */
+#define LN_RING_HOT_BYTES (64u * 1024u)
 
 /* LN_OK if h (the first bytes of segment `name` of `size` bytes, at least the header's if
  * size says so) is a ring of this library's format with consistent geometry; else
@@ -124,10 +146,24 @@ void ln_ring_detach(ln_ring* ring);
 int ln_ring_follow_once(ln_ring* ring);
 /* Follow successors until the ring is not retired (publishers: they write only the newest). */
 int ln_ring_follow(ln_ring* ring);
+/* A tap reading samples (it holds no reader slot): count it in the ring's header, and in every
+ * successor it follows to, until detached.  EVERY: writers keep the whole depth of samples
+ * for it (`taps`); NEWEST: the newest sample (`newest_taps`). */
+enum { LN_RING_TAP_NONE = 0, LN_RING_TAP_EVERY = 1, LN_RING_TAP_NEWEST = 2 };
+void ln_ring_count_tap(ln_ring* ring, int kind);
 
-static inline ln_ring_slot* ln_ring_slot_at(const ln_ring* ring, uint64_t seq)
+static inline ln_ring_slot* ln_ring_slot_index(const ln_ring* ring, uint32_t index)
 {
-    return (ln_ring_slot*)(ring->slots + (seq % ring->slot_count) * (uint64_t)ring->stride);
+    return (ln_ring_slot*)(ring->slots + (uint64_t)index * ring->stride);
+}
+
+/* The slot that holds, or last held, sample seq; NULL if its directory entry is out of range
+ * (a corrupted header). */
+static inline ln_ring_slot* ln_ring_sample_slot(const ln_ring* ring, uint64_t seq)
+{
+    uint32_t index =
+        atomic_load_explicit(&ring->hdr->slot_of[seq % ring->slot_count], memory_order_acquire);
+    return index < ring->slot_count ? ln_ring_slot_index(ring, index) : NULL;
 }
 
 static inline void* ln_ring_payload(ln_ring_slot* slot)
@@ -165,13 +201,19 @@ int ln_ring_has_space(const ln_ring* ring);
 /* Without the lock: sleep until a queued reader frees a buffer (or the ring is retired, or
  * the deadline passes: LN_ETIMEOUT).  May return LN_OK spuriously; callers re-check. */
 int ln_ring_sleep_for_space(ln_ring* ring, ln_deadline* d);
-/* Under the lock: start sample write_seq+1 and return its slot (marked WRITING). */
+/* Under the lock: start sample write_seq+1 and return its slot (marked WRITING): a slot
+ * whose sample no reader can want any more (queued readers: within their buffers and not
+ * read yet; latest readers: the newest unless they have read it, and what they hold; taps:
+ * the whole ring or the newest).  Of those, samples of LN_RING_HOT_BYTES and more take the
+ * newest sample's slot, else the second newest's (still in cache) when free; otherwise the
+ * one holding the oldest.  Latest readers of such rings publish next_seq and `holding`. */
 ln_ring_slot* ln_ring_begin(ln_ring* ring);
 /* Under the lock: publish the slot begun last with the current time, then wake sleeping
  * readers. */
 void ln_ring_commit(ln_ring* ring, ln_ring_slot* slot);
 /* The same for a sample with a given number seq > write_seq (numbers may be skipped) and a
- * given timestamp: a forwarded sample keeps those of the publisher's host. */
+ * given timestamp: a forwarded sample keeps those of the publisher's host.  Commit points the
+ * slot directory at the slot before it announces the sample. */
 ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq);
 void ln_ring_commit_seq(ln_ring* ring, ln_ring_slot* slot, uint64_t seq, int64_t timestamp_ns);
 void ln_ring_wake_readers(ln_ring* ring);

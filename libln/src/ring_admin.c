@@ -87,7 +87,10 @@ int ln_ring_admin_create(ln_ring_admin** out, const char* shm_name, const char* 
         free(a);
         return rc;
     }
-    /* Slots start at sequence 0 (zero pages), which no sample ever has. */
+    /* Slots start at sequence 0 (zero pages), which no sample ever has; the directory puts
+     * sample n in slot n % slots until writers move samples to hot slots. */
+    for (uint32_t i = 0; i < slots; i++)
+        atomic_store_explicit(&h->slot_of[i], i, memory_order_relaxed);
     atomic_store_explicit((_Atomic uint64_t*)&h->magic, LN_RING_MAGIC, memory_order_release);
     a->magic = LN_ADMIN_MAGIC;
     a->hdr = h;

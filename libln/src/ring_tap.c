@@ -67,6 +67,8 @@ int ln_ring_tap_open(ln_ring_tap** out, const char* shm_name, uint64_t layout_ha
         return rc;
     }
     t->mode = mode;
+    if (mode == LN_TAP_EVERY)
+        ln_ring_count_tap(&t->ring, LN_RING_TAP_EVERY); /* no reader slot: keep the whole ring */
     t->cur.reader = -1;
     t->cur.whole_ring = mode == LN_TAP_EVERY;
     fit_cursor(t);
@@ -95,6 +97,8 @@ int ln_ring_tap_read(ln_ring_tap* t, void* buf, ln_sample_info* info, double tim
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_read: buf is NULL");
     if (isnan(timeout))
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_read: timeout is NaN");
+    if (t->mode == LN_TAP_NEWEST) /* a reading tap: writers keep the newest for it */
+        ln_ring_count_tap(&t->ring, LN_RING_TAP_NEWEST);
     uint64_t expected = t->cur.next;
     uint64_t word;
     int64_t ts;

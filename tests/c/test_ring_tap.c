@@ -503,7 +503,7 @@ static void test_admin_open(void)
 
     char junk_name[64];
     snprintf(junk_name, sizeof(junk_name), "/ln.taptest%d.junk", (int)getpid());
-    uint8_t junk[8192];
+    uint8_t junk[32768]; /* more than a ring header */
     for (size_t i = 0; i < sizeof(junk); i++)
         junk[i] = (uint8_t)(i * 131 + 7);
     raw_segment(junk_name, sizeof(junk), junk, sizeof(junk));

@@ -1,6 +1,7 @@
 /* fuzz_ring.c — fuzz target: attaching a hostile topic ring (libln/src/ring.c): the input patches
- * a fresh segment's geometry, size, write_seq and slot words; then admin open, attach, follow and
- * latest/queued readers' pick/finish must refuse it or read it in bounded steps. */
+ * a fresh segment's geometry, size, write_seq, slot words, slot directory and reader slots;
+ * then admin open, attach, follow, latest/queued readers' pick/finish and a writer (small and
+ * hot-slot sizes) must refuse it or work in bounds and in bounded steps. */
 #define _GNU_SOURCE 1
 #include <assert.h>
 #include <fcntl.h>
@@ -16,6 +17,9 @@
 #define LAYOUT_HASH 0xfeedull
 #define FLAG_PATCH_GEOMETRY 1u
 #define FLAG_RETIRED 2u
+#define FLAG_HOT 4u             /* samples big enough for hot-slot reuse */
+#define FLAG_PATCH_DIRECTORY 8u /* slot_of entries from the input */
+#define FLAG_PATCH_READERS 16u  /* two reader slots from the input */
 
 struct input {
     const uint8_t* p;
@@ -42,9 +46,29 @@ static void read_ring(ln_ring* ring, ln_ring_cursor* c, int steps)
         assert((uint8_t*)slot >= ring->slots &&
                (uint8_t*)ln_ring_payload(slot) + ring->message_size <=
                    ring->slots + (uint64_t)ring->slot_count * ring->stride);
-        memcpy(copy, ln_ring_payload(slot), ring->message_size);
+        size_t n = ring->message_size < sizeof copy ? ring->message_size : sizeof copy;
+        memcpy(copy, ln_ring_payload(slot), n);
+        copy[0] ^= ((const uint8_t*)ln_ring_payload(slot))[ring->message_size - 1];
         ln_ring_finish(ring, c, slot, word, 1);
     }
+}
+
+/* Writes one sample like a publisher (its slot is chosen from the hostile directory and
+ * reader slots): it must land inside the ring. */
+static void write_ring(ln_ring* ring)
+{
+    if (atomic_load(&ring->hdr->write_seq) >= LN_RING_MAX_SEQ - 1)
+        return;
+    ln_deadline d = ln_deadline_in(0);
+    if (ln_ring_lock(ring, &d) != LN_OK)
+        return;
+    ln_ring_slot* slot = ln_ring_begin(ring);
+    assert((uint8_t*)slot >= ring->slots &&
+           (uint8_t*)ln_ring_payload(slot) + ring->message_size <=
+               ring->slots + (uint64_t)ring->slot_count * ring->stride);
+    memset(ln_ring_payload(slot), 0x5a, ring->message_size);
+    ln_ring_commit(ring, slot);
+    ln_ring_unlock(ring);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
@@ -54,6 +78,8 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     uint64_t message_size = 1 + take(&in, 1) % 200;
     int64_t delta = (int8_t)take(&in, 1) * (int64_t)64; /* the real segment size differs */
     unsigned flags = (unsigned)take(&in, 1);
+    if (flags & FLAG_HOT)
+        message_size += LN_RING_HOT_BYTES;
 
     char name[64];
     snprintf(name, sizeof name, "/ln-fuzz-ring-%d", (int)getpid());
@@ -87,6 +113,15 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
             if (at + sizeof word <= real)
                 memcpy(m + at, &word, sizeof word);
         }
+        if (flags & FLAG_PATCH_DIRECTORY)
+            for (uint32_t i = 0; i < slots; i++)
+                atomic_store(&h->slot_of[i], (uint32_t)take(&in, 2));
+        if (flags & FLAG_PATCH_READERS)
+            for (uint32_t i = 0; i < 2; i++) {
+                atomic_store(&h->readers[i].buffers, (uint32_t)take(&in, 1));
+                atomic_store(&h->readers[i].next_seq, take(&in, 8));
+                atomic_store(&h->readers[i].active, (uint32_t)take(&in, 1) & 1u);
+            }
         munmap(m, real);
     }
     close(fd);
@@ -108,6 +143,9 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         ln_ring_cursor queued = {
             .next = take(&in, 8), .buffers = 2 + (uint32_t)take(&in, 1) % 16, .reader = -1};
         read_ring(&ring, &queued, 8);
+        write_ring(&ring);
+        read_ring(&ring, &latest, 2);
+        read_ring(&ring, &queued, 2);
         ln_ring_detach(&ring);
     }
     ln_ring_admin_unlink(name);
