@@ -174,7 +174,7 @@ def main() -> int:
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     serial = f"{os.getpid()}"
     names = {shape: f"{PREFIX}.{shape}{serial}" for shape in SHAPES}
-    scope_topics = [f"{names['pingpong']}ln.ping", f"{names['control']}ln.state"]
+    scope_topics = [f"{names['pingpong']}ln.ping:counter", f"{names['control']}ln.state:cycle"]
     with tempfile.TemporaryDirectory(prefix="ln_bench_realtime_") as tmp_name:
         tmp = Path(tmp_name)
         bg = Background(tmp)

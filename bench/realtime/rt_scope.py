@@ -1,9 +1,9 @@
 """The web UI scope of bench/realtime's background: a WebSocket client of the manager's web
-UI (docs/webui.md) that subscribes the field `counter` of each topic named on the command line
-as soon as that topic exists (retrying every 0.2 s), as a browser's scope would, and prints
+UI (docs/webui.md) that subscribes one field of each topic named on the command line as
+soon as that topic exists (retrying every 0.2 s), as a browser's scope would, and prints
 {"events": N, "samples": M, "subscribed": [...], "refused": {topic: why}} when SIGTERM ends it.
 
-usage: rt_scope.py URL TOPIC..."""
+usage: rt_scope.py URL TOPIC:FIELD..."""
 
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ async def run(url: str, topics: list[str], stop: asyncio.Event) -> dict[str, Any
     ws_url = f"ws://{port}/ws"
     async with connect(ws_url, origin=f"http://{port}",  # type: ignore[arg-type]
                        additional_headers={"Cookie": session(url)}, max_size=None) as conn:
-        pending = {i: t for i, t in enumerate(topics, 1)}
+        pending = {i: t for i, t in enumerate(topics, 1)}  # "topic:field"
         waiting: dict[int, str] = {}
 
         async def ask() -> None:
@@ -46,8 +46,9 @@ async def run(url: str, topics: list[str], stop: asyncio.Event) -> dict[str, Any
                 for rid, topic in list(pending.items()):
                     if rid not in waiting:
                         waiting[rid] = topic
+                        name, field = topic.rsplit(":", 1)
                         await conn.send(json.dumps({"id": rid, "op": "subscribe_topic",
-                                                    "name": topic, "fields": ["counter"]}))
+                                                    "name": name, "fields": [field]}))
                 await asyncio.sleep(RETRY)
 
         async def receive() -> None:

@@ -287,20 +287,19 @@ int ln_ring_sleep_for_space(ln_ring* ring, ln_deadline* d)
 
 static int hot_ring(const ln_ring* ring) { return ring->message_size >= LN_RING_HOT_BYTES; }
 
-/* The first sample number a reader may still want once sample n is written (n > newest): the
- * samples in [keep, newest] stay where they are (keep = newest + 1: none).  A queued reader
- * wants what it has not read of its newest `buffers`; a latest reader the newest unless it
- * has read it (hot rings: else it does not say) and the sample it is reading; a tap that
- * reads every sample everything the ring can hold, one that reads the newest the newest.
- * Reader positions only grow, so a stale one keeps more. */
+/* Of a hot ring: the first sample number a reader may still want once sample n is written
+ * (n > newest): the samples in [keep, newest] stay where they are (keep = newest + 1: none).
+ * A queued reader wants what it has not read of its newest `buffers`; a latest reader the
+ * newest unless it has read it, and the sample it is reading; a tap that reads every sample
+ * everything the ring can hold, one that reads the newest the newest.  Reader positions
+ * only grow, so a stale one keeps more. */
 static uint64_t keep_from(const ln_ring* ring, uint64_t n, uint64_t newest)
 {
     const ln_ring_header* h = ring->hdr;
     if (atomic_load_explicit(&h->taps, memory_order_seq_cst) > 0)
         return n > ring->slot_count ? n - ring->slot_count + 1 : 0;
-    const int hot = hot_ring(ring);
     uint64_t keep = newest + 1;
-    if (!hot || atomic_load_explicit(&h->newest_taps, memory_order_seq_cst) > 0)
+    if (atomic_load_explicit(&h->newest_taps, memory_order_seq_cst) > 0)
         keep = newest;
     for (uint32_t i = 0; i < LN_RING_MAX_READERS; i++) {
         const ln_ring_reader* r = &h->readers[i];
@@ -315,7 +314,7 @@ static uint64_t keep_from(const ln_ring* ring, uint64_t n, uint64_t newest)
                 from = next;
         } else {
             from = next <= newest ? newest : newest + 1;
-            uint64_t holding = hot ? atomic_load_explicit(&r->holding, memory_order_seq_cst) : 0;
+            uint64_t holding = atomic_load_explicit(&r->holding, memory_order_seq_cst);
             if (holding && holding - 1 < from)
                 from = holding - 1;
         }
@@ -334,17 +333,21 @@ static int slot_free(uint64_t word, uint64_t keep, uint64_t newest)
     return s == 0 || LN_SLOT_STATE(word) != LN_SLOT_COMMITTED || s < keep || s > newest;
 }
 
-/* The slot for sample n (see ring.h).  The fast case of small samples and of rings whose
- * readers lag: the slot the directory gives for n's position held n - slot_count, which no
- * reader can want.  Otherwise (after hot reuse moved samples around) the oldest free slot. */
+/* The slot for sample n (see ring.h).  Small samples: slot n mod slot_count, as the ring
+ * always had it (their directory never moves).  Large ones: the newest's or the second
+ * newest's slot when free; else, the fast case of readers that lag, the slot the directory
+ * gives for n's position if it still holds n - slot_count or older, which no reader can
+ * want; else (after hot reuse moved samples around) the oldest free slot. */
 static uint32_t choose_slot(const ln_ring* ring, uint64_t n)
 {
     const ln_ring_header* h = ring->hdr;
     const uint32_t count = ring->slot_count;
+    if (!hot_ring(ring))
+        return n % count; /* never moved: the directory is the identity (see commit) */
     uint64_t newest = atomic_load_explicit(&h->write_seq, memory_order_relaxed);
     uint64_t keep = 0;
     int keep_known = 0;
-    if (hot_ring(ring) && newest >= 1) {
+    if (newest >= 1) {
         keep = keep_from(ring, n, newest);
         keep_known = 1;
         /* the newest sample's slot if nobody wants it any more, else the one before */
@@ -387,7 +390,8 @@ static uint32_t choose_slot(const ln_ring* ring, uint64_t n)
 
 ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq)
 {
-    ln_ring_slot* slot = ln_ring_slot_index(ring, choose_slot(ring, seq));
+    ring->begun = choose_slot(ring, seq);
+    ln_ring_slot* slot = ln_ring_slot_index(ring, ring->begun);
     atomic_store_explicit(&slot->seq, LN_SLOT_WORD(seq, LN_SLOT_WRITING), memory_order_relaxed);
     atomic_thread_fence(memory_order_release);
     return slot;
@@ -395,10 +399,16 @@ ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq)
 
 void ln_ring_commit_seq(ln_ring* ring, ln_ring_slot* slot, uint64_t seq, int64_t timestamp_ns)
 {
-    uint32_t index = (uint32_t)(((uint8_t*)slot - ring->slots) / ring->stride);
+    uint32_t index = ring->begun;
+    if (index >= ring->slot_count || ln_ring_slot_index(ring, index) != slot)
+        index = (uint32_t)(((uint8_t*)slot - ring->slots) / ring->stride); /* not begun last */
     slot->timestamp_ns = timestamp_ns;
     atomic_store_explicit(&slot->seq, LN_SLOT_WORD(seq, LN_SLOT_COMMITTED), memory_order_release);
-    atomic_store_explicit(&ring->hdr->slot_of[seq % ring->slot_count], index, memory_order_release);
+    /* Rotating rings keep the directory as it is: no store, so readers' copies of its cache
+     * lines stay valid. */
+    _Atomic uint32_t* entry = &ring->hdr->slot_of[seq % ring->slot_count];
+    if (atomic_load_explicit(entry, memory_order_relaxed) != index)
+        atomic_store_explicit(entry, index, memory_order_release);
     atomic_store_explicit(&ring->hdr->write_seq, seq, memory_order_seq_cst);
     ln_ring_wake_readers(ring);
 }
@@ -512,9 +522,10 @@ int ln_ring_finish(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot* slot, uint64_
     return LN_OK;
 }
 
-int ln_ring_spin_data(const ln_ring* ring, uint64_t seq, uint32_t spin_us)
+/* Poll `done(ring, arg)` (yielding the CPU) for up to spin_us; 1 once it holds. */
+static int spin_until(const ln_ring* ring, uint64_t arg, uint32_t spin_us,
+                      int (*done)(const ln_ring*, uint64_t))
 {
-    const ln_ring_header* h = ring->hdr;
     if (spin_us == 0)
         return 0;
     struct timespec start, now;
@@ -522,16 +533,40 @@ int ln_ring_spin_data(const ln_ring* ring, uint64_t seq, uint32_t spin_us)
     int64_t limit = (int64_t)spin_us * 1000;
     for (;;) {
         for (int i = 0; i < 8; i++) {
-            if (atomic_load_explicit(&h->write_seq, memory_order_acquire) >= seq ||
-                atomic_load_explicit(&h->retired, memory_order_acquire))
+            if (done(ring, arg))
                 return 1;
-            /* Yield, not just pause: a publisher on this CPU gets to run right away. */
+            /* Yield, not just pause: the other side on this CPU gets to run right away. */
             sched_yield();
         }
         clock_gettime(CLOCK_MONOTONIC, &now);
         if ((now.tv_sec - start.tv_sec) * 1000000000LL + (now.tv_nsec - start.tv_nsec) >= limit)
             return 0;
     }
+}
+
+static int space_or_retired(const ln_ring* ring, uint64_t unused)
+{
+    (void)unused;
+    const ln_ring_header* h = ring->hdr;
+    return atomic_load_explicit(&h->retired, memory_order_acquire) ||
+           !reader_full(h, atomic_load_explicit(&h->write_seq, memory_order_acquire) + 1);
+}
+
+int ln_ring_spin_space(const ln_ring* ring, uint32_t spin_us)
+{
+    return spin_until(ring, 0, spin_us, space_or_retired);
+}
+
+static int data_or_retired(const ln_ring* ring, uint64_t seq)
+{
+    const ln_ring_header* h = ring->hdr;
+    return atomic_load_explicit(&h->write_seq, memory_order_acquire) >= seq ||
+           atomic_load_explicit(&h->retired, memory_order_acquire);
+}
+
+int ln_ring_spin_data(const ln_ring* ring, uint64_t seq, uint32_t spin_us)
+{
+    return spin_until(ring, seq, spin_us, data_or_retired);
 }
 
 int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d)

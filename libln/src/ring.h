@@ -126,7 +126,8 @@ typedef struct ln_ring {
     uint32_t stride;
     uint64_t layout_hash; /* what attach checked, again for successors */
     uint64_t message_size;
-    int tap_kind; /* LN_RING_TAP_*: counted in the header (moves along to successors) */
+    int tap_kind;   /* LN_RING_TAP_*: counted in the header (moves along to successors) */
+    uint32_t begun; /* writer: the slot index ln_ring_begin_seq chose last */
     char name[LN_RING_NAME_MAX];
 } ln_ring;
 
@@ -198,6 +199,9 @@ int ln_ring_lock(ln_ring* ring, ln_deadline* d);
 int ln_ring_unlock(ln_ring* ring);
 /* Under the lock: 1 if every queued reader has room for one more sample. */
 int ln_ring_has_space(const ln_ring* ring);
+/* Without the lock: poll (yielding the CPU) for up to spin_us until every queued reader has
+ * room for one more sample or the ring is retired; 1 if that happened. */
+int ln_ring_spin_space(const ln_ring* ring, uint32_t spin_us);
 /* Without the lock: sleep until a queued reader frees a buffer (or the ring is retired, or
  * the deadline passes: LN_ETIMEOUT).  May return LN_OK spuriously; callers re-check. */
 int ln_ring_sleep_for_space(ln_ring* ring, ln_deadline* d);

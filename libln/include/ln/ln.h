@@ -154,12 +154,14 @@ LN_EXPORT int ln_client_last_error(const ln_client* clnt, char* text, size_t siz
 /* Before a blocking read sleeps, it polls (yielding the CPU) for up to spin_us: a sample that
  * comes within that time is seen without a futex wake-up, which costs tens of microseconds when
  * it crosses CPUs.  0 sleeps at once; the cost is at most spin_us of CPU per blocking read that
- * waits longer. */
+ * waits longer.  A publisher with LN_PUBLISH_WAIT_FOR_SUBSCRIBERS polls the same way before it
+ * sleeps for a free buffer (then the subscriber's release makes no system call). */
 #define LN_DEFAULT_SPIN_US 20u
 typedef struct ln_port_options {
     uint32_t buffers; /* 1 .. 1024, default 1 */
     uint32_t flags;   /* publishers: LN_PUBLISH_*; subscribers: at most one LN_SUBSCRIBE_* */
-    uint32_t spin_us; /* subscribers: poll before sleeping, default LN_DEFAULT_SPIN_US */
+    uint32_t spin_us; /* poll before sleeping (subscribers: for a sample; waiting publishers:
+                         for a free buffer), default LN_DEFAULT_SPIN_US */
 } ln_port_options;
 
 LN_EXPORT void ln_port_options_init(ln_port_options* opts);
