@@ -246,18 +246,25 @@ int ln_ring_unlock(ln_ring* ring)
     return LN_OK;
 }
 
+/* Reader slot i: 1 with its buffers and next sequence number if a subscriber holds it. */
+static int active_reader(const ln_ring_header* h, uint32_t i, uint32_t* buffers, uint64_t* next)
+{
+    const ln_ring_reader* r = &h->readers[i];
+    if (!atomic_load_explicit(&r->active, memory_order_acquire))
+        return 0;
+    *buffers = atomic_load_explicit(&r->buffers, memory_order_relaxed);
+    *next = atomic_load_explicit(&r->next_seq, memory_order_seq_cst);
+    return 1;
+}
+
 /* 1 if some queued reader would lose its oldest unread sample when sample n is written. */
 static int reader_full(const ln_ring_header* h, uint64_t n)
 {
-    for (uint32_t i = 0; i < LN_RING_MAX_READERS; i++) {
-        const ln_ring_reader* r = &h->readers[i];
-        if (!atomic_load_explicit(&r->active, memory_order_acquire))
-            continue;
-        uint32_t buffers = atomic_load_explicit(&r->buffers, memory_order_relaxed);
-        uint64_t next = atomic_load_explicit(&r->next_seq, memory_order_seq_cst);
-        if (buffers > 1 && n >= next && n - next >= buffers)
+    uint32_t buffers;
+    uint64_t next;
+    for (uint32_t i = 0; i < LN_RING_MAX_READERS; i++)
+        if (active_reader(h, i, &buffers, &next) && buffers > 1 && n >= next && n - next >= buffers)
             return 1;
-    }
     return 0;
 }
 
@@ -302,19 +309,17 @@ static uint64_t keep_from(const ln_ring* ring, uint64_t n, uint64_t newest)
     if (atomic_load_explicit(&h->newest_taps, memory_order_seq_cst) > 0)
         keep = newest;
     for (uint32_t i = 0; i < LN_RING_MAX_READERS; i++) {
-        const ln_ring_reader* r = &h->readers[i];
-        if (!atomic_load_explicit(&r->active, memory_order_acquire))
+        uint32_t buffers;
+        uint64_t next, from;
+        if (!active_reader(h, i, &buffers, &next))
             continue;
-        uint32_t buffers = atomic_load_explicit(&r->buffers, memory_order_relaxed);
-        uint64_t next = atomic_load_explicit(&r->next_seq, memory_order_seq_cst);
-        uint64_t from;
         if (buffers > 1) {
             from = n >= buffers ? n - buffers + 1 : 0;
             if (next > from)
                 from = next;
         } else {
             from = next <= newest ? newest : newest + 1;
-            uint64_t holding = atomic_load_explicit(&r->holding, memory_order_seq_cst);
+            uint64_t holding = atomic_load_explicit(&h->readers[i].holding, memory_order_seq_cst);
             if (holding && holding - 1 < from)
                 from = holding - 1;
         }
