@@ -1,9 +1,10 @@
 """The release version of links_and_nodes, read from the one place it is written down: the
 LN_VERSION_* macros of libln/include/ln/ln.h.  The SConscripts take ln.pc's and the CMake
-package's version from here.  Three copies cannot be derived at build time and are checked
+package's version from here.  Four copies cannot be derived at build time and are checked
 instead (version_mismatches(), which the build runs, and tests/python/distribution/
-test_version.py): debian/changelog (Debian's convention) and the `__version__` of the two
-Python packages, which must work in a wheel without the checkout."""
+test_version.py): debian/changelog (Debian's convention), the `__version__` of the two
+Python packages, which must work in a wheel without the checkout, and the VS Code
+extension's package.json (scripts/build-vsix also writes ln.h's version into the .vsix)."""
 
 import os
 import re
@@ -12,10 +13,12 @@ _MACROS = re.compile(r'^#define (LN_VERSION_MAJOR|LN_VERSION_MINOR|LN_VERSION_PA
                      r'LN_SOVERSION) (\d+)$', re.M)
 _PYTHON = re.compile(r'^__version__ = "([^"]*)"$', re.M)
 _CHANGELOG = re.compile(r'\A[a-z0-9][a-z0-9.+-]* \(([^)]+)\) ')
+_PACKAGE_JSON = re.compile(r'^  "version": "([^"]*)",$', re.M)  # the top level's, 2 blanks in
 # Relative to the checkout: the copies and how to find the version in each.
 COPIES = (('debian/changelog', _CHANGELOG),
           ('python/links_and_nodes/__init__.py', _PYTHON),
-          ('ln_generate/__init__.py', _PYTHON))
+          ('ln_generate/__init__.py', _PYTHON),
+          ('editors/vscode/package.json', _PACKAGE_JSON))
 
 
 def version_macros(header_text):

@@ -36,7 +36,8 @@ SPAWN_ATTRS = {
     "pty": {"fork", "spawn"},
     "cffi": {"compile", "verify"},  # FFI().compile() runs the C compiler
 }
-SPAWN_MODULES = ("multiprocessing", "concurrent.futures.process", "pexpect")
+# (pytest_lsp: its client starts the language server under test)
+SPAWN_MODULES = ("multiprocessing", "concurrent.futures.process", "pexpect", "pytest_lsp")
 # An event loop's own methods, whatever object they are called on.
 SPAWN_METHODS = {"subprocess_exec", "subprocess_shell", "create_subprocess_exec",
                  "create_subprocess_shell"}

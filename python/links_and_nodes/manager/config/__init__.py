@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import os
 import socket
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ConfigError, LineError, Problem, sort_problems
@@ -25,8 +26,8 @@ from .shell import SHELL_TIMEOUT
 from .text import Value
 from .values import parse_address
 
-__all__ = ["LANGUAGE_VERSION", "Config", "ConfigError", "Location", "Problem", "load",
-           "parse_text"]
+__all__ = ["LANGUAGE_VERSION", "Config", "ConfigError", "Location", "Problem", "Reading",
+           "load", "parse_text", "read_text"]
 
 
 def load(path: str | Path, *, defines: dict[str, str] | None = None,
@@ -57,6 +58,32 @@ def parse_text(text: str | bytes, filename: str, *, defines: dict[str, str] | No
                strict: bool = False, shell_timeout: float = SHELL_TIMEOUT) -> Config:
     """Like load(), for text that claims to come from `filename` (includes and relative
     paths are resolved against its directory)."""
+    reading = read_text(text, filename, defines=defines, env=env, manager=manager,
+                        strict=strict, shell_timeout=shell_timeout)
+    if reading.problems or reading.config is None:
+        raise ConfigError(reading.problems, reading.warnings)
+    reading.config.warnings = reading.warnings
+    return reading.config
+
+
+@dataclass
+class Reading:
+    """Everything one read of a configuration found: the Parser with what it collected
+    (drafts, templates, names; editors point into them), the model (None when a problem
+    stopped it) and the problems and warnings, sorted, as ConfigError would carry them."""
+
+    parser: Parser
+    config: Config | None
+    problems: list[Problem]
+    warnings: list[Problem]
+
+
+def read_text(text: str | bytes, filename: str, *, defines: dict[str, str] | None = None,
+              env: Mapping[str, str] | None = None, manager: str | None = None,
+              strict: bool = False, shell_timeout: float = SHELL_TIMEOUT,
+              make_parser: Callable[[Evaluator], Parser] = Parser) -> Reading:
+    """parse_text() without raising: the whole Reading.  `make_parser` builds the Parser
+    (a subclass may read included files from elsewhere, such as an editor's buffers)."""
     fixed = dict(defines or {})
     for name in fixed:
         if not DEFINE_NAME_RE.match(name) or name in BUILTINS:
@@ -68,7 +95,7 @@ def parse_text(text: str | bytes, filename: str, *, defines: dict[str, str] | No
             raise ValueError(exc.problems[0].message) from None
     evaluator = Evaluator(os.environ if env is None else env, fixed, socket.gethostname(),
                           manager, shell_timeout)
-    parser = Parser(evaluator)
+    parser = make_parser(evaluator)
     data = text.encode("utf-8", "surrogatepass") if isinstance(text, str) else text
     parser.read_main(filename, data)
     config, problems = build(parser.drafts, evaluator.defines, manager, filename)
@@ -79,7 +106,5 @@ def parse_text(text: str | bytes, filename: str, *, defines: dict[str, str] | No
                      for w in warnings]
         warnings = []
     if problems or config is None:
-        raise ConfigError(sort_problems(problems, parser.drafts.files), warnings)
-    config.warnings = warnings
-    return config
-
+        return Reading(parser, None, sort_problems(problems, parser.drafts.files), warnings)
+    return Reading(parser, config, [], warnings)
