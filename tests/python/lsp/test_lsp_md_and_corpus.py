@@ -55,10 +55,15 @@ async def test_md_syntax_errors_and_missing_imports(start_server, tmp_path: Path
 
 async def test_real_include_file_from_a_main_file(server, tmp_path: Path):
     """robotkernel.inc.lnc, included in place from a small main file (as
-    test_lnc_real_world.py checks it): its warning is shown in it, hover and outline."""
+    test_lnc_real_world.py checks it): its warning is summarised on the include line while
+    it is not open and shown in it once it is; hover and outline."""
     main = tmp_path / "main.lnc"
     main.write_text(f"instance\nname: rk\nmanager: :54414\ninclude {RK}\n")
-    assert await open_doc(server, main) == []
+    [summary] = await open_doc(server, main)
+    assert (summary.range.start.line, summary.range.start.character) == (3, 8)
+    assert summary.severity == lsp.DiagnosticSeverity.Warning
+    assert summary.message.startswith(f"included file '{RK}' has 1 problem; the first: "
+                                      f"{RK}:50:")
     found = await open_doc(server, RK)
     assert [(d.range.start.line, d.severity, d.message) for d in found] == [
         (49, lsp.DiagnosticSeverity.Warning,

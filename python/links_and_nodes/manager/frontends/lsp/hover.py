@@ -1,23 +1,26 @@
 """Hover in `.lnc` files: a keyword's documentation (keywords.py), a define's value, a
-process's resolved command, a template's parameters, a host's interfaces, an md file."""
+process's resolved command, a template's parameters, a host's interfaces, an md file;
+each with the range (in characters) of the name or word it is about."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from lsprotocol import types as lsp
+
 from .keywords import describe, section_at
-from .locations import word_at
+from .locations import token_range, word_at
 from .names import DEFINE, FILE, HOST, MD, NAME, TEMPLATE, Target, target_at
 from .reading import Analysis
 
 
 def hover_text(analysis: Analysis, path: str, text: str, line: int, character: int,
-               md_dirs: list[Path]) -> str | None:
+               md_dirs: list[Path]) -> tuple[str, lsp.Range] | None:
     found = target_at(analysis, path, text, line, character, md_dirs)
     if found is not None:
         described = _describe_target(analysis, found[0])
         if described:
-            return described
+            return described, token_range(found[1], text.split("\n"), found[2] or None)
     word, start = word_at(text, line, character)
     if not word:
         return None
@@ -25,8 +28,11 @@ def hover_text(analysis: Analysis, path: str, text: str, line: int, character: i
     section = header.word if header else ""
     before = text.split("\n")[line][:start]
     in_flags = "flags" in before and ":" in before
-    return describe(word, section if before.strip() or header is None or
-                    header.loc.line != line + 1 else "", in_flags)
+    described = describe(word, section if before.strip() or header is None or
+                         header.loc.line != line + 1 else "", in_flags)
+    if described is None:
+        return None
+    return described, lsp.Range(lsp.Position(line, start), lsp.Position(line, start + len(word)))
 
 
 def _describe_target(analysis: Analysis, target: Target) -> str | None:

@@ -1,9 +1,11 @@
 """Message definition files in the editor, through ln_generate's own parser and lookup:
-diagnostics (its syntax errors and warnings, and `define`s whose md is not found), the
-outline (sections, fields, defines) and go to definition of imported md names."""
+diagnostics (its syntax errors and warnings, and what resolving it finds: imports not
+found, unknown field types; md_check.py), the outline (sections, fields, defines) and go
+to definition of imported md names."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from lsprotocol import types as lsp
@@ -12,7 +14,10 @@ from ln_generate.diagnostics import Diagnostic, Location, MdError
 from ln_generate.lookup import LookupError_, default_md_dirs, find
 from ln_generate.parser import RawFile, parse
 
+from .md_check import check, home
+
 SOURCE = "ln_generate"
+_NAME_RE = re.compile(r"[A-Za-z0-9_/]+|\S+")
 
 
 def read(text: str, path: str) -> tuple[RawFile | None, list[Diagnostic]]:
@@ -24,39 +29,25 @@ def read(text: str, path: str) -> tuple[RawFile | None, list[Diagnostic]]:
     return raw, [*raw.errors, *raw.warnings]
 
 
-def _home(path: str, dirs: list[Path]) -> tuple[Path, str] | None:
-    """(md dir, md name) of a file lying in one of `dirs`."""
-    p = Path(path).resolve()
-    for d in dirs:
-        if p.is_relative_to(d.resolve()):
-            return d, p.relative_to(d.resolve()).as_posix()
-    return None
-
-
 def resolve_define(path: str, md_name: str, dirs: list[Path]) -> Path:
     """The file of an imported md name (first beside the importing md, as ln_generate
     looks); raises LookupError_ when it is not found."""
     all_dirs = default_md_dirs([str(d) for d in dirs])
-    home = _home(path, [*dirs, Path(path).parent]) or (Path(path).parent, Path(path).name)
-    return find(md_name, all_dirs, home)[2]
+    return find(md_name, all_dirs, home(path, all_dirs))[2]
 
 
 def diagnostics(text: str, path: str, dirs: list[Path]) -> list[lsp.Diagnostic]:
     raw, found = read(text, path)
     if raw is not None:
-        for d in raw.defines:
-            try:
-                resolve_define(path, d.md_name, dirs)
-            except LookupError_ as exc:
-                found.append(Diagnostic(d.name_loc, str(exc)))
+        found += check(raw, path, dirs)
     return [_diagnostic(d, len(_word(text, d.loc))) for d in found]
 
 
 def _word(text: str, loc: Location) -> str:
     lines = text.split("\n")
     line = lines[loc.line - 1] if 0 < loc.line <= len(lines) else ""
-    rest = line[loc.col - 1:]
-    return rest.split()[0].rstrip('"') if rest.split() else " "
+    m = _NAME_RE.match(line, loc.col - 1)
+    return m.group() if m else " "
 
 
 def _range(loc: Location, length: int) -> lsp.Range:

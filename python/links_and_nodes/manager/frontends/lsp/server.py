@@ -1,7 +1,8 @@
 """`ln_lsp`: the language server for `.lnc` configurations and md files, on pygls.  Each
 open configuration is read as a main file by the project's reader (reading.py) in a worker
 thread, so a slow `%(shell)` or `pipe_include` (bounded by the shell-timeout setting)
-delays only its own diagnostics; requests are answered from the newest read."""
+delays only its own diagnostics; requests are answered from the newest read.  Positions
+are converted at this edge between characters and the client's position encoding."""
 
 from __future__ import annotations
 
@@ -14,9 +15,16 @@ from lsprotocol import types as lsp
 from pygls.lsp.server import LanguageServer
 
 from .... import __version__
+from ...config.model import Location
 from . import completion, definitions, hover, md, symbols
-from .diagnostics import diagnostics
+from .diagnostics import add_include_summaries, diagnostics
 from .documents import LNC, MD, kind_of
+from .encoding import (
+    diagnostics_to_client,
+    position_from_client,
+    range_to_client,
+    symbols_to_client,
+)
 from .locations import path_to_uri, to_location, uri_to_path
 from .names import MD as MD_TARGET
 from .names import target_at
@@ -46,6 +54,20 @@ class LnServer(LanguageServer):
             if path in a.records.texts:
                 return a.records.texts[path].split("\n")
         return []
+
+    def is_open(self, path: str) -> bool:
+        return os.path.abspath(path) in {os.path.abspath(p) for p in self.kinds}
+
+    def position(self, path: str, pos: lsp.Position) -> lsp.Position:
+        """A position the client sent, in characters."""
+        return position_from_client(self.workspace.position_codec, self.lines(path), pos)
+
+    def location(self, loc: Location, length: int | None) -> lsp.Location:
+        """A place in characters, as the client counts."""
+        lines = self.lines(loc.file)
+        out = to_location(loc, lines, length)
+        out.range = range_to_client(self.workspace.position_codec, lines, out.range)
+        return out
 
     def owner(self, path: str) -> str:
         """The open configuration whose read speaks for `path`: one that includes it (it
@@ -114,12 +136,14 @@ class LnServer(LanguageServer):
         """The diagnostics of every open file this read speaks for, each with the version
         of the text that was read."""
         found = diagnostics(analysis, self.lines)
+        add_include_summaries(analysis, found, self.is_open, self.lines)
         for path, items in found.items():
             if path in self.kinds and self.owner(path) == main:
                 self.publish(path, items, versions.get(path))
 
     def publish(self, path: str, items: list[lsp.Diagnostic],
                 version: int | None = None) -> None:
+        items = diagnostics_to_client(self.workspace.position_codec, self.lines(path), items)
         self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(
             uri=path_to_uri(path), diagnostics=items, version=version))
 
@@ -173,18 +197,20 @@ async def _hover(ls: LnServer, params: lsp.HoverParams) -> lsp.Hover | None:
     analysis = await ls.analysis(path)
     if ls.kinds.get(path) != LNC or analysis is None:
         return None
-    pos = params.position
-    text = hover.hover_text(analysis, path, ls.text(path), pos.line, pos.character,
-                            ls.settings.md_dirs)
-    if text is None:
+    pos = ls.position(path, params.position)
+    found = hover.hover_text(analysis, path, ls.text(path), pos.line, pos.character,
+                             ls.settings.md_dirs)
+    if found is None:
         return None
-    return lsp.Hover(lsp.MarkupContent(lsp.MarkupKind.Markdown, text))
+    text, where = found
+    return lsp.Hover(lsp.MarkupContent(lsp.MarkupKind.Markdown, text),
+                     range_to_client(ls.workspace.position_codec, ls.lines(path), where))
 
 
 @server.feature(lsp.TEXT_DOCUMENT_DEFINITION)
 async def _definition(ls: LnServer, params: lsp.DefinitionParams) -> list[lsp.Location]:
     path = uri_to_path(params.text_document.uri)
-    pos = params.position
+    pos = ls.position(path, params.position)
     if ls.kinds.get(path) == MD:
         found = md.definition(ls.text(path), path, pos.line, pos.character,
                               ls.settings.md_dirs)
@@ -199,7 +225,7 @@ async def _definition(ls: LnServer, params: lsp.DefinitionParams) -> list[lsp.Lo
     if found_target is None:
         return []
     sites = definitions.definition(analysis, found_target[0])
-    return [to_location(loc, ls.lines(loc.file), length) for loc, length in sites]
+    return [ls.location(loc, length) for loc, length in sites]
 
 
 @server.feature(lsp.TEXT_DOCUMENT_REFERENCES)
@@ -208,13 +234,13 @@ async def _references(ls: LnServer, params: lsp.ReferenceParams) -> list[lsp.Loc
     analysis = await ls.analysis(path)
     if ls.kinds.get(path) != LNC or analysis is None:
         return []
-    pos = params.position
+    pos = ls.position(path, params.position)
     found = target_at(analysis, path, ls.text(path), pos.line, pos.character,
                       ls.settings.md_dirs)
     if found is None or found[0].kind == MD_TARGET:
         return []
     sites = definitions.references(analysis, found[0], params.context.include_declaration)
-    return [to_location(loc, ls.lines(loc.file), length) for loc, length in sites]
+    return [ls.location(loc, length) for loc, length in sites]
 
 
 @server.feature(lsp.TEXT_DOCUMENT_COMPLETION,
@@ -224,7 +250,7 @@ async def _completion(ls: LnServer, params: lsp.CompletionParams) -> lsp.Complet
     analysis = await ls.analysis(path)
     if ls.kinds.get(path) != LNC or analysis is None:
         return lsp.CompletionList(is_incomplete=False, items=[])
-    pos = params.position
+    pos = ls.position(path, params.position)
     items = completion.complete(analysis, path, ls.text(path), pos.line, pos.character,
                                 ls.settings.md_dirs)
     return lsp.CompletionList(is_incomplete=False, items=items)
@@ -234,12 +260,13 @@ async def _completion(ls: LnServer, params: lsp.CompletionParams) -> lsp.Complet
 async def _symbols(ls: LnServer, params: lsp.DocumentSymbolParams
                    ) -> list[lsp.DocumentSymbol]:
     path = uri_to_path(params.text_document.uri)
+    codec, lines = ls.workspace.position_codec, ls.lines(path)
     if ls.kinds.get(path) == MD:
-        return md.symbols(ls.text(path), path)
+        return symbols_to_client(codec, lines, md.symbols(ls.text(path), path))
     analysis = await ls.analysis(path)
     if analysis is None:
         return []
-    return symbols.document_symbols(analysis, path, ls.text(path).split("\n"))
+    return symbols_to_client(codec, lines, symbols.document_symbols(analysis, path, lines))
 
 
 def main() -> None:
