@@ -108,10 +108,10 @@ class Bridge:
         it, auto takes it if it loads and says so if not."""
         if self.config.native == "off":
             return False
-        from .native import CoreUnavailable, library
+        from .native import CoreUnavailable, load_core
 
         try:
-            library()
+            load_core()
         except CoreUnavailable as exc:
             if self.config.native == "on":
                 raise RuntimeError(f"native on, but the native core cannot be loaded: {exc}; "

@@ -88,7 +88,7 @@ def _candidates() -> list[str]:
     return found
 
 
-def library() -> ctypes.CDLL:
+def load_core() -> ctypes.CDLL:
     """The loaded core; CoreUnavailable naming every place that was tried."""
     global _lib, _why_not
     if _lib is not None:
@@ -201,7 +201,7 @@ class Core:
     sessions are clients of the same routers)."""
 
     def __init__(self, zenoh_config: Any, mode: str, say: Callable[[str], None]) -> None:
-        self.lib = library()
+        self.lib = load_core()
         self.mode = mode
         self._say = say
         self._log = LOG_FN(lambda _ctx, text: say(text.decode("utf-8", "replace")))

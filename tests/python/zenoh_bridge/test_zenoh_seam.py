@@ -35,7 +35,7 @@ class _FakeCore:
 
 def test_the_built_core_agrees() -> None:
     require_native_core()
-    core = native.library()
+    core = native.load_core()
     native.check_seam(core)
     assert native._names(core, "lnz_counter_names") == list(native.COUNTER_FIELDS)
     names = native._names(core, "lnz_libln_functions")

@@ -42,10 +42,10 @@ def require_zenoh() -> None:
 
 def require_native_core() -> None:
     """ln_zenoh's native core (built by `scons` where cargo is installed: in CI always)."""
-    from links_and_nodes.zenoh_bridge.native import CoreUnavailable, library
+    from links_and_nodes.zenoh_bridge.native import CoreUnavailable, load_core
 
     try:
-        library()
+        load_core()
     except CoreUnavailable as exc:
         missing_test_tool(f"ln_zenoh's native core (scons builds it with cargo): {exc}")
 
