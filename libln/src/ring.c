@@ -338,31 +338,37 @@ static int slot_free(uint64_t word, uint64_t keep, uint64_t newest)
     return s == 0 || LN_SLOT_STATE(word) != LN_SLOT_COMMITTED || s < keep || s > newest;
 }
 
+/* The slot the directory gives for sample s if that slot still holds s, else slot_count. */
+static uint32_t slot_holding(const ln_ring* ring, uint64_t s)
+{
+    uint32_t i =
+        atomic_load_explicit(&ring->hdr->slot_of[s % ring->slot_count], memory_order_relaxed);
+    if (i < ring->slot_count &&
+        atomic_load_explicit(&ln_ring_slot_index(ring, i)->seq, memory_order_relaxed) ==
+            LN_SLOT_WORD(s, LN_SLOT_COMMITTED))
+        return i;
+    return ring->slot_count;
+}
+
 /* The slot for sample n (see ring.h).  Small samples: slot n mod slot_count, as the ring
  * always had it (their directory never moves).  Large ones: the newest's or the second
- * newest's slot when free; else, the fast case of readers that lag, the slot the directory
- * gives for n's position if it still holds n - slot_count or older, which no reader can
- * want; else (after hot reuse moved samples around) the oldest free slot. */
+ * newest's slot when no reader wants its sample any more; else, the fast case of readers
+ * that lag, the slot the directory gives for n's position if it still holds n - slot_count
+ * or older, which no reader can want; else (after hot reuse moved samples around) the
+ * oldest free slot. */
 static uint32_t choose_slot(const ln_ring* ring, uint64_t n)
 {
     const ln_ring_header* h = ring->hdr;
     const uint32_t count = ring->slot_count;
     if (!hot_ring(ring))
-        return n % count; /* never moved: the directory is the identity (see commit) */
+        return n % count;
     uint64_t newest = atomic_load_explicit(&h->write_seq, memory_order_relaxed);
-    uint64_t keep = 0;
-    int keep_known = 0;
-    if (newest >= 1) {
-        keep = keep_from(ring, n, newest);
-        keep_known = 1;
-        /* the newest sample's slot if nobody wants it any more, else the one before */
-        for (uint64_t s = newest; s + 2 > newest && s >= 1; s--) {
-            uint32_t hot = atomic_load_explicit(&h->slot_of[s % count], memory_order_relaxed);
-            if (s < keep && hot < count &&
-                atomic_load_explicit(&ln_ring_slot_index(ring, hot)->seq, memory_order_relaxed) ==
-                    LN_SLOT_WORD(s, LN_SLOT_COMMITTED))
-                return hot;
-        }
+    uint64_t keep = keep_from(ring, n, newest);
+    for (uint64_t back = 0; back < 2 && back < newest; back++) {
+        uint64_t s = newest - back;
+        uint32_t hot = s < keep ? slot_holding(ring, s) : count;
+        if (hot < count)
+            return hot;
     }
     uint32_t at = atomic_load_explicit(&h->slot_of[n % count], memory_order_relaxed);
     if (at < count) {
@@ -371,8 +377,6 @@ static uint32_t choose_slot(const ln_ring* ring, uint64_t n)
         if (slot_free(word, n >= count ? n - count + 1 : 0, newest))
             return at;
     }
-    if (!keep_known)
-        keep = keep_from(ring, n, newest);
     /* The oldest free sample; if a latest reader holds on to an old one so long that none is
      * free, the oldest but the newest (that reader's release then says it was overwritten). */
     uint32_t best = n % count, any = n % count;
@@ -395,8 +399,7 @@ static uint32_t choose_slot(const ln_ring* ring, uint64_t n)
 
 ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq)
 {
-    ring->begun = choose_slot(ring, seq);
-    ln_ring_slot* slot = ln_ring_slot_index(ring, ring->begun);
+    ln_ring_slot* slot = ln_ring_slot_index(ring, choose_slot(ring, seq));
     atomic_store_explicit(&slot->seq, LN_SLOT_WORD(seq, LN_SLOT_WRITING), memory_order_relaxed);
     atomic_thread_fence(memory_order_release);
     return slot;
@@ -404,16 +407,14 @@ ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq)
 
 void ln_ring_commit_seq(ln_ring* ring, ln_ring_slot* slot, uint64_t seq, int64_t timestamp_ns)
 {
-    uint32_t index = ring->begun;
-    if (index >= ring->slot_count || ln_ring_slot_index(ring, index) != slot)
-        index = (uint32_t)(((uint8_t*)slot - ring->slots) / ring->stride); /* not begun last */
     slot->timestamp_ns = timestamp_ns;
     atomic_store_explicit(&slot->seq, LN_SLOT_WORD(seq, LN_SLOT_COMMITTED), memory_order_release);
-    /* Rotating rings keep the directory as it is: no store, so readers' copies of its cache
-     * lines stay valid. */
-    _Atomic uint32_t* entry = &ring->hdr->slot_of[seq % ring->slot_count];
-    if (atomic_load_explicit(entry, memory_order_relaxed) != index)
-        atomic_store_explicit(entry, index, memory_order_release);
+    /* Small samples never move, so their directory stays the identity it was created as
+     * (and readers' copies of its cache lines stay valid). */
+    if (hot_ring(ring))
+        atomic_store_explicit(&ring->hdr->slot_of[seq % ring->slot_count],
+                              (uint32_t)(((uint8_t*)slot - ring->slots) / ring->stride),
+                              memory_order_release);
     atomic_store_explicit(&ring->hdr->write_seq, seq, memory_order_seq_cst);
     ln_ring_wake_readers(ring);
 }

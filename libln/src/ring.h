@@ -13,7 +13,7 @@
  *      store(slot.seq, n|WRITING, relaxed); fence(release)      -- readers see WRITING first
  *      copy payload, timestamp
  *      store(slot.seq, n|COMMITTED, release)                     -- payload before seq
- *      store(slot_of[n % slot_count], slot, release)
+ *      store(slot_of[n % slot_count], slot, release)   -- hot-slot sizes; smaller never move
  *      store(write_seq, n, seq_cst); if the sleepers bit of data_futex is set (seq_cst load):
  *      change data_futex, clear the bit, FUTEX_WAKE
  *  reader:  w = load(write_seq, acquire); pick n <= w; slot = load(slot_of[n % slot_count],
@@ -126,8 +126,7 @@ typedef struct ln_ring {
     uint32_t stride;
     uint64_t layout_hash; /* what attach checked, again for successors */
     uint64_t message_size;
-    int tap_kind;   /* LN_RING_TAP_*: counted in the header (moves along to successors) */
-    uint32_t begun; /* writer: the slot index ln_ring_begin_seq chose last */
+    int tap_kind; /* LN_RING_TAP_*: counted in the header (moves along to successors) */
     char name[LN_RING_NAME_MAX];
 } ln_ring;
 
@@ -217,7 +216,7 @@ ln_ring_slot* ln_ring_begin(ln_ring* ring);
 void ln_ring_commit(ln_ring* ring, ln_ring_slot* slot);
 /* The same for a sample with a given number seq > write_seq (numbers may be skipped) and a
  * given timestamp: a forwarded sample keeps those of the publisher's host.  Commit points the
- * slot directory at the slot before it announces the sample. */
+ * slot directory at the slot (hot-slot sizes) before it announces the sample. */
 ln_ring_slot* ln_ring_begin_seq(ln_ring* ring, uint64_t seq);
 void ln_ring_commit_seq(ln_ring* ring, ln_ring_slot* slot, uint64_t seq, int64_t timestamp_ns);
 void ln_ring_wake_readers(ln_ring* ring);
