@@ -12,6 +12,7 @@
 #include "iceoryx_binding_c/subscriber.h"
 #include "iceoryx_binding_c/wait_set.h"
 
+#include "iox_take.h"
 #include "rt_common.h"
 
 static const char usage[] =
@@ -66,26 +67,8 @@ static uint64_t receive_one(void* ctx, size_t size)
 {
     port* p = ctx;
     const void* chunk;
-    uint64_t spin_until = 0;
-    for (;;) {
-        enum iox_ChunkReceiveResult rc = iox_sub_take_chunk(p->sub, &chunk);
-        if (rc == ChunkReceiveResult_SUCCESS)
-            break;
-        if (rc != ChunkReceiveResult_NO_CHUNK_AVAILABLE) {
-            fprintf(stderr, "rt_iox: iox_sub_take_chunk failed (%d)\n", (int)rc);
-            exit(2);
-        }
-        uint64_t now = rt_now_ns();
-        if (spin_until == 0)
-            spin_until = now + p->spin_ns;
-        if (now < spin_until) {
-            sched_yield();
-            continue;
-        }
-        iox_notification_info_t info[1];
-        uint64_t missed = 0;
-        iox_ws_timed_wait(p->ws, (struct timespec){60, 0}, info, 1, &missed);
-    }
+    while (!(chunk = iox_take_chunk(p->sub, p->ws, p->spin_ns, 60.0, "rt_iox")))
+        continue; /* 60 s without a chunk: wait on */
     memcpy(p->buf, chunk, size);
     iox_sub_release_chunk(p->sub, chunk);
     uint64_t counter;

@@ -17,6 +17,7 @@
 #include "iceoryx_binding_c/wait_set.h"
 
 #include "bench_common.h"
+#include "iox_take.h"
 
 static const char usage[] =
     "usage: iox_bench pong NAME SIZE TOTAL WARMUP SPIN_US [zc|full]\n"
@@ -111,30 +112,7 @@ static void send_one(const port* p, uint64_t value)
 /* The next chunk, not yet released; NULL after `timeout_s` without one. */
 static const void* take(const port* p, double timeout_s)
 {
-    const void* chunk;
-    uint64_t spin_until = 0;
-    for (;;) {
-        enum iox_ChunkReceiveResult rc = iox_sub_take_chunk(p->sub, &chunk);
-        if (rc == ChunkReceiveResult_SUCCESS)
-            break;
-        if (rc != ChunkReceiveResult_NO_CHUNK_AVAILABLE) {
-            fprintf(stderr, "iox_bench: iox_sub_take_chunk failed (%d)\n", (int)rc);
-            exit(2);
-        }
-        uint64_t now = bench_now_ns();
-        if (spin_until == 0)
-            spin_until = now + p->spin_ns;
-        if (now < spin_until) {
-            sched_yield();
-            continue;
-        }
-        iox_notification_info_t info[1];
-        uint64_t missed = 0;
-        struct timespec t = {(time_t)timeout_s, (long)((timeout_s - (time_t)timeout_s) * 1e9)};
-        if (iox_ws_timed_wait(p->ws, t, info, 1, &missed) == 0 && !iox_sub_has_chunks(p->sub))
-            return NULL;
-    }
-    return chunk;
+    return iox_take_chunk(p->sub, p->ws, p->spin_ns, timeout_s, "iox_bench");
 }
 
 /* The next sample's value (its chunk released; full: copied out whole first); 0 in *got
