@@ -20,6 +20,7 @@ import threading
 import time
 from typing import TYPE_CHECKING
 
+from ..tool_output import say_line
 from .config import DEFAULT_HOST, DEFAULT_PORT, ConfigError, FoxgloveConfig
 
 if TYPE_CHECKING:
@@ -80,7 +81,7 @@ def build_config(args: argparse.Namespace) -> FoxgloveConfig:
 
 
 def say(text: str) -> None:
-    print(f"ln_foxglove: {text}", file=sys.stderr, flush=True)
+    say_line("ln_foxglove", text)
 
 
 def run(config: FoxgloveConfig) -> int:

@@ -23,6 +23,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from ..mcap_format import McapError, McapTruncatedError
+from ..tool_output import say_line
 from . import control_service, keyboard, service_replay
 from .control import Controller
 from .playback import Playback, Quit
@@ -93,7 +94,7 @@ def parser() -> argparse.ArgumentParser:
 
 def _say(args: argparse.Namespace, text: str) -> None:
     if not args.quiet:
-        print(f"ln_play: {text}", file=sys.stderr, flush=True)
+        say_line("ln_play", text)
 
 
 def run(args: argparse.Namespace, remap: dict[str, str]) -> int:

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..mcap_chunk import COMPRESSIONS, DEFAULT_CHUNK_SIZE
+from ..tool_output import say_line
 from .defaults import DEFAULT_BUFFER_MEMORY, DEFAULT_ENCODING, ENCODINGS, MAX_BUFFERS
 
 if TYPE_CHECKING:
@@ -97,7 +98,7 @@ def parser() -> argparse.ArgumentParser:
 
 def _say(args: argparse.Namespace, text: str) -> None:
     if not args.quiet:
-        print(f"ln_record: {text}", file=sys.stderr, flush=True)
+        say_line("ln_record", text)
 
 
 def _mb(n: float) -> str:

@@ -22,6 +22,7 @@ import threading
 import time
 from typing import Any
 
+from ..tool_output import say_line
 from .config import BridgeConfig, ConfigError, load_file, service_spec, topic_spec
 from .session import INSTALL_HINT, ZenohMissing, import_zenoh
 
@@ -96,13 +97,13 @@ def build_config(args: argparse.Namespace) -> BridgeConfig:
 
 
 def say(text: str) -> None:
-    print(f"ln_zenoh: {text}", file=sys.stderr, flush=True)
+    say_line("ln_zenoh", text)
 
 
 def report(bridge: Any, config: BridgeConfig, why: str) -> None:
     say(f"statistics ({why}):")
     for line in bridge.stats.lines():
-        print(f"ln_zenoh:   {line}", file=sys.stderr, flush=True)
+        say_line("ln_zenoh", f"  {line}")
     if config.stats_file:
         try:
             bridge.stats.write(config.stats_file)
