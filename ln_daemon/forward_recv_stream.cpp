@@ -43,6 +43,34 @@ void RecvStream::write(const uint8_t *data, uint64_t seq, int64_t timestamp_ns)
     counters.note_segment(ln_ring_tap_segment(tap_.get()));
 }
 
+bool RecvStream::begin(uint64_t seq, void **payload)
+{
+    mutex_.lock();
+    if (tap_ && ln_ring_tap_inject_begin(tap_.get(), seq, payload) == LN_OK)
+        return true; // held until finish()
+    mutex_.unlock();
+    return false;
+}
+
+void RecvStream::finish(bool intact, int64_t timestamp_ns)
+{
+    std::lock_guard<std::mutex> lock(mutex_, std::adopt_lock);
+    if (!intact) {
+        ln_ring_tap_inject_abort(tap_.get());
+        StreamCounters::add(counters.drops);
+        return;
+    }
+    int rc = ln_ring_tap_inject_commit(tap_.get(), timestamp_ns);
+    if (rc == LN_OK) {
+        StreamCounters::add(counters.samples);
+        StreamCounters::add(counters.bytes, spec.message_size);
+    } else {
+        StreamCounters::add(counters.drops);
+        counters.set_error(std::string("cannot write into the ring: ") + ln_last_error());
+    }
+    counters.note_segment(ln_ring_tap_segment(tap_.get()));
+}
+
 uint64_t RecvStream::newest()
 {
     std::lock_guard<std::mutex> lock(mutex_);

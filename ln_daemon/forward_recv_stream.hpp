@@ -34,6 +34,13 @@ public:
     // Writes a complete sample into the ring and counts it (written, or stale if it is not
     // newer than the ring's newest).  Nothing happens once the stream is closed.
     void write(const uint8_t *data, uint64_t seq, int64_t timestamp_ns);
+    // The same in place, for a sample whose bytes are at hand (TCP: all in the socket's
+    // buffer): true with *payload, the slot of sample `seq` to fill, and the stream locked
+    // (the ring's write lock held) until finish(); false if the stream is closed or the ring
+    // refuses (then write() a copy, which counts why).  finish publishes the sample
+    // (`intact`) or leaves nothing (a torn frame, a failed read: counted as a drop).
+    bool begin(uint64_t seq, void **payload);
+    void finish(bool intact, int64_t timestamp_ns);
     // The ring's newest sequence number (0 when closed: nothing will be written anyway).
     uint64_t newest();
     void close() noexcept;

@@ -42,7 +42,21 @@ protected:
     Next next_sample(ln_ring_tap *tap, void *buf, ln_sample_info &info, int64_t spin_ns,
                      const StopSignal &stop)
     {
-        int rc = read_tap(tap, buf, info, spin_ns, 0.1, stop);
+        return judge(read_tap(tap, buf, info, spin_ns, 0.1, stop), tap, info, stop);
+    }
+    // The same, the sample left in the ring (borrow_tap): release it with ln_ring_tap_release.
+    Next next_borrowed(ln_ring_tap *tap, const void **payload, ln_sample_info &info,
+                       int64_t spin_ns, const StopSignal &stop)
+    {
+        return judge(borrow_tap(tap, payload, info, spin_ns, 0.1, stop), tap, info, stop);
+    }
+
+    const SendSpec spec_;
+    StreamCounters counters_;
+
+private:
+    Next judge(int rc, ln_ring_tap *tap, const ln_sample_info &info, const StopSignal &stop)
+    {
         if (rc == LN_ETIMEOUT)
             return Next::none;
         if (rc != LN_OK) {
@@ -54,9 +68,6 @@ protected:
             StreamCounters::add(counters_.drops, info.overruns);
         return Next::sample;
     }
-
-    const SendSpec spec_;
-    StreamCounters counters_;
 };
 
 } // namespace lnd::fwd

@@ -35,22 +35,38 @@ inline Outcome open_tap(Tap &out, const std::string &ring, uint64_t layout_hash,
     return outcome::ok();
 }
 
-// The next sample into buf (libln's code, LN_ETIMEOUT if none came): polls the tap, yielding
-// the CPU, for up to spin_ns (a sample that comes that soon costs no futex wake-up; a stop
-// ends the polling), then sleeps up to `timeout` seconds.
-inline int read_tap(ln_ring_tap *tap, void *buf, ln_sample_info &info, int64_t spin_ns,
-                    double timeout, const StopSignal &stop)
+// One read of a tap with libln's code as the result (LN_ETIMEOUT if none came): polls with
+// `read(0)`, yielding the CPU, for up to spin_ns (a sample that comes that soon costs no futex
+// wake-up; a stop ends the polling), then `read(timeout)` sleeps up to `timeout` seconds.
+template <typename Read>
+int poll_tap(Read &&read, int64_t spin_ns, double timeout, const StopSignal &stop)
 {
     using Clock = std::chrono::steady_clock;
     if (spin_ns > 0) {
         for (auto end = Clock::now() + std::chrono::nanoseconds(spin_ns); !stop.raised();) {
-            int rc = ln_ring_tap_read(tap, buf, &info, 0);
+            int rc = read(0.0);
             if (rc != LN_ETIMEOUT || Clock::now() >= end)
-                return rc == LN_ETIMEOUT ? ln_ring_tap_read(tap, buf, &info, timeout) : rc;
+                return rc == LN_ETIMEOUT ? read(timeout) : rc;
             std::this_thread::yield();
         }
     }
-    return ln_ring_tap_read(tap, buf, &info, timeout);
+    return read(timeout);
+}
+
+// The next sample copied into buf.
+inline int read_tap(ln_ring_tap *tap, void *buf, ln_sample_info &info, int64_t spin_ns,
+                    double timeout, const StopSignal &stop)
+{
+    return poll_tap([&](double t) { return ln_ring_tap_read(tap, buf, &info, t); }, spin_ns,
+                    timeout, stop);
+}
+
+// The next sample left in the ring (*payload; ln_ring_tap_release says whether it stayed intact).
+inline int borrow_tap(ln_ring_tap *tap, const void **payload, ln_sample_info &info, int64_t spin_ns,
+                      double timeout, const StopSignal &stop)
+{
+    return poll_tap([&](double t) { return ln_ring_tap_borrow(tap, payload, &info, t); }, spin_ns,
+                    timeout, stop);
 }
 
 } // namespace lnd::fwd

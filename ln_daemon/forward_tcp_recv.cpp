@@ -1,5 +1,8 @@
 // The TCP receive threads (forward_tcp_recv.hpp).  A frame's size is checked against the
 // stream before its payload is read, so a bad sender costs its connection, never memory.
+// The socket wakes its thread once a whole frame is buffered (SO_RCVLOWAT), whose payload
+// is then received straight into a ring slot; a frame's trailer decides whether it is
+// published (intact) or dropped (torn while sent).
 #include "forward_tcp_recv.hpp"
 
 #include <cerrno>
@@ -7,8 +10,10 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <system_error>
+#include <thread>
 #include <vector>
 
 #include "forward_wire.hpp"
@@ -18,6 +23,12 @@ namespace lnd::fwd {
 namespace {
 
 constexpr int kHelloTimeoutMs = 10000;
+// A frame counted as buffered is read within this, or the connection is dropped (the read
+// holds the ring's write lock).
+constexpr int kInPlaceTimeoutMs = 1000;
+// Frames this large are received whole into a ring slot; smaller ones cost less to copy
+// than the kernel's wake-up bookkeeping (SO_RCVLOWAT) saves.
+constexpr size_t kGatherBytes = 64 * 1024;
 constexpr int kAcceptWakeMs = 1000; // to reap ended connections without new ones
 // A sender host that died is noticed after about idle + interval * count seconds.
 constexpr int kKeepIdle = 10, kKeepInterval = 2, kKeepCount = 3;
@@ -32,7 +43,115 @@ void send_reply(int fd, wire::Kind kind, wire::Reject reason, uint64_t token,
     write_full(fd, &iov, 1, stop, error);
 }
 
+// Asks the kernel to wake a reader only once `frame` bytes are buffered (SO_RCVLOWAT); false
+// (and no mark) unless the receive buffer holds several whole frames and the kernel keeps the
+// mark as asked.
+bool wake_for_whole_frames(int fd, size_t frame)
+{
+    int rcvbuf = 0, want = 0, got = 0;
+    socklen_t len = sizeof rcvbuf;
+    if (::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, &len) != 0 || rcvbuf <= 0 ||
+        frame > static_cast<size_t>(rcvbuf) / 4)
+        return false;
+    want = static_cast<int>(frame);
+    len = sizeof got;
+    if (::setsockopt(fd, SOL_SOCKET, SO_RCVLOWAT, &want, sizeof want) == 0 &&
+        ::getsockopt(fd, SOL_SOCKET, SO_RCVLOWAT, &got, &len) == 0 && got == want)
+        return true;
+    int one = 1;
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVLOWAT, &one, sizeof one);
+    return false;
+}
+
 } // namespace
+
+// Waits until fd is readable; `in_place` if a whole frame is buffered by then.
+Io TcpReceiver::wait_frame(int fd, size_t frame, bool &in_place, std::string &error)
+{
+    auto buffered = [fd]() -> size_t {
+        int n = 0;
+        return ::ioctl(fd, FIONREAD, &n) == 0 && n > 0 ? static_cast<size_t>(n) : 0;
+    };
+    if (spin_ns_ > 0) {
+        auto end = std::chrono::steady_clock::now() + std::chrono::nanoseconds(spin_ns_);
+        while (buffered() < frame && !stop_.raised() && std::chrono::steady_clock::now() < end)
+            std::this_thread::yield(); // a frame that comes soon is taken without a wake-up
+    }
+    if (buffered() < frame) {
+        switch (wait_fd(fd, POLLIN, stop_, -1)) {
+        case Wait::stopped:
+            return Io::stopped;
+        case Wait::timeout:
+            error = "poll timed out";
+            return Io::error;
+        case Wait::ready:
+            break;
+        }
+    }
+    in_place = buffered() >= frame;
+    return Io::ok;
+}
+
+bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, uint8_t *payload, bool in_place)
+{
+    const int fd = c.fd.get();
+    std::string error;
+    uint8_t head[wire::kFrameHeaderSize];
+    uint8_t tail[wire::kFrameTrailerSize];
+    Io io = read_full(fd, head, sizeof head, stop_, -1, error, in_place ? 0 : spin_ns_);
+    if (io != Io::ok)
+        return ended(c, s, io, error);
+    wire::FrameHeader f = wire::decode_frame_header(head);
+    if (f.size != s.spec.message_size) {
+        StreamCounters::add(s.counters.invalid);
+        s.counters.set_error("frame of " + std::to_string(f.size) + " bytes from " + c.peer +
+                             ", the stream's messages have " + std::to_string(s.spec.message_size));
+        return false;
+    }
+    void *slot = nullptr;
+    if (in_place && s.begin(f.seq, &slot)) {
+        // All of it is buffered: these reads do not wait (the timeout only guards the lock).
+        io = read_full(fd, slot, f.size, stop_, kInPlaceTimeoutMs, error);
+        if (io == Io::ok)
+            io = read_full(fd, tail, sizeof tail, stop_, kInPlaceTimeoutMs, error);
+        wire::Trailer t = io == Io::ok ? wire::decode_frame_trailer(tail) : wire::Trailer::torn;
+        s.finish(t == wire::Trailer::intact, f.timestamp_ns);
+        if (io != Io::ok)
+            return ended(c, s, io, error);
+        return trailer_ok(c, s, t);
+    }
+    io = read_full(fd, payload, f.size, stop_, -1, error);
+    if (io == Io::ok)
+        io = read_full(fd, tail, sizeof tail, stop_, -1, error);
+    if (io != Io::ok)
+        return ended(c, s, io, error);
+    wire::Trailer t = wire::decode_frame_trailer(tail);
+    if (s.closed())
+        return false;
+    if (t == wire::Trailer::intact)
+        s.write(payload, f.seq, f.timestamp_ns);
+    else if (t == wire::Trailer::torn)
+        StreamCounters::add(s.counters.drops);
+    return trailer_ok(c, s, t);
+}
+
+bool TcpReceiver::trailer_ok(const Connection &c, RecvStream &s, wire::Trailer t)
+{
+    if (t != wire::Trailer::invalid)
+        return !s.closed();
+    StreamCounters::add(s.counters.invalid);
+    s.counters.set_error("a frame from " + c.peer + " does not end in a frame trailer");
+    return false;
+}
+
+bool TcpReceiver::ended(const Connection &c, RecvStream &s, Io io, const std::string &error)
+{
+    if (io == Io::error && !s.closed())
+        s.counters.set_error("connection from " + c.peer + ": " + error);
+    else if (io == Io::timeout && !s.closed())
+        s.counters.set_error("connection from " + c.peer + ": a buffered frame did not arrive");
+    return false;
+}
 
 TcpReceiver::TcpReceiver(int listener, RecvTable &table, TotalCounters &totals, unsigned spin_us)
     : listener_(listener), table_(table), totals_(totals), spin_ns_(int64_t{spin_us} * 1000)
@@ -177,29 +296,23 @@ void TcpReceiver::serve(Connection &c)
     }
     send_reply(fd, wire::Kind::accept, wire::Reject::none, hello.token, stop_);
     s->attach(c.peer);
+    const size_t frame = wire::kFrameHeaderSize + s->spec.message_size + wire::kFrameTrailerSize;
+    const bool gather = frame >= kGatherBytes && wake_for_whole_frames(fd, frame);
     for (;;) {
-        uint8_t head[wire::kFrameHeaderSize];
-        Io io = read_full(fd, head, sizeof head, stop_, -1, error, spin_ns_);
-        if (io == Io::ok) {
-            wire::FrameHeader f = wire::decode_frame_header(head);
-            if (f.size != s->spec.message_size) {
-                StreamCounters::add(s->counters.invalid);
-                s->counters.set_error("frame of " + std::to_string(f.size) + " bytes from " +
-                                      c.peer + ", the stream's messages have " +
-                                      std::to_string(s->spec.message_size));
+        // With the whole frame in the socket's buffer, its payload goes straight into the
+        // ring (one copy, the ring's lock held only for it); otherwise it is read as it comes
+        // into `payload` and copied into the ring once complete.
+        bool in_place = false;
+        if (gather) {
+            Io io = wait_frame(fd, frame, in_place, error);
+            if (io != Io::ok) {
+                if (io == Io::error && !s->closed())
+                    s->counters.set_error("connection from " + c.peer + ": " + error);
                 break;
             }
-            io = read_full(fd, payload.get(), f.size, stop_, -1, error);
-            if (io == Io::ok) {
-                if (s->closed())
-                    break;
-                s->write(payload.get(), f.seq, f.timestamp_ns);
-                continue;
-            }
         }
-        if (io == Io::error && !s->closed())
-            s->counters.set_error("connection from " + c.peer + ": " + error);
-        break;
+        if (!receive_frame(c, *s, payload.get(), in_place))
+            break;
     }
     s->detach();
     c.done.store(true);

@@ -1,6 +1,6 @@
 // The TCP receive side: an accept thread on the data port's listener and one thread per
 // connection, which reads the hello, answers accept or reject, then reads frames and
-// writes them into the stream's ring.
+// writes them into the stream's ring (straight into a slot when a whole frame is buffered).
 #pragma once
 
 #include <atomic>
@@ -14,6 +14,7 @@
 #include "fd.hpp"
 #include "forward_net.hpp"
 #include "forward_recv_stream.hpp"
+#include "forward_wire.hpp"
 
 namespace lnd::fwd {
 
@@ -47,6 +48,13 @@ private:
 
     void accept_loop();
     void serve(Connection &c);
+    // Waits until fd is readable; `in_place` if a whole frame of `frame` bytes is buffered.
+    Io wait_frame(int fd, size_t frame, bool &in_place, std::string &error);
+    // Reads one frame into the ring (in place: straight into a slot, else through
+    // `payload`); false once the connection is to end.
+    bool receive_frame(Connection &c, RecvStream &s, uint8_t *payload, bool in_place);
+    static bool trailer_ok(const Connection &c, RecvStream &s, wire::Trailer t);
+    static bool ended(const Connection &c, RecvStream &s, Io io, const std::string &error);
     void reap(); // joins connections whose thread ended
 
     const int listener_;

@@ -1,6 +1,7 @@
 // The TCP sending threads (forward_tcp_send.hpp).  Memory: at most capacity_ + 1 sample
 // buffers ever exist (the queue with the sample in flight, plus the reader's), recycled
-// between the two threads (a direct send by the reader uses the reader's buffer).  A
+// between the two threads (a direct send by the reader sends from the ring slot and needs
+// the reader's buffer only for what the socket did not take).  A
 // sample counts as sent only once it was written whole; after a broken connection it is
 // sent again from its first byte, so the receiver (which drops partial frames) sees it
 // exactly once.  A frame the reader began stays first in the queue until the writer has
@@ -23,6 +24,10 @@
 namespace lnd::fwd {
 
 namespace {
+
+// Samples this large are sent straight from their ring slot (borrowed); smaller ones are
+// copied out first, which costs less than a separate send of their trailer.
+constexpr uint64_t kBorrowBytes = 64 * 1024;
 
 Outcome refused(std::string text)
 {
@@ -152,17 +157,27 @@ void TcpSender::give_buffer(Buffer b) { free_.push_back(std::move(b)); }
 void TcpSender::read_loop()
 {
     Buffer buf = take_buffer();
+    const bool borrow = spec_.message_size >= kBorrowBytes;
     while (!stop_.raised()) {
         ln_sample_info info;
-        Next next = next_sample(tap_.get(), buf.get(), info, spin_ns_, stop_);
+        const void *payload = nullptr;
+        Next next = borrow ? next_borrowed(tap_.get(), &payload, info, spin_ns_, stop_)
+                           : next_sample(tap_.get(), buf.get(), info, spin_ns_, stop_);
         if (next == Next::stop)
             break;
         if (next == Next::none)
             continue;
-        if (send_direct(buf, info)) {
+        if (send_direct(borrow ? payload : nullptr, buf, info)) {
             if (!buf)
                 buf = take_buffer();
             continue;
+        }
+        if (borrow) {
+            std::memcpy(buf.get(), payload, spec_.message_size);
+            if (ln_ring_tap_release(tap_.get()) != LN_OK) {
+                StreamCounters::add(counters_.drops); // overwritten while copied
+                continue;
+            }
         }
         bool queued = false;
         {
@@ -192,7 +207,22 @@ void TcpSender::read_loop()
     }
 }
 
-bool TcpSender::send_direct(Buffer &buf, const ln_sample_info &info)
+size_t TcpSender::frame_size() const noexcept
+{
+    return wire::kFrameHeaderSize + spec_.message_size + wire::kFrameTrailerSize;
+}
+
+void TcpSender::count_sent(const Sample &s)
+{
+    if (!s.intact) {
+        StreamCounters::add(counters_.drops);
+        return;
+    }
+    StreamCounters::add(counters_.samples);
+    StreamCounters::add(counters_.bytes, spec_.message_size);
+}
+
+bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_info &info)
 {
     int fd;
     {
@@ -203,61 +233,89 @@ bool TcpSender::send_direct(Buffer &buf, const ln_sample_info &info)
         in_flight_ = true;
         fd = sock_.get();
     }
-    Sample s{info.seq, info.timestamp_ns, std::move(buf)};
+    Sample s{info.seq, info.timestamp_ns, nullptr};
+    const auto *payload = static_cast<const uint8_t *>(borrowed ? borrowed : buf.get());
     uint8_t header[wire::kFrameHeaderSize];
+    uint8_t trailer[wire::kFrameTrailerSize];
     wire::encode_frame_header(header, {s.seq, s.timestamp_ns, spec_.message_size});
-    const size_t total = sizeof header + spec_.message_size;
-    while (s.sent < total) {
-        iovec iov[2];
-        msghdr msg = {};
-        msg.msg_iov = iov;
-        msg.msg_iovlen = frame_iov(header, s, iov);
-        ssize_t n = ::sendmsg(fd, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
-        if (n > 0)
-            s.sent += static_cast<size_t>(n);
-        else if (n < 0 && errno == EINTR)
-            continue;
-        else
-            break; // full, or an error the writer will meet and handle
+    wire::encode_frame_trailer(trailer, true);
+    auto send_part = [&](size_t end) {
+        while (s.sent < end) {
+            iovec iov[3];
+            msghdr msg = {};
+            msg.msg_iov = iov;
+            msg.msg_iovlen = frame_iov(header, trailer, payload, s, iov);
+            if (end < frame_size())
+                --msg.msg_iovlen; // header and payload only: the trailer is the last iovec
+            ssize_t n = ::sendmsg(fd, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
+            if (n > 0)
+                s.sent += static_cast<size_t>(n);
+            else if (n < 0 && errno == EINTR)
+                continue;
+            else
+                break; // full, or an error the writer will meet and handle
+        }
+    };
+    if (borrowed) {
+        // Header and payload straight from the slot, then whether it stayed intact meanwhile,
+        // then the trailer that says so.
+        const size_t body = wire::kFrameHeaderSize + spec_.message_size;
+        send_part(body);
+        if (s.sent < body) // the writer finishes it from a copy: the slot is given back now
+            std::memcpy(buf.get(), borrowed, spec_.message_size);
+        s.intact = ln_ring_tap_release(tap_.get()) == LN_OK;
+        wire::encode_frame_trailer(trailer, s.intact);
+        if (s.sent == body)
+            send_part(frame_size());
+    } else {
+        send_part(frame_size()); // a copy: the whole frame in one go
     }
-    const bool whole = s.sent == total;
+    const bool whole = s.sent == frame_size();
+    const bool queue = !whole && (s.sent > 0 || s.intact); // a torn frame not begun is dropped
     {
         std::lock_guard<std::mutex> lock(mutex_);
         reader_sending_ = false;
         in_flight_ = false;
-        if (whole) {
-            buf = std::move(s.data);
-        } else {
+        if (queue) {
+            s.data = std::move(buf);
             queue_.push_front(std::move(s)); // the queue was empty: nothing overtakes it
             queued_.store(queue_.size(), std::memory_order_release);
         }
     }
-    if (whole) {
-        StreamCounters::add(counters_.samples);
-        StreamCounters::add(counters_.bytes, spec_.message_size);
-    } else {
+    if (queue)
         ready_.notify_one();
-    }
+    else if (whole)
+        count_sent(s);
+    else
+        StreamCounters::add(counters_.drops);
     return true;
 }
 
-size_t TcpSender::frame_iov(uint8_t *header, const Sample &s, iovec iov[2]) const
+size_t TcpSender::frame_iov(uint8_t *header, uint8_t *trailer, const uint8_t *payload,
+                            const Sample &s, iovec iov[3]) const
 {
-    const size_t h = wire::kFrameHeaderSize;
-    size_t count = 0;
-    if (s.sent < h)
-        iov[count++] = {header + s.sent, h - s.sent};
-    size_t skip = s.sent > h ? s.sent - h : 0;
-    iov[count++] = {s.data.get() + skip, spec_.message_size - skip};
+    const size_t h = wire::kFrameHeaderSize, body = h + spec_.message_size;
+    size_t count = 0, at = s.sent;
+    if (at < h) {
+        iov[count++] = {header + at, h - at};
+        at = h;
+    }
+    if (at < body) {
+        iov[count++] = {const_cast<uint8_t *>(payload) + (at - h), body - at};
+        at = body;
+    }
+    iov[count++] = {trailer + (at - body), wire::kFrameTrailerSize - (at - body)};
     return count;
 }
 
 Io TcpSender::write_sample(Sample &s, std::string &error)
 {
     uint8_t header[wire::kFrameHeaderSize];
+    uint8_t trailer[wire::kFrameTrailerSize];
     wire::encode_frame_header(header, {s.seq, s.timestamp_ns, spec_.message_size});
-    iovec iov[2];
-    size_t count = frame_iov(header, s, iov);
+    wire::encode_frame_trailer(trailer, s.intact);
+    iovec iov[3];
+    size_t count = frame_iov(header, trailer, s.data.get(), s, iov);
     return write_full(sock_.get(), iov, static_cast<int>(count), stop_, error);
 }
 
@@ -398,10 +456,10 @@ void TcpSender::write_loop()
             have = true;
         }
         std::string error;
-        switch (write_sample(current, error)) {
+        const Io io = write_sample(current, error);
+        switch (io) {
         case Io::ok: {
-            StreamCounters::add(counters_.samples);
-            StreamCounters::add(counters_.bytes, spec_.message_size);
+            count_sent(current);
             std::lock_guard<std::mutex> lock(mutex_);
             give_buffer(std::move(current.data));
             in_flight_ = false;
@@ -410,13 +468,16 @@ void TcpSender::write_loop()
         }
         case Io::stopped:
             return;
-        case Io::closed:
-            lost("closed by the receiver");
-            current.sent = 0; // the receiver drops a partial frame: send it whole again
-            break;
         default:
-            lost(error);
-            current.sent = 0;
+            lost(io == Io::closed ? "closed by the receiver" : error);
+            current.sent = 0;      // the receiver drops a partial frame: send it whole again
+            if (!current.intact) { // unless it was torn: then it is gone
+                StreamCounters::add(counters_.drops);
+                std::lock_guard<std::mutex> lock(mutex_);
+                give_buffer(std::move(current.data));
+                in_flight_ = false;
+                have = false;
+            }
             break;
         }
     }

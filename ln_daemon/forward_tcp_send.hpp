@@ -2,10 +2,12 @@
 // into a bounded queue (when it is full the oldest queued sample is dropped), a writer
 // thread keeps a connection to the receiving daemon and sends the queue in order,
 // reconnecting with back-off.  When the writer is idle on a healthy connection and nothing
-// is queued, the reader sends the sample itself without blocking (saving a thread
-// wake-up per sample) and queues only what the socket did not take at once.  The publisher
-// is never held up: the tap holds no reader slot and the reader never waits for the
-// writer or the network.
+// is queued, the reader sends the sample itself without blocking (no thread wake-up), large
+// samples straight from the ring slot (no copy), and queues a copy of only what the socket
+// did not take at once.  The frame's trailer says whether the slot stayed intact while it was sent (the
+// publisher overwrites it only when the stream falls a whole ring behind); a torn frame is
+// dropped by the receiver and counted as a drop here.  The publisher is never held up: the
+// tap holds no reader slot and the reader never waits for the writer or the network.
 #pragma once
 
 #include <atomic>
@@ -45,16 +47,23 @@ private:
         uint64_t seq = 0;
         int64_t timestamp_ns = 0;
         Buffer data;
-        size_t sent = 0; // bytes of its frame already written on the current connection
+        size_t sent = 0;    // bytes of its frame already written on the current connection
+        bool intact = true; // false: the payload was overwritten while sent (trailer: torn)
     };
 
     void read_loop();
     void write_loop();
-    // Reader: sends `buf` at once if the writer is idle with nothing queued; true if the
-    // sample was dealt with (sent whole, or queued with what part of it went out).
-    bool send_direct(Buffer &buf, const ln_sample_info &info);
-    // The frame of `s` (header, then payload) from byte s.sent on, as 1 or 2 iovecs.
-    size_t frame_iov(uint8_t *header, const Sample &s, iovec iov[2]) const;
+    // Reader: sends the sample at once if the writer is idle with nothing queued: `borrowed`
+    // from the ring (released here), or copied into `buf` (borrowed == nullptr); true if it
+    // was dealt with (sent whole, dropped as torn, or queued in `buf` with what part of it
+    // went out).
+    bool send_direct(const void *borrowed, Buffer &buf, const ln_sample_info &info);
+    // Counts a frame written whole: a sample, or a drop if it was torn.
+    void count_sent(const Sample &s);
+    // The frame of `s` (header, payload, trailer) from byte s.sent on, as 1 to 3 iovecs.
+    size_t frame_iov(uint8_t *header, uint8_t *trailer, const uint8_t *payload, const Sample &s,
+                     iovec iov[3]) const;
+    size_t frame_size() const noexcept;
     // Writer: writes `s` from s.sent on; Io::ok once all of it went out.
     Io write_sample(Sample &s, std::string &error);
     // Connects (and reconnects) until it succeeds or the stream stops (false).

@@ -3,10 +3,13 @@
 // its geometry fit that stream (else the stream's invalid); only then is anything stored.
 #include "forward_udp_recv.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <ctime>
+#include <netinet/in.h>
+#include <netinet/udp.h>
 #include <sys/socket.h>
 #include <thread>
 
@@ -14,8 +17,24 @@ namespace lnd::fwd {
 
 namespace {
 
-constexpr unsigned kBatch = 32;           // datagrams per recvmmsg
-constexpr size_t kBufferSize = 64 * 1024; // more than any UDP datagram over IPv4
+constexpr unsigned kBatch = 32; // datagrams per recvmmsg
+// More than any UDP datagram over IPv4, and than what UDP_GRO coalesces into one.
+constexpr size_t kBufferSize = 64 * 1024;
+#ifndef UDP_GRO
+#define UDP_GRO 104
+#endif
+
+// The size of the datagrams the kernel coalesced into this message (UDP_GRO), 0 if none.
+size_t coalesced_size(msghdr &m)
+{
+    for (cmsghdr *c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c))
+        if (c->cmsg_level == SOL_UDP && c->cmsg_type == UDP_GRO) {
+            int size = 0;
+            std::memcpy(&size, CMSG_DATA(c), sizeof size);
+            return size > 0 ? static_cast<size_t>(size) : 0;
+        }
+    return 0;
+}
 constexpr int64_t kSweepNs = 100'000'000; // how often incomplete samples are checked for age
 
 int64_t monotonic_ns() noexcept
@@ -151,6 +170,9 @@ void UdpReceiver::run()
     mmsghdr msgs[kBatch];
     iovec iov[kBatch];
     Address from[kBatch];
+    alignas(cmsghdr) char control[kBatch][CMSG_SPACE(sizeof(int))];
+    int one = 1; // datagrams of one flow may come coalesced: cut them apart below
+    ::setsockopt(fd_, SOL_UDP, UDP_GRO, &one, sizeof one);
     int64_t next_sweep = monotonic_ns() + kSweepNs;
     while (!stop_.load(std::memory_order_acquire)) {
         for (unsigned i = 0; i < kBatch; ++i) {
@@ -161,6 +183,8 @@ void UdpReceiver::run()
             msgs[i].msg_hdr.msg_namelen = sizeof from[i].storage;
             msgs[i].msg_hdr.msg_iov = &iov[i];
             msgs[i].msg_hdr.msg_iovlen = 1;
+            msgs[i].msg_hdr.msg_control = control[i];
+            msgs[i].msg_hdr.msg_controllen = sizeof control[i];
         }
         int n = -1;
         if (spin_ns_ > 0) { // a datagram that comes soon is taken without a wake-up
@@ -183,7 +207,14 @@ void UdpReceiver::run()
                 continue;
             }
             from[i].length = msgs[i].msg_hdr.msg_namelen;
-            handle(static_cast<const uint8_t *>(iov[i].iov_base), msgs[i].msg_len, from[i], now);
+            const auto *data = static_cast<const uint8_t *>(iov[i].iov_base);
+            const size_t len = msgs[i].msg_len, step = coalesced_size(msgs[i].msg_hdr);
+            if (step == 0) {
+                handle(data, len, from[i], now);
+                continue;
+            }
+            for (size_t at = 0; at < len; at += step)
+                handle(data + at, std::min(step, len - at), from[i], now);
         }
         if (n < 0 && err != EAGAIN && err != EWOULDBLOCK && err != EINTR) {
             // Nothing on this socket fails for long (ENOMEM, a pending ICMP error): pause

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <netinet/in.h>
+#include <netinet/udp.h>
 #include <poll.h>
 
 #include "forward_wire.hpp"
@@ -20,6 +21,16 @@ constexpr auto kResolveInterval = std::chrono::seconds(1);
 constexpr int kRefusedRetries = 3;                          // per sample, see send_sample
 constexpr int64_t kMinBackoffUs = 50, kMaxBackoffUs = 5000; // after ENOBUFS
 constexpr double kBurstBytes = 64 * 1024; // with a rate limit: sent at once, at most
+#ifndef UDP_SEGMENT
+#define UDP_SEGMENT 103
+#endif
+
+// Datagrams one send hands the kernel to cut (UDP_SEGMENT): what fits one IP datagram of
+// 64 KiB; 1 (no segmentation offload) for datagrams too large to gain from it.
+unsigned segments_per_send(size_t datagram)
+{
+    return static_cast<unsigned>(std::clamp<size_t>(wire::kMaxDatagram / datagram, 1, 64));
+}
 
 // Datagrams per sendmmsg: with a rate limit no more than fit one burst (at least one).
 unsigned batch_size(double rate, size_t datagram)
@@ -46,8 +57,10 @@ UdpSender::UdpSender(const SendSpec &spec, const Options &options, Tap tap)
     : SendStream(spec), tap_(std::move(tap)), chunk_(static_cast<uint16_t>(options.udp_payload)),
       socket_buffer_(options.socket_buffer), spin_ns_(int64_t{options.spin_us} * 1000),
       rate_(options.udp_max_rate), batch_(batch_size(rate_, wire::kFragmentHeaderSize + chunk_)),
+      segments_(segments_per_send(wire::kFragmentHeaderSize + chunk_)),
       sample_(new uint8_t[spec.message_size ? spec.message_size : 1]),
-      headers_(kBatch * wire::kFragmentHeaderSize), msgs_(kBatch), iov_(2 * kBatch)
+      headers_(kBatch * wire::kFragmentHeaderSize), msgs_(kBatch), iov_(2 * kBatch),
+      control_(kBatch)
 {
     counters_.note_segment(ln_ring_tap_segment(tap_.get()));
 }
@@ -144,12 +157,31 @@ UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
             iov_[2 * i] = {h, wire::kFragmentHeaderSize};
             iov_[2 * i + 1] = {sample_.get() + static_cast<uint64_t>(index) * chunk_,
                                wire::fragment_length(f.sample_size, chunk_, index)};
-            msgs_[i] = {};
-            msgs_[i].msg_hdr.msg_iov = &iov_[2 * i];
-            msgs_[i].msg_hdr.msg_iovlen = 2;
         }
-        for (unsigned done = 0; done < n;) {
-            int sent = ::sendmmsg(sock_.get(), msgs_.data() + done, n - done, 0);
+        // One message per datagram, or, with segmentation offload, per run of datagrams the
+        // kernel cuts at the datagram size (all are that size but a sample's last one, which
+        // can only end a run).
+        unsigned count = 0;
+        for (unsigned i = 0; i < n; ++count) {
+            unsigned k = gso_ ? std::min(segments_, n - i) : 1;
+            msgs_[count] = {};
+            msghdr &m = msgs_[count].msg_hdr;
+            m.msg_iov = &iov_[2 * i];
+            m.msg_iovlen = 2 * k;
+            if (k > 1) {
+                m.msg_control = control_[count].data();
+                m.msg_controllen = sizeof(control_[count]);
+                cmsghdr *c = CMSG_FIRSTHDR(&m);
+                c->cmsg_level = SOL_UDP;
+                c->cmsg_type = UDP_SEGMENT;
+                c->cmsg_len = CMSG_LEN(sizeof(uint16_t));
+                uint16_t size = static_cast<uint16_t>(wire::kFragmentHeaderSize + chunk_);
+                std::memcpy(CMSG_DATA(c), &size, sizeof size);
+            }
+            i += k;
+        }
+        for (unsigned done = 0; done < count;) {
+            int sent = ::sendmmsg(sock_.get(), msgs_.data() + done, count - done, 0);
             if (sent > 0) {
                 done += static_cast<unsigned>(sent);
                 backoff_us = kMinBackoffUs;
@@ -158,6 +190,11 @@ UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
             int err = errno;
             if (err == EINTR)
                 continue;
+            if (gso_ && done == 0 && (err == EINVAL || err == EIO || err == EOPNOTSUPP)) {
+                gso_ = false;    // no segmentation offload on this path: one datagram per message
+                first -= batch_; // (unsigned: the loop's step brings it back) the batch again
+                break;
+            }
             if (err == EAGAIN || err == EWOULDBLOCK) {
                 // The socket buffer is full: the link is the limit, wait until it drains.
                 if (wait_fd(sock_.get(), POLLOUT, stop_, -1) == Wait::stopped)

@@ -1,8 +1,12 @@
 // The sending end of a UDP stream: one thread reads the newest sample from the ring's tap
 // and sends it at once, cut into fragments, with sendmmsg in batches (paced when the stream
-// has a rate limit).  Nothing is queued: a sample published while the previous one is still
+// has a rate limit), runs of fragments handed to the kernel as one message that it cuts
+// into datagrams (UDP_SEGMENT, where the kernel offers it).  Nothing is queued: a sample published while the previous one is still
 // being sent is skipped if a newer one follows before the send ends (counted in drops).
 #pragma once
+
+#include <array>
+#include <sys/socket.h>
 
 #include <chrono>
 #include <cstdint>
@@ -45,10 +49,12 @@ private:
     Tap tap_;
     const uint16_t chunk_;
     const int socket_buffer_;
-    const int64_t spin_ns_; // poll the tap this long before sleeping
-    const double rate_;     // bytes per second, 0: no limit
-    const unsigned batch_;  // datagrams per sendmmsg
-    double credit_ = 0;     // bytes that may go now (token bucket)
+    const int64_t spin_ns_;   // poll the tap this long before sleeping
+    const double rate_;       // bytes per second, 0: no limit
+    const unsigned batch_;    // datagrams per sendmmsg
+    const unsigned segments_; // datagrams per message with segmentation offload
+    bool gso_ = true;         // UDP_SEGMENT works here (cleared at its first refusal)
+    double credit_ = 0;       // bytes that may go now (token bucket)
     std::chrono::steady_clock::time_point last_pace_{};
     std::unique_ptr<uint8_t[]> sample_;
     UniqueFd sock_;
@@ -57,6 +63,7 @@ private:
     std::vector<uint8_t> headers_;
     std::vector<mmsghdr> msgs_;
     std::vector<iovec> iov_;
+    std::vector<std::array<char, CMSG_SPACE(sizeof(uint16_t))>> control_; // per message
     StopSignal stop_;
     std::thread thread_;
 };

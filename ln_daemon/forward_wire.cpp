@@ -186,4 +186,27 @@ FrameHeader decode_frame_header(const uint8_t *in) noexcept
     return f;
 }
 
+// Frame trailer: "LNFE" | u32 state (0 intact, 1 torn).
+constexpr uint8_t kTrailerMagic[4] = {'L', 'N', 'F', 'E'};
+
+void encode_frame_trailer(uint8_t *out, bool intact) noexcept
+{
+    std::memcpy(out, kTrailerMagic, sizeof kTrailerMagic);
+    put32(out + 4, intact ? 0 : 1);
+}
+
+Trailer decode_frame_trailer(const uint8_t *in) noexcept
+{
+    if (std::memcmp(in, kTrailerMagic, sizeof kTrailerMagic) != 0)
+        return Trailer::invalid;
+    switch (get32(in + 4)) {
+    case 0:
+        return Trailer::intact;
+    case 1:
+        return Trailer::torn;
+    default:
+        return Trailer::invalid;
+    }
+}
+
 } // namespace lnd::fwd::wire

@@ -1,5 +1,5 @@
 // The forwarding wire format (docs/network.md, "Wire format"): the header of every UDP
-// datagram, and the hello, reply and frame header of a TCP stream.  Pure encode/decode, all
+// datagram, and the hello, reply, frame header and frame trailer of a TCP stream.  Pure encode/decode, all
 // little-endian, no sockets, so the unit tests can feed it anything.
 #pragma once
 
@@ -9,7 +9,7 @@
 namespace lnd::fwd::wire {
 
 constexpr uint8_t kMagic[4] = {'L', 'N', 'F', '1'};
-constexpr uint8_t kVersion = 1;
+constexpr uint8_t kVersion = 2; // 2: TCP frames end in a trailer
 
 enum class Kind : uint8_t {
     fragment = 0, // UDP: one piece of a sample
@@ -67,6 +67,7 @@ const char *check_fragment(const Fragment &f, uint64_t message_size) noexcept;
 constexpr size_t kHelloSize = 32;
 constexpr size_t kReplySize = 16;
 constexpr size_t kFrameHeaderSize = 24;
+constexpr size_t kFrameTrailerSize = 8;
 
 struct Hello {
     uint64_t token = 0;
@@ -92,5 +93,12 @@ void encode_reply(uint8_t *out, const Reply &r) noexcept;
 bool decode_reply(const uint8_t *in, Reply &r) noexcept;
 void encode_frame_header(uint8_t *out, const FrameHeader &f) noexcept;
 FrameHeader decode_frame_header(const uint8_t *in) noexcept;
+
+// What follows a frame's payload: whether the payload stayed intact while it was sent (a
+// sender sends straight from the ring, where the publisher may overwrite a sample it falls
+// a whole ring behind on).  A torn frame is dropped by the receiver.
+enum class Trailer { intact, torn, invalid };
+void encode_frame_trailer(uint8_t *out, bool intact) noexcept;
+Trailer decode_frame_trailer(const uint8_t *in) noexcept; // invalid: not a trailer
 
 } // namespace lnd::fwd::wire

@@ -111,6 +111,24 @@ LN_ADMIN_API int ln_ring_tap_read(ln_ring_tap* tap, void* buf, ln_sample_info* i
  * than the ring's newest sample; LN_EINVAL if seq >= 2^62. */
 LN_ADMIN_API int ln_ring_tap_inject(ln_ring_tap* tap, const void* data, uint64_t seq,
                                     int64_t timestamp_ns);
+/* Zero-copy reading: the next sample (as ln_ring_tap_read) stays in the ring and *payload
+ * points at its message_size bytes there.  A tap holds no reader slot, so a publisher may
+ * reuse the slot meanwhile: use the bytes (e.g. hand them to send()), then
+ * ln_ring_tap_release says whether they stayed intact all along (LN_OK) or were overwritten
+ * (LN_EOVERRUN: what was read may be torn; the tap is past the sample either way).  One
+ * borrow at a time (LN_EBUSY); ln_ring_tap_read in between is refused the same way. */
+LN_ADMIN_API int ln_ring_tap_borrow(ln_ring_tap* tap, const void** payload, ln_sample_info* info,
+                                    double timeout);
+LN_ADMIN_API int ln_ring_tap_release(ln_ring_tap* tap);
+/* Injecting in place: ln_ring_tap_inject in three steps, for a sample that arrives piece by
+ * piece (received straight into the ring).  begin makes the checks of inject, takes the
+ * topic's write lock and sets *payload to the slot to fill; the lock stays held until commit
+ * (publishes it with timestamp_ns) or abort (the slot stays unpublished: readers never see
+ * it), so fill it quickly.  All three from the thread that began.  A process killed between
+ * begin and commit leaves nothing visible (the next writer recovers the lock). */
+LN_ADMIN_API int ln_ring_tap_inject_begin(ln_ring_tap* tap, uint64_t seq, void** payload);
+LN_ADMIN_API int ln_ring_tap_inject_commit(ln_ring_tap* tap, int64_t timestamp_ns);
+LN_ADMIN_API int ln_ring_tap_inject_abort(ln_ring_tap* tap);
 /* Newest sequence number of the topic, 0 if none: of the ring the tap is on, or of its
  * newest successor if that one is retired (without moving the tap).  0 for a bad handle. */
 LN_ADMIN_API uint64_t ln_ring_tap_write_seq(ln_ring_tap* tap);

@@ -1,7 +1,8 @@
 /* ring_tap.c — taps: a topic ring mapped without the manager and without a reader slot, for the
  * daemons that forward topics between hosts.  Reading takes samples out like a subscriber
- * that never holds publishers back; injecting writes forwarded samples in under their
- * original sequence numbers and timestamps (the seqlock of ring.h, numbers may jump). */
+ * that never holds publishers back (copied, or borrowed in place and checked afterwards);
+ * injecting writes forwarded samples in under their original sequence numbers and timestamps
+ * (the seqlock of ring.h, numbers may jump), copied or filled in place. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +19,11 @@ struct ln_ring_tap {
     uint32_t magic;
     unsigned mode;
     ln_ring ring;
-    ln_ring_cursor cur; /* reading; holds no reader slot (reader = -1) */
+    ln_ring_cursor cur;      /* reading; holds no reader slot (reader = -1) */
+    ln_ring_slot* borrowed;  /* the sample of ln_ring_tap_borrow, until released */
+    uint64_t borrowed_word;  /* its seq word */
+    ln_ring_slot* injecting; /* the slot of ln_ring_tap_inject_begin, until commit/abort */
+    uint64_t injecting_seq;
 };
 
 static int bad_tap(const ln_ring_tap* t, const char* what)
@@ -83,6 +88,8 @@ void ln_ring_tap_close(ln_ring_tap* t)
 {
     if (!t || t->magic != LN_TAP_MAGIC)
         return;
+    if (t->injecting) /* closed between begin and commit: nothing is published */
+        ln_ring_unlock(&t->ring);
     ln_ring_detach(&t->ring);
     t->magic = 0;
     free(t);
@@ -97,6 +104,8 @@ int ln_ring_tap_read(ln_ring_tap* t, void* buf, ln_sample_info* info, double tim
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_read: buf is NULL");
     if (isnan(timeout))
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_read: timeout is NaN");
+    if (t->borrowed)
+        return ln_set_error(NULL, LN_EBUSY, "ln_ring_tap_read: a borrowed sample is not released");
     if (t->mode == LN_TAP_NEWEST) /* a reading tap: writers keep the newest for it */
         ln_ring_count_tap(&t->ring, LN_RING_TAP_NEWEST);
     uint64_t expected = t->cur.next;
@@ -121,19 +130,66 @@ int ln_ring_tap_read(ln_ring_tap* t, void* buf, ln_sample_info* info, double tim
     return LN_OK;
 }
 
-int ln_ring_tap_inject(ln_ring_tap* t, const void* data, uint64_t seq, int64_t timestamp_ns)
+int ln_ring_tap_borrow(ln_ring_tap* t, const void** payload, ln_sample_info* info, double timeout)
 {
-    int rc = bad_tap(t, "ln_ring_tap_inject");
+    int rc = bad_tap(t, "ln_ring_tap_borrow");
     if (rc != LN_OK)
         return rc;
-    if (!data)
-        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject: data is NULL");
+    if (!payload)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_borrow: payload is NULL");
+    if (isnan(timeout))
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_borrow: timeout is NaN");
+    if (t->borrowed)
+        return ln_set_error(NULL, LN_EBUSY,
+                            "ln_ring_tap_borrow: a borrowed sample is not released");
+    if (t->mode == LN_TAP_NEWEST)
+        ln_ring_count_tap(&t->ring, LN_RING_TAP_NEWEST);
+    uint64_t expected = t->cur.next;
+    ln_ring_slot* slot;
+    uint64_t word;
+    rc = ln_ring_next(&t->ring, &t->cur, timeout, 0, &slot, &word);
+    if (rc == LN_EAGAIN || rc == LN_ETIMEOUT)
+        return ln_set_error(NULL, LN_ETIMEOUT, "tap on '%s': no sample within %g s", t->ring.name,
+                            timeout);
+    if (rc != LN_OK)
+        return rc;
+    t->borrowed = slot;
+    t->borrowed_word = word;
+    *payload = ln_ring_payload(slot);
+    if (info) {
+        info->seq = LN_SLOT_SEQ(word);
+        info->timestamp_ns = slot->timestamp_ns; /* checked with the payload at release */
+        info->overruns = info->seq - expected;
+    }
+    t->cur.pending = 0;
+    return LN_OK;
+}
+
+int ln_ring_tap_release(ln_ring_tap* t)
+{
+    int rc = bad_tap(t, "ln_ring_tap_release");
+    if (rc != LN_OK)
+        return rc;
+    if (!t->borrowed)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_release: nothing is borrowed");
+    ln_ring_slot* slot = t->borrowed;
+    t->borrowed = NULL;
+    if (ln_ring_finish(&t->ring, &t->cur, slot, t->borrowed_word, 0) != LN_OK)
+        return ln_set_error(NULL, LN_EOVERRUN,
+                            "tap on '%s': sample %llu was overwritten while borrowed", t->ring.name,
+                            (unsigned long long)LN_SLOT_SEQ(t->borrowed_word));
+    return LN_OK;
+}
+
+/* Takes the write lock on the newest ring and begins sample seq there: LN_OK with *slot, the
+ * lock held; otherwise the lock is not held. */
+static int inject_start(ln_ring_tap* t, uint64_t seq, const char* what, ln_ring_slot** slot)
+{
     if (seq > LN_RING_MAX_SEQ)
-        return ln_set_error(NULL, LN_EINVAL,
-                            "ln_ring_tap_inject: sequence number %llu is "
-                            "beyond %llu",
+        return ln_set_error(NULL, LN_EINVAL, "%s: sequence number %llu is beyond %llu", what,
                             (unsigned long long)seq, (unsigned long long)LN_RING_MAX_SEQ);
     ln_deadline d = ln_deadline_in(LN_TAP_LOCK_TIMEOUT);
+    int rc;
     for (;;) {
         if ((rc = ln_ring_lock(&t->ring, &d)) != LN_OK)
             return rc;
@@ -155,7 +211,63 @@ int ln_ring_tap_inject(ln_ring_tap* t, const void* data, uint64_t seq, int64_t t
     }
     /* No waiting for queued readers: a slot they have not read yet is overwritten and they
      * count it as lost, as with any publisher that does not wait. */
-    ln_ring_slot* slot = ln_ring_begin_seq(&t->ring, seq);
+    *slot = ln_ring_begin_seq(&t->ring, seq);
+    return LN_OK;
+}
+
+int ln_ring_tap_inject_begin(ln_ring_tap* t, uint64_t seq, void** payload)
+{
+    int rc = bad_tap(t, "ln_ring_tap_inject_begin");
+    if (rc != LN_OK)
+        return rc;
+    if (!payload)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject_begin: payload is NULL");
+    if (t->injecting)
+        return ln_set_error(NULL, LN_EBUSY, "ln_ring_tap_inject_begin: a sample is begun");
+    ln_ring_slot* slot;
+    if ((rc = inject_start(t, seq, "ln_ring_tap_inject_begin", &slot)) != LN_OK)
+        return rc;
+    t->injecting = slot;
+    t->injecting_seq = seq;
+    *payload = ln_ring_payload(slot);
+    return LN_OK;
+}
+
+int ln_ring_tap_inject_commit(ln_ring_tap* t, int64_t timestamp_ns)
+{
+    int rc = bad_tap(t, "ln_ring_tap_inject_commit");
+    if (rc != LN_OK)
+        return rc;
+    if (!t->injecting)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject_commit: nothing is begun");
+    ln_ring_commit_seq(&t->ring, t->injecting, t->injecting_seq, timestamp_ns);
+    t->injecting = NULL;
+    return ln_ring_unlock(&t->ring);
+}
+
+int ln_ring_tap_inject_abort(ln_ring_tap* t)
+{
+    int rc = bad_tap(t, "ln_ring_tap_inject_abort");
+    if (rc != LN_OK)
+        return rc;
+    if (!t->injecting)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject_abort: nothing is begun");
+    t->injecting = NULL; /* the slot stays WRITING: free for the next writer, never read */
+    return ln_ring_unlock(&t->ring);
+}
+
+int ln_ring_tap_inject(ln_ring_tap* t, const void* data, uint64_t seq, int64_t timestamp_ns)
+{
+    int rc = bad_tap(t, "ln_ring_tap_inject");
+    if (rc != LN_OK)
+        return rc;
+    if (!data)
+        return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject: data is NULL");
+    if (t->injecting)
+        return ln_set_error(NULL, LN_EBUSY, "ln_ring_tap_inject: a sample is begun");
+    ln_ring_slot* slot;
+    if ((rc = inject_start(t, seq, "ln_ring_tap_inject", &slot)) != LN_OK)
+        return rc;
     memcpy(ln_ring_payload(slot), data, t->ring.message_size);
     ln_ring_commit_seq(&t->ring, slot, seq, timestamp_ns);
     return ln_ring_unlock(&t->ring);

@@ -1,6 +1,7 @@
 /* test_ring_tap.c — ring taps and ln_ring_admin_open without a manager: injected samples keep
  * their numbers and timestamps, gaps in the numbers (every reader kind counts them and goes
- * on), stale injects, both read modes, timeouts and wake-ups, following successor rings, and
+ * on), stale injects, borrowing in place and filling in place (also by a writer killed
+ * meanwhile), both read modes, timeouts and wake-ups, following successor rings, and
  * re-adopting segments.  Links the static libln to compare with the internal reader. */
 #include <fcntl.h>
 #include <math.h>
@@ -277,6 +278,115 @@ static void test_stale_inject_changes_nothing(void)
     LN_CHECK_EQ(inject(in, 7), LN_OK);
     free(before);
     ln_ring_detach(&r);
+    ln_ring_tap_close(in);
+    drop(a, seg_name);
+}
+
+/* Borrowing leaves the sample in the ring: release says LN_OK while it stayed intact and
+ * LN_EOVERRUN once a writer reused its slot meanwhile; one borrow at a time. */
+static void test_borrow_and_release(void)
+{
+    ln_ring_admin* a = make("borrow", 2);
+    ln_ring_tap* in = tap(seg_name, LN_TAP_NEWEST);
+    ln_ring_tap* out = tap(seg_name, LN_TAP_EVERY);
+    LN_CHECK_EQ(inject(in, 1), LN_OK);
+    const void* p = NULL;
+    ln_sample_info info;
+    LN_CHECK_EQ(ln_ring_tap_borrow(out, &p, &info, 0), LN_OK);
+    LN_CHECK_EQ(info.seq, 1);
+    LN_CHECK_EQ(info.timestamp_ns, 1007);
+    LN_CHECK_EQ(((const uint8_t*)p)[0], 1);
+    LN_CHECK_EQ(((const uint8_t*)p)[MSG - 1], 1);
+    uint8_t buf[MSG];
+    LN_CHECK_EQ(ln_ring_tap_borrow(out, &p, &info, 0), LN_EBUSY);
+    LN_CHECK_EQ(ln_ring_tap_read(out, buf, &info, 0), LN_EBUSY);
+    LN_CHECK_EQ(ln_ring_tap_release(out), LN_OK);
+    LN_CHECK_EQ(ln_ring_tap_release(out), LN_EINVAL);
+    /* Sample 2 borrowed; the writer goes round the two slots and reuses its slot. */
+    LN_CHECK_EQ(inject(in, 2), LN_OK);
+    LN_CHECK_EQ(ln_ring_tap_borrow(out, &p, &info, 0), LN_OK);
+    LN_CHECK_EQ(info.seq, 2);
+    LN_CHECK_EQ(inject(in, 3), LN_OK);
+    LN_CHECK_EQ(inject(in, 4), LN_OK);
+    LN_CHECK_EQ(((const uint8_t*)p)[0], 4); /* what a sender would have sent: torn */
+    LN_CHECK_EQ(ln_ring_tap_release(out), LN_EOVERRUN);
+    LN_CHECK(strstr(ln_last_error(), "overwritten while borrowed") != NULL);
+    /* The tap is past sample 2 and goes on with what the ring still holds: 3 and 4. */
+    LN_CHECK_EQ(ln_ring_tap_borrow(out, &p, &info, 0), LN_OK);
+    LN_CHECK_EQ(info.seq, 3);
+    LN_CHECK_EQ(((const uint8_t*)p)[0], 3);
+    LN_CHECK_EQ(ln_ring_tap_release(out), LN_OK);
+    LN_CHECK_EQ(ln_ring_tap_borrow(out, &p, &info, 0), LN_OK);
+    LN_CHECK_EQ(info.seq, 4);
+    LN_CHECK_EQ(info.overruns, 0);
+    LN_CHECK_EQ(ln_ring_tap_release(out), LN_OK);
+    LN_CHECK_EQ(ln_ring_tap_borrow(out, &p, &info, 0), LN_ETIMEOUT);
+    ln_ring_tap_close(out);
+    ln_ring_tap_close(in);
+    drop(a, seg_name);
+}
+
+/* Child: begins sample 5 in place, fills half of it and dies by SIGKILL holding the lock. */
+static void die_while_injecting(const char* name) __attribute__((noreturn));
+static void die_while_injecting(const char* name)
+{
+    ln_ring_tap* t = NULL;
+    void* p = NULL;
+    if (ln_ring_tap_open(&t, name, HASH, MSG, LN_TAP_NEWEST) != LN_OK ||
+        ln_ring_tap_inject_begin(t, 5, &p) != LN_OK)
+        _exit(2);
+    memset(p, 0x55, MSG / 2);
+    kill(getpid(), SIGKILL);
+    _exit(3);
+}
+
+/* In-place injects: commit publishes under the given number and timestamp, abort leaves
+ * nothing visible, the checks of inject apply, and a writer killed between begin and commit
+ * leaves no sample and no held lock behind. */
+static void test_inject_in_place(void)
+{
+    ln_ring_admin* a = make("inplace", 4);
+    ln_ring_tap* in = tap(seg_name, LN_TAP_NEWEST);
+    ln_ring_tap* out = tap(seg_name, LN_TAP_EVERY);
+    void* p = NULL;
+    LN_CHECK_EQ(ln_ring_tap_inject_begin(in, 2, &p), LN_OK);
+    memset(p, 2, MSG);
+    LN_CHECK_EQ(ln_ring_tap_inject_begin(in, 3, &p), LN_EBUSY);
+    LN_CHECK_EQ(inject(in, 3), LN_EBUSY);
+    LN_CHECK_EQ(ln_ring_tap_inject_commit(in, 2007), LN_OK);
+    LN_CHECK_EQ(ln_ring_tap_inject_commit(in, 2007), LN_EINVAL);
+    uint64_t overruns = 0;
+    LN_CHECK_EQ(tap_read(out, 0, &overruns, NULL), 2);
+    /* Aborted: never seen, and the number may still come. */
+    LN_CHECK_EQ(ln_ring_tap_inject_begin(in, 3, &p), LN_OK);
+    memset(p, 0xee, MSG);
+    LN_CHECK_EQ(ln_ring_tap_inject_abort(in), LN_OK);
+    LN_CHECK_EQ(ln_ring_tap_inject_abort(in), LN_EINVAL);
+    int rc = LN_OK;
+    LN_CHECK_EQ(tap_read(out, 0, NULL, &rc), 0);
+    LN_CHECK_EQ(rc, LN_ETIMEOUT);
+    LN_CHECK_EQ(ln_ring_tap_inject_begin(in, 2, &p), LN_EOVERRUN); /* not newer */
+    LN_CHECK_EQ(ln_ring_tap_inject_begin(in, LN_RING_MAX_SEQ + 1, &p), LN_EINVAL);
+    LN_CHECK_EQ(ln_ring_tap_inject_begin(in, 4, NULL), LN_EINVAL);
+    /* Killed while filling sample 5: readers never see it, the next writer goes on. */
+    pid_t pid = fork();
+    if (pid == 0)
+        die_while_injecting(seg_name);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    LN_CHECK(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    LN_CHECK_EQ(tap_read(out, 0, NULL, &rc), 0);
+    LN_CHECK_EQ(rc, LN_ETIMEOUT);
+    LN_CHECK_EQ(inject(in, 6), LN_OK);
+    LN_CHECK_EQ(tap_read(out, 0, &overruns, NULL), 6);
+    LN_CHECK_EQ(overruns, 3); /* 3, 4 and 5 never came */
+    /* Closed between begin and commit: the lock is given back. */
+    LN_CHECK_EQ(ln_ring_tap_inject_begin(in, 7, &p), LN_OK);
+    ln_ring_tap_close(in);
+    in = tap(seg_name, LN_TAP_NEWEST);
+    LN_CHECK_EQ(inject(in, 8), LN_OK);
+    LN_CHECK_EQ(tap_read(out, 0, &overruns, NULL), 8);
+    ln_ring_tap_close(out);
     ln_ring_tap_close(in);
     drop(a, seg_name);
 }
@@ -560,6 +670,8 @@ int main(void)
     LN_TEST_RUN(test_gaps_are_counted_and_skipped);
     LN_TEST_RUN(test_writer_dead_in_newest_slot_does_not_hang_readers);
     LN_TEST_RUN(test_stale_inject_changes_nothing);
+    LN_TEST_RUN(test_borrow_and_release);
+    LN_TEST_RUN(test_inject_in_place);
     LN_TEST_RUN(test_modes_and_start_point);
     LN_TEST_RUN(test_blocked_read_is_woken_by_inject);
     LN_TEST_RUN(test_taps_follow_successors);

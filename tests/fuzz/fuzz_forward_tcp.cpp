@@ -1,5 +1,5 @@
 // fuzz_forward_tcp.cpp — fuzz target: the forwarder's TCP stream wire (forward_wire.cpp):
-// a receiver reading a sender's hello and then frame headers and payloads, as
+// a receiver reading a sender's hello and then frame headers, payloads and trailers, as
 // forward_tcp_recv.cpp does, and a sender reading the receiver's reply, on the same bytes.
 #include <cstdint>
 #include <cstring>
@@ -40,12 +40,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         wire::FrameHeader f = wire::decode_frame_header(data);
         data += wire::kFrameHeaderSize;
         size -= wire::kFrameHeaderSize;
-        if (f.size != kMessageSize || size < f.size)
+        if (f.size != kMessageSize || size < f.size + wire::kFrameTrailerSize)
             break;
         std::memcpy(payload, data, f.size);
         data += f.size;
         size -= f.size;
-        last_seq = f.seq;
+        wire::Trailer t = wire::decode_frame_trailer(data);
+        data += wire::kFrameTrailerSize;
+        size -= wire::kFrameTrailerSize;
+        if (t == wire::Trailer::invalid)
+            break;
+        if (t == wire::Trailer::intact)
+            last_seq = f.seq;
     }
     (void)last_seq;
     return 0;
@@ -53,7 +59,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
 extern "C" void ln_fuzz_seeds(ln_fuzz_emit *emit)
 {
-    uint8_t buf[wire::kHelloSize + 3 * (wire::kFrameHeaderSize + kMessageSize)];
+    uint8_t buf[wire::kHelloSize +
+                3 * (wire::kFrameHeaderSize + kMessageSize + wire::kFrameTrailerSize)];
     size_t n = 0;
     wire::Hello h;
     h.token = kToken;
@@ -70,6 +77,8 @@ extern "C" void ln_fuzz_seeds(ln_fuzz_emit *emit)
         n += wire::kFrameHeaderSize;
         std::memset(buf + n, static_cast<int>(seq), kMessageSize);
         n += kMessageSize;
+        wire::encode_frame_trailer(buf + n, seq != 2); // the second one torn
+        n += wire::kFrameTrailerSize;
     }
     emit("hello_three_frames", buf, n);
     uint8_t reply[wire::kReplySize];

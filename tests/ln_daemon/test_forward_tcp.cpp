@@ -3,6 +3,7 @@
 // bound; a receiving Forwarder that goes away and comes back on the same port gets the
 // stream again; hellos and frames that are wrong are refused and counted.
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <memory>
 #include <netinet/tcp.h>
@@ -91,11 +92,12 @@ public:
             LN_CHECK(wire::decode_reply(raw, r));
         return r;
     }
-    // True once the receiver closed the connection.
+    // True once the receiver closed the connection (a reset if it left bytes unread).
     bool closed_by_peer()
     {
         char byte;
-        return ::recv(fd_, &byte, 1, 0) == 0;
+        ssize_t n = ::recv(fd_, &byte, 1, 0);
+        return n == 0 || (n < 0 && errno == ECONNRESET);
     }
 
 private:
@@ -149,7 +151,13 @@ void every_sample_in_order(unsigned spin_us, uint64_t size = 256, uint64_t kSamp
     LN_CHECK(r.peer.rfind("127.0.0.1:", 0) == 0);
 }
 
-void test_every_sample_in_order() { every_sample_in_order(0); }
+void test_every_sample_in_order()
+{
+    every_sample_in_order(0);
+    every_sample_in_order(0, 64, 2000, 1); // one at a time: no frame may wait for the next
+    // 1 MiB: sent from the ring slot, received whole into a ring slot.
+    every_sample_in_order(0, 1 << 20, 200, 8);
+}
 
 // The same with the threads polling before they sleep (--spin-us).
 void test_every_sample_in_order_polling() { every_sample_in_order(200); }
@@ -306,9 +314,11 @@ void test_bad_hello_and_frames()
         c.send(hello, sizeof hello);
         LN_CHECK(c.reply().kind == wire::Kind::accept);
         LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).connected; }));
-        uint8_t head[wire::kFrameHeaderSize];
-        wire::encode_frame_header(head, {1, stamp(1), 129});
-        c.send(head, sizeof head); // the size is refused before any payload is read
+        // The receiver wakes once a whole frame's bytes are there; the size is refused
+        // before any payload is read into the ring.
+        uint8_t frame[wire::kFrameHeaderSize + 129 + wire::kFrameTrailerSize] = {};
+        wire::encode_frame_header(frame, {1, stamp(1), 129});
+        c.send(frame, sizeof frame);
         LN_CHECK(c.closed_by_peer());
         LN_CHECK(wait_until([&] { return !stats_of(rx, kToken, false).connected; }));
     }
@@ -323,13 +333,107 @@ void test_bad_hello_and_frames()
         wire::encode_hello(hello, {kToken, 128, kHash});
         c.send(hello, sizeof hello);
         LN_CHECK(c.reply().kind == wire::Kind::accept);
-        uint8_t frame[wire::kFrameHeaderSize + 128];
+        uint8_t frame[wire::kFrameHeaderSize + 128 + wire::kFrameTrailerSize];
         wire::encode_frame_header(frame, {3, stamp(3), 128});
         fill(frame + wire::kFrameHeaderSize, 128, 3);
+        wire::encode_frame_trailer(frame + wire::kFrameHeaderSize + 128, true);
         c.send(frame, sizeof frame);
         LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).samples == 1; }));
     }
     LN_CHECK_EQ(dst.newest(), 3);
+}
+
+// A frame whose trailer says it was torn while sent is dropped (counted) and the next one
+// goes in, whole or fed in pieces; a frame with no trailer where it belongs costs the
+// connection and nothing reaches the ring.
+void test_frame_trailers()
+{
+    constexpr size_t kSize = 4096,
+                     kFrame = wire::kFrameHeaderSize + kSize + wire::kFrameTrailerSize;
+    TestRing dst(kSize, 8);
+    Forwarder rx(local_options());
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
+    auto frame = [](uint64_t seq, bool intact) {
+        std::vector<uint8_t> f(kFrame);
+        wire::encode_frame_header(f.data(), {seq, stamp(seq), kSize});
+        fill(f.data() + wire::kFrameHeaderSize, kSize, seq);
+        wire::encode_frame_trailer(f.data() + wire::kFrameHeaderSize + kSize, intact);
+        return f;
+    };
+    Reader reader(dst);
+    {
+        Client c(rx.data_port());
+        uint8_t hello[wire::kHelloSize];
+        wire::encode_hello(hello, {kToken, kSize, kHash});
+        c.send(hello, sizeof hello);
+        LN_CHECK(c.reply().kind == wire::Kind::accept);
+        auto torn = frame(1, false);
+        c.send(torn.data(), torn.size());
+        auto good = frame(2, true);
+        for (size_t at = 0; at < good.size(); at += 1000) { // in pieces, with pauses
+            c.send(good.data() + at, std::min<size_t>(1000, good.size() - at));
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+        LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).samples == 1; }));
+        LN_CHECK_EQ(reader.read(5), LN_OK);
+        LN_CHECK_EQ(reader.info.seq, 2);
+        LN_CHECK(matches(reader.buf.data(), kSize, 2));
+        LN_CHECK_EQ(stats_of(rx, kToken, false).drops, 1);
+        auto bad = frame(3, true);
+        bad[bad.size() - 8] = 'X'; // the trailer's place holds something else
+        c.send(bad.data(), bad.size());
+        LN_CHECK(c.closed_by_peer());
+    }
+    auto r = stats_of(rx, kToken, false);
+    LN_CHECK_EQ(r.samples, 1);
+    LN_CHECK_EQ(r.invalid, 1);
+    LN_CHECK(r.last_error.find("trailer") != std::string::npos);
+    LN_CHECK_EQ(dst.newest(), 2);
+    LN_CHECK(reader.read(0) != LN_OK);
+}
+
+// The publisher floods a ring of two slots far faster than the stream sends: the sender,
+// sending straight from the slots, has samples overwritten under it.  Every sample that
+// arrives is intact and in order; the rest is counted as dropped on the sending side.
+void test_overwritten_while_sent()
+{
+    constexpr uint64_t kSize = 64 * 1024, kPublished = 400;
+    TestRing src(kSize, 2), dst(kSize, 512);
+    Options o = local_options();
+    o.socket_buffer = 16 * 1024; // the socket takes little at once: sending takes a while
+    Forwarder rx(o), tx(o);
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())).text, "");
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
+    Reader reader(dst);
+    Publisher pub(src);
+    for (uint64_t seq = 1; seq <= kPublished; ++seq)
+        LN_CHECK_EQ(pub.publish(seq), LN_OK);
+    LN_CHECK(wait_until([&] {
+        auto s = stats_of(tx, kToken, true);
+        return s.samples + s.drops == kPublished;
+    }));
+    auto s = stats_of(tx, kToken, true);
+    LN_CHECK(s.samples > 0);
+    LN_CHECK(wait_until([&] { return stats_of(rx, kToken, false).samples == s.samples; }));
+    uint64_t last = 0, got = 0;
+    while (reader.read(0.5) == LN_OK) {
+        if (reader.info.seq <= last)
+            std::printf("    seq %llu after %llu\n", (unsigned long long)reader.info.seq,
+                        (unsigned long long)last);
+        LN_CHECK(reader.info.seq > last);
+        LN_CHECK(matches(reader.buf.data(), kSize, reader.info.seq));
+        last = reader.info.seq;
+        ++got;
+    }
+    LN_CHECK(got > 0);
+    auto r = stats_of(rx, kToken, false);
+    LN_CHECK_EQ(r.invalid + r.stale, 0);
+    LN_CHECK_EQ(r.samples, s.samples);
+    LN_CHECK_EQ(got, s.samples); // the destination ring holds them all
+    std::printf("    flood through 2 slots: %llu sent, %llu dropped (%llu of them torn)\n",
+                static_cast<unsigned long long>(s.samples),
+                static_cast<unsigned long long>(s.drops), static_cast<unsigned long long>(r.drops));
 }
 
 } // namespace
@@ -344,5 +448,7 @@ int main()
     LN_TEST_RUN(test_reconnect);
     LN_TEST_RUN(test_refused_streams);
     LN_TEST_RUN(test_bad_hello_and_frames);
+    LN_TEST_RUN(test_frame_trailers);
+    LN_TEST_RUN(test_overwritten_while_sent);
     LN_TEST_EXIT();
 }

@@ -307,7 +307,7 @@ void test_garbage_datagrams()
     d[0] = 'X'; // magic
     send(d);
     d = datagram(7, 1, 3000, 1000, 0);
-    d[4] = 2; // version
+    d[4] = 1; // version (before frame trailers)
     send(d);
     d = datagram(7, 1, 3000, 1000, 0);
     d[5] = static_cast<uint8_t>(wire::Kind::hello); // kind

@@ -25,7 +25,7 @@ void test_fragment_header_layout()
     uint8_t h[wire::kFragmentHeaderSize];
     wire::encode_fragment_header(h, f);
     const uint8_t want[48] = {
-        'L',  'N',  'F',  '1',  1,    0,    0x52, 0x51, // magic, version, kind, chunk
+        'L',  'N',  'F',  '1',  2,    0,    0x52, 0x51, // magic, version, kind, chunk
         0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01, // token
         0x18, 0x17, 0x16, 0x15, 0x14, 0x13, 0x12, 0x11, // seq
         0xfe, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, // timestamp
@@ -48,7 +48,7 @@ void test_fragment_header_layout()
     LN_CHECK_EQ(g.length, 1);
     LN_CHECK(g.data == d.data() + 48);
     LN_CHECK(!wire::decode_fragment(d.data(), 47, g));
-    d[4] = 2;
+    d[4] = 1; // the version before frame trailers
     LN_CHECK(!wire::decode_fragment(d.data(), d.size(), g));
 }
 
@@ -56,7 +56,7 @@ void test_tcp_messages_layout()
 {
     uint8_t hello[wire::kHelloSize];
     wire::encode_hello(hello, {0x0102030405060708ull, 64, 0xa1a2a3a4a5a6a7a8ull});
-    const uint8_t want[32] = {'L', 'N', 'F',  '1',  1,    1,    0,    0,    8,    7,   6,
+    const uint8_t want[32] = {'L', 'N', 'F',  '1',  2,    1,    0,    0,    8,    7,   6,
                               5,   4,   3,    2,    1,    64,   0,    0,    0,    0,   0,
                               0,   0,   0xa8, 0xa7, 0xa6, 0xa5, 0xa4, 0xa3, 0xa2, 0xa1};
     LN_CHECK(std::memcmp(hello, want, sizeof want) == 0);
@@ -68,7 +68,7 @@ void test_tcp_messages_layout()
 
     uint8_t reply[wire::kReplySize];
     wire::encode_reply(reply, {wire::Kind::reject, wire::Reject::layout, 9});
-    const uint8_t want_reply[16] = {'L', 'N', 'F', '1', 1, 3, 2, 0, 9, 0, 0, 0, 0, 0, 0, 0};
+    const uint8_t want_reply[16] = {'L', 'N', 'F', '1', 2, 3, 2, 0, 9, 0, 0, 0, 0, 0, 0, 0};
     LN_CHECK(std::memcmp(reply, want_reply, sizeof want_reply) == 0);
     wire::Reply r;
     LN_CHECK(wire::decode_reply(reply, r));
@@ -87,6 +87,21 @@ void test_tcp_messages_layout()
     LN_CHECK_EQ(fh.seq, 5);
     LN_CHECK_EQ(fh.timestamp_ns, -1);
     LN_CHECK_EQ(fh.size, 300);
+
+    uint8_t tail[wire::kFrameTrailerSize];
+    wire::encode_frame_trailer(tail, true);
+    const uint8_t want_intact[8] = {'L', 'N', 'F', 'E', 0, 0, 0, 0};
+    LN_CHECK(std::memcmp(tail, want_intact, sizeof want_intact) == 0);
+    LN_CHECK(wire::decode_frame_trailer(tail) == wire::Trailer::intact);
+    wire::encode_frame_trailer(tail, false);
+    const uint8_t want_torn[8] = {'L', 'N', 'F', 'E', 1, 0, 0, 0};
+    LN_CHECK(std::memcmp(tail, want_torn, sizeof want_torn) == 0);
+    LN_CHECK(wire::decode_frame_trailer(tail) == wire::Trailer::torn);
+    tail[4] = 2; // no such state
+    LN_CHECK(wire::decode_frame_trailer(tail) == wire::Trailer::invalid);
+    tail[4] = 0;
+    tail[3] = 'X'; // not a trailer: payload bytes where the trailer should be
+    LN_CHECK(wire::decode_frame_trailer(tail) == wire::Trailer::invalid);
 }
 
 wire::Fragment frag(uint64_t seq, uint64_t size, uint16_t chunk, uint32_t index,
