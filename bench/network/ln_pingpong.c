@@ -16,8 +16,10 @@ static const char usage[] =
     "PREFIX.data,\n"
     "                                                           RATE per second (0: no pause)\n"
     "MODE: udp | tcp | default (LN_SUBSCRIBE_UDP, LN_SUBSCRIBE_TCP or neither) for every\n"
-    "subscription.  SIZE: 64, 4096, 1048576 or 4194304 (the lnbench/sample_* mds).\n"
-    "pong and sink print \"ready\" once subscribed; ping, sink and source print one JSON line.\n";
+    "subscription.  SIZE: 64, 4096, 65536, 1048576, 4194304, 16777216 or 67108864 (the\n"
+    "lnbench/sample_* mds).  pong and sink print \"ready\" once subscribed; ping, sink and\n"
+    "source print one JSON line (sink and source with cpu_s, their CPU seconds, user + system,\n"
+    "the client's threads included).\n";
 
 #define RETRY_S 1.0        /* ping: resend a ping not answered within this */
 #define GIVE_UP_S 60.0     /* nothing at all arrived for this long: the topic is not forwarded */
@@ -207,9 +209,10 @@ static int sink(const char* prefix, bench_md md, uint32_t flags, uint64_t count)
                 "samples)\n",
                 prefix, GIVE_UP_S, primes);
     printf("{\"received\": %" PRIu64 ", \"bytes\": %" PRIu64 ", \"overruns\": %" PRIu64
-           ", \"disorder\": %" PRIu64 ", \"elapsed_s\": %.9f, \"primes\": %" PRIu64 "}\n",
+           ", \"disorder\": %" PRIu64 ", \"elapsed_s\": %.9f, \"primes\": %" PRIu64
+           ", \"cpu_s\": %.6f}\n",
            received, received * (uint64_t)md.size, ln_inport_overruns(e.sub), disorder,
-           (double)(last_ns - first_ns) * 1e-9, primes);
+           (double)(last_ns - first_ns) * 1e-9, primes, bench_cpu_s());
     ln_client_destroy(e.clnt);
     return received ? 0 : 1;
 }
@@ -253,8 +256,8 @@ static int source(const char* prefix, bench_md md, uint32_t flags, uint64_t coun
         done = timed_out || got == DONE;
     }
     printf("{\"sent\": %" PRIu64 ", \"elapsed_s\": %.9f, \"primes\": %" PRIu64
-           ", \"done_seen\": %s}\n",
-           count, (double)(t1 - t0) * 1e-9, primes, timed_out ? "false" : "true");
+           ", \"done_seen\": %s, \"cpu_s\": %.6f}\n",
+           count, (double)(t1 - t0) * 1e-9, primes, timed_out ? "false" : "true", bench_cpu_s());
     ln_client_destroy(e.clnt);
     return 0;
 }

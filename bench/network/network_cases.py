@@ -1,8 +1,8 @@
 """Running one case of the network benchmark in a NetLab (tests/python/netlab.py): raw
 socket pairs between hosts a and b, and ln pairs that an ln_manager starts through the
 ln_daemons, either with both processes on one host (the manager there too) or with `ping` on
-a, `pong` on b and the manager on mgr.  Knows how to start and collect things, not what the
-numbers mean (network_report.py)."""
+a, `pong` on b and the manager on mgr; the ln_daemons' CPU time.  Knows how to start and
+collect things, not what the numbers mean (network_report.py)."""
 
 from __future__ import annotations
 
@@ -43,8 +43,9 @@ def json_line(text: str, what: str) -> dict[str, Any]:
 
 def ln_env(host: Host) -> dict[str, str]:
     """The host's environment, able to import links_and_nodes from this checkout."""
-    path = os.pathsep.join(p for p in (str(REPO / "python"), str(REPO),
-                                       os.environ.get("PYTHONPATH", "")) if p)
+    path = os.pathsep.join(
+        p for p in (str(REPO / "python"), str(REPO), os.environ.get("PYTHONPATH", "")) if p
+    )
     return {**host.env(), "PYTHONPATH": path, "PYTHONUNBUFFERED": "1"}
 
 
@@ -55,6 +56,14 @@ def multihost_missing(daemon_exe: str) -> str | None:
     if "--data-port" not in text:
         return "ln_daemon has no --data-port (host-to-host forwarding is not built)"
     return None
+
+
+def process_cpu_s(pid: int) -> float:
+    """CPU seconds (user + system, all its threads, not its children) that process `pid` has
+    used so far, from /proc/PID/stat."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()  # the name in (...) may hold spaces
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime, stime
 
 
 @dataclass
@@ -72,9 +81,14 @@ class Lab:
     """The run's lab: hosts a, b and mgr, an ln_daemon on a and b (with a data port where
     the daemon has one), and the programs of bench/network."""
 
-    def __init__(self, lab: NetLab, bin_dir: Path, force_multihost: bool = False,
-                 daemon_args: tuple[str, ...] = (),
-                 host_args: dict[str, tuple[str, ...]] | None = None) -> None:
+    def __init__(
+        self,
+        lab: NetLab,
+        bin_dir: Path,
+        force_multihost: bool = False,
+        daemon_args: tuple[str, ...] = (),
+        host_args: dict[str, tuple[str, ...]] | None = None,
+    ) -> None:
         """`host_args`: further daemon options of one host (e.g. bench/pull's
         --advertise-data-port on b, whose data port sits behind a relay)."""
         from links_and_nodes.manager.processes.daemon_launch import daemon_executable
@@ -88,9 +102,18 @@ class Lab:
         self.multihost_missing = None if force_multihost else missing
         data_port = None if missing else DATA_PORT
         self.daemons: dict[str, DaemonProc] = {
-            h.name: h.start_daemon(lab.key_file, data_port=data_port,
-                                   extra_args=daemon_args + (host_args or {}).get(h.name, ()))
-            for h in (self.a, self.b)}
+            h.name: h.start_daemon(
+                lab.key_file,
+                data_port=data_port,
+                extra_args=daemon_args + (host_args or {}).get(h.name, ()),
+            )
+            for h in (self.a, self.b)
+        }
+
+    def daemon_cpu_s(self) -> dict[str, float]:
+        """CPU seconds each host's ln_daemon has used so far, by host name: the daemons live
+        through every case, so a case's share is the difference around it."""
+        return {name: process_cpu_s(d.pid) for name, d in self.daemons.items()}
 
     def path(self, stem: str) -> Path:
         self.serial += 1
@@ -111,16 +134,18 @@ class Lab:
                 sel.register(srv.stdout, selectors.EVENT_READ)
                 line = srv.stdout.readline() if sel.select(READY_TIMEOUT) else ""
             if line.strip() != "ready":
-                raise CaseError(f"{what}: server did not start: {line.strip()!r} "
-                                f"{srv.log_path and srv.log_path.read_text()[-300:]!r}")
+                raise CaseError(
+                    f"{what}: server did not start: {line.strip()!r} "
+                    f"{srv.log_path and srv.log_path.read_text()[-300:]!r}"
+                )
             try:
                 cli = self.a.run(client, timeout=CASE_TIMEOUT)
             except subprocess.TimeoutExpired:
-                raise CaseError(f"{what}: client did not finish in {CASE_TIMEOUT:.0f} s") \
-                    from None
+                raise CaseError(f"{what}: client did not finish in {CASE_TIMEOUT:.0f} s") from None
             if cli.returncode != 0:
-                raise CaseError(f"{what}: client exited with {cli.returncode}: "
-                                f"{cli.stderr.strip()[-300:]}")
+                raise CaseError(
+                    f"{what}: client exited with {cli.returncode}: {cli.stderr.strip()[-300:]}"
+                )
             try:
                 out, _ = srv.communicate(timeout=5.0)  # a stream server ends at EOF
             except subprocess.TimeoutExpired:
@@ -136,8 +161,9 @@ class Lab:
 
     # ---- ln pairs through a manager -----------------------------------------------------
 
-    def managed(self, manager: Host, procs: list[Proc], results: list[str],
-                what: str, extra: str = "") -> dict[str, dict[str, Any]]:
+    def managed(
+        self, manager: Host, procs: list[Proc], results: list[str], what: str, extra: str = ""
+    ) -> dict[str, dict[str, Any]]:
         """Run `procs` with an ln_manager on `manager` (`--start-all`; a process with
         `ready` is one the others depend on) until every process in `results` has printed its
         JSON line; then stop the manager, which stops the rest.  The JSON lines by name.
@@ -149,9 +175,20 @@ class Lab:
         for proc in procs:
             proc.log = self.path(f"{proc.name}.out")
         config.write_text(self._config(instance, address, procs) + extra)
-        argv = [sys.executable, "-m", "links_and_nodes.manager", "-c", str(config),
-                "--start-all", "--no-console", "--exit-on-failure", "--log-level", "warning",
-                "--daemon-key-file", str(self.lab.key_file)]
+        argv = [
+            sys.executable,
+            "-m",
+            "links_and_nodes.manager",
+            "-c",
+            str(config),
+            "--start-all",
+            "--no-console",
+            "--exit-on-failure",
+            "--log-level",
+            "warning",
+            "--daemon-key-file",
+            str(self.lab.key_file),
+        ]
         mgr = manager.popen(argv, env=ln_env(manager), log=f"{config.stem}.manager.log")
         got: dict[str, dict[str, Any]] = {}
         deadline = time.monotonic() + CASE_TIMEOUT
@@ -160,18 +197,23 @@ class Lab:
                 for proc in procs:
                     if proc.name in results and proc.name not in got:
                         text = proc.log.read_text(errors="replace") if proc.log.exists() else ""
-                        text = text[:text.rfind("\n") + 1]  # whole lines only
+                        text = text[: text.rfind("\n") + 1]  # whole lines only
                         line = next((ln for ln in text.splitlines() if ln.startswith("{")), "")
                         if line:
                             got[proc.name] = json.loads(line)
                         elif re.search(r"^ln_\w+: ", text, re.M):  # its error, or libln's
                             raise CaseError(f"{what}: {proc.name}: {text.strip()[-300:]}")
                 if mgr.poll() is not None and len(got) < len(results):
-                    tails = [f"{p.name}: {p.log.read_text(errors='replace').strip()[-200:]}"
-                             for p in procs if p.log.exists()]
+                    tails = [
+                        f"{p.name}: {p.log.read_text(errors='replace').strip()[-200:]}"
+                        for p in procs
+                        if p.log.exists()
+                    ]
                     log = mgr.log_path.read_text(errors="replace") if mgr.log_path else ""
-                    raise CaseError(f"{what}: {' | '.join(tails)} | ln_manager exited with "
-                                    f"{mgr.returncode}: {log.strip()[-300:]}")
+                    raise CaseError(
+                        f"{what}: {' | '.join(tails)} | ln_manager exited with "
+                        f"{mgr.returncode}: {log.strip()[-300:]}"
+                    )
                 if time.monotonic() > deadline:
                     raise CaseError(f"{what}: no result in {CASE_TIMEOUT:.0f} s")
                 time.sleep(0.05)
@@ -187,15 +229,25 @@ class Lab:
 
     def _config(self, instance: str, address: str, procs: list[Proc]) -> str:
         port = self.daemons["a"].port
-        lines = ["instance", f"name: {instance}", f"manager: {address}", "", "hosts",
-                 f"localhost: daemon_port:{port}"]
+        lines = [
+            "instance",
+            f"name: {instance}",
+            f"manager: {address}",
+            "",
+            "hosts",
+            f"localhost: daemon_port:{port}",
+        ]
         lines += [f"{h.name}: eth0:{h.address}, daemon_port:{port}" for h in (self.a, self.b)]
         ready = [p.name for p in procs if p.ready]
         for proc in procs:
-            lines += ["", f"process {proc.name}", f"    node: {proc.node}",
-                      f"    command: {' '.join(proc.argv)}",
-                      f"    output_logfile: {proc.log}",
-                      "    flags: no_pty, no_error_on_successful_stop"]
+            lines += [
+                "",
+                f"process {proc.name}",
+                f"    node: {proc.node}",
+                f"    command: {' '.join(proc.argv)}",
+                f"    output_logfile: {proc.log}",
+                "    flags: no_pty, no_error_on_successful_stop",
+            ]
             if proc.ready:
                 lines.append("    ready_regex: ^ready")
             elif ready:
@@ -210,6 +262,8 @@ class Lab:
 
     def shm_left(self) -> dict[str, list[str]]:
         """Names in each host's /dev/shm, which the managers must have emptied."""
-        return {h.name: sorted(os.listdir(h.path("/dev/shm")))
-                for h in (self.a, self.b, self.mgr)
-                if os.listdir(h.path("/dev/shm"))}
+        return {
+            h.name: sorted(os.listdir(h.path("/dev/shm")))
+            for h in (self.a, self.b, self.mgr)
+            if os.listdir(h.path("/dev/shm"))
+        }

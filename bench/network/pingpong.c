@@ -1,6 +1,7 @@
 /* pingpong.c — the raw floor under topics between hosts: UDP and TCP ping-pong (the echo side
  * receives a whole message, then sends it back; the ping side times every round trip) and a
- * TCP stream of fixed-size messages for throughput.  No libln: plain sockets. */
+ * TCP stream of fixed-size messages for throughput, whose ends report their CPU time.  No
+ * libln: plain sockets. */
 #include <arpa/inet.h>
 #include <errno.h>
 #include <inttypes.h>
@@ -28,7 +29,8 @@ static const char usage[] =
     "       pingpong tcp-sink PORT SIZE                           count SIZE-byte messages "
     "until EOF\n"
     "       pingpong tcp-source HOST PORT SIZE COUNT              send COUNT messages at once\n"
-    "Servers print \"ready\" once they listen; the other modes print one JSON line.\n"
+    "Servers print \"ready\" once they listen; the other modes print one JSON line (sink and\n"
+    "source with cpu_s, their CPU seconds, user + system).\n"
     "Every message starts with its number (uint64); round trips check it.\n";
 
 static uint64_t number(const char* text, uint64_t max, const char* what)
@@ -276,8 +278,9 @@ static int tcp_sink(const char* port, size_t size)
     }
     close(fd);
     printf("{\"received\": %" PRIu64 ", \"bytes\": %" PRIu64 ", \"overruns\": 0, "
-           "\"disorder\": %" PRIu64 ", \"elapsed_s\": %.9f}\n",
-           received, received * (uint64_t)size, disorder, (double)(last_ns - first_ns) * 1e-9);
+           "\"disorder\": %" PRIu64 ", \"elapsed_s\": %.9f, \"cpu_s\": %.6f}\n",
+           received, received * (uint64_t)size, disorder, (double)(last_ns - first_ns) * 1e-9,
+           bench_cpu_s());
     return 0;
 }
 
@@ -298,7 +301,8 @@ static int tcp_source(char** argv)
     while (read(fd, buf, size) > 0) {
     }
     close(fd);
-    printf("{\"sent\": %" PRIu64 ", \"elapsed_s\": %.9f}\n", count, (double)(t1 - t0) * 1e-9);
+    printf("{\"sent\": %" PRIu64 ", \"elapsed_s\": %.9f, \"cpu_s\": %.6f}\n", count,
+           (double)(t1 - t0) * 1e-9, bench_cpu_s());
     return 0;
 }
 

@@ -1,7 +1,7 @@
 /* bench_common.h — code shared by the topic benchmark programs: the clock, the benchmark
  * md for a payload size, the first/last 8-byte touch of zero-copy samples, minor page
- * faults, round-trip output for the driver and error exits.  Header-only, so each program
- * stays one translation unit. */
+ * faults and CPU time, round-trip output for the driver and error exits.  Header-only, so
+ * each program stays one translation unit. */
 #ifndef LN_BENCH_COMMON_H
 #define LN_BENCH_COMMON_H
 
@@ -35,6 +35,7 @@ static inline bench_md bench_md_for(size_t size)
     static const bench_md table[] = {
         {sizeof(lnbench_sample_64_t), LNBENCH_SAMPLE_64_MD_NAME, LNBENCH_SAMPLE_64_LAYOUT_HASH},
         {sizeof(lnbench_sample_4k_t), LNBENCH_SAMPLE_4K_MD_NAME, LNBENCH_SAMPLE_4K_LAYOUT_HASH},
+        {sizeof(lnbench_sample_64k_t), LNBENCH_SAMPLE_64K_MD_NAME, LNBENCH_SAMPLE_64K_LAYOUT_HASH},
         {sizeof(lnbench_sample_1m_t), LNBENCH_SAMPLE_1M_MD_NAME, LNBENCH_SAMPLE_1M_LAYOUT_HASH},
         {sizeof(lnbench_sample_4m_t), LNBENCH_SAMPLE_4M_MD_NAME, LNBENCH_SAMPLE_4M_LAYOUT_HASH},
         {sizeof(lnbench_sample_16m_t), LNBENCH_SAMPLE_16M_MD_NAME, LNBENCH_SAMPLE_16M_LAYOUT_HASH},
@@ -43,7 +44,7 @@ static inline bench_md bench_md_for(size_t size)
     for (size_t i = 0; i < sizeof(table) / sizeof(table[0]); i++)
         if (table[i].size == size)
             return table[i];
-    fprintf(stderr, "no benchmark md of %zu bytes (64, 4096, 1, 4, 16, 64 MiB)\n", size);
+    fprintf(stderr, "no benchmark md of %zu bytes (64, 4096, 65536, 1, 4, 16, 64 MiB)\n", size);
     exit(2);
 }
 
@@ -53,6 +54,15 @@ static inline uint64_t bench_minflt(void)
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     return (uint64_t)ru.ru_minflt;
+}
+
+/* CPU seconds (user + system) of the whole process so far (every thread). */
+static inline double bench_cpu_s(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+           (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
 }
 
 /* What a zero-copy sample carries: `value` in its first and in its last 8 bytes, so a
