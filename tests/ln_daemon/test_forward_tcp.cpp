@@ -104,6 +104,14 @@ private:
     int fd_;
 };
 
+// Stream kToken from `src` (tx) to `dst` (rx) over TCP, connected.
+void connect_tcp(Forwarder &rx, Forwarder &tx, const TestRing &src, const TestRing &dst)
+{
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())).text, "");
+    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
+}
+
 // kSamples samples of `size` bytes, at most `window` unread at a time, arrive whole, in
 // order and with their timestamps.
 void every_sample_in_order(unsigned spin_us, uint64_t size = 256, uint64_t kSamples = 2000,
@@ -115,9 +123,7 @@ void every_sample_in_order(unsigned spin_us, uint64_t size = 256, uint64_t kSamp
     if (socket_buffer)
         o.socket_buffer = socket_buffer;
     Forwarder rx(o), tx(o);
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())).text, "");
-    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
+    connect_tcp(rx, tx, src, dst);
     Reader reader(dst);
     Publisher pub(src);
     uint64_t published = 0, received = 0;
@@ -402,9 +408,7 @@ void test_overwritten_while_sent()
     Options o = local_options();
     o.socket_buffer = 16 * 1024; // the socket takes little at once: sending takes a while
     Forwarder rx(o), tx(o);
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())).text, "");
-    LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
+    connect_tcp(rx, tx, src, dst);
     Reader reader(dst);
     Publisher pub(src);
     for (uint64_t seq = 1; seq <= kPublished; ++seq)

@@ -1,5 +1,5 @@
 """Topics and services across hosts, on separate network stacks (docs/network.md): a
-publisher on host a with subscribers on b and c, 8 MiB samples over UDP, TCP and UDP
+publisher on host a with subscribers on b and c, 8 MiB samples over UDP and over TCP, TCP and UDP
 through 20 % injected loss (ln_relay between the daemons), remote service calls, a daemon
 killed and restarted, a host cut off.  Every assertion is about what arrived, never about
 how fast."""
@@ -57,6 +57,27 @@ def test_big_samples_reach_two_hosts_over_udp(system: System) -> None:
     assert pairs == {("a", "b"), ("a", "c")}
     hosts = {h["name"]: h for h in system.mgr.hosts()}
     assert all(hosts[h]["state"] == "up" for h in "abc"), hosts
+
+
+def test_big_samples_over_tcp_arrive_every_one_whole_and_in_order(system: System) -> None:
+    """8 MiB samples over TCP at a rate the link carries: sent from the publisher's ring slot,
+    received whole into the subscriber host's ring (docs/network.md, "Sender", "Receiver");
+    every one arrives, intact, in order, and the stream counts no drop."""
+    system.start_daemons()
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.blob nettest/blob --rate 10", "publishing")
+        + system.process("sub", "b", "sub net.blob nettest/blob --buffers 8", "subscribed"),
+        extra="topics\nnet.*: transport: tcp\n")
+    system.run(lnc)
+    got = wait_for(lambda: len(r := system.received(system.output("sub"))) >= 30 and r,
+                   "30 samples of 8 MiB over TCP", timeout=TIMEOUT * 2)
+    assert all(ok for _, _, ok in got), "corrupt 8 MiB sample"
+    counters = [counter for _, counter, _ in got]
+    assert _consecutive(counters), f"TCP lost samples: {counters}"
+    assert all(seq == counter for seq, counter, _ in got)
+    stream = wait_for(lambda: (s := system.stream("net.blob", "a", "b")) and s["received"] >= 30
+                      and s, "the manager's statistics to count a -> b")
+    assert stream["transport"] == "tcp" and stream["drops"] == 0, stream
 
 
 def test_tcp_topic_delivers_every_sample_through_loss(system: System) -> None:
