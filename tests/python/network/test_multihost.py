@@ -175,6 +175,35 @@ def test_daemon_restart_resumes_forwarding(system: System) -> None:
     assert all(seq == counter for seq, counter, _ in got_b)
 
 
+def test_receiving_daemon_killed_during_big_tcp_samples_resumes_whole(system: System) -> None:
+    """The receiving daemon is SIGKILLed while 8 MiB frames stream into its host's ring (it
+    may die in the middle of filling a slot: tests/c/test_ring_tap.c kills a writer there on
+    purpose); after its restart the stream goes on and every sample the subscriber gets is
+    whole, in publish order."""
+    system.start_daemons()
+    lnc = system.lnc(
+        system.process("pub", "a", "pub net.blob nettest/blob --rate 30", "publishing"),
+        extra="topics\nnet.*: transport: tcp\n")
+    mgr = system.run(lnc)
+    sub = system.client("b", "sub", "net.blob", "nettest/blob", "--buffers", "8")
+    wait_for(lambda: len(system.client_received(sub)) >= 10, "b to receive 8 MiB samples",
+             timeout=TIMEOUT)
+    system.daemons["b"].kill()
+    wait_for(lambda: {h["name"]: h for h in mgr.hosts()}["b"]["state"] == "unreachable",
+             "the manager to see b's daemon gone")
+    system.daemons["b"].restart()
+    wait_for(lambda: {h["name"]: h for h in mgr.hosts()}["b"]["state"] == "up",
+             "b's daemon back")
+    seen = system.client_received(sub)[-1][1]
+    wait_for(lambda: system.client_received(sub)[-1][1] > seen + 10,
+             "big samples to b to resume after its daemon's restart", timeout=TIMEOUT)
+    got = system.client_received(sub)
+    assert all(ok for _, _, ok in got), "a torn or corrupt 8 MiB sample reached b"
+    counters = [counter for _, counter, _ in got]
+    assert counters == sorted(set(counters)), "an older sample after a newer one"
+    assert all(seq == counter for seq, counter, _ in got)
+
+
 def test_unreachable_host_is_reported_and_others_go_on(system: System) -> None:
     system.start_daemons()
     lnc = system.lnc(
