@@ -6,6 +6,8 @@ tests/python/netlab.py), for
                topic samples through the bridges' native core (--native on)
     bridge_py  the same with the samples through Python (--native off): the bridge before
                its native core, measured in the same run
+    bridge_1by1  the native core with --batch off: one Zenoh message per sample, the bridge
+               before batches between bridges (docs/zenoh.md), measured in the same run
     zenoh      plain Zenoh pub/sub between two Python processes on a and b (the floor)
     daemons  the same ln programs with one manager, the ln_daemons forwarding over UDP
 
@@ -13,7 +15,8 @@ All measuring programs are Python (zb_bench_peer.py), so the three differ only i
 Goal: the bridge adds at most 1.3x over plain Zenoh (p50 latency; throughput at least 1/1.3).
 Prints a table, writes bench/results/zenoh.json, exits 0 either way.  Needs root and zenoh.
 
-    sudo .venv/bin/python bench/zenoh/bench_zenoh.py [--quick]
+    sudo .venv/bin/python bench/zenoh/bench_zenoh.py [--quick] [--only 64:throughput]
+        [--systems zenoh,bridge,bridge_1by1]
 """
 
 from __future__ import annotations
@@ -48,10 +51,12 @@ GOAL = 1.3
 SITE_PORT = 54500  # the bridge case's managers (one per host)
 ZENOH_PORT = 7447
 PLAIN_PORT = 7450
-SYSTEMS = ("zenoh", "bridge", "bridge_py", "daemons")
-# the two bridge pairs: topic-name prefix, key prefix of site a's bridge, Zenoh port, --native
-PAIRS = {"bridge": ("b", "ln/a", "ln/b", ZENOH_PORT, "on"),
-         "bridge_py": ("p", "ln/pa", "ln/pb", ZENOH_PORT + 1, "off")}
+SYSTEMS = ("zenoh", "bridge", "bridge_py", "daemons", "bridge_1by1")
+# the bridge pairs: topic-name prefix, key prefixes of site a's and b's bridge, Zenoh port,
+# --native, --batch
+PAIRS = {"bridge": ("b", "ln/a", "ln/b", ZENOH_PORT, "on", "on"),
+         "bridge_py": ("p", "ln/pa", "ln/pb", ZENOH_PORT + 1, "off", "off"),
+         "bridge_1by1": ("n", "ln/na", "ln/nb", ZENOH_PORT + 2, "on", "off")}
 TIMEOUT = 600.0
 
 
@@ -127,7 +132,7 @@ class Bench:
             self._managers_up = True
         if system in self._pairs_up:
             return
-        tag, prefix_a, prefix_b, port, native = PAIRS[system]
+        tag, prefix_a, prefix_b, port, native, batch = PAIRS[system]
         manager = f"127.0.0.1:{SITE_PORT}"
         names = [f"{tag}{size}" for size in SIZES]
         # queued depth of the data topics: 1024 samples of 64 B, 32 of 1 MiB (ring memory)
@@ -138,7 +143,7 @@ class Bench:
         out_b = [x for n in names for x in ("--out", f"{n}.pong")]
         in_b = [x for n in names for x in ("--in", f"{n}.ping", "--in", data[n])]
         cli = [sys.executable, "-m", "links_and_nodes.zenoh_bridge.cli", "--poll", "0.2",
-               "--native", native]
+               "--native", native, "--batch", batch]
         endpoint = f"tcp/{self.a.address}:{port}"
         bridge_a = self.spawn(self.a, [*cli, "--prefix", prefix_a, "--remote", prefix_b,
                                        "--listen", endpoint, *out_a, *in_a],
@@ -230,8 +235,8 @@ def table(results: dict[str, Any]) -> list[str]:
     verdicts = []
     for size in SIZES:
         label = "64 B" if size == 64 else "1 MiB"
-        lat = results["latency"][str(size)]
-        for q in ("p50_us", "p99_us"):
+        lat = results["latency"].get(str(size), {})
+        for q in ("p50_us", "p99_us") if lat else ():
             vals = [lat.get(s, {}).get(q) for s in SYSTEMS]
             ratio = vals[1] / vals[0] if vals[0] and vals[1] else None
             lines.append(f"{label + ' one-way ' + q[:3] + ' (µs)':<28}"
@@ -240,7 +245,9 @@ def table(results: dict[str, Any]) -> list[str]:
             if q == "p50_us" and ratio:
                 verdicts.append((f"{label} p50 latency bridge/zenoh {ratio:.2f}x <= {GOAL}x",
                                  ratio <= GOAL))
-        thr = results["throughput"][str(size)]
+        thr = results["throughput"].get(str(size), {})
+        if not thr:
+            continue
         vals = [thr.get(s, {}).get("msgs_per_s") for s in SYSTEMS]
         got = [thr.get(s, {}).get("received") for s in SYSTEMS]
         sent = thr.get("zenoh", {}).get("sent")
@@ -261,7 +268,14 @@ def table(results: dict[str, Any]) -> list[str]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="a tenth of the samples")
+    ap.add_argument("--only", metavar="SIZE:KIND", action="append", default=[],
+                    help="only these cases, e.g. 64:throughput or 1048576:latency (repeatable)")
+    ap.add_argument("--systems", default=",".join(SYSTEMS),
+                    help=f"comma-separated systems to measure (default {','.join(SYSTEMS)})")
+    ap.add_argument("--out", default=str(REPO / "bench" / "results" / "zenoh.json"),
+                    help="the JSON file (the table goes beside it as .txt)")
     args = ap.parse_args()
+    systems = tuple(s for s in SYSTEMS if s in args.systems.split(","))
     why = netlab_available()
     if why:
         log(f"bench_zenoh: cannot build the lab: {why}")
@@ -278,10 +292,12 @@ def main() -> int:
         try:
             for size in SIZES:
                 for kind in ("latency", "throughput"):
-                    runs: dict[str, list[dict[str, Any]]] = {s: [] for s in SYSTEMS}
+                    if args.only and f"{size}:{kind}" not in args.only:
+                        continue
+                    runs: dict[str, list[dict[str, Any]]] = {s: [] for s in systems}
                     for r in range(rounds):
                         # the systems in turn, starting with another one each round
-                        for system in SYSTEMS[r % len(SYSTEMS):] + SYSTEMS[:r % len(SYSTEMS)]:
+                        for system in systems[r % len(systems):] + systems[:r % len(systems)]:
                             log(f"{kind} {size} B {system} (round {r + 1}/{rounds}) ...")
                             try:
                                 runs[system].append(getattr(bench, kind)(size, system))
@@ -295,13 +311,15 @@ def main() -> int:
         finally:
             bench.close()
     results.update(machine=platform.machine(), cpus=os.cpu_count(), quick=args.quick,
+                   only=args.only, systems=list(systems),
                    goal=f"bridge <= {GOAL}x plain Zenoh", python=platform.python_version())
     lines = table(results)
     print("\n".join(lines))
-    out = REPO / "bench" / "results" / "zenoh.json"
+    out = Path(args.out).resolve()
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(results, indent=1))
-    print(f"\n{os.cpu_count()} CPUs; results in {out.relative_to(REPO)}")
+    out.with_suffix(".txt").write_text("\n".join(lines) + "\n")
+    print(f"\n{os.cpu_count()} CPUs; results in {out}")
     return 0
 
 

@@ -20,7 +20,8 @@ macro_rules! counters {
 
 counters! {
     read, sent, unmatched, rate_limited, overruns, received, published, bad_attachment,
-    bad_size, refused, md_unavailable, superseded, gaps, bytes, errors, last_seq, forced,
+    bad_size, refused, md_unavailable, superseded, gaps, bytes, errors, last_seq, forced, batches,
+    bad_batches,
 }
 
 /// A pointer to the Python side's counters, valid until the object using it is closed.
@@ -58,8 +59,8 @@ mod tests {
     #[test]
     fn names_follow_the_struct() {
         let n = NAMES.trim_end_matches('\0').split_whitespace().count();
-        assert_eq!(n, 17);
+        assert_eq!(n, 19);
         assert_eq!(std::mem::size_of::<Counters>(), n * 8);
-        assert!(NAMES.starts_with("read sent ") && NAMES.ends_with(" last_seq forced \0"));
+        assert!(NAMES.starts_with("read sent ") && NAMES.ends_with(" forced batches bad_batches \0"));
     }
 }

@@ -20,6 +20,7 @@
 #![allow(clippy::missing_safety_doc)] // stated once above
 
 mod attachment;
+mod batch;
 mod counters;
 mod inbound;
 mod libln;
@@ -142,9 +143,11 @@ pub unsafe extern "C" fn lnz_close(core: *mut Core) {
 }
 
 /// An outbound topic: reads `port` (an ln_inport of `size`-byte samples) and puts each sample
-/// on `key` while a remote subscriber matches.  `label` prefixes what it says ("topic 'x'").
+/// on `key` while a remote subscriber matches, and in batches on `batch_key` (NULL: none)
+/// while a bridge takes them (batch.rs).  `label` prefixes what it says ("topic 'x'").
 #[no_mangle]
-pub unsafe extern "C" fn lnz_out_open(core: *const Core, key: *const c_char, port: *mut c_void,
+pub unsafe extern "C" fn lnz_out_open(core: *const Core, key: *const c_char,
+                               batch_key: *const c_char, port: *mut c_void,
                                size: usize, md_name: *const c_char, layout_hash: u64,
                                queued: c_int, rate_hz: f64, counters: *const Counters,
                                label: *const c_char, on_match: MatchFn, match_ctx: *mut c_void,
@@ -155,7 +158,13 @@ pub unsafe extern "C" fn lnz_out_open(core: *const Core, key: *const c_char, por
         }
         // SAFETY: a handle from lnz_open not yet closed.
         let core = unsafe { &*core };
-        let spec = OutSpec { key: text_arg(key, "the key")?.to_string(), port: Port(port), size,
+        let batch_key = if batch_key.is_null() {
+            None
+        } else {
+            Some(text_arg(batch_key, "the batch key")?.to_string())
+        };
+        let spec = OutSpec { key: text_arg(key, "the key")?.to_string(), batch_key,
+                             port: Port(port), size,
                              md_name: text_arg(md_name, "the md name")?.to_string(), layout_hash,
                              queued: queued != 0, rate_hz, counters: Shared(counters), on_match,
                              match_ctx: match_ctx as usize };
@@ -181,10 +190,12 @@ pub unsafe extern "C" fn lnz_out_close(out: *mut OutTopic) {
     }
 }
 
-/// An inbound rule: subscribes to `key_expr`; samples of keys not handed over go to
-/// on_sample(ctx, ...).
+/// An inbound rule: subscribes to `key_expr` (`<remote>/topic/...`); samples of keys not
+/// handed over go to on_sample(ctx, ...).  `remote` (NULL: none) is the prefix of the bridge
+/// whose batches lnz_in_batch may take.
 #[no_mangle]
-pub unsafe extern "C" fn lnz_in_open(core: *const Core, key_expr: *const c_char, on_sample: SampleFn,
+pub unsafe extern "C" fn lnz_in_open(core: *const Core, key_expr: *const c_char,
+                              remote: *const c_char, on_sample: SampleFn,
                               ctx: *mut c_void, err: *mut c_char, errlen: usize) -> *mut InRule {
     boxed(guarded(err, errlen, || {
         if core.is_null() {
@@ -192,9 +203,32 @@ pub unsafe extern "C" fn lnz_in_open(core: *const Core, key_expr: *const c_char,
         }
         // SAFETY: a handle from lnz_open not yet closed.
         let core = unsafe { &*core };
-        InRule::open(&core.session, text_arg(key_expr, "the key expression")?, core.fns,
+        let remote = if remote.is_null() { None } else { Some(text_arg(remote, "the remote")?) };
+        InRule::open(&core.session, text_arg(key_expr, "the key expression")?, remote, core.fns,
                      core.logger, on_sample, ctx as usize)
     }))
+}
+
+/// Takes the remote bridge's batches instead of its per-topic samples (on 1) or back (0);
+/// 0, or -1 with err.
+#[no_mangle]
+pub unsafe extern "C" fn lnz_in_batch(rule: *const InRule, on: c_int, err: *mut c_char,
+                                      errlen: usize) -> c_int {
+    guarded(err, errlen, || {
+        if rule.is_null() {
+            return Err("a NULL handle".into());
+        }
+        // SAFETY: a handle from lnz_in_open not yet closed.
+        unsafe { &*rule }.set_batch(on != 0).map(|()| 0)
+    }).unwrap_or(-1)
+}
+
+/// Malformed batches the rule dropped for topics not handed over (those of handed-over topics
+/// are in their counters).
+#[no_mangle]
+pub unsafe extern "C" fn lnz_in_bad_batches(rule: *const InRule) -> u64 {
+    // SAFETY: a handle from lnz_in_open not yet closed.
+    if rule.is_null() { 0 } else { unsafe { &*rule }.bad_batches() }
 }
 
 /// Hands the topic of `key` over: its samples are checked against md_name, layout_hash and

@@ -4,7 +4,9 @@
 opens the session, serves the mds, declares the bridge's liveliness token and the inbound
 subscriptions; `poll()` (every `poll` seconds) takes the manager's topic and service lists and
 bridges what the outbound rules select; `tick()` (often) handles liveliness events: remote
-bridges coming and going (logged) and remote services to provide here.  Topics this bridge
+bridges coming and going (logged), remote bridges offering batches (their `P/@live/batch`
+token: inbound rules take those instead of per-topic samples) and remote services to provide
+here.  Topics this bridge
 publishes (inbound) and services it provides are never sent back out.
 """
 
@@ -41,6 +43,7 @@ class Bridge:
         self.prefix = config.prefix or ""
         self.session: Any = None
         self.core: Any = None  # native.Core: the session topic samples go through, or None
+        self.batching = False  # outbound samples also go in batches to bridges taking them
         self.client: Any = None
         self.manager: Any = None
         self.md_server: Any = None
@@ -77,6 +80,8 @@ class Bridge:
         if opened is None:
             return False
         self.session, self.core = opened
+        # batches come from the core only: with --ros2 outbound topics go through Python
+        self.batching = self.core is not None and self.config.batch and not self.config.ros2
         self.mds = MdResolver(self.session)
         self.md_server = MdServer(self.session, self.prefix)
         liveliness = self.session.liveliness()
@@ -93,6 +98,12 @@ class Bridge:
         for rule in self.config.topics:
             if rule.direction == "in":
                 self.in_rules.append(InRule(self, rule))
+        if self.core is not None and self.config.batch:
+            for remote in sorted({r.remote for r in self.in_rules if r.remote}):
+                self._closers.append(liveliness.declare_subscriber(
+                    live_key(remote, "batch"), self._on_batch_token, history=True))
+        if self.batching:
+            self._closers.append(liveliness.declare_token(live_key(self.prefix, "batch")))
         # Declared last: a remote bridge that sees it sees the subscriptions above too.
         self._closers.append(liveliness.declare_token(live_key(self.prefix, "bridge")))
         endpoints = ", ".join([f"listening on {e}" for e in self.config.listen]
@@ -158,6 +169,11 @@ class Bridge:
         if prefix != self.prefix:
             self._events.put(("bridge_" + str(sample.kind).rsplit(".", 1)[-1].lower(), prefix))
 
+    def _on_batch_token(self, sample: Any) -> None:
+        prefix = str(sample.key_expr).removesuffix("/@live/batch")
+        on = str(sample.kind).endswith("PUT")
+        self._events.put(("batch_on" if on else "batch_off", prefix))
+
     def _on_service_token(self, sample: Any) -> None:
         key = str(sample.key_expr)
         prefix, _, name = key.partition("/@live/service/")
@@ -177,6 +193,8 @@ class Bridge:
             elif kind == "bridge_delete":
                 self.say(f"remote bridge {what} is gone (its samples and services stop "
                          "until it is back)")
+            elif kind in ("batch_on", "batch_off"):
+                self._take_batches(what, kind == "batch_on")
             elif kind == "service":
                 self._provide(*what.split("\0"))
             elif kind == "service_gone":
@@ -184,6 +202,14 @@ class Bridge:
                 if name in self.in_services:
                     self.say(f"service '{name}': {prefix} no longer serves it; calls fail "
                              "until it is back")
+
+    def _take_batches(self, remote: str, on: bool) -> None:
+        """The inbound rules of `remote` take its batches (it offers them) or its per-topic
+        samples again (it stopped: gone, or restarted without); the core says `topics from
+        <remote>: samples come in batches` (or `one by one`) once the switch is done."""
+        for rule in self.in_rules:
+            if rule.remote == remote:
+                rule.set_batch(on)
 
     def _provide(self, remote: str, name: str) -> None:
         rule = self.config.service_rule(name, "in")

@@ -4,7 +4,7 @@
              [--listen EP]... [--connect EP]... [--zenoh-config FILE] [--remote PREFIX]
              [--out SPEC]... [--in SPEC]... [--service-out SPEC]... [--service-in SPEC]...
              [--ros2 [--ros2-domain N]] [--stats-file PATH] [--stats-interval S] [-v]
-             [--native auto|on|off]
+             [--native auto|on|off] [--batch on|off]
 
 SPEC: `PATTERN[,queued[=N]][,latest][,rate=HZ][,remote=PREFIX]` for topics,
 `PATTERN[,remote=PREFIX][,timeout=S]` for services.  SIGINT/SIGTERM end it, SIGUSR1 prints the
@@ -69,6 +69,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--native", choices=("auto", "on", "off"),
                     help="topic samples through the native core: auto (default: if it is "
                     "built), on (an error if not), off (through Python)")
+    ap.add_argument("--batch", choices=("on", "off"),
+                    help="several small samples per Zenoh message between two bridges with "
+                    "the native core, where the other one takes them (default on)")
     ap.add_argument("-v", "--verbose", action="store_true",
                     help="print statistics periodically")
     return ap
@@ -81,6 +84,8 @@ def build_config(args: argparse.Namespace) -> BridgeConfig:
         value = getattr(args, key)
         if value is not None:
             setattr(config, key, value)
+    if args.batch is not None:
+        config.batch = args.batch == "on"
     config.listen += args.listen
     config.connect += args.connect
     config.md_dirs += args.md_dir

@@ -73,6 +73,7 @@ class BridgeConfig:
     stats_file: str | None = None
     poll: float = 1.0  # seconds between looks at the manager's topic and service lists
     native: str = "auto"  # the native core for topic samples: auto (if found), on, off
+    batch: bool = True  # batches between two bridges' native cores (docs/zenoh.md)
 
     def topic_rule(self, name: str, direction: str) -> TopicRule | None:
         for rule in self.topics:

@@ -14,7 +14,9 @@ With the native core (native.py) the rule's subscription is the core's: it hands
 keys it does not know to `InRule._on_key` here.  Once a topic is set up, the topic's thread
 publishes what waits in its queue and hands the topic over with `ready`, holding the queue's
 lock, so a sample that meanwhile reached `offer` goes to the core after them; from then on
-the core checks and publishes the topic's samples itself, in order.
+the core checks and publishes the topic's samples itself, in order.  While the remote bridge
+offers batches (its `P/@live/batch` token; bridge.py) the core's subscription is to its batch
+keys instead (`set_batch`), and the samples of a batch come here, or are handled, one by one.
 
 While a queued topic is set up its queue (the rule's buffers) fills; a sample that finds it
 full waits up to SETUP_WAIT_S for room (Zenoh holds the sender back meanwhile) before the
@@ -333,9 +335,24 @@ class InRule:
         self._subscriber: Any = None
         self.native: Any = None
         if bridge.core is not None:
-            self.native = bridge.core.in_rule(self.key, self._on_key)
+            self.native = bridge.core.in_rule(self.key, self.remote or None, self._on_key)
+            bridge.stats.stray_batches.append(self.native.bad_batches)
         else:
             self._subscriber = bridge.session.declare_subscriber(self.key, self._on_sample)
+
+    def set_batch(self, on: bool) -> bool:
+        """Take the remote bridge's batches instead of its per-topic samples (native core), or
+        back; False if this rule cannot (Python path, or said why not)."""
+        if self.native is None:
+            return False
+        from .native import CoreError
+
+        try:
+            self.native.set_batch(on)
+        except CoreError as exc:
+            self.bridge.say(f"topics from {self.remote}: batches not taken: {exc}")
+            return False
+        return True
 
     def _on_sample(self, sample: Any) -> None:
         attachment = sample.attachment

@@ -145,13 +145,15 @@ def _declare_all(lib: ctypes.CDLL) -> None:
     d(lib, "lnz_open", c_void_p, [c_char_p, c_void_p, LOG_FN, c_void_p, c_char_p, c_size_t])
     d(lib, "lnz_zid", c_int, [c_void_p, c_char_p, c_size_t])
     d(lib, "lnz_close", None, [c_void_p])
-    d(lib, "lnz_out_open", c_void_p, [c_void_p, c_char_p, c_void_p, c_size_t, c_char_p,
+    d(lib, "lnz_out_open", c_void_p, [c_void_p, c_char_p, c_char_p, c_void_p, c_size_t, c_char_p,
                                       c_uint64, c_int, c_double, ctypes.POINTER(Counters),
                                       c_char_p, MATCH_FN, c_void_p, c_char_p, c_size_t])
     d(lib, "lnz_out_matching", c_int, [c_void_p])
     d(lib, "lnz_out_close", None, [c_void_p])
-    d(lib, "lnz_in_open", c_void_p, [c_void_p, c_char_p, SAMPLE_FN, c_void_p, c_char_p,
-                                     c_size_t])
+    d(lib, "lnz_in_open", c_void_p, [c_void_p, c_char_p, c_char_p, SAMPLE_FN, c_void_p,
+                                     c_char_p, c_size_t])
+    d(lib, "lnz_in_batch", c_int, [c_void_p, c_int, c_char_p, c_size_t])
+    d(lib, "lnz_in_bad_batches", c_uint64, [c_void_p])
     d(lib, "lnz_in_ready", c_int, [c_void_p, c_char_p, c_void_p, c_void_p, c_size_t,
                                    c_char_p, c_uint64, c_double, c_int,
                                    ctypes.POINTER(Counters), c_char_p, c_char_p, c_size_t])
@@ -245,15 +247,15 @@ class Core:
         self.lib.lnz_zid(self.handle, out, len(out))
         return out.value.decode()
 
-    def out_topic(self, *, key: str, port: Any, md_name: str, layout_hash: int, queued: bool,
-                  rate: float | None, counters: Counters, label: str,
-                  on_match: Callable[[bool], None]) -> OutTopic:
-        return OutTopic(self, key, port, md_name, layout_hash, queued, rate, counters, label,
-                        on_match)
+    def out_topic(self, *, key: str, batch_key: str | None, port: Any, md_name: str,
+                  layout_hash: int, queued: bool, rate: float | None, counters: Counters,
+                  label: str, on_match: Callable[[bool], None]) -> OutTopic:
+        return OutTopic(self, key, batch_key, port, md_name, layout_hash, queued, rate,
+                        counters, label, on_match)
 
-    def in_rule(self, key_expr: str,
+    def in_rule(self, key_expr: str, remote: str | None,
                 on_sample: Callable[[str, bytes, bytes | None], None]) -> InRule:
-        return InRule(self, key_expr, on_sample)
+        return InRule(self, key_expr, remote, on_sample)
 
     def close(self) -> None:
         handle, self.handle = self.handle, None
@@ -270,18 +272,21 @@ class Core:
 
 class OutTopic:
     """The core's reader of one outbound topic: it reads `port` (a subscriber; not used by
-    Python meanwhile) and puts the samples while a remote subscriber matches."""
+    Python meanwhile) and puts the samples while a remote subscriber matches, and in batches
+    on `batch_key` (None: not) while a bridge takes them."""
 
-    def __init__(self, core: Core, key: str, port: Any, md_name: str, layout_hash: int,
-                 queued: bool, rate: float | None, counters: Counters, label: str,
-                 on_match: Callable[[bool], None]) -> None:
+    def __init__(self, core: Core, key: str, batch_key: str | None, port: Any, md_name: str,
+                 layout_hash: int, queued: bool, rate: float | None, counters: Counters,
+                 label: str, on_match: Callable[[bool], None]) -> None:
         self.core = core
         self.counters = counters  # kept alive while the core writes to it
         self._match = MATCH_FN(lambda _ctx, matching: on_match(bool(matching)))
         err = _err()
         size = ctypes.sizeof(port.packet)
-        handle = core.lib.lnz_out_open(core.handle, key.encode(), port.handle, size,
-                                       md_name.encode(), layout_hash, int(queued),
+        handle = core.lib.lnz_out_open(core.handle, key.encode(),
+                                       batch_key.encode() if batch_key else None,
+                                       port.handle, size, md_name.encode(), layout_hash,
+                                       int(queued),
                                        float(rate or 0.0), ctypes.byref(counters),
                                        label.encode(), self._match, None, err, ERR_SIZE)
         if not handle:
@@ -302,9 +307,10 @@ class OutTopic:
 
 class InRule:
     """The core's subscription of one inbound rule.  Samples of keys not handed over come to
-    `on_sample(key, payload, attachment)` in Zenoh's thread; `ready` hands a key over."""
+    `on_sample(key, payload, attachment)` in Zenoh's thread; `ready` hands a key over.
+    `set_batch` takes the batches of the bridge with prefix `remote` instead."""
 
-    def __init__(self, core: Core, key_expr: str,
+    def __init__(self, core: Core, key_expr: str, remote: str | None,
                  on_sample: Callable[[str, bytes, bytes | None], None]) -> None:
         self.core = core
         self._keep: dict[str, Counters] = {}  # counters of handed-over keys, kept alive
@@ -318,8 +324,9 @@ class InRule:
 
         self._deliver = SAMPLE_FN(deliver)
         err = _err()
-        handle = core.lib.lnz_in_open(core.handle, key_expr.encode(), self._deliver, None, err,
-                                      ERR_SIZE)
+        handle = core.lib.lnz_in_open(core.handle, key_expr.encode(),
+                                      remote.encode() if remote else None, self._deliver, None,
+                                      err, ERR_SIZE)
         if not handle:
             raise CoreError(_text(err))
         self.handle: int | None = handle
@@ -341,6 +348,19 @@ class InRule:
                                       label.encode(), err, ERR_SIZE) < 0:
             del self._keep[key]
             raise CoreError(_text(err))
+
+    def set_batch(self, on: bool) -> None:
+        """Subscribe to the remote bridge's batches instead of its per-topic samples, or back
+        (CoreError if the subscription cannot be made)."""
+        if not self.handle:
+            return
+        err = _err()
+        if self.core.lib.lnz_in_batch(self.handle, int(on), err, ERR_SIZE) < 0:
+            raise CoreError(_text(err))
+
+    def bad_batches(self) -> int:
+        """Malformed batches dropped for topics not handed over."""
+        return int(self.core.lib.lnz_in_bad_batches(self.handle)) if self.handle else 0
 
     def offer(self, key: str, payload: bytes, attachment: bytes | None) -> bool:
         """Let the core handle a sample of the handed-over `key` that reached Python while

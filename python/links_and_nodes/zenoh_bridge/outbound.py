@@ -8,7 +8,9 @@ also goes, as CDR, under the topic's ROS 2 key while a subscriber matches that o
 
 With the native core (native.py) and without ROS 2, the core declares the publisher and reads
 the subscription in its own thread, with the same rules and counters; this object keeps the
-liveliness token and the log lines.
+liveliness token and the log lines.  With batches on (bridge.batching) the core also puts the
+samples in batches on `P/batch/<name>` while a bridge takes them there (docs/zenoh.md
+"Batches between bridges"); "a remote subscriber matches" then means either key.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from typing import Any
 from ..md_loader import message_class
 from .config import TopicRule
 from .ros2 import Ros2Out
-from .wire import AttachmentEncoder, live_key, topic_key
+from .wire import AttachmentEncoder, batch_key, live_key, topic_key
 
 READ_SLICE = 0.2  # seconds a reader waits before it looks at the stop flag
 
@@ -91,7 +93,8 @@ class OutTopic:
             self.port = bridge.client.subscribe(self.name, self.md_name, buffers=rule.depth)
             counters = Counters()
             self.native = bridge.core.out_topic(
-                key=self.key, port=self.port, md_name=self.md_name, layout_hash=self.layout_hash,
+                key=self.key, batch_key=batch_key(bridge.prefix, self.name) if bridge.batching
+                else None, port=self.port, md_name=self.md_name, layout_hash=self.layout_hash,
                 queued=rule.queued, rate=rule.rate, counters=counters,
                 label=f"topic '{self.name}'", on_match=self._on_matching)
             bridge.stats.add_native(self.name, "out", counters)

@@ -19,7 +19,9 @@ class TopicStats:
     (layout mismatch), `md_unavailable` (its md could not be had), `superseded` (a newer
     sample replaced it in the queue, or a queued topic's queue was full), `gaps` (sequence
     numbers missing between received samples), `forced` (queued: written although a subscriber
-    here had no free buffer for HOLD_S, which lost its oldest sample: inbound.py)."""
+    here had no free buffer for HOLD_S, which lost its oldest sample: inbound.py).  Batches
+    between bridges (native core): out `batches` put, in `batches` received and `bad_batches`
+    (malformed, dropped whole)."""
 
     direction: str
     md_name: str = ""
@@ -41,6 +43,8 @@ class TopicStats:
     errors: int = 0
     last_seq: int = 0
     forced: int = 0
+    batches: int = 0
+    bad_batches: int = 0
 
 
 @dataclass
@@ -58,6 +62,8 @@ class Stats:
     topics: dict[str, TopicStats] = field(default_factory=dict)
     services: dict[str, ServiceStats] = field(default_factory=dict)
     unknown_keys: int = 0  # samples of topics past an inbound rule's limit of 1024 names
+    # malformed batches of topics not set up yet, per inbound rule (native.InRule.bad_batches)
+    stray_batches: list[Any] = field(default_factory=list, repr=False, compare=False)
     lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
     # counters the native core adds to (native.Counters), per topic key; shown summed with
     # the topic's own (last_seq: the core's once it has one)
@@ -88,7 +94,8 @@ class Stats:
         with self.lock:
             return {"topics": {k: self._merged(k, asdict(v)) for k, v in self.topics.items()},
                     "services": {k: asdict(v) for k, v in self.services.items()},
-                    "unknown_keys": self.unknown_keys}
+                    "unknown_keys": self.unknown_keys,
+                    "bad_batches": sum(count() for count in self.stray_batches)}
 
     def _merged(self, key: str, topic: dict[str, Any]) -> dict[str, Any]:
         for counters in self.native.get(key, ()):
@@ -108,19 +115,23 @@ class Stats:
             if t["direction"] == "out":
                 out.append(f"{key} [{t['state']}] read {t['read']} sent {t['sent']} "
                            f"unmatched {t['unmatched']} rate_limited {t['rate_limited']} "
-                           f"overruns {t['overruns']} errors {t['errors']}")
+                           f"overruns {t['overruns']} batches {t['batches']} "
+                           f"errors {t['errors']}")
             else:
                 out.append(f"{key} [{t['state']}] received {t['received']} published "
                            f"{t['published']} gaps {t['gaps']} superseded {t['superseded']} "
                            f"forced {t['forced']} "
                            f"rate_limited {t['rate_limited']} bad_attachment "
                            f"{t['bad_attachment']} bad_size {t['bad_size']} refused "
-                           f"{t['refused']} md_unavailable {t['md_unavailable']}")
+                           f"{t['refused']} md_unavailable {t['md_unavailable']} batches "
+                           f"{t['batches']} bad_batches {t['bad_batches']}")
         for key, s in sorted(data["services"].items()):
             out.append(f"{key} [{s['state']}] calls {s['calls']} errors {s['errors']} "
                        f"bad_requests {s['bad_requests']}")
         if data["unknown_keys"]:
             out.append(f"samples of topics past the limit of names: {data['unknown_keys']}")
+        if data["bad_batches"]:
+            out.append(f"malformed batches of topics not set up yet: {data['bad_batches']}")
         return out or ["nothing bridged yet"]
 
     def write(self, path: str | os.PathLike[str]) -> None:

@@ -4,10 +4,12 @@ of every sample and service call, and the JSON form of service requests and resp
 Keys under a bridge's prefix P (default `ln/<instance>`):
 
     P/topic/<topic>          samples: the md's packed little-endian bytes, the attachment
+    P/batch/<topic>          batches of samples for bridges (native core, ln_zenoh_core batch.rs)
     P/md/<md name>           queryable: the md's text with what it imports (ln-md-text)
     P/service/<name>         queryable: a call, request and response as JSON
     P/info/service/<name>    queryable: {"md_name", "layout_hash", "signature"} as JSON
     P/@live/bridge           liveliness token of the bridge
+    P/@live/batch            liveliness token: its topics' samples also go in batches
     P/@live/topic/<topic>    liveliness token of each topic it publishes
     P/@live/service/<name>   liveliness token of each service it serves
 
@@ -124,6 +126,10 @@ def bad_name(name: str) -> str | None:
 
 def topic_key(prefix: str, topic: str) -> str:
     return f"{prefix}/topic/{topic}"
+
+
+def batch_key(prefix: str, topic: str) -> str:
+    return f"{prefix}/batch/{topic}"
 
 
 def md_key(prefix: str, md_name: str) -> str:
