@@ -9,20 +9,10 @@ from collections.abc import Iterator
 
 import pytest
 from netlab import NetLab
-from zenoh_sites import Site, require_native_core, require_zenoh
+from zenoh_sites import Site, site_pair
 
 
 @pytest.fixture(params=["native", "python"])
 def sites(netlab: NetLab, request: pytest.FixtureRequest) -> Iterator[tuple[Site, Site]]:
-    """Sites a (host a, 10.77.0.1) and b (host b, 10.77.0.2); nothing started yet.  Their
-    bridges carry topic samples through the native core or through Python (the param)."""
-    require_zenoh()
-    native = request.param == "native"
-    if native:
-        require_native_core()
-    a, b = (Site(netlab, netlab[h], h, native=native) for h in ("a", "b"))
-    try:
-        yield a, b
-    finally:
-        b.close()
-        a.close()
+    """site_pair through the native core or through Python (the param)."""
+    yield from site_pair(netlab, request.param == "native")

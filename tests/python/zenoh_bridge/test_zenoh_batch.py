@@ -17,8 +17,7 @@ from zenoh_sites import (
     Site,
     log_text,
     received,
-    require_native_core,
-    require_zenoh,
+    site_pair,
     start_managers,
     wait_log,
 )
@@ -31,14 +30,7 @@ _RAW_GOT = re.compile(r"got (\d+) (\d+) OK$")
 @pytest.fixture
 def native_sites(netlab: NetLab) -> Iterator[tuple[Site, Site]]:
     """Sites a and b whose bridges carry topic samples through the native core."""
-    require_zenoh()
-    require_native_core()
-    a, b = (Site(netlab, netlab[h], h, native=True) for h in ("a", "b"))
-    try:
-        yield a, b
-    finally:
-        b.close()
-        a.close()
+    yield from site_pair(netlab, native=True)
 
 
 def _raw_received(proc: HostProcess) -> list[tuple[int, int]]:

@@ -43,6 +43,16 @@ def session(endpoint: str) -> zenoh.Session:
     return zenoh.open(config)
 
 
+def matched_publisher(s: zenoh.Session, key: str) -> zenoh.Publisher:
+    """A publisher of `key` once a subscriber matches it (or after 30 s).  It blocks rather
+    than drops: a large case must not be dropped by a full queue under load."""
+    publisher = s.declare_publisher(key, congestion_control=zenoh.CongestionControl.BLOCK)
+    deadline = time.monotonic() + 30
+    while not publisher.matching_status.matching and time.monotonic() < deadline:
+        time.sleep(0.02)
+    return publisher
+
+
 def bad(args: argparse.Namespace) -> None:
     cls = message_class("zbtest/sample")
     good = Attachment(7, time.time_ns(), cls.LAYOUT_HASH, "zbtest/sample").encode()
@@ -59,12 +69,7 @@ def bad(args: argparse.Namespace) -> None:
         (bytes(size), other_hash),                             # another layout
     ]
     with session(args.connect) as s:
-        # block, not drop: the 1 MiB case must not be dropped by a full queue under load
-        publisher = s.declare_publisher(args.key,
-                                        congestion_control=zenoh.CongestionControl.BLOCK)
-        deadline = time.monotonic() + 30
-        while not publisher.matching_status.matching and time.monotonic() < deadline:
-            time.sleep(0.02)
+        publisher = matched_publisher(s, args.key)
         for payload, attachment in cases:
             publisher.put(payload, attachment=attachment)
         time.sleep(2.0)  # let the last puts leave before the session closes
@@ -116,11 +121,7 @@ def batches(args: argparse.Namespace) -> None:
     ]
     with session(args.connect) as s:
         token = s.liveliness().declare_token(f"{args.prefix}/@live/batch")
-        publisher = s.declare_publisher(f"{args.prefix}/batch/{args.topic}",
-                                        congestion_control=zenoh.CongestionControl.BLOCK)
-        deadline = time.monotonic() + 30
-        while not publisher.matching_status.matching and time.monotonic() < deadline:
-            time.sleep(0.02)
+        publisher = matched_publisher(s, f"{args.prefix}/batch/{args.topic}")
         for payload, attachment in cases:
             publisher.put(payload, attachment=attachment)
         for first, count in ((1, 3), (4, 2)):

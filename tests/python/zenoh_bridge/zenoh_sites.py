@@ -16,6 +16,7 @@ import re
 import signal
 import sys
 import uuid
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -174,3 +175,17 @@ def start_managers(*sites: Site) -> None:
     for site in sites:
         assert site.manager is not None
         wait_log(site.manager, r" listening on ")
+
+
+def site_pair(netlab: NetLab, native: bool) -> Iterator[tuple[Site, Site]]:
+    """Sites a (host a, 10.77.0.1) and b (host b, 10.77.0.2), closed afterwards; nothing
+    started yet.  Their bridges carry topic samples through the native core or Python."""
+    require_zenoh()
+    if native:
+        require_native_core()
+    a, b = (Site(netlab, netlab[h], h, native=native) for h in ("a", "b"))
+    try:
+        yield a, b
+    finally:
+        b.close()
+        a.close()
