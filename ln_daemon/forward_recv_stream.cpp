@@ -30,7 +30,11 @@ void RecvStream::write(const uint8_t *data, uint64_t seq, int64_t timestamp_ns)
     std::lock_guard<std::mutex> lock(mutex_);
     if (!tap_)
         return;
-    int rc = ln_ring_tap_inject(tap_.get(), data, seq, timestamp_ns);
+    count_write(ln_ring_tap_inject(tap_.get(), data, seq, timestamp_ns));
+}
+
+void RecvStream::count_write(int rc)
+{
     if (rc == LN_OK) {
         StreamCounters::add(counters.samples);
         StreamCounters::add(counters.bytes, spec.message_size);
@@ -60,15 +64,7 @@ void RecvStream::finish(bool intact, int64_t timestamp_ns)
         StreamCounters::add(counters.drops);
         return;
     }
-    int rc = ln_ring_tap_inject_commit(tap_.get(), timestamp_ns);
-    if (rc == LN_OK) {
-        StreamCounters::add(counters.samples);
-        StreamCounters::add(counters.bytes, spec.message_size);
-    } else {
-        StreamCounters::add(counters.drops);
-        counters.set_error(std::string("cannot write into the ring: ") + ln_last_error());
-    }
-    counters.note_segment(ln_ring_tap_segment(tap_.get()));
+    count_write(ln_ring_tap_inject_commit(tap_.get(), timestamp_ns));
 }
 
 uint64_t RecvStream::newest()

@@ -55,6 +55,10 @@ public:
     Address last_source; // to update the peer text only when the source changes
 
 private:
+    // Counts the outcome of a write into the ring (under mutex_): a sample, a stale one, or a
+    // drop with libln's error.
+    void count_write(int rc);
+
     std::mutex mutex_; // serializes the tap: writers are the UDP thread and TCP connections
     Tap tap_;
     std::atomic<bool> closed_{false};

@@ -306,8 +306,7 @@ void TcpReceiver::serve(Connection &c)
         if (gather) {
             Io io = wait_frame(fd, frame, in_place, error);
             if (io != Io::ok) {
-                if (io == Io::error && !s->closed())
-                    s->counters.set_error("connection from " + c.peer + ": " + error);
+                ended(c, *s, io, error);
                 break;
             }
         }

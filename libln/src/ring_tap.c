@@ -183,10 +183,11 @@ int ln_ring_tap_release(ln_ring_tap* t)
 
 /* Takes the write lock on the newest ring and begins sample seq there: LN_OK with *slot, the
  * lock held; otherwise the lock is not held. */
-static int inject_start(ln_ring_tap* t, uint64_t seq, const char* what, ln_ring_slot** slot)
+static int inject_start(ln_ring_tap* t, uint64_t seq, ln_ring_slot** slot)
 {
     if (seq > LN_RING_MAX_SEQ)
-        return ln_set_error(NULL, LN_EINVAL, "%s: sequence number %llu is beyond %llu", what,
+        return ln_set_error(NULL, LN_EINVAL,
+                            "ln_ring_tap_inject: sequence number %llu is beyond %llu",
                             (unsigned long long)seq, (unsigned long long)LN_RING_MAX_SEQ);
     ln_deadline d = ln_deadline_in(LN_TAP_LOCK_TIMEOUT);
     int rc;
@@ -224,8 +225,8 @@ int ln_ring_tap_inject_begin(ln_ring_tap* t, uint64_t seq, void** payload)
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject_begin: payload is NULL");
     if (t->injecting)
         return ln_set_error(NULL, LN_EBUSY, "ln_ring_tap_inject_begin: a sample is begun");
-    ln_ring_slot* slot;
-    if ((rc = inject_start(t, seq, "ln_ring_tap_inject_begin", &slot)) != LN_OK)
+    ln_ring_slot* slot = NULL;
+    if ((rc = inject_start(t, seq, &slot)) != LN_OK)
         return rc;
     t->injecting = slot;
     t->injecting_seq = seq;
@@ -263,14 +264,11 @@ int ln_ring_tap_inject(ln_ring_tap* t, const void* data, uint64_t seq, int64_t t
         return rc;
     if (!data)
         return ln_set_error(NULL, LN_EINVAL, "ln_ring_tap_inject: data is NULL");
-    if (t->injecting)
-        return ln_set_error(NULL, LN_EBUSY, "ln_ring_tap_inject: a sample is begun");
-    ln_ring_slot* slot;
-    if ((rc = inject_start(t, seq, "ln_ring_tap_inject", &slot)) != LN_OK)
+    void* payload;
+    if ((rc = ln_ring_tap_inject_begin(t, seq, &payload)) != LN_OK)
         return rc;
-    memcpy(ln_ring_payload(slot), data, t->ring.message_size);
-    ln_ring_commit_seq(&t->ring, slot, seq, timestamp_ns);
-    return ln_ring_unlock(&t->ring);
+    memcpy(payload, data, t->ring.message_size);
+    return ln_ring_tap_inject_commit(t, timestamp_ns);
 }
 
 uint64_t ln_ring_tap_write_seq(ln_ring_tap* t)
