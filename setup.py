@@ -26,8 +26,9 @@ NATIVE = [("libln/libln.so.1.0.0", "lib/libln.so.1"),
           ("libln/links_and_nodes/libln_admin.so", "lib/links_and_nodes/libln_admin.so"),
           ("ln_daemon/ln_daemon", "bin/ln_daemon")]
 HEADERS = ["libln/include/ln/ln.h", "libln/include/ln/ln.hpp",
-           "libln/include/ln/parameters.hpp", "libln_pull/include/ln/ndn.h",
-           "libln_pull/include/ln/pull.h", "libln_pull/include/ln/pull_udp.h"]
+           "libln/include/ln/parameters.hpp", "libln/include/ln/waitset.hpp",
+           "libln_pull/include/ln/ndn.h", "libln_pull/include/ln/pull.h",
+           "libln_pull/include/ln/pull_udp.h"]
 
 
 def uplot_dir() -> Path:

@@ -5,12 +5,17 @@
 // (robot/joint_state: target position and velocity, commanded torque, the state's cycle).
 // The service arm.set_gains (robot/set_gains) changes the gains; it is answered between
 // cycles, never blocking the loop, and unsafe gains are refused with ok=0 and the reason.
+// One thread does it all in a waitset (ln/waitset.hpp, docs/waiting.md): it sleeps until a
+// sample of arm.state, a request of the service group "control" or the 1 s status timer
+// comes, and runs the callback attached to it.
 // The gains the loop uses are the parameters kp and kd of the parameter block "gains"
 // (ln/parameters.hpp, docs/parameters.md): their input is what arm.set_gains set, and
 // `ln_manager param set arm.controller.gains kp [...]` overrides them, checked against the
 // same limits, from the next cycle on (`param reset` hands them back to the service).
-// A status line every second; SIGTERM or SIGINT ends it with exit status 0.
+// A status line every second (the last state's time, the cycles of that second); SIGTERM or
+// SIGINT ends it with exit status 0.
 // Manager from -ln_manager or $LN_MANAGER.  Usage: arm_controller
+#include <atomic>
 #include <csignal>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +24,7 @@
 
 #include <ln/ln.hpp>
 #include <ln/parameters.hpp>
+#include <ln/waitset.hpp>
 
 #include "robot_messages.hpp"
 
@@ -32,8 +38,20 @@ constexpr std::uint8_t mode_torque = 3;
 constexpr double write_timeout = 0.0002; // s, a fifth of the sensor's period
 
 volatile std::sig_atomic_t stop_signal = 0;
+std::atomic<ln::waitset*> running{nullptr}; // the waitset the signal handler stops
 
-extern "C" void on_signal(int sig) { stop_signal = sig; }
+extern "C" void on_signal(int sig)
+{
+    stop_signal = sig;
+    if (ln::waitset* ws = running.load())
+        ws->stop();
+}
+
+// Hands the waitset to the signal handler while it lives.
+struct stopped_by_signals {
+    explicit stopped_by_signals(ln::waitset& ws) { running = &ws; }
+    ~stopped_by_signals() { running = nullptr; }
+};
 
 struct gains {
     double kp[joints];
@@ -153,56 +171,54 @@ int main(int argc, char** argv)
         command.mode = mode_torque;
         unsigned long cycles = 0, cycles_in_second = 0, skipped = 0, dropped = 0;
         std::uint32_t last_cycle = 0;
-        double next_status = 1.0;
-        while (!stop_signal) {
-            if (state_in.read(state, 0.05)) {
-                if (params.update() > 0) { // an override came (or went): from this cycle on
-                    std::printf("parameters: kp[0] %g (%s), kd[0] %g (%s)\n", kp[0],
-                                params.changed("kp") ? "changed" : "same", kd[0],
-                                params.changed("kd") ? "changed" : "same");
-                    std::fflush(stdout);
-                }
-                double t = state.timestamp;
-                double q_target[joints], qd_target[joints];
-                target(t, q_target, qd_target);
-                for (int j = 0; j < joints; j++) {
-                    double q = state.position[j], qd = state.velocity[j];
-                    command.target[j] = kp[j] * (q_target[j] - q) + kd[j] * (qd_target[j] - qd);
-                    reference.position[j] = q_target[j];
-                    reference.velocity[j] = qd_target[j];
-                    reference.effort[j] = command.target[j];
-                }
-                command.timestamp = t;
-                reference.timestamp = t;
-                reference.cycle = state.cycle;
-                dropped += !publish(command_out, command, write_timeout);
-                dropped += !publish(reference_out, reference, write_timeout);
-                if (last_cycle != 0 && state.cycle > last_cycle + 1)
-                    skipped += state.cycle - last_cycle - 1; // latest mode: we fell behind
-                last_cycle = state.cycle;
-                cycles++;
-                cycles_in_second++;
-                if (t >= next_status) {
-                    std::string extra;
-                    if (dropped > 0)
-                        extra = ", " + std::to_string(dropped) + " samples dropped";
-                    std::printf("t=%.0f s: %lu cycles in the last second, %lu "
-                                "skipped in all%s, gains '%s' (kp[0] %g, kd[0] %g)\n",
-                                t, cycles_in_second, skipped, extra.c_str(), active.profile.c_str(),
-                                kp[0], kd[0]);
-                    std::fflush(stdout);
-                    cycles_in_second = 0;
-                    next_status = std::floor(t) + 1.0;
-                }
+        ln::waitset ws;
+        // A cycle per new state (latest mode: the newest one, if several came meanwhile).
+        auto cycle = ws.on_data(state_in, [&](ln::inport<robot::joint_state_t>& in) {
+            if (!in.read(state, 0.0))
+                return;
+            if (params.update() > 0) { // an override came (or went): from this cycle on
+                std::printf("parameters: kp[0] %g (%s), kd[0] %g (%s)\n", kp[0],
+                            params.changed("kp") ? "changed" : "same", kd[0],
+                            params.changed("kd") ? "changed" : "same");
+                std::fflush(stdout);
             }
-            // Service calls between cycles: handle what is pending, never wait.
-            try {
-                clnt.wait_and_handle_service_group_requests("control", 0.0);
-            } catch (const ln::error& e) {
-                if (e.code() != LN_EINTR)
-                    throw;
+            double t = state.timestamp;
+            double q_target[joints], qd_target[joints];
+            target(t, q_target, qd_target);
+            for (int j = 0; j < joints; j++) {
+                double q = state.position[j], qd = state.velocity[j];
+                command.target[j] = kp[j] * (q_target[j] - q) + kd[j] * (qd_target[j] - qd);
+                reference.position[j] = q_target[j];
+                reference.velocity[j] = qd_target[j];
+                reference.effort[j] = command.target[j];
             }
-        }
+            command.timestamp = t;
+            reference.timestamp = t;
+            reference.cycle = state.cycle;
+            dropped += !publish(command_out, command, write_timeout);
+            dropped += !publish(reference_out, reference, write_timeout);
+            if (last_cycle != 0 && state.cycle > last_cycle + 1)
+                skipped += state.cycle - last_cycle - 1; // latest mode: we fell behind
+            last_cycle = state.cycle;
+            cycles++;
+            cycles_in_second++;
+        });
+        // Service calls between cycles: the waitset handles the group's pending requests.
+        auto service = ws.on_requests(clnt, "control");
+        auto status = ws.every(1.0, [&] {
+            std::string extra;
+            if (dropped > 0)
+                extra = ", " + std::to_string(dropped) + " samples dropped";
+            std::printf("t=%.0f s: %lu cycles in the last second, %lu skipped in all%s, gains "
+                        "'%s' (kp[0] %g, kd[0] %g)\n",
+                        state.timestamp, cycles_in_second, skipped, extra.c_str(),
+                        active.profile.c_str(), kp[0], kd[0]);
+            std::fflush(stdout);
+            cycles_in_second = 0;
+        });
+        stopped_by_signals armed(ws);
+        if (!stop_signal) // else it came before the handler could stop the waitset
+            ws.spin();
         std::printf("stopped by %s after %lu cycles (%lu skipped, %lu samples dropped); %lu "
                     "gain settings accepted, %lu refused\n",
                     stop_signal == SIGINT ? "SIGINT" : "SIGTERM", cycles, skipped, dropped,

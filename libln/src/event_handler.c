@@ -7,6 +7,7 @@
 
 #include "event_internal.h"
 #include "json_scan.h"
+#include "waitset_internal.h"
 
 #define LN_EVENT_HANDLER_MAGIC 0x4c4e4548u
 #define LN_EVENT_REQUEST_MAGIC 0x4c4e4552u
@@ -333,4 +334,14 @@ int ln_event_disconnect(ln_event_handler* h)
 const char* ln_event_handler_name(const ln_event_handler* h)
 {
     return handler_check(h) == LN_OK ? h->name : NULL;
+}
+
+/* ---- waitsets (waitset_internal.h) ---- */
+
+int ln_event_handler_provider(const ln_event_handler* h, ln_service_provider** prov)
+{
+    int rc = handler_check(h);
+    if (rc == LN_OK)
+        *prov = h->prov;
+    return rc;
 }

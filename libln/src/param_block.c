@@ -9,6 +9,8 @@
 #include "client_internal.h"
 #include "param_internal.h"
 #include "param_messages.h"
+#include "bell.h"
+#include "waitset_internal.h"
 
 static int block_check(const ln_parameter_block* b)
 {
@@ -43,6 +45,7 @@ int ln_param_find(const ln_parameter_block* b, const char* name)
 
 static void block_free(ln_parameter_block* b)
 {
+    ln_waitset_forget(b->ws, b->ws_id, b);
     for (uint32_t i = 0; i < b->n; i++)
         free(b->params[i].description);
     free(b->params);
@@ -352,8 +355,42 @@ void ln_param_publish(ln_parameter_block* b)
     }
     memcpy(s->values, b->values, b->values_size);
     uint32_t old =
-        atomic_exchange_explicit(&b->middle, b->back | LN_PARAM_DIRTY, memory_order_acq_rel);
+        atomic_exchange_explicit(&b->middle, b->back | LN_PARAM_DIRTY, memory_order_seq_cst);
     b->back = old & 3u;
+    uint64_t bell = atomic_load_explicit(&b->bell, memory_order_seq_cst);
+    if (bell != 0)
+        ln_bell_ring(bell, atomic_load_explicit(&b->bell_tag, memory_order_relaxed));
+}
+
+/* ---- waitsets (waitset_internal.h) ---- */
+
+int ln_param_check_handle(const ln_parameter_block* b, const char* what)
+{
+    if (b == NULL || b->magic != LN_PARAM_MAGIC)
+        return ln_set_error(NULL, LN_EBADHANDLE, "%s: invalid parameter block handle", what);
+    return LN_OK;
+}
+
+int ln_param_bell(ln_parameter_block* b, ln_waitset* ws, uint32_t id, uint64_t bell, uint32_t tag)
+{
+    pthread_mutex_lock(&b->lock);
+    int rc = LN_OK;
+    if (ws != NULL && b->ws != NULL && b->ws != ws)
+        rc = ln_set_error(NULL, LN_EBUSY, "parameter block '%s' is attached to another waitset",
+                          b->name);
+    else {
+        b->ws = ws;
+        b->ws_id = id;
+        atomic_store_explicit(&b->bell_tag, tag, memory_order_relaxed);
+        atomic_store_explicit(&b->bell, ws != NULL ? bell : 0, memory_order_seq_cst);
+    }
+    pthread_mutex_unlock(&b->lock);
+    return rc;
+}
+
+int ln_param_pending(const ln_parameter_block* b)
+{
+    return (atomic_load_explicit(&b->middle, memory_order_seq_cst) & LN_PARAM_DIRTY) != 0;
 }
 
 /* ---- the loop ---- */

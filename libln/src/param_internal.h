@@ -117,6 +117,12 @@ struct ln_parameter_block {
     _Atomic uint64_t updates;     /* update() calls so far */
     _Atomic uint64_t applied_gen; /* block generation the loop has taken */
 
+    /* a waitset attached to it (waitset.c): rung when overrides are handed to the loop */
+    ln_waitset* ws; /* under `lock` */
+    uint32_t ws_id;
+    _Atomic uint64_t bell;
+    _Atomic uint32_t bell_tag;
+
     /* reports */
     _Atomic uint32_t report_state;
     uint8_t* report_in;

@@ -8,8 +8,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bell.h"
 #include "client_internal.h"
+#include "futex.h"
 #include "ring.h"
+#include "waitset_internal.h"
 
 #define LN_OUTPORT_MAGIC 0x4c4e4f50u
 #define LN_INPORT_MAGIC 0x4c4e4950u
@@ -47,6 +50,9 @@ struct ln_inport {
     uint32_t spin_us;
     ln_ring_slot* borrowed;
     uint64_t borrowed_word;
+    /* the waitset it is attached to (waitset.c), under its lock */
+    ln_waitset* ws;
+    uint32_t ws_id;
 };
 
 void ln_port_options_init(ln_port_options* opts)
@@ -368,6 +374,7 @@ int ln_unsubscribe(ln_inport* port)
     int rc = bad_port(port, LN_INPORT_MAGIC, "ln_unsubscribe");
     if (rc != LN_OK)
         return rc;
+    ln_waitset_forget(port->ws, port->ws_id, port);
     return close_port(&port->c);
 }
 
@@ -629,4 +636,66 @@ uint64_t ln_inport_overruns(const ln_inport* p)
     if (bad_port(p, LN_INPORT_MAGIC, "ln_inport_overruns") != LN_OK)
         return 0;
     return p->cur.total + p->cur.pending; /* pending: found lost, not yet reported by a read */
+}
+
+int ln_inport_set_interruptible(ln_inport* p, int on)
+{
+    int rc = bad_port(p, LN_INPORT_MAGIC, "ln_inport_set_interruptible");
+    if (rc == LN_OK)
+        p->cur.interruptible = on != 0;
+    return rc;
+}
+
+int ln_inport_interrupt(ln_inport* p)
+{
+    int rc = bad_port(p, LN_INPORT_MAGIC, "ln_inport_interrupt");
+    if (rc != LN_OK)
+        return rc;
+    atomic_store_explicit(&p->cur.interrupted, 1, memory_order_seq_cst);
+    /* wakes every sleeper of the ring; the others find nothing new and sleep again */
+    ln_futex_bump_wake(&p->c.ring.hdr->data_futex);
+    return LN_OK;
+}
+
+/* ---- for waitset.c (waitset_internal.h) ---- */
+
+int ln_inport_check(const ln_inport* p, const char* what)
+{
+    return bad_port(p, LN_INPORT_MAGIC, what);
+}
+
+int ln_inport_bell(ln_inport* p, ln_waitset* ws, uint32_t id, uint64_t bell, uint32_t tag)
+{
+    if (p->cur.reader < 0)
+        return ln_set_error(p->c.clnt, LN_EINVAL, "topic '%s': this subscriber has no reader slot",
+                            p->c.topic);
+    p->ws = ws;
+    p->ws_id = id;
+    p->cur.bell = bell;
+    p->cur.bell_tag = tag;
+    ln_ring_set_bell(p->c.ring.hdr, (uint32_t)p->cur.reader, bell, tag);
+    return LN_OK;
+}
+
+ln_waitset* ln_inport_waitset(const ln_inport* p) { return p->ws; }
+
+int ln_inport_ready(ln_inport* p)
+{
+    /* seen by the writer before the check below, so no sample falls between */
+    if (p->cur.reader >= 0)
+        atomic_store_explicit(&p->c.ring.hdr->readers[p->cur.reader].bell_pending, 0,
+                              memory_order_seq_cst);
+    return on_client(&p->c, ln_ring_has_data(&p->c.ring, &p->cur));
+}
+
+uint64_t ln_inport_write_seq(const ln_inport* p)
+{
+    return atomic_load_explicit(&p->c.ring.hdr->write_seq, memory_order_acquire);
+}
+
+int ln_inport_live_publishers(const ln_inport* p)
+{
+    if (atomic_load_explicit(&p->c.ring.hdr->retired, memory_order_acquire))
+        return ln_inport_publisher_count(p); /* the successor's, through a look at it */
+    return (int)atomic_load_explicit(&p->c.ring.hdr->publishers, memory_order_relaxed);
 }

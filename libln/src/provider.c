@@ -14,6 +14,7 @@
 #include "naming.h"
 #include "net.h"
 #include "svc_internal.h"
+#include "waitset_internal.h"
 
 #define LN_PROVIDER_MAGIC 0x4c4e5350u
 #define RX_INITIAL 4096
@@ -701,4 +702,20 @@ int ln_service_request_respond_error(ln_service_request* req, const char* text)
 const char* ln_service_request_service_name(const ln_service_request* req)
 {
     return request_check(req) == LN_OK ? req->prov->name : NULL;
+}
+
+/* ---- waitsets (waitset_internal.h) ---- */
+
+int ln_provider_group_of(const ln_service_provider* p, ln_client** clnt, const char** group)
+{
+    int rc = provider_check(p);
+    if (rc != LN_OK)
+        return rc;
+    if (p->group == NULL)
+        return ln_set_error(p->clnt, LN_EINVAL,
+                            "service '%s' is not registered: register it before attaching it",
+                            p->name);
+    *clnt = p->clnt;
+    *group = p->group_name;
+    return LN_OK;
 }

@@ -2,6 +2,7 @@
  * memory-ordering protocol).  Everything here runs in the publishing or subscribing process;
  * the manager only creates, sizes and retires rings (ring_admin.c). */
 #include "ring.h"
+#include "bell.h"
 
 #include <errno.h>
 #include <sched.h>
@@ -436,6 +437,8 @@ void ln_ring_commit(ln_ring* ring, ln_ring_slot* slot)
 void ln_ring_wake_readers(ln_ring* ring)
 {
     ln_futex_wake_sleepers(&ring->hdr->data_futex); /* no system call unless one sleeps */
+    if (atomic_load_explicit(&ring->hdr->bell_readers, memory_order_seq_cst))
+        ln_ring_ring_bells(ring->hdr, 0);
 }
 
 int ln_ring_pick(ln_ring* ring, ln_ring_cursor* c, ln_ring_slot** slot, uint64_t* word)
@@ -575,17 +578,46 @@ int ln_ring_spin_data(const ln_ring* ring, uint64_t seq, uint32_t spin_us)
     return spin_until(ring, seq, spin_us, data_or_retired);
 }
 
-int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d)
+int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d, _Atomic uint32_t* interrupted,
+                      int stop_on_signal)
 {
     ln_ring_header* h = ring->hdr;
     struct timespec rel;
     int err = 0;
     uint32_t v = ln_futex_announce(&h->data_futex);
+    /* after announcing: an interrupt set before it is seen here, one after it wakes us */
+    if (interrupted && atomic_exchange_explicit(interrupted, 0, memory_order_seq_cst))
+        return LN_EINTR;
     if (atomic_load_explicit(&h->write_seq, memory_order_seq_cst) < seq &&
         !atomic_load_explicit(&h->retired, memory_order_acquire) &&
         (err = ln_deadline_left(d, &rel)) == 0)
         err = ln_futex_wait(&h->data_futex, v, d->forever ? NULL : &rel);
-    return err == ETIMEDOUT ? LN_ETIMEOUT : LN_OK;
+    return err == ETIMEDOUT ? LN_ETIMEOUT : (err == EINTR && stop_on_signal) ? LN_EINTR : LN_OK;
+}
+
+/* After following to a successor: the cursor's progress and its bell, in the new ring. */
+static void moved(ln_ring* ring, ln_ring_cursor* c)
+{
+    if (c->whole_ring)
+        c->buffers = ring->slot_count;
+    ln_ring_publish_cursor(ring, c);
+    if (c->bell && c->reader >= 0)
+        ln_ring_set_bell(ring->hdr, (uint32_t)c->reader, c->bell, c->bell_tag);
+}
+
+int ln_ring_has_data(ln_ring* ring, ln_ring_cursor* c)
+{
+    for (;;) {
+        int retired = atomic_load_explicit(&ring->hdr->retired, memory_order_acquire);
+        if (atomic_load_explicit(&ring->hdr->write_seq, memory_order_seq_cst) >= c->next)
+            return 1;
+        if (!retired)
+            return 0;
+        int rc = ln_ring_follow_once(ring);
+        if (rc != LN_OK)
+            return rc;
+        moved(ring, c);
+    }
 }
 
 int ln_ring_next(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us,
@@ -603,9 +635,7 @@ int ln_ring_next(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin
         if (retired) {
             if ((rc = ln_ring_follow_once(ring)) != LN_OK)
                 return rc;
-            if (c->whole_ring)
-                c->buffers = ring->slot_count;
-            ln_ring_publish_cursor(ring, c); /* its progress, in the new ring */
+            moved(ring, c);
             continue;
         }
         if (timeout == 0)
@@ -615,8 +645,9 @@ int ln_ring_next(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin
             if (ln_ring_spin_data(ring, c->next, spin_us))
                 continue;
         }
-        if (ln_ring_wait_data(ring, c->next, &d) == LN_ETIMEOUT)
-            return LN_ETIMEOUT;
+        rc = ln_ring_wait_data(ring, c->next, &d, &c->interrupted, c->interruptible);
+        if (rc != LN_OK)
+            return rc;
     }
 }
 

@@ -50,7 +50,7 @@
 #include "shm.h"
 
 #define LN_RING_MAGIC 0x31474e49524e4c00ull /* "\0LNRING1" little-endian */
-#define LN_RING_VERSION 2u
+#define LN_RING_VERSION 3u                  /* 3: waitset bells in the reader slots */
 #define LN_RING_MAX_READERS 64u
 #define LN_RING_MAX_SLOTS 1025u /* 1,024 buffers + the one being written */
 #define LN_RING_NAME_MAX 256
@@ -70,7 +70,12 @@ typedef struct ln_ring_reader {
     /* rings of hot-slot size (LN_RING_HOT_BYTES), latest readers: the sample it copies or
      * has borrowed + 1 (0: none), so writers leave that slot alone */
     _Atomic uint64_t holding;
-    uint8_t reserved[32];
+    /* a subscriber attached to a waitset (bell.h): its bell, the tag it sends, and 1 while a
+     * ring is unanswered */
+    _Atomic uint64_t bell;
+    _Atomic uint32_t bell_tag;
+    _Atomic uint32_t bell_pending;
+    uint8_t reserved[16];
 } ln_ring_reader;
 
 typedef struct ln_ring_header {
@@ -99,6 +104,8 @@ typedef struct ln_ring_header {
      * writers keep the ring's whole depth; those reading the newest, the newest */
     alignas(64) _Atomic uint32_t taps;
     _Atomic uint32_t newest_taps;
+    /* reader slots whose subscriber waits in a waitset (bit i: readers[i].bell), bell.h */
+    _Atomic uint64_t bell_readers;
     alignas(64) ln_ring_reader readers[LN_RING_MAX_READERS];
     /* the slot directory: slot_of[n % slot_count] is the slot of sample n (identity at
      * creation); written under write_lock, validated by every reader */
@@ -231,6 +238,11 @@ typedef struct ln_ring_cursor {
     uint64_t pending; /* overruns not yet reported by a read */
     uint64_t total;   /* overruns since subscribing */
     int whole_ring;   /* buffers follow the ring's slot count across growth (a tap, EVERY) */
+    /* a subscriber in a waitset: its bell, registered again in every ring it follows to */
+    uint64_t bell;
+    uint32_t bell_tag;
+    int interruptible;            /* a signal ends a blocking wait with LN_EINTR */
+    _Atomic uint32_t interrupted; /* ln_inport_interrupt: the next wait returns LN_EINTR */
 } ln_ring_cursor;
 
 /* Choose the sample to read now: LN_OK with *slot and *word (its seq word) set, LN_EAGAIN if
@@ -248,8 +260,10 @@ void ln_ring_publish_cursor(ln_ring* ring, const ln_ring_cursor* c);
  * retired; 1 if that happened. */
 int ln_ring_spin_data(const ln_ring* ring, uint64_t seq, uint32_t spin_us);
 /* Sleep until a sample >= seq is committed, the ring is retired, or the deadline passes
- * (LN_ETIMEOUT).  May return LN_OK spuriously; callers pick again. */
-int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d);
+ * (LN_ETIMEOUT).  May return LN_OK spuriously; callers pick again.  LN_EINTR: *interrupted
+ * (may be NULL) was set, which it clears, or a signal handler ran and stop_on_signal. */
+int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d, _Atomic uint32_t* interrupted,
+                      int stop_on_signal);
 
 /* The read loop of every reader (subscriber ports and taps): find the next sample for cursor
  * c, waiting up to timeout (< 0 forever) after spinning up to spin_us once.  A retired ring
@@ -259,6 +273,9 @@ int ln_ring_wait_data(ln_ring* ring, uint64_t seq, ln_deadline* d);
  * the error of a corrupted or vanished ring. */
 int ln_ring_next(ln_ring* ring, ln_ring_cursor* c, double timeout, uint32_t spin_us,
                  ln_ring_slot** slot, uint64_t* word);
+/* 1 if a read by cursor c would find a sample now (a retired ring is followed, as a read
+ * would, once nothing more can come from it), 0 if not, or the error of following. */
+int ln_ring_has_data(ln_ring* ring, ln_ring_cursor* c);
 /* ln_ring_next, then copy the payload (message_size bytes) to buf and finish; a sample
  * overwritten while copied is counted and the next one taken.  On LN_OK *word and *ts hold
  * the sample's seq word and timestamp. */

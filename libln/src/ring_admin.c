@@ -10,6 +10,7 @@
 #include "client_internal.h"
 #include "futex.h"
 #include "naming.h"
+#include "bell.h"
 #include "ring.h"
 
 #define LN_ADMIN_MAGIC 0x4c4e5241u
@@ -148,8 +149,11 @@ int ln_ring_admin_set_counts(ln_ring_admin* a, uint32_t publishers, uint32_t sub
     int rc = check(a);
     if (rc != LN_OK)
         return rc;
-    atomic_store_explicit(&a->hdr->publishers, publishers, memory_order_relaxed);
+    uint32_t before =
+        atomic_exchange_explicit(&a->hdr->publishers, publishers, memory_order_seq_cst);
     atomic_store_explicit(&a->hdr->subscribers, subscribers, memory_order_relaxed);
+    if ((before == 0) != (publishers == 0))
+        ln_ring_ring_bells(a->hdr, 1); /* waitsets watching the topic's liveliness */
     return LN_OK;
 }
 
@@ -209,6 +213,9 @@ int ln_ring_admin_reserve_reader(ln_ring_admin* a, uint32_t index, int32_t pid, 
                             "of %u slots",
                             index, buffers, a->hdr->slot_count);
     ln_ring_reader* r = &a->hdr->readers[index];
+    if (atomic_load_explicit(&r->pid, memory_order_relaxed) != pid)
+        ln_ring_clear_bell(a->hdr, index); /* left by an earlier subscriber (same pid: taken
+                                            * back after a manager restart, bell and all) */
     atomic_store_explicit(&r->pid, pid, memory_order_relaxed);
     atomic_store_explicit(&r->buffers, buffers, memory_order_relaxed);
     atomic_store_explicit(&r->next_seq,
@@ -228,6 +235,7 @@ int ln_ring_admin_release_reader(ln_ring_admin* a, uint32_t index)
     if (index >= LN_RING_MAX_READERS)
         return ln_set_error(NULL, LN_EINVAL, "reader slot %u out of range", index);
     atomic_store_explicit(&a->hdr->readers[index].active, 0, memory_order_seq_cst);
+    ln_ring_clear_bell(a->hdr, index);
     wake_publishers(a->hdr); /* a publisher may be waiting for this (dead) reader */
     return LN_OK;
 }
@@ -267,6 +275,7 @@ int ln_ring_admin_retire(ln_ring_admin* a, ln_ring_admin* successor, const char*
     ln_ring_unlock(&ring);
     /* Sleeping readers and waiting publishers must notice the move. */
     ln_futex_bump_wake(&old->data_futex);
+    ln_ring_ring_bells(old, 1); /* waitsets move their subscribers along */
     wake_publishers(old);
     return LN_OK;
 }

@@ -16,6 +16,7 @@
 #include "client_conn.h"
 #include "net.h"
 #include "svc_internal.h"
+#include "waitset_internal.h"
 
 struct ln_svc_group {
     ln_client* clnt;
@@ -584,4 +585,22 @@ void ln_svc_client_free(ln_client* clnt)
     pthread_mutex_destroy(&s->lock);
     free(s);
     clnt->svc = NULL;
+}
+
+/* ---- waitsets (waitset_internal.h) ---- */
+
+int ln_svc_group_wait_fd(ln_client* clnt, const char* group, int* fd)
+{
+    int rc = ln_client_check(clnt);
+    if (rc != LN_OK)
+        return rc;
+    ln_svc_group* g;
+    rc = ln_svc_group_get(clnt, group, 0, &g);
+    if (rc != LN_OK)
+        return rc;
+    if (g->pool != NULL)
+        return ln_set_error(clnt, LN_EBUSY, "service group %s is handled by thread pool \"%s\"",
+                            shown(g->name), g->pool->name);
+    *fd = g->epfd;
+    return LN_OK;
 }

@@ -158,7 +158,7 @@ static void* wait_thread(void* arg)
     struct waiter* w = arg;
     ln_deadline d = ln_deadline_in(30.0);
     atomic_store(&w->started, 1);
-    w->rc = ln_ring_wait_data(w->r, 1, &d);
+    w->rc = ln_ring_wait_data(w->r, 1, &d, NULL, 0);
     return NULL;
 }
 
@@ -169,7 +169,7 @@ static void test_blocking_read_wakes_and_times_out(void)
     attach(&w, seg_name);
     attach(&r, seg_name);
     ln_deadline soon = ln_deadline_in(0.01);
-    LN_CHECK_EQ(ln_ring_wait_data(&r, 1, &soon), LN_ETIMEOUT);
+    LN_CHECK_EQ(ln_ring_wait_data(&r, 1, &soon, NULL, 0), LN_ETIMEOUT);
     /* A sleeper that gave up (or died) leaves its announcement: it costs one wake, not more. */
     LN_CHECK(atomic_load(&r.hdr->data_futex) & LN_FUTEX_SLEEPERS);
     struct waiter wt = {.r = &r};

@@ -219,7 +219,7 @@ static void reader_child(const char* name, uint64_t newest)
     ln_ring_cursor queued = {.next = newest, .buffers = 4, .reader = -1};
     uint64_t got = port_read(&r, &latest, NULL) + port_read(&r, &queued, NULL);
     ln_deadline d = ln_deadline_in(0);
-    int waited = ln_ring_wait_data(&r, latest.next, &d);
+    int waited = ln_ring_wait_data(&r, latest.next, &d, NULL, 0);
     _exit(got == 0 && latest.next == newest + 1 && queued.pending == 1 && waited == LN_ETIMEOUT
               ? 0
               : 3);

@@ -209,6 +209,15 @@ LN_EXPORT int ln_read_borrow(ln_inport* port, const void** data, double timeout,
                              ln_sample_info* info);
 LN_EXPORT int ln_read_release(ln_inport* port);
 
+/* Blocking reads and signals: by default a blocking ln_read / ln_read_borrow sleeps on after
+ * a signal handler ran.  After ln_inport_set_interruptible(port, 1) it returns LN_EINTR then
+ * (as read(2) without SA_RESTART), so that a language runtime can run its handlers (Python's
+ * Ctrl-C).  ln_inport_interrupt, from any thread, makes the port's blocking read that sleeps
+ * now, or else its next one, return LN_EINTR at once (a runtime closing the port from another
+ * thread wakes its reader first). */
+LN_EXPORT int ln_inport_set_interruptible(ln_inport* port, int on);
+LN_EXPORT int ln_inport_interrupt(ln_inport* port);
+
 LN_EXPORT int ln_outport_subscriber_count(const ln_outport* port);
 LN_EXPORT int ln_inport_publisher_count(const ln_inport* port);
 /* Total samples this subscriber lost since it subscribed. */
@@ -514,6 +523,120 @@ LN_EXPORT int ln_parameter_block_changed(const ln_parameter_block* blk, int inde
 LN_EXPORT const char* ln_parameter_block_service_name(const ln_parameter_block* blk);
 /* Unregisters the service (waiting for a request being handled) and frees the block. */
 LN_EXPORT int ln_parameter_block_destroy(ln_parameter_block* blk);
+
+/* ==== waiting on many things: the waitset (docs/waiting.md) =================================
+ * A waitset lets one thread wait for whatever comes first of: samples on inports, the
+ * deadline of an inport ("no sample for X seconds"), an inport's topic losing its last
+ * publisher or getting one again, requests of a service group, overrides for a parameter
+ * block, file descriptors, interval timers, and ln_waitset_trigger from another thread.
+ * ln_waitset_wait sleeps in one kernel wait (epoll) until one of them fires and reports each
+ * as an ln_waitset_event; it never polls and never allocates.
+ *
+ * Publishers (and the daemon injecting forwarded samples, and the manager changing publisher
+ * counts) notify a waitset through a datagram to its abstract Unix socket, only when it has
+ * looked at that inport since the last notification: a waitset that keeps up costs a
+ * publisher one system call per sample, one that is busy costs nothing.  Wake-ups therefore
+ * reach waitsets in the publisher's network namespace (on a host, as ln_host_id says).
+ *
+ * Reports are level-triggered for data: an inport with unread samples is reported by every
+ * wait until they are read.  Deadline, GONE/BACK and timers are edges: reported once each
+ * time they happen.  Events that do not fit into ready[] stay pending for the next wait.
+ *
+ * Threads: wait (and the reads of attached inports, which the wait may move to a grown ring)
+ * from one thread at a time; attach, detach, trigger from any thread, also while another one
+ * waits (it wakes and takes the change into account).  An inport or parameter block is
+ * attached to at most one waitset; destroy the waitset (or detach) before closing what is
+ * attached, except that closing an inport or ending its client detaches nothing in shared
+ * memory that could harm anyone (the manager reuses the reader slot cleanly). */
+typedef struct ln_waitset ln_waitset;
+
+/* What fired (ln_waitset_event.kind). */
+enum ln_waitset_kind {
+    LN_WAIT_DATA = 1,       /* the inport has a sample to read */
+    LN_WAIT_DEADLINE = 2,   /* the inport had no new sample for its deadline */
+    LN_WAIT_GONE = 3,       /* the inport's topic lost its last publisher */
+    LN_WAIT_BACK = 4,       /* the inport's topic has a publisher again */
+    LN_WAIT_REQUESTS = 5,   /* the service group has requests: handle them with
+                             * ln_wait_and_handle_service_group_requests(clnt, group, 0) */
+    LN_WAIT_PARAMETERS = 6, /* the parameter block has overrides for its next update() */
+    LN_WAIT_FD = 7,         /* the file descriptor is ready: `events` holds LN_WAIT_READABLE...*/
+    LN_WAIT_TIMER = 8,      /* the timer expired `count` times since it was last reported */
+    LN_WAIT_TRIGGER = 9     /* ln_waitset_trigger was called (`count` times) */
+};
+
+/* Inport conditions (ln_waitset_attach_inport flags). */
+#define LN_WAIT_ON_DATA 0x1u       /* LN_WAIT_DATA */
+#define LN_WAIT_ON_LIVELINESS 0x2u /* LN_WAIT_GONE / LN_WAIT_BACK */
+/* File descriptor conditions and what fired (poll(2) meanings). */
+#define LN_WAIT_READABLE 0x1u
+#define LN_WAIT_WRITABLE 0x2u
+#define LN_WAIT_ERROR 0x4u /* reported only: an error or hang-up on the descriptor */
+
+#define LN_WAITSET_MAX_ATTACHMENTS 65535 /* attachments of one waitset at a time */
+#define LN_WAITSET_TRIGGER_ID 0u         /* the id of LN_WAIT_TRIGGER events */
+
+typedef struct ln_waitset_event {
+    uint32_t id;     /* the attachment, as its attach call gave it (never 0) */
+    uint32_t kind;   /* enum ln_waitset_kind */
+    uint32_t events; /* LN_WAIT_FD: LN_WAIT_READABLE | _WRITABLE | _ERROR */
+    uint32_t count;  /* LN_WAIT_TIMER / LN_WAIT_DEADLINE / LN_WAIT_TRIGGER: times it fired
+                      * since last reported (timers that fell behind skip, never burst); else 1 */
+    void* user_data; /* as given at attach (NULL for LN_WAIT_TRIGGER) */
+} ln_waitset_event;
+
+LN_EXPORT int ln_waitset_create(ln_waitset** out);
+/* Detaches everything and frees the waitset; LN_EBUSY while another thread waits in it. */
+LN_EXPORT int ln_waitset_destroy(ln_waitset* ws);
+
+/* Each attach returns the attachment's id (> 0) in *id (may be NULL) and its user_data comes
+ * back with every event of it.  Errors: LN_EBADHANDLE (a closed port, a destroyed handle),
+ * LN_EBUSY (attached to a waitset already; a service group handled by a thread pool),
+ * LN_ENOTFOUND (a group with no registered provider), LN_ELIMIT, LN_EINVAL.
+ *
+ * An inport: `flags` LN_WAIT_ON_* (0 means LN_WAIT_ON_DATA); `deadline` > 0 reports
+ * LN_WAIT_DEADLINE each time that many seconds pass without a new sample (counted from the
+ * attach, the last sample, or the last deadline report), 0 none. */
+LN_EXPORT int ln_waitset_attach_inport(ln_waitset* ws, ln_inport* port, uint32_t flags,
+                                       double deadline, void* user_data, uint32_t* id);
+/* Change an inport attachment's deadline (seconds, 0: none), counted from now. */
+LN_EXPORT int ln_waitset_set_deadline(ln_waitset* ws, uint32_t id, double deadline);
+/* The requests of a service group of clnt (NULL or "": the default group), or of the group a
+ * provider or event handler is registered in (register it first). */
+LN_EXPORT int ln_waitset_attach_service_group(ln_waitset* ws, ln_client* clnt, const char* group,
+                                              void* user_data, uint32_t* id);
+LN_EXPORT int ln_waitset_attach_provider(ln_waitset* ws, ln_service_provider* provider,
+                                         void* user_data, uint32_t* id);
+LN_EXPORT int ln_waitset_attach_event_handler(ln_waitset* ws, ln_event_handler* handler,
+                                              void* user_data, uint32_t* id);
+/* Overrides that arrived for the block (registered or not yet): take them with update(). */
+LN_EXPORT int ln_waitset_attach_parameter_block(ln_waitset* ws, ln_parameter_block* blk,
+                                                void* user_data, uint32_t* id);
+/* A file descriptor the caller owns and keeps open while attached; events LN_WAIT_READABLE
+ * and/or LN_WAIT_WRITABLE, reported while they hold (level-triggered). */
+LN_EXPORT int ln_waitset_attach_fd(ln_waitset* ws, int fd, uint32_t events, void* user_data,
+                                   uint32_t* id);
+/* An interval timer: first expiry at `first_ns` (CLOCK_MONOTONIC, ns; 0: now + period), then
+ * every `period` seconds after the previous expiry time (> 0; 0: once only), on absolute
+ * times, so it does not drift. */
+LN_EXPORT int ln_waitset_attach_timer(ln_waitset* ws, int64_t first_ns, double period,
+                                      void* user_data, uint32_t* id);
+/* Ends an attachment; its pending events are dropped.  LN_ENOTFOUND for an unknown id. */
+LN_EXPORT int ln_waitset_detach(ln_waitset* ws, uint32_t id);
+
+/* Wait up to `timeout` seconds (< 0: forever, 0: only what is ready now) until something
+ * fires, and fill ready[0..n) with what did.  Returns how many events it wrote (0: the
+ * timeout passed), LN_EINTR if a signal handler ran meanwhile (nothing lost: wait again),
+ * LN_EINVAL (ready NULL or n 0, NaN timeout), LN_EBUSY (another thread waits already). */
+LN_EXPORT int ln_waitset_wait(ln_waitset* ws, double timeout, ln_waitset_event* ready, size_t n);
+/* Wake a wait from any thread (or a signal handler): it reports LN_WAIT_TRIGGER. */
+LN_EXPORT int ln_waitset_trigger(ln_waitset* ws);
+
+/* For event loops (asyncio, GLib, ...): a descriptor that becomes readable when a wait may
+ * have something to report, and the next time a timer or deadline falls due (CLOCK_MONOTONIC
+ * ns, or -1 for none): add the descriptor to the loop, call ln_waitset_wait(ws, 0, ...) when
+ * it is readable or that time has come.  The descriptor belongs to the waitset. */
+LN_EXPORT int ln_waitset_fd(const ln_waitset* ws);
+LN_EXPORT int ln_waitset_next_due(ln_waitset* ws, int64_t* monotonic_ns);
 
 #ifdef __cplusplus
 }

@@ -52,6 +52,7 @@ opaque!(
     ln_event_request,
     ln_logger,
     ln_parameter_block,
+    ln_waitset,
 );
 
 #[repr(C)]
@@ -122,6 +123,16 @@ pub struct ln_parameter_desc {
     pub output: *mut c_void,
     pub min: c_double,
     pub max: c_double,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct ln_waitset_event {
+    pub id: u32,
+    pub kind: u32,
+    pub events: u32,
+    pub count: u32,
+    pub user_data: *mut c_void,
 }
 
 pub type ln_parameter_validator = Option<
@@ -203,6 +214,8 @@ extern "C" {
     pub fn ln_outport_subscriber_count(port: *const ln_outport) -> c_int;
     pub fn ln_inport_publisher_count(port: *const ln_inport) -> c_int;
     pub fn ln_inport_overruns(port: *const ln_inport) -> u64;
+    pub fn ln_inport_set_interruptible(port: *mut ln_inport, on: c_int) -> c_int;
+    pub fn ln_inport_interrupt(port: *mut ln_inport) -> c_int;
 
     // ---- time
     pub fn ln_client_use_clock(clnt: *mut ln_client, topic: *const c_char) -> c_int;
@@ -361,4 +374,66 @@ extern "C" {
     pub fn ln_parameter_block_changed(blk: *const ln_parameter_block, index: c_int) -> c_int;
     pub fn ln_parameter_block_service_name(blk: *const ln_parameter_block) -> *const c_char;
     pub fn ln_parameter_block_destroy(blk: *mut ln_parameter_block) -> c_int;
+
+    // ---- the waitset
+    pub fn ln_waitset_create(out: *mut *mut ln_waitset) -> c_int;
+    pub fn ln_waitset_destroy(ws: *mut ln_waitset) -> c_int;
+    pub fn ln_waitset_attach_inport(
+        ws: *mut ln_waitset,
+        port: *mut ln_inport,
+        flags: u32,
+        deadline: c_double,
+        user_data: *mut c_void,
+        id: *mut u32,
+    ) -> c_int;
+    pub fn ln_waitset_set_deadline(ws: *mut ln_waitset, id: u32, deadline: c_double) -> c_int;
+    pub fn ln_waitset_attach_service_group(
+        ws: *mut ln_waitset,
+        clnt: *mut ln_client,
+        group: *const c_char,
+        user_data: *mut c_void,
+        id: *mut u32,
+    ) -> c_int;
+    pub fn ln_waitset_attach_provider(
+        ws: *mut ln_waitset,
+        provider: *mut ln_service_provider,
+        user_data: *mut c_void,
+        id: *mut u32,
+    ) -> c_int;
+    pub fn ln_waitset_attach_event_handler(
+        ws: *mut ln_waitset,
+        handler: *mut ln_event_handler,
+        user_data: *mut c_void,
+        id: *mut u32,
+    ) -> c_int;
+    pub fn ln_waitset_attach_parameter_block(
+        ws: *mut ln_waitset,
+        blk: *mut ln_parameter_block,
+        user_data: *mut c_void,
+        id: *mut u32,
+    ) -> c_int;
+    pub fn ln_waitset_attach_fd(
+        ws: *mut ln_waitset,
+        fd: c_int,
+        events: u32,
+        user_data: *mut c_void,
+        id: *mut u32,
+    ) -> c_int;
+    pub fn ln_waitset_attach_timer(
+        ws: *mut ln_waitset,
+        first_ns: i64,
+        period: c_double,
+        user_data: *mut c_void,
+        id: *mut u32,
+    ) -> c_int;
+    pub fn ln_waitset_detach(ws: *mut ln_waitset, id: u32) -> c_int;
+    pub fn ln_waitset_wait(
+        ws: *mut ln_waitset,
+        timeout: c_double,
+        ready: *mut ln_waitset_event,
+        n: usize,
+    ) -> c_int;
+    pub fn ln_waitset_trigger(ws: *mut ln_waitset) -> c_int;
+    pub fn ln_waitset_fd(ws: *const ln_waitset) -> c_int;
+    pub fn ln_waitset_next_due(ws: *mut ln_waitset, monotonic_ns: *mut i64) -> c_int;
 }
