@@ -765,10 +765,10 @@ static size_t report(ln_waitset* ws, ln_waitset_event* ready, size_t n)
                 e->events = t->fd_events;
                 t->fd_events = 0;
             }
+            /* level-triggered: again while unread samples remain (requests and descriptors:
+             * epoll reports them again while they hold) */
             if (kind == LN_WAIT_DATA)
-                push_recheck(ws, i); /* level-triggered: again while unread samples remain */
-            if (kind == LN_WAIT_REQUESTS || kind == LN_WAIT_FD)
-                push_recheck(ws, i); /* epoll reports them again while they hold */
+                push_recheck(ws, i);
         }
         if (t->fired == 0)
             pop_fired(ws);
