@@ -3,7 +3,8 @@
  * own threads ring with an attachment's id), attached file descriptors and service groups'
  * epoll sets.  A wait looks at what rang, at inports it reported data for last time (data is
  * level-triggered), at timers and deadlines that fell due, and sleeps in epoll_pwait2 until
- * the nearest of them otherwise.
+ * the nearest of them otherwise (in recvmmsg on the bell when nothing else is to be watched
+ * and nothing is timed).
  *
  * Attachments live in a table; an id is (generation << 16) | (index + 1), so a late bell for
  * an attachment that was detached and whose slot was reused is recognised and dropped.
@@ -73,7 +74,8 @@ struct ln_waitset {
     uint32_t qlen; /* datagrams the bell holds before senders get EAGAIN */
     att* a;
     uint32_t cap, used;
-    int free_head; /* free slots chained through next_fired */
+    uint32_t polled; /* attached descriptors and service groups (in the epoll set) */
+    int free_head;   /* free slots chained through next_fired */
     int fired_head, fired_tail;
     int recheck_head;
     int timed_head;
@@ -128,7 +130,9 @@ static uint32_t read_qlen(void)
 /* A bound bell socket with a fresh random id. */
 static int open_bell(ln_waitset* ws)
 {
-    ws->sock = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    /* blocking: a wait with only the bell to watch sleeps in recvmmsg itself (every other
+     * receive passes MSG_DONTWAIT) */
+    ws->sock = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
     if (ws->sock < 0)
         return ln_set_errno_error(NULL, errno, "ln_waitset_create: socket");
     for (int tries = 0; tries < 8; tries++) {
@@ -340,6 +344,7 @@ static void release(ln_waitset* ws, int i)
     case ATT_FD:
     case ATT_GROUP:
         epoll_ctl(ws->epfd, EPOLL_CTL_DEL, t->fd, NULL); /* fails if closed already: fine */
+        ws->polled--;
         break;
     default:
         break;
@@ -450,6 +455,7 @@ static int add_fd(ln_waitset* ws, int i, int fd, uint32_t want)
         return ln_set_errno_error(NULL, errno, "waitset: cannot wait on file descriptor %d", fd);
     ws->a[i].fd = fd;
     ws->a[i].want = want;
+    ws->polled++;
     return LN_OK;
 }
 
@@ -653,34 +659,52 @@ static void look_timed(ln_waitset* ws, int64_t now, int64_t* next)
     }
 }
 
-/* Everything that rang the bell; a bell that may have overflowed makes it look at all. */
-static void drain_bell(ln_waitset* ws, int64_t now)
-{
+/* Datagrams of the bell, received in one call. */
+typedef struct bell_batch {
     uint32_t tags[DRAIN_BATCH];
     struct iovec iov[DRAIN_BATCH];
     struct mmsghdr msgs[DRAIN_BATCH];
+} bell_batch;
+
+static int bell_receive(ln_waitset* ws, bell_batch* b, int flags)
+{
+    for (int k = 0; k < DRAIN_BATCH; k++) {
+        b->iov[k] = (struct iovec){.iov_base = &b->tags[k], .iov_len = sizeof b->tags[k]};
+        b->msgs[k] = (struct mmsghdr){.msg_hdr = {.msg_iov = &b->iov[k], .msg_iovlen = 1}};
+    }
+    return recvmmsg(ws->sock, b->msgs, DRAIN_BATCH, flags, NULL);
+}
+
+/* Looks at the attachments n received datagrams name, then at what else the bell holds
+ * (nothing more to receive when fewer than a batch came: one system call saved, and what
+ * comes meanwhile keeps the socket readable).  A bell that may have been full makes it look
+ * at every inport and parameter block: a sender that found it full dropped its datagram. */
+static void bell_take(ln_waitset* ws, bell_batch* b, int n, int64_t now)
+{
     uint32_t total = 0;
-    for (;;) {
-        for (int k = 0; k < DRAIN_BATCH; k++) {
-            iov[k] = (struct iovec){.iov_base = &tags[k], .iov_len = sizeof tags[k]};
-            msgs[k] = (struct mmsghdr){.msg_hdr = {.msg_iov = &iov[k], .msg_iovlen = 1}};
-        }
-        int n = recvmmsg(ws->sock, msgs, DRAIN_BATCH, MSG_DONTWAIT, NULL);
-        if (n <= 0)
-            break;
+    while (n > 0) {
         total += (uint32_t)n;
         for (int k = 0; k < n; k++) {
-            if (msgs[k].msg_len != sizeof(uint32_t) || tags[k] == 0)
+            if (b->msgs[k].msg_len != sizeof(uint32_t) || b->tags[k] == 0)
                 continue; /* a trigger or an attach: looked at by the caller */
-            int i = slot_of(ws, tags[k]);
+            int i = slot_of(ws, b->tags[k]);
             if (i != NONE)
                 look(ws, i, now);
         }
+        if (n < DRAIN_BATCH)
+            break;
+        n = bell_receive(ws, b, MSG_DONTWAIT);
     }
-    if (total >= ws->qlen) /* a sender may have found the bell full: its ring is lost */
+    if (total >= ws->qlen)
         for (uint32_t k = 0; k < ws->cap; k++)
             if (ws->a[k].kind == ATT_INPORT || ws->a[k].kind == ATT_PARAMS)
                 look(ws, (int)k, now);
+}
+
+static void drain_bell(ln_waitset* ws, int64_t now)
+{
+    bell_batch b;
+    bell_take(ws, &b, bell_receive(ws, &b, MSG_DONTWAIT), now);
 }
 
 static void on_epoll(ln_waitset* ws, const struct epoll_event* ev, int64_t now)
@@ -796,13 +820,27 @@ static int wait_locked(ln_waitset* ws, int64_t until, ln_waitset_event* ready, s
             return (int)report(ws, ready, n);
         struct timespec rel = span(next - now);
         int sleep = next > now;
-        pthread_mutex_unlock(&ws->mu);
-        int got = epoll_pwait2(ws->epfd, evs, 16, next == INT64_MAX ? NULL : &rel, NULL);
-        int err = errno;
-        pthread_mutex_lock(&ws->mu);
-        now = now_ns();
-        for (int k = 0; k < got; k++)
-            on_epoll(ws, &evs[k], now);
+        int got, err;
+        if (ws->polled == 0 && next == INT64_MAX) {
+            /* only the bell to watch, no time limit: sleep in its receive (one system call
+             * per wake-up instead of epoll's two) */
+            bell_batch b;
+            pthread_mutex_unlock(&ws->mu);
+            got = bell_receive(ws, &b, MSG_WAITFORONE);
+            err = errno;
+            pthread_mutex_lock(&ws->mu);
+            now = now_ns();
+            if (got > 0)
+                bell_take(ws, &b, got, now);
+        } else {
+            pthread_mutex_unlock(&ws->mu);
+            got = epoll_pwait2(ws->epfd, evs, 16, next == INT64_MAX ? NULL : &rel, NULL);
+            err = errno;
+            pthread_mutex_lock(&ws->mu);
+            now = now_ns();
+            for (int k = 0; k < got; k++)
+                on_epoll(ws, &evs[k], now);
+        }
         if (got < 0 && err == EINTR) {
             next = INT64_MAX;
             collect(ws, now, &next);
@@ -810,7 +848,7 @@ static int wait_locked(ln_waitset* ws, int64_t until, ln_waitset_event* ready, s
                 return LN_EINTR;
         }
         if (got < 0 && err != EINTR)
-            return ln_set_errno_error(NULL, err, "ln_waitset_wait: epoll_pwait2");
+            return ln_set_errno_error(NULL, err, "ln_waitset_wait: waiting");
         if (ws->fired_head == NONE && !atomic_load(&ws->triggers) && now >= until &&
             (got == 0 || !sleep))
             return 0;
