@@ -5,6 +5,8 @@
                                     clients and hosts, transports, forwarding rates
     service_info {"name"}           the service as `services` lists it, plus md_dirs
     md_show {"name", "recursive"}   the md's text (and of the mds it uses), its file
+    md_layout {"name"}              the md's layout hash, signature and field names, for
+                                    clients that pack samples at run time (docs/matlab.md)
 
 `topic echo|hz|bw` and `service call` run in the client (tools/introspection/commands.py),
 with their own libln client; echo, hz and bw stream.
@@ -28,6 +30,8 @@ from ...tools.introspection import DEFAULT_TIMEOUT, views
 from ...tools.introspection.stats import DEFAULT_WINDOW
 
 if TYPE_CHECKING:
+    from ln_generate import Struct
+
     from ..registry.core import Core
     from ..registry.model import Client, Port, Topic
 
@@ -177,6 +181,35 @@ async def md_show(control: Control, command: dict[str, Any]) -> dict[str, Any]:
             "recursive": recursive}
 
 
+async def md_layout(control: Control, command: dict[str, Any]) -> dict[str, Any]:
+    from ln_generate import MdError, MdRegistry
+    from ln_generate.layout import layout_hash, md_signature
+
+    from ...tools.introspection.client import md_error_text
+
+    name = command["name"]
+    dirs = md_dirs(control)
+    try:
+        md = MdRegistry([Path(d) for d in dirs]).load(name)
+    except MdError as exc:
+        raise _error(f"md {name!r}: {md_error_text(exc)}") from None
+    sections = [{"name": section, "size": struct.size, "names": ",".join(_names(struct))}
+                for section, struct in md.sections.items()]
+    return {"name": name, "kind": md.kind, "layout_hash": f"0x{layout_hash(md):016x}",
+            "signature": md_signature(md), "sections": sections, "md_dirs": dirs}
+
+
+def _names(struct: Struct) -> list[str]:
+    """Field names in pre-order, one per field of the signature (a dynamic field's count and
+    pointer are one field): a nested md's name, then its own fields' names."""
+    out: list[str] = []
+    for f in struct.fields:
+        out.append(f.name)
+        if f.is_nested:
+            out += _names(f.type)  # type: ignore[arg-type]
+    return out
+
+
 def _read(path: Path) -> str:
     try:
         return path.read_bytes().decode("utf-8", "replace")
@@ -291,6 +324,14 @@ register(
             script_doc="The text of md `name` from the manager's md search path; with "
                        "`recursive` also of every md it uses, each under a `# ==== NAME: "
                        "PATH` line."),
+    Command("md_layout", "the layout hash, signature and field names of a message definition",
+            "topics", md_layout, (_NAME,),
+            result="name, kind, layout_hash, signature, sections: [{name, size, names}], "
+                   "md_dirs", console=False, cli=False,
+            script_doc="What a client that packs samples at run time needs of md `name` "
+                       "(docs/matlab.md): layout_hash (\"0x%016x\"), the signature of "
+                       "ln_generate and per section its struct size and its field names in "
+                       "pre-order, comma-separated."),
     Command("service_call", "call a service with REQUEST fields ('a: 1, b: [1, 2], name: "
             "\"x\"' or JSON)", "services", None,
             (_NAME, Arg("request", "json", "the request: field values or request text",
