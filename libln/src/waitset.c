@@ -900,15 +900,11 @@ int ln_waitset_next_due(ln_waitset* ws, int64_t* monotonic_ns)
     pthread_mutex_lock(&ws->mu);
     int64_t now = now_ns();
     int64_t next = INT64_MAX;
-    if (ws->fired_head != NONE || ws->recheck_head != NONE ||
-        atomic_load_explicit(&ws->triggers, memory_order_acquire))
+    /* what a wait would look at first (inports reported last time: data left unread?), so
+     * that an event loop is sent back only when there is something */
+    collect(ws, now, &next);
+    if (ws->fired_head != NONE || atomic_load_explicit(&ws->triggers, memory_order_acquire))
         next = now;
-    for (int i = ws->timed_head; i != NONE; i = ws->a[i].next_timed) {
-        const att* t = &ws->a[i];
-        int64_t due = t->kind == ATT_TIMER ? t->next_ns : t->last_ns + t->deadline;
-        if (due < next)
-            next = due;
-    }
     pthread_mutex_unlock(&ws->mu);
     *monotonic_ns = next == INT64_MAX ? -1 : next;
     return LN_OK;

@@ -32,6 +32,8 @@ _PARAMETER_NAMES = ("parameter", "parameter_block")
 __all__ += ["parameter", "parameter_block"]
 _PULL_NAMES = ("PullSample", "pull_subscribe")
 __all__ += list(_PULL_NAMES)
+_WAITSET_NAMES = ("Attachment", "FdEvents", "WaitEvent", "WaitKind", "WaitSet")
+__all__ += list(_WAITSET_NAMES)
 
 
 def __getattr__(name: str) -> Any:
@@ -61,6 +63,10 @@ def __getattr__(name: str) -> Any:
         from . import _parameters
 
         return getattr(_parameters, name)
+    if name in _WAITSET_NAMES:
+        from . import _waitset
+
+        return getattr(_waitset, name)
     if name.startswith("Ln") and name.endswith("Error"):
         from . import _libln
 

@@ -28,6 +28,7 @@ from typing import Any, NoReturn
 from . import _clientlib as C
 from . import _services, transports
 from . import _waits as W
+from ._handles import run_close_hooks
 from ._libln import ERROR_CLASSES, ERRORS_BY_CODE, error_from_code
 from ._services import Handler, provided_service, service
 from .md_loader import message_class
@@ -70,6 +71,7 @@ class client:  # noqa: N801 - the LN name
         self._waiting: dict[int, int] = {}
         self._waiting_changed = threading.Condition()
         self._closing = False
+        self._close_hooks: list[Callable[[], None]] = []  # its waitset attachments (_handles)
         self.name: str = C.ln_client_name(self._handle).decode()
 
     @property
@@ -168,6 +170,33 @@ class client:  # noqa: N801 - the LN name
     def unregister_service_provider(self, provider: provided_service) -> None:
         provider.close()
 
+    # ---- asyncio (see _async_waits.py, _async_provider.py and docs/waiting.md) ----
+    def provide_async(self, name: str, message_definition_name: str, handler: Any,
+                      group: str | None = None, max_size: int | None = None,
+                      loop: Any = None) -> provided_service:
+        """Provide service `name` with `handler(request)`, a coroutine function, run on
+        `loop` (default: the running one): it answers with request.respond() or returns the
+        response (a struct or a dict).  The provider's service group (default: one of its
+        own, "asyncio.NAME") is served through the loop's waitset; close() it before the
+        loop ends."""
+        import asyncio
+
+        from ._async_provider import async_provided_service
+
+        provider = async_provided_service(self, name, message_definition_name, handler, group,
+                                          max_size, loop or asyncio.get_running_loop())
+        self._providers.append(provider)
+        return provider
+
+    async def wait_publisher(self, topic: str | subscriber, md_name: str | None = None,
+                             timeout: float | None = None) -> bool:
+        """`await clnt.wait_publisher(topic)`: until the topic (a subscriber, or the name of
+        a topic this client subscribes, else pass its `md_name`) has a publisher; True, or
+        False after `timeout` seconds (None: no limit)."""
+        from ._async_waits import wait_topic_publisher
+
+        return await wait_topic_publisher(self, topic, md_name, timeout)
+
     # ---- events (see _events.py and docs/events.md) ----
     def connect_event(self, name: str, message_definition_name: str,
                       handler: Callable[[Any], Any], connect: Any = None, *,
@@ -240,13 +269,17 @@ class client:  # noqa: N801 - the LN name
     def close(self) -> None:
         """Close every port, service and provider and the connection (idempotent).
 
-        Calls running in other threads end first: a blocking read, write or
+        Calls running in other threads end first: a blocking read at once, a write or
         wait_and_handle_service_group_requests within 0.1 s (then raising ValueError), a
         service call when it returns.  From inside a service handler of this client it
         raises LnBusyError."""
         if _services.in_handler_of(self):
             raise ERROR_CLASSES["LnBusyError"](
                 f"client '{self.name}' cannot be closed inside one of its service handlers")
+        # first end the waitset attachments of everything, which also stops the handlers of
+        # asyncio providers from waiting for their coroutines (the waits below would not end)
+        for owner in (*self._ports, *self._providers, self):
+            run_close_hooks(owner)
         with self._waiting_changed:
             self._closing = True  # no new wait starts, running ones end after their slice
             me = threading.get_ident()
@@ -296,6 +329,7 @@ _ln_write_loan = C.ln_write_loan
 _ln_write_commit = C.ln_write_commit
 _ln_write_abort = C.ln_write_abort
 _TimeoutError = ERRORS_BY_CODE[C.LN_ETIMEOUT]
+_monotonic = time.monotonic
 # subscribe(transport=...): the LN_SUBSCRIBE_* flag of each name
 _TRANSPORTS = {transports.UDP: C.LN_SUBSCRIBE_UDP, transports.TCP: C.LN_SUBSCRIBE_TCP}
 def _uint32(what: str, value: Any, low: int) -> int:
@@ -319,20 +353,30 @@ def _name(what: str, name: str) -> bytes:
 class _CallArgs:
     """A port's handle, packet address and size as ctypes objects, and the last timeout."""
 
-    __slots__ = ("handle", "data", "size", "_timeout")
+    __slots__ = ("handle", "data", "size", "_timeout", "_whole")
 
     def __init__(self, handle: int, packet: LnStruct) -> None:
         self.handle = ctypes.c_void_p(handle)
         self.data = ctypes.c_void_p(ctypes.addressof(packet))
         self.size = ctypes.c_size_t(ctypes.sizeof(packet))
         self._timeout: tuple[Any, ctypes.c_double] = (None, ctypes.c_double(W.SLICE))
+        self._whole: tuple[Any, ctypes.c_double] = (None, ctypes.c_double(-1.0))
 
     def timeout(self, timeout: float | None) -> ctypes.c_double:
-        """The ctypes value of one libln wait of `timeout` (see _slice)."""
+        """The ctypes value of the first libln wait of a write or loan of `timeout`, which
+        waits in slices (_waits)."""
         last, value = self._timeout
         if timeout != last:
             value = ctypes.c_double(W.first_slice(timeout))
             self._timeout = (timeout, value)
+        return value
+
+    def whole(self, timeout: float | None) -> ctypes.c_double:
+        """The ctypes value of a read's `timeout` (None: -1, forever): reads wait once."""
+        last, value = self._whole
+        if timeout != last:
+            value = ctypes.c_double(-1.0 if timeout is None else float(timeout))
+            self._whole = (timeout, value)
         return value
 
 
@@ -357,6 +401,7 @@ class _Port:
         self._ptr = ctypes.c_void_p()
         self._ptr_ref = ctypes.byref(self._ptr)
         self._from_address = self.message_class.from_address
+        self._close_hooks: list[Callable[[], None]] = []  # its waitset attachments (_handles)
 
     @property
     def handle(self) -> int:
@@ -427,8 +472,8 @@ class _Port:
         return a
 
     def _wait_idle(self) -> None:
-        """Until no call of the port runs in another thread (they end within a slice once
-        _args is None)."""
+        """Until no call of the port runs in another thread (once _args is None a read ends
+        at once, woken by _interrupt, a write or loan within a slice)."""
         while self._calls:
             time.sleep(0.001)
 
@@ -449,16 +494,26 @@ class _Port:
         # ctypes arguments of the hot path, converted once (halves the cost of a call)
         self._args = _CallArgs(self._handle, self._packet)
 
-    def _forget(self) -> None:
-        self._args = None  # no new call starts; a running one ends within a slice
+    def _interrupt(self, handle: int) -> None:
+        """Wake a call of the port that blocks in another thread (a subscriber's read)."""
+
+    def _stop_calls(self) -> None:
+        """No new call starts, waitsets let go of the port, a running call ends."""
+        self._args = None
+        handle = self._handle
+        if handle is not None:
+            run_close_hooks(self)
+            self._interrupt(handle)
         self._wait_idle()
+
+    def _forget(self) -> None:
+        self._stop_calls()
         self._handle = None
 
     def close(self) -> None:
-        """Close the port (idempotent).  A call of it waiting in another thread returns
-        within 0.1 s and raises ValueError."""
-        self._args = None  # no new call starts; a running one ends within a slice
-        self._wait_idle()
+        """Close the port (idempotent).  A read of it blocked in another thread wakes at
+        once, a write or loan within 0.1 s; they raise ValueError."""
+        self._stop_calls()
         handle, self._handle = self._handle, None
         if handle is None:
             return
@@ -552,6 +607,11 @@ class subscriber(_Port):  # noqa: N801
         flags = 0 if transport is None else _TRANSPORTS[transport]
         self._open(C.ln_subscribe, buffers, flags, spin_us)
         self._info_ref = ctypes.byref(self.info)
+        # a blocking read returns LN_EINTR after a signal, so that Python runs its handlers
+        C.ln_inport_set_interruptible(self._handle, 1)
+
+    def _interrupt(self, handle: int) -> None:
+        C.ln_inport_interrupt(handle)
 
     def _result(self, rc: int) -> bool:
         if rc in (C.LN_ETIMEOUT, C.LN_EAGAIN):
@@ -564,8 +624,12 @@ class subscriber(_Port):  # noqa: N801
         """The next sample (copied into self.packet), or None if none came in time.
 
         timeout None blocks, 0 returns at once.  self.info has seq, timestamp_ns and the
-        overruns since the previous read.  Ctrl-C ends a blocking read (KeyboardInterrupt;
-        nothing is lost, the next read goes on where this one would have)."""
+        overruns since the previous read.  One libln wait for the whole time: a signal
+        interrupts it, Python runs its handlers and the read goes on for the rest of the
+        time, so Ctrl-C ends a blocking read (KeyboardInterrupt; nothing is lost, the next
+        read goes on where this one would have).  close() from another thread ends it at
+        once with ValueError."""
+        start = _monotonic() if timeout else 0.0
         calls = self._calls
         calls.append(None)
         try:
@@ -573,26 +637,38 @@ class subscriber(_Port):  # noqa: N801
             if a is None or len(calls) != 1:
                 self._unusable(a)
             packet = self._packet  # the one a.data points to
-            rc = _ln_read(a.handle, a.data, a.size, a.timeout(timeout), self._info_ref)
+            rc = _ln_read(a.handle, a.data, a.size, a.whole(timeout), self._info_ref)
         finally:
             calls.pop()
         if rc == 0:
             return packet
-        if rc == C.LN_ETIMEOUT and W.waits_longer(timeout):
-            rc, packet = self._read_on(W.deadline(timeout))
+        if rc == C.LN_EINTR:
+            rc, packet = self._read_on(W.end_of(timeout, start))
         return packet if self._result(rc) else None
 
-    def _read_on(self, deadline: float) -> tuple[int, LnStruct]:
-        """Further waits of a read that used up its first slice: libln's result and the
-        packet it filled."""
+    async def read_async(self, timeout: float | None = None) -> LnStruct | None:
+        """`await sub.read_async(timeout)`: read() without blocking the event loop; waits
+        through the loop's waitset (docs/waiting.md)."""
+        from ._async_waits import read_async
+
+        return await read_async(self, timeout)
+
+    def __aiter__(self) -> Any:
+        """`async for sample in sub`: each sample as read_async() gives it (sub.packet,
+        filled again by the next one)."""
+        from ._async_waits import samples
+
+        return samples(self)
+
+    def _read_on(self, end: float) -> tuple[int, LnStruct]:
+        """Further waits of a read that a signal interrupted (or close() in another thread,
+        then ValueError): libln's result and the packet it filled."""
         while True:
-            t = W.next_slice(deadline)
-            if t <= 0:
-                return C.LN_ETIMEOUT, self._packet
+            W.run_signal_handlers()  # KeyboardInterrupt for Ctrl-C comes from here
             with self._call() as a:
                 packet = self._packet
-                rc = _ln_read(a.handle, a.data, a.size, t, self._info_ref)
-            if rc != C.LN_ETIMEOUT:
+                rc = _ln_read(a.handle, a.data, a.size, W.remaining(end), self._info_ref)
+            if rc != C.LN_EINTR:
                 return rc, packet
 
     def borrow(self, timeout: float | None = None) -> _Borrow:
@@ -602,17 +678,15 @@ class subscriber(_Port):  # noqa: N801
         must be discarded.  timeout as read()."""
         return _Borrow(self, timeout)
 
-    def _borrow_on(self, deadline: float) -> tuple[int, int | None]:
-        """Further waits of a borrow that used up its first slice: libln's result and the
-        borrowed slot's address."""
+    def _borrow_on(self, end: float) -> tuple[int, int | None]:
+        """Further waits of a borrow that a signal interrupted (as _read_on): libln's
+        result and the borrowed slot's address."""
         while True:
-            t = W.next_slice(deadline)
-            if t <= 0:
-                return C.LN_ETIMEOUT, None
+            W.run_signal_handlers()
             with self._call() as a:
-                rc = _ln_read_borrow(a.handle, self._ptr_ref, t, self._info_ref)
+                rc = _ln_read_borrow(a.handle, self._ptr_ref, W.remaining(end), self._info_ref)
                 address = self._ptr.value
-            if rc != C.LN_ETIMEOUT:
+            if rc != C.LN_EINTR:
                 return rc, address
 
     @property
@@ -679,14 +753,15 @@ class _Borrow:
 
     def __enter__(self) -> LnStruct | None:
         port, timeout = self.port, self.timeout
+        start = _monotonic() if timeout else 0.0
         a = port._begin()
         try:
-            rc = _ln_read_borrow(a.handle, port._ptr_ref, a.timeout(timeout), port._info_ref)
+            rc = _ln_read_borrow(a.handle, port._ptr_ref, a.whole(timeout), port._info_ref)
             address = port._ptr.value
         finally:
             port._calls.pop()
-        if rc == C.LN_ETIMEOUT and W.waits_longer(timeout):
-            rc, address = port._borrow_on(W.deadline(timeout))
+        if rc == C.LN_EINTR:
+            rc, address = port._borrow_on(W.end_of(timeout, start))
         if not port._result(rc):
             return None
         self.held = True

@@ -84,6 +84,11 @@ ln_read = _declare("ln_read", c_int, [c_void_p, c_void_p, c_size_t, c_double,
 ln_read_borrow = _declare("ln_read_borrow", c_int, [c_void_p, ctypes.POINTER(c_void_p), c_double,
                                                     ctypes.POINTER(SampleInfo)])
 ln_read_release = _declare("ln_read_release", c_int, [c_void_p])
+# After set_interruptible a signal ends a blocking read with LN_EINTR (the bindings run
+# Python's handlers and read on); ln_inport_interrupt wakes a read from another thread.
+ln_inport_set_interruptible = _declare("ln_inport_set_interruptible", c_int, [c_void_p, c_int],
+                                       _check)
+ln_inport_interrupt = _declare("ln_inport_interrupt", c_int, [c_void_p], _check)
 ln_client_use_clock = _declare("ln_client_use_clock", c_int, [c_void_p, c_char_p], _check)
 ln_now = _declare("ln_now", c_int, [c_void_p, ctypes.POINTER(ctypes.c_int64)], _check)
 ln_outport_subscriber_count = _declare("ln_outport_subscriber_count", c_int, [c_void_p], _check)

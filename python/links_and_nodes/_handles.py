@@ -5,13 +5,14 @@ client, `with` support, and the bookkeeping of a handler running in libln's call
 Callers (`service`, `event`) serialize their calls on a lock and are kept in
 `client._services`; handlers (`provided_service`, `event_handler`) run in the thread that
 handles their group and are kept in `client._providers`.  The client forgets (`_forget`)
-every handle it destroys with itself."""
+every handle it destroys with itself.  Before a handle is freed, its close hooks run
+(run_close_hooks): they end its waitset attachments (_waitset.py) first."""
 
 from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
@@ -22,6 +23,19 @@ if TYPE_CHECKING:
 # waits in wait_and_handle_service_group_requests (waiting) and a BaseException a handler
 # raised there, to be raised again by that wait (pending).
 thread_state = threading.local()
+
+
+def run_close_hooks(obj: Any) -> None:
+    """Run (and drop) the close hooks of `obj`, a port, provider, parameter block or client
+    about to be freed: each ends a waitset attachment of it, also from another thread than
+    the one that waits."""
+    hooks: list[Callable[[], None]] = obj._close_hooks
+    while hooks:
+        try:
+            hook = hooks.pop()
+        except IndexError:  # another thread closing it too took the last one
+            return
+        hook()
 
 
 @contextmanager
@@ -47,6 +61,7 @@ class _Owned:
         self.name = name
         self.message_definition_name = md_name
         self._handle: int | None = None
+        self._close_hooks: list[Callable[[], None]] = []
 
     @property
     def handle(self) -> int:
@@ -100,6 +115,7 @@ class HandlerHandle(_Owned):
         raise NotImplementedError
 
     def _forget(self) -> None:
+        run_close_hooks(self)
         self._handle = None
 
     def close(self) -> None:
@@ -107,6 +123,7 @@ class HandlerHandle(_Owned):
         from inside one of its own handlers it raises LnBusyError."""
         if self._handle is None:
             return
+        run_close_hooks(self)
         self._release(self._handle)
         self._handle = None
         if self in self.client._providers:

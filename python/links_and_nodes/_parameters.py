@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import _param_lib as P
+from ._handles import run_close_hooks
 
 if TYPE_CHECKING:
     from ._client import client
@@ -132,6 +133,7 @@ class parameter_block:  # noqa: N801 - the LN naming
         self.parameters: dict[str, parameter] = {}
         self._validator: Validator | None = None
         self._callback: Any = None  # the ctypes callback: alive as long as libln may call it
+        self._close_hooks: list[Callable[[], None]] = []  # its waitset attachments (_handles)
         clnt._providers.append(self)  # type: ignore[arg-type] - forgotten and kept alive
         from ._client import _pool_clients
 
@@ -232,10 +234,13 @@ class parameter_block:  # noqa: N801 - the LN naming
 
     def _forget(self) -> None:
         """The client is closing: libln destroys the block with it."""
+        run_close_hooks(self)
         self._handle = None
 
     def close(self) -> None:
         """Unregister the block's service and free it (the client does it when closed)."""
+        if self._handle is not None:
+            run_close_hooks(self)
         handle, self._handle = self._handle, None
         if handle is not None:
             P.ln_parameter_block_destroy(handle)

@@ -95,18 +95,50 @@ class service(CallerHandle):  # noqa: N801 - the LN name
         text for an error response, LnTimeoutError, LnNotfoundError, LnLayoutError,
         LnConnectionError, ... (see docs/services.md)."""
         with self._lock:
-            C.ln_service_call(self.handle, ctypes.byref(self.req), ctypes.byref(self._raw),
-                              _timeout(timeout))
-            try:
-                ctypes.memmove(ctypes.addressof(self.resp), ctypes.addressof(self._raw),
-                               ctypes.sizeof(self._raw))
-                own_dynamic_data(self.resp)
-            except BaseException:
-                _clear(self.resp)
-                raise
-            finally:
-                _clear(self._raw)
-        return self.resp
+            return self._call_locked(self.req, self.resp, timeout)
+
+    async def call_async(self, req: LnStruct | dict[str, Any] | None = None,
+                         timeout: float | None = None) -> Any:
+        """`await svc.call_async(req, timeout)`: call() without blocking the event loop.
+        `req` (a request struct or a dict of its fields; None: `self.req`) is sent as it is
+        when the call starts.  Returns a response struct of its own (`resp` stays as it
+        was), so calls of several tasks on one handle (serialized) never mix.  The call
+        runs in the loop's default executor (libln's calls block); a cancelled caller stops
+        waiting at once while the call ends in its thread (by `timeout` at the latest)."""
+        from ._async_waits import call_async
+
+        return await call_async(self, req, timeout)
+
+    def _call_with(self, req: LnStruct | dict[str, Any] | None, timeout: float | None) -> Any:
+        """call() with request `req` into a new response (call_async's, in an executor
+        thread)."""
+        resp = self.response_class()
+        with self._lock:
+            if req is None:
+                return self._call_locked(self.req, resp, timeout)
+            if isinstance(req, dict):
+                struct = self.request_class()
+                struct.update(req)
+                req = struct
+            elif not isinstance(req, self.request_class):
+                raise TypeError(f"{self.message_definition_name}: a request struct of this md "
+                                f"or a dict, not {type(req).__name__}")
+            return self._call_locked(req, resp, timeout)
+
+    def _call_locked(self, req: LnStruct, resp: LnStruct, timeout: float | None) -> Any:
+        """One call (under _lock): sends `req`, copies the response into `resp`."""
+        C.ln_service_call(self.handle, ctypes.byref(req), ctypes.byref(self._raw),
+                          _timeout(timeout))
+        try:
+            ctypes.memmove(ctypes.addressof(resp), ctypes.addressof(self._raw),
+                           ctypes.sizeof(self._raw))
+            own_dynamic_data(resp)
+        except BaseException:
+            _clear(resp)
+            raise
+        finally:
+            _clear(self._raw)
+        return resp
 
     def set_max_size(self, max_bytes: int) -> None:
         """Largest response accepted (wire bytes plus decoded dynamic data)."""

@@ -633,7 +633,8 @@ LN_EXPORT int ln_waitset_trigger(ln_waitset* ws);
 
 /* For event loops (asyncio, GLib, ...): a descriptor that becomes readable when a wait may
  * have something to report, and the next time a timer or deadline falls due (CLOCK_MONOTONIC
- * ns, or -1 for none): add the descriptor to the loop, call ln_waitset_wait(ws, 0, ...) when
+ * ns, or -1 for none; now when events are pending, e.g. an inport reported last time still
+ * has unread samples): add the descriptor to the loop, call ln_waitset_wait(ws, 0, ...) when
  * it is readable or that time has come.  The descriptor belongs to the waitset. */
 LN_EXPORT int ln_waitset_fd(const ln_waitset* ws);
 LN_EXPORT int ln_waitset_next_due(ln_waitset* ws, int64_t* monotonic_ns);

@@ -5,6 +5,8 @@
                                                       print "got SEQ COUNTER OK" per sample
     netclient.py provide SERVICE                      provide nettest/echo
     netclient.py call SERVICE --count N               call it, print "call I OK|FAIL ..."
+    netclient.py watch TOPIC MD [--transport udp|tcp]  a waitset on a subscriber: "back",
+                                                      "got SEQ COUNTER OK", "gone" per event
 
 Samples carry a counter; 8 MiB blobs a byte pattern derived from it, which the subscriber
 checks completely.  Output lines are what the tests read through the manager."""
@@ -90,6 +92,20 @@ def call(clnt: ln.client, args: argparse.Namespace) -> None:
     time.sleep(3600)
 
 
+def watch(clnt: ln.client, args: argparse.Namespace) -> None:
+    sub = clnt.subscribe(args.topic, args.md, buffers=16, transport=args.transport)
+    with ln.WaitSet() as ws:
+        ws.attach_subscriber(sub, liveliness=True)
+        print("watching", flush=True)
+        while True:
+            for event in ws.wait():
+                if event.kind == ln.WaitKind.DATA:
+                    while (packet := sub.read(timeout=0)) is not None:
+                        print(f"got {sub.info.seq} {packet.counter} OK", flush=True)
+                else:
+                    print(event.kind.name.lower(), flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     sub = parser.add_subparsers(dest="mode", required=True)
@@ -108,9 +124,14 @@ def main() -> None:
     c = sub.add_parser("call")
     c.add_argument("service")
     c.add_argument("--count", type=int, default=10)
+    w = sub.add_parser("watch")
+    w.add_argument("topic")
+    w.add_argument("md")
+    w.add_argument("--transport", choices=("udp", "tcp"))
     args = parser.parse_args()
     clnt = ln.client(f"net-{args.mode}")
-    {"pub": publish, "sub": subscribe, "provide": provide, "call": call}[args.mode](clnt, args)
+    {"pub": publish, "sub": subscribe, "provide": provide, "call": call,
+     "watch": watch}[args.mode](clnt, args)
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import sys
 
+import pytest
 from polling import wait_for
 
 from .conftest import DAEMON_PORT, HERE, System
@@ -278,6 +279,45 @@ def test_a_publisher_back_on_its_host_reaches_the_other_hosts(system: System) ->
     got = wait_for(lambda: [r for r in system.received(system.output("sub")) if r[0] > 200],
                    "b to receive the second publisher's samples")
     assert all(1 <= counter <= 20 and seq == 200 + counter for seq, counter, _ in got), got
+
+
+@pytest.mark.parametrize("transport", ["udp", "tcp"])
+def test_a_waitset_on_another_host_sees_samples_and_the_publisher_gone_and_back(
+        system: System, transport: str) -> None:
+    """A waitset on b watches a topic published on a: the forwarded samples wake it (the
+    receiving daemon rings its bell), and the publisher's death and a new publisher reach it
+    as "gone" and "back" through the counts the manager sets on b's ring."""
+    system.start_daemons()
+    lnc = system.lnc(system.process("watch", "b", f"watch net.ws nettest/sample "
+                                    f"--transport {transport}", "watching"))
+    system.run(lnc)
+
+    def events() -> list[str]:
+        return [line for line in system.output("watch") if line in ("back", "gone")
+                or line.startswith("got ")]
+
+    def counters(lines: list[str]) -> list[int]:
+        return [int(line.split()[2]) for line in lines if line.startswith("got ")]
+
+    first = system.client("a", "pub", "net.ws", "nettest/sample", "--rate", "50")
+    got = wait_for(lambda: len(counters(events())) >= 3 and events(), "b to see samples")
+    assert got[0] == "back", got
+    seen = counters(got)
+    assert seen == sorted(seen) and len(set(seen)) == len(seen), got
+    first.kill()
+    first.wait()
+    wait_for(lambda: "gone" in events(), "the waitset on b to see the publisher gone")
+    system.client("a", "pub", "net.ws", "nettest/sample", "--rate", "50")
+
+    def after_gone() -> list[str] | None:
+        lines = events()
+        tail = lines[lines.index("gone"):]
+        return tail if len(counters(tail)) >= 3 else None
+
+    after = wait_for(after_gone, "the new publisher's samples")
+    assert after[:2] == ["gone", "back"], after
+    again = counters(after)
+    assert again == sorted(again) and len(set(again)) == len(again), after
 
 
 def test_processes_reach_a_manager_whose_host_is_not_configured(system: System) -> None:
