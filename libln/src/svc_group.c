@@ -317,6 +317,18 @@ static int remaining_ms(const struct timespec* deadline)
     return left > 1e6 ? 1000000000 : (int)ceil(left * 1000.0);
 }
 
+/* The existing group `group` of clnt, which no thread pool handles (its thread handles it). */
+static int unpooled_group(ln_client* clnt, const char* group, ln_svc_group** out)
+{
+    int rc = ln_svc_group_get(clnt, group, 0, out);
+    if (rc != LN_OK)
+        return rc;
+    if ((*out)->pool != NULL)
+        return ln_set_error(clnt, LN_EBUSY, "service group %s is handled by thread pool \"%s\"",
+                            shown((*out)->name), (*out)->pool->name);
+    return LN_OK;
+}
+
 int ln_wait_and_handle_service_group_requests(ln_client* clnt, const char* group, double timeout)
 {
     int rc = ln_client_check(clnt);
@@ -326,12 +338,8 @@ int ln_wait_and_handle_service_group_requests(ln_client* clnt, const char* group
         return ln_set_error(clnt, LN_EINVAL,
                             "wait_and_handle_service_group_requests: timeout is NaN");
     ln_svc_group* g;
-    rc = ln_svc_group_get(clnt, group, 0, &g);
-    if (rc != LN_OK)
+    if ((rc = unpooled_group(clnt, group, &g)) != LN_OK)
         return rc;
-    if (g->pool != NULL)
-        return ln_set_error(clnt, LN_EBUSY, "service group %s is handled by thread pool \"%s\"",
-                            shown(g->name), g->pool->name);
     if (tls_handling != NULL)
         return ln_set_error(clnt, LN_EBUSY,
                             "wait_and_handle_service_group_requests called from a handler");
@@ -595,12 +603,8 @@ int ln_svc_group_wait_fd(ln_client* clnt, const char* group, int* fd)
     if (rc != LN_OK)
         return rc;
     ln_svc_group* g;
-    rc = ln_svc_group_get(clnt, group, 0, &g);
-    if (rc != LN_OK)
+    if ((rc = unpooled_group(clnt, group, &g)) != LN_OK)
         return rc;
-    if (g->pool != NULL)
-        return ln_set_error(clnt, LN_EBUSY, "service group %s is handled by thread pool \"%s\"",
-                            shown(g->name), g->pool->name);
     *fd = g->epfd;
     return LN_OK;
 }

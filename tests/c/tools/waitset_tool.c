@@ -9,7 +9,8 @@
  *       prints "tick COUNT LATE_US" per report, then "done"
  *   waitset_tool many TOPIC N               N subscribers of TOPIC.0 .. TOPIC.N-1 attached,
  *       "ready", then prints "data I VALUE" for each sample until value 0 arrives on one
- *   waitset_tool bad                        bad input: prints "NAME CODE" per check
+ *   waitset_tool bad [TOPIC]                bad input: prints "NAME CODE" per check (with
+ *       TOPIC and a manager also those that need a real inport)
  *   waitset_tool race SECONDS TOPIC         one thread waits, another attaches and detaches
  *       timers, an inport and triggers for SECONDS (for the sanitizers): prints "ok WAITS" */
 #define _POSIX_C_SOURCE 200809L
@@ -170,7 +171,7 @@ static void check(const char* name, int rc)
     printf("%s %s\n", name, rc == LN_OK ? "OK" : ln_error_name(rc));
 }
 
-static int bad(void)
+static int bad(ln_client* c, const char* topic)
 {
     ln_waitset* ws;
     ln_waitset_event ev[1];
@@ -183,8 +184,6 @@ static int bad(void)
     check("wait_nan", ln_waitset_wait(ws, 0.0 / 0.0, ev, 1));
     check("wait_negative_poll", ln_waitset_wait(ws, 0, ev, 1) == 0 ? LN_OK : LN_EPROTOCOL);
     check("attach_null_inport", ln_waitset_attach_inport(ws, NULL, 0, 0, NULL, NULL));
-    check("attach_negative_deadline",
-          ln_waitset_attach_inport(ws, (ln_inport*)ev, 0, -1, NULL, NULL));
     check("attach_bad_fd", ln_waitset_attach_fd(ws, -1, LN_WAIT_READABLE, NULL, NULL));
     check("attach_closed_fd", ln_waitset_attach_fd(ws, 1000, LN_WAIT_READABLE, NULL, NULL));
     check("attach_no_events", ln_waitset_attach_fd(ws, 0, 0, NULL, NULL));
@@ -196,8 +195,24 @@ static int bad(void)
     check("provider_null", ln_waitset_attach_provider(ws, NULL, NULL, NULL));
     check("params_null", ln_waitset_attach_parameter_block(ws, NULL, NULL, NULL));
     check("trigger_null", ln_waitset_trigger(NULL));
+    if (c != NULL) { /* with a manager: checks that need a real inport */
+        ln_inport* in;
+        int rc2 = subscribe(c, &in, topic, 1);
+        if (rc2 != LN_OK)
+            return fail("subscribe", rc2);
+        check("attach_negative_deadline", ln_waitset_attach_inport(ws, in, 0, -1, NULL, NULL));
+        check("attach_nan_deadline", ln_waitset_attach_inport(ws, in, 0, 0.0 / 0.0, NULL, NULL));
+        check("attach_bad_flags", ln_waitset_attach_inport(ws, in, 0x80, 0, NULL, NULL));
+        check("attach_inport", ln_waitset_attach_inport(ws, in, 0, 0, NULL, NULL));
+        check("attach_inport_twice", ln_waitset_attach_inport(ws, in, 0, 0, NULL, NULL));
+        ln_waitset* other;
+        ln_waitset_create(&other);
+        check("attach_inport_elsewhere", ln_waitset_attach_inport(other, in, 0, 0, NULL, NULL));
+        ln_waitset_destroy(other);
+        check("group_none", ln_waitset_attach_service_group(ws, c, "no.such.group", NULL, NULL));
+        ln_unsubscribe(in); /* detaches it */
+    }
     check("destroy", ln_waitset_destroy(ws));
-    check("destroy_again", ln_waitset_destroy(ws));
     return 0;
 }
 
@@ -257,8 +272,8 @@ static int race(ln_client* c, double seconds, const char* topic)
 
 int main(int argc, char** argv)
 {
-    if (argc >= 2 && strcmp(argv[1], "bad") == 0)
-        return bad();
+    if (argc == 2 && strcmp(argv[1], "bad") == 0)
+        return bad(NULL, NULL);
     if (argc == 4 && strcmp(argv[1], "timer") == 0)
         return timer(atoi(argv[2]), atoi(argv[3]));
     ln_client* c;
@@ -269,6 +284,8 @@ int main(int argc, char** argv)
         rc = watch(c, argv[2], atof(argv[3]), atof(argv[4]));
     else if (argc == 4 && strcmp(argv[1], "many") == 0)
         rc = many(c, argv[2], atoi(argv[3]));
+    else if (argc == 3 && strcmp(argv[1], "bad") == 0)
+        rc = bad(c, argv[2]);
     else if (argc == 4 && strcmp(argv[1], "race") == 0)
         rc = race(c, atof(argv[2]), argv[3]);
     else {

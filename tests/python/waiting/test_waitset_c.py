@@ -175,21 +175,33 @@ def test_attach_and_detach_from_another_thread(manager: Manager) -> None:
         assert line.startswith("ok ")
 
 
+BAD_WITHOUT_MANAGER = {
+    "create_null": "EINVAL", "wait_null_array": "EINVAL", "wait_zero_size": "EINVAL",
+    "wait_nan": "EINVAL", "wait_negative_poll": "OK", "attach_null_inport": "EBADHANDLE",
+    "attach_bad_fd": "EINVAL", "attach_closed_fd": "ESYS", "attach_no_events": "EINVAL",
+    "timer_negative": "EINVAL", "timer_never": "EINVAL", "detach_unknown": "ENOTFOUND",
+    "deadline_unknown": "ENOTFOUND", "group_null_client": "EBADHANDLE",
+    "provider_null": "EBADHANDLE", "params_null": "EBADHANDLE", "trigger_null": "EBADHANDLE",
+    "destroy": "OK"}
+
+
 def test_bad_input_gets_codes_not_crashes() -> None:
     if not WAITSET_TOOL.exists():
         pytest.fail(f"{WAITSET_TOOL} is missing: run scons first")
     out = subprocess.run([str(WAITSET_TOOL), "bad"], capture_output=True, text=True,
                          timeout=LIMIT, check=True).stdout
-    got = dict(line.split() for line in out.splitlines())
-    assert got == {
-        "create_null": "EINVAL", "wait_null_array": "EINVAL", "wait_zero_size": "EINVAL",
-        "wait_nan": "EINVAL", "wait_negative_poll": "OK", "attach_null_inport": "EBADHANDLE",
-        "attach_negative_deadline": "EBADHANDLE", "attach_bad_fd": "EINVAL",
-        "attach_closed_fd": "ESYS", "attach_no_events": "EINVAL", "timer_negative": "EINVAL",
-        "timer_never": "EINVAL", "detach_unknown": "ENOTFOUND",
-        "deadline_unknown": "ENOTFOUND", "group_null_client": "EBADHANDLE",
-        "provider_null": "EBADHANDLE", "params_null": "EBADHANDLE",
-        "trigger_null": "EBADHANDLE", "destroy": "OK", "destroy_again": "EBADHANDLE"}
+    assert dict(line.split() for line in out.splitlines()) == BAD_WITHOUT_MANAGER
+
+
+def test_bad_input_on_a_real_inport(manager: Manager) -> None:
+    proc = tool(manager, "bad", "ws.bad")
+    assert proc.wait(timeout=LIMIT) == 0
+    assert proc.stdout is not None
+    got = dict(line.split() for line in proc.stdout.read().splitlines())
+    assert got == {**BAD_WITHOUT_MANAGER, "attach_negative_deadline": "EINVAL",
+                   "attach_nan_deadline": "EINVAL", "attach_bad_flags": "EINVAL",
+                   "attach_inport": "OK", "attach_inport_twice": "EBUSY",
+                   "attach_inport_elsewhere": "EBUSY", "group_none": "ENOTFOUND"}
 
 
 def shm_names(instance: str) -> set[str]:
