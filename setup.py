@@ -1,8 +1,8 @@
 """What pyproject.toml cannot say: a wheel built by build_backend/links_and_nodes_build.py
 carries the native parts of $LN_NATIVE_BUILD_DIR (a SCons variant directory) in the package
 (lib/, bin/, include/: python/links_and_nodes/bundled.py finds them) and uPlot in the web UI's
-static/vendor, and is tagged for the platform (py3-none: ctypes, no Python ABI); an sdist
-carries uPlot too, so installing it needs no npm.  Without $LN_NATIVE_BUILD_DIR (editable
+static/vendor (with dagre, the graph view's layout), and is tagged for the platform
+(py3-none: ctypes, no Python ABI); an sdist carries them too, so installing it needs no npm.  Without $LN_NATIVE_BUILD_DIR (editable
 installs) the build is Python-only."""
 
 import atexit
@@ -20,6 +20,7 @@ HERE = Path(__file__).resolve().parent
 NATIVE_DIR = os.environ.get("LN_NATIVE_BUILD_DIR")
 VENDOR = "python/links_and_nodes/manager/frontends/webui/static/vendor"
 UPLOT = ["uPlot.iife.min.js", "uPlot.min.css", "LICENSE"]
+DAGRE = ["dagre.min.js", "dagre.LICENSE"]
 # (from, to): from the variant directory (or the source tree, "#..."), to the package
 NATIVE = [("libln/libln.so.1.0.0", "lib/libln.so.1"),
           ("libln_pull/libln_pull.so.1.0.0", "lib/libln_pull.so.1"),
@@ -40,6 +41,23 @@ def uplot_dir() -> Path:
                      "build/webui/uplot)")
 
 
+def dagre_dir() -> Path:
+    """dagre: in an unpacked sdist already in static/vendor, in a checkout in build/webui."""
+    for d in (HERE / VENDOR, HERE / "build" / "webui" / "dagre"):
+        if all((d / f).is_file() for f in DAGRE):
+            return d
+    raise SystemExit("dagre is missing: run `scons` (it fetches dagre with npm into "
+                     "build/webui/dagre)")
+
+
+def copy_vendor(vendor: Path) -> None:
+    """uPlot and dagre into a package's static/vendor."""
+    vendor.mkdir(parents=True, exist_ok=True)
+    for names, where in ((UPLOT, uplot_dir()), (DAGRE, dagre_dir())):
+        for name in names:
+            shutil.copy2(where / name, vendor / name)
+
+
 class BuildPy(build_py):
     def run(self) -> None:
         super().run()
@@ -55,19 +73,13 @@ class BuildPy(build_py):
         include.mkdir(parents=True, exist_ok=True)
         for header in HEADERS:
             shutil.copy2(HERE / header, include)
-        vendor = package / "manager" / "frontends" / "webui" / "static" / "vendor"
-        vendor.mkdir(parents=True, exist_ok=True)
-        for name in UPLOT:
-            shutil.copy2(uplot_dir() / name, vendor / name)
+        copy_vendor(package / "manager" / "frontends" / "webui" / "static" / "vendor")
 
 
 class Sdist(sdist):
     def make_release_tree(self, base_dir: str, files: list[str]) -> None:
         super().make_release_tree(base_dir, files)
-        vendor = Path(base_dir) / VENDOR
-        vendor.mkdir(parents=True, exist_ok=True)
-        for name in UPLOT:
-            shutil.copy2(uplot_dir() / name, vendor / name)
+        copy_vendor(Path(base_dir) / VENDOR)
 
 
 class BdistWheel(bdist_wheel):

@@ -38,8 +38,9 @@ def _scons_build(source: Path) -> Path:
     jobs = os.environ.get("LN_BUILD_JOBS") or str(os.cpu_count() or 1)
     cmd = [sys.executable, "-m", "SCons", "-j", jobs, "zenoh_core=no", "rust=no"]
     cmd += [str(variant / t) for t in TARGETS]
-    if not (source / VENDOR / "uPlot.iife.min.js").is_file():
-        cmd.append(str(source / "build" / "webui"))  # a checkout: uPlot with npm, as `scons`
+    if not (source / VENDOR / "uPlot.iife.min.js").is_file() \
+            or not (source / VENDOR / "dagre.min.js").is_file():
+        cmd.append(str(source / "build" / "webui"))  # a checkout: uPlot, dagre with npm
     print("links_and_nodes: building the native parts: " + " ".join(cmd), flush=True)
     # SCons writes its progress to stdout, which pip reserves for the hook's protocol.
     subprocess.run(cmd, cwd=source, check=True, stdout=sys.stderr)

@@ -117,6 +117,6 @@ int main(int argc, char **argv)
     lnd::Loggers loggers(opt.logger_memory);
     lnd::Pulls pulls;
     lnd::Server server(os, key, std::move(listener), std::move(signals), opt.log_file, host_id,
-                       {&net, &loggers, &pulls});
+                       {&net, &loggers, &pulls}, opt.resource_period);
     return server.run();
 }

@@ -8,6 +8,7 @@
 
 #include "forward.hpp"
 #include "loggers.hpp"
+#include "resources.hpp"
 
 #include <default_ports.h>
 
@@ -16,7 +17,7 @@ namespace lnd {
 const char kUsage[] =
     "usage: ln_daemon [--port P] [--bind ADDR] --key-file FILE [--log FILE] [--foreground]\n"
     "                 [--data-port P] [--advertise-data-port P] [--udp-fragment-size N]\n"
-    "                 [--spin-us N] [--logger-memory BYTES]\n"
+    "                 [--spin-us N] [--logger-memory BYTES] [--resource-period S]\n"
     "\n"
     "Supervises processes for ln_manager instances on this host and forwards topics\n"
     "between hosts (docs/daemon.md).\n"
@@ -46,7 +47,11 @@ const char kUsage[] =
                                 "  --logger-memory BYTES\n"
                                 "                  memory of all topic loggers together, with k, M "
                                 "or G for KiB, MiB,\n"
-                                "                  GiB (default 256M; 0 disables topic logging)\n";
+                                "                  GiB (default 256M; 0 disables topic logging)\n"
+                                "  --resource-period S\n"
+                                "                  default seconds between resource samples, "
+                                "0.1..3600 (default 1;\n"
+                                "                  0 disables them)\n";
 
 namespace {
 
@@ -112,6 +117,20 @@ bool parse_bytes(const char *text, uint64_t &out)
     return true;
 }
 
+// Seconds of --resource-period: 0, or kMinPeriod..kMaxPeriod.
+bool parse_period(const char *text, double &out)
+{
+    if (*text < '0' || *text > '9')
+        return false;
+    char *end;
+    errno = 0;
+    double v = std::strtod(text, &end);
+    if (errno || *end || !(v == 0 || (v >= res::kMinPeriod && v <= res::kMaxPeriod)))
+        return false;
+    out = v;
+    return true;
+}
+
 } // namespace
 
 Outcome port_from_environment(unsigned &port)
@@ -140,6 +159,7 @@ Outcome parse_options(int argc, char **argv, Options &out)
         {"udp-fragment-size", required_argument, nullptr, 's'},
         {"spin-us", required_argument, nullptr, 'w'},
         {"logger-memory", required_argument, nullptr, 'm'},
+        {"resource-period", required_argument, nullptr, 'r'},
         {"help", no_argument, nullptr, 'h'},
         {nullptr, 0, nullptr, 0},
     };
@@ -182,6 +202,10 @@ Outcome parse_options(int argc, char **argv, Options &out)
             if (!parse_bytes(optarg, out.logger_memory))
                 return usage("--logger-memory needs a number of bytes, optionally with k, M or G "
                              "(e.g. 256M)");
+            break;
+        case 'r':
+            if (!parse_period(optarg, out.resource_period))
+                return usage("--resource-period needs seconds 0.1..3600, or 0");
             break;
         case 'h':
             out.help = true;

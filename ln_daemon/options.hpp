@@ -23,7 +23,8 @@ struct Options {
     unsigned long udp_fragment = 0;
     unsigned long spin_us = 0;
     uint64_t logger_memory = 0;
-    bool help = false; // --help: print the usage and end
+    double resource_period = 1.0; // seconds, the default of RESOURCES; 0: refused
+    bool help = false;            // --help: print the usage and end
 };
 
 // The TCP port from $LN_ARBITER_PORT, else the default, into `port`.

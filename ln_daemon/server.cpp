@@ -5,6 +5,7 @@
 // nothing but its connection.
 #include "server.hpp"
 
+#include <algorithm>
 #include <arpa/inet.h>
 #include <cerrno>
 #include <climits>
@@ -42,9 +43,11 @@ struct Connection {
     Key to_client;
     uint64_t seq_in = 0;
     uint64_t seq_out = 0;
-    double deadline = 0; // monotonic: handshake or linger ends
-    bool shut = false;   // closing: our side is shut down
-    bool dead = false;   // to be erased at the end of the round
+    double deadline = 0;        // monotonic: handshake or linger ends
+    double resource_period = 0; // RESOURCES: seconds between EV_RESOURCES, 0: none
+    double resource_due = 0;    // monotonic
+    bool shut = false;          // closing: our side is shut down
+    bool dead = false;          // to be erased at the end of the round
 };
 
 namespace {
@@ -80,10 +83,10 @@ const char *msg_name(uint8_t type) noexcept
 } // namespace
 
 Server::Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
-               std::string host_id, std::vector<Feature *> features)
+               std::string host_id, std::vector<Feature *> features, double resource_period)
     : os_(os), key_(key), listener_(std::move(listener)), signals_(std::move(signals)),
       log_path_(std::move(log_path)), processes_(os, *this, std::move(host_id)),
-      supervisor_(processes_.supervisor())
+      supervisor_(processes_.supervisor()), resource_period_(resource_period)
 {
     features_.push_back(&processes_);
     features_.insert(features_.end(), features.begin(), features.end());
@@ -384,6 +387,8 @@ void Server::handle_request(Connection &c, uint8_t type, uint32_t req, proto::Re
             return malformed();
         return send(c, Msg::ok, req, {});
     }
+    if (type == static_cast<uint8_t>(Msg::resources))
+        return resources_request(c, req, r);
     Feature *feature = owner(type);
     if (!feature) {
         refuse(c, req, Err::bad_request, "unknown message type " + std::to_string(type));
@@ -465,6 +470,83 @@ void Server::exited(const Process &p)
     broadcast(p.instance(), Msg::ev_exited, w.buffer());
 }
 
+// ---- resource samples --------------------------------------------------------------------
+
+void Server::resources_request(Connection &c, uint32_t req, proto::Reader &r)
+{
+    wire::Resources body;
+    if (!wire::decode(r, body) || std::isnan(body.period))
+        return refuse(c, req, Err::bad_request, "malformed RESOURCES request");
+    if (body.period < 0) {
+        c.resource_period = 0;
+        return send(c, Msg::ok, req, {});
+    }
+    if (resource_period_ <= 0)
+        return send_error(c, req, Err::limit,
+                          "resource samples are disabled (ln_daemon --resource-period 0)");
+    double period = body.period == 0 ? resource_period_ : body.period;
+    c.resource_period = std::min(std::max(period, res::kMinPeriod), res::kMaxPeriod);
+    c.resource_due = os_.monotonic(); // the first sample at once: a baseline for the rates
+    send(c, Msg::ok, req, {});
+}
+
+double Server::resources_due() const noexcept
+{
+    double due = HUGE_VAL;
+    for (const auto &entry : conns_) {
+        const Connection &c = *entry.second;
+        if (c.resource_period > 0 && c.phase == Connection::Phase::ready)
+            due = std::min(due, c.resource_due);
+    }
+    return due;
+}
+
+// One host sample for every connection that is due, and per connection the running processes
+// of its instance.  A failure (an unreadable /proc) is logged once and skips the round.
+void Server::send_resources(double now)
+{
+    if (resources_due() > now)
+        return;
+    Outcome host = sampler_.sample_host(now, sample_);
+    if (host.failed()) {
+        if (!sample_failed_)
+            logf("resource sample failed: %s", host.text.c_str());
+        sample_failed_ = true;
+    } else {
+        sample_failed_ = false;
+    }
+    char name[256] = "";
+    ::gethostname(name, sizeof name - 1);
+    sample_.host = name;
+    sample_.time = os_.wall();
+    for (auto &entry : conns_) {
+        Connection &c = *entry.second;
+        if (c.resource_period <= 0 || c.phase != Connection::Phase::ready || c.dead ||
+            c.resource_due > now)
+            continue;
+        c.resource_due = std::max(c.resource_due + c.resource_period, now);
+        if (host.failed())
+            continue;
+        size_t n = 0;
+        for (const Process *p : supervisor_.list(c.instance)) {
+            if (p->state() != State::running && p->state() != State::stopping)
+                continue;
+            if (n == sample_.processes.size())
+                sample_.processes.emplace_back();
+            wire::ProcessResources &pr = sample_.processes[n];
+            if (sampler_.sample_process(p->pid(), now, pr).failed())
+                continue; // gone meanwhile: its exit follows
+            pr.name = p->name();
+            ++n;
+        }
+        sample_.processes.resize(n);
+        proto::Writer w;
+        wire::encode(w, sample_);
+        send(c, Msg::ev_resources, 0, w.buffer());
+    }
+    sampler_.forget_older(now - 2 * res::kMaxPeriod);
+}
+
 // ---- the loop ----------------------------------------------------------------------------
 
 void Server::begin_shutdown()
@@ -535,7 +617,7 @@ int Server::run()
         size_t proc_base = fds.size();
         supervisor_.collect_fds(fds, proc_refs);
 
-        double due = supervisor_.next_deadline();
+        double due = std::min(supervisor_.next_deadline(), resources_due());
         if (listener_ && !accepting)
             due = std::min(due, accept_paused_until_);
         for (auto &entry : conns_)
@@ -570,6 +652,7 @@ int Server::run()
         }
         supervisor_.tick();
         double now = os_.monotonic();
+        send_resources(now);
         for (auto it = conns_.begin(); it != conns_.end();) {
             Connection &c = *it->second;
             if (!c.dead && c.phase == Connection::Phase::handshake && now >= c.deadline)

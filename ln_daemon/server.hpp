@@ -19,6 +19,7 @@
 #include "process.hpp"
 #include "processes.hpp"
 #include "protocol.hpp"
+#include "resources.hpp"
 
 namespace lnd {
 
@@ -36,8 +37,10 @@ public:
     // SIGCHLD, SIGTERM, SIGINT and SIGHUP.  `log_path` is reopened on SIGHUP.  `host_id`
     // is the LN_HOST_ID of spawned processes.  The server runs the process requests itself;
     // `features` take the others (in this order at shutdown) and must outlive the server.
+    // `resource_period` is the default period of RESOURCES (0: resource samples are refused).
     Server(Os &os, const Key &key, UniqueFd listener, UniqueFd signals, std::string log_path,
-           std::string host_id, std::vector<Feature *> features);
+           std::string host_id, std::vector<Feature *> features,
+           double resource_period = res::kDefaultPeriod);
     ~Server() override;
     // Runs until SIGTERM/SIGINT has stopped every process, then shuts the features down;
     // returns the exit status.
@@ -67,6 +70,11 @@ private:
     void drop(Connection &c, const char *why);
     void broadcast(const std::string &instance, proto::Msg type, const std::string &payload);
     void begin_shutdown();
+    // RESOURCES: this connection's period of EV_RESOURCES.
+    void resources_request(Connection &c, uint32_t req, proto::Reader &r);
+    // The next EV_RESOURCES due (monotonic; +inf if none); sends those due at `now`.
+    double resources_due() const noexcept;
+    void send_resources(double now);
 
     Os &os_;
     Key key_;
@@ -83,6 +91,10 @@ private:
     std::unordered_map<uint64_t, std::pair<uint64_t, uint32_t>> pending_;
     int shutdown_signals_ = 0;
     double accept_paused_until_ = 0; // monotonic
+    double resource_period_;
+    res::Sampler sampler_;
+    wire::EvResources sample_;   // reused: its vectors keep their capacity
+    bool sample_failed_ = false; // logged once until a sample succeeds again
 };
 
 } // namespace lnd

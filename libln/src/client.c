@@ -323,6 +323,8 @@ int ln_client_destroy(ln_client* clnt)
     int rc = ln_client_check(clnt);
     if (rc != LN_OK)
         return rc;
+    /* What ln_log queued goes out while the connection is still there. */
+    ln_log_stop(clnt);
     /* The monitor first: it re-registers ports, which are closed below.  Its connect or
      * re-registration is cut short, so this never waits for a manager that is away. */
     ln_conn_stop_monitor(clnt);

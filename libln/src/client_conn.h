@@ -1,6 +1,7 @@
 /* client_conn.h — the inside of a client handle, shared by client.c (handle, ports, options,
- * create/destroy) and client_conn.c (the manager connection: handshake and requests).
- * Nothing else in libln may include it: the rest uses client_internal.h. */
+ * create/destroy), client_conn.c (the manager connection: handshake and requests) and
+ * client_log.c (the log queue).  Nothing else in libln may include it: the rest uses
+ * client_internal.h. */
 #ifndef LN_CLIENT_CONN_H
 #define LN_CLIENT_CONN_H
 
@@ -62,6 +63,8 @@ struct ln_client {
     struct ln_svc_state* svc; /* service groups and pools (svc_group.c), created on first use */
 
     struct ln_replay_clock* _Atomic clock; /* what ln_now follows (clock.c); NULL: realtime */
+
+    struct ln_log_queue* _Atomic log; /* ln_log's queue and sender (client_log.c), on first use */
 };
 
 /* Connects to c->host:c->port, sends HELLO as `name` and takes the WELCOME (client_id, name,
@@ -73,6 +76,8 @@ int ln_conn_open(ln_client* c, const char* from, const char* name);
 int ln_conn_start_monitor(ln_client* c);
 /* Stops and joins the monitor, wherever it is (ln_client_destroy, before closing ports). */
 void ln_conn_stop_monitor(ln_client* c);
+/* Sends what ln_log queued and ends the log sender thread (ln_client_destroy, first). */
+void ln_log_stop(ln_client* c);
 /* Closes the connection (if still open) and frees its buffers. */
 void ln_conn_close(ln_client* c);
 

@@ -34,6 +34,7 @@ _PULL_NAMES = ("PullSample", "pull_subscribe")
 __all__ += list(_PULL_NAMES)
 _WAITSET_NAMES = ("Attachment", "FdEvents", "WaitEvent", "WaitKind", "WaitSet")
 __all__ += list(_WAITSET_NAMES)
+__all__ += ["LogHandler"]
 
 
 def __getattr__(name: str) -> Any:
@@ -67,6 +68,10 @@ def __getattr__(name: str) -> Any:
         from . import _waitset
 
         return getattr(_waitset, name)
+    if name == "LogHandler":
+        from . import _log_handler
+
+        return _log_handler.LogHandler
     if name.startswith("Ln") and name.endswith("Error"):
         from . import _libln
 

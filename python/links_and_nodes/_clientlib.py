@@ -100,6 +100,14 @@ ln_control = _declare("ln_control", c_int, [c_void_p, c_char_p, ctypes.POINTER(c
                       _check)
 ln_free = _declare("ln_free", None, [c_void_p])
 
+# ---- client logging (ln.LogHandler); ln_log_text's LN_EAGAIN (dropped) is no exception ----
+ln_log_text = _declare("ln_log_text", c_int, [c_void_p, c_int, c_char_p, c_int, c_char_p,
+                                              c_char_p])
+ln_log_set_level = _declare("ln_log_set_level", c_int, [c_void_p, c_int], _check)
+ln_log_counts = _declare("ln_log_counts", c_int, [c_void_p, ctypes.POINTER(c_uint64),
+                                                  ctypes.POINTER(c_uint64)], _check)
+ln_log_flush = _declare("ln_log_flush", c_int, [c_void_p, ctypes.c_double], _check)
+
 # ---- services ----------------------------------------------------------------------------
 LN_EINTR = _error_code("EINTR")
 # int handler(ln_client*, ln_service_request*, void* user_data); ctypes takes the GIL for it,

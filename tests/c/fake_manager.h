@@ -22,6 +22,8 @@
 #include "../../libln/src/net.c"
 #include "../../libln/src/client.c"
 #include "../../libln/src/client_conn.c"
+#include "../../libln/src/log_format.c"
+#include "../../libln/src/client_log.c"
 #include "../../libln/src/host_id.c" /* ln_host_id: not exported by libln.so */
 
 /* client.c stops and frees service groups on destroy; these tests link no service code and

@@ -356,7 +356,7 @@ static void test_message_types(void)
     int known = 0;
     for (uint32_t t = 0; t <= UINT16_MAX; t++)
         known += ln_proto_type_known((uint16_t)t);
-    LN_CHECK_EQ(known, 18);
+    LN_CHECK_EQ(known, 19);
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_RECLAIM_PORT), LN_MSG_PORT_OK);
     LN_CHECK_STREQ(ln_proto_type_name(LN_MSG_RECLAIM_PORT), "RECLAIM_PORT");
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_REGISTER_SERVICE), LN_MSG_OK);
@@ -366,6 +366,8 @@ static void test_message_types(void)
     LN_CHECK(ln_proto_to_client(LN_MSG_SERVICE_INFO) && !ln_proto_to_client(LN_MSG_FIND_SERVICE));
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_CONTROL), LN_MSG_CONTROL_RESULT);
     LN_CHECK(ln_proto_to_client(LN_MSG_CONTROL_RESULT) && !ln_proto_to_client(LN_MSG_CONTROL));
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_LOG), LN_MSG_OK);
+    LN_CHECK(!ln_proto_to_client(LN_MSG_LOG));
 }
 
 static void test_text_fields(void)

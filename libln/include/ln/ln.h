@@ -454,6 +454,48 @@ LN_EXPORT int ln_logger_disable(ln_logger* lg);
 LN_EXPORT int ln_logger_save(ln_logger* lg, const char* path);
 LN_EXPORT void ln_logger_close(ln_logger* lg);
 
+/* ==== client logging (docs/logging.md, "Client logging") ==================================
+ * Log lines with a level, the time, file:line and the text, collected by the manager from
+ * every client (`ln_manager log`, the web UI's log page, `ln_record --logs`).  A call copies
+ * the format and its arguments (strings too) into a slot of a bounded queue of the client (no
+ * lock, no system call, never waits); a thread of the client formats them (printf's rules)
+ * and sends the queue to the manager in batches on the client's connection.  Formats with
+ * %n, %L, %ls/%lc, positional or more than 16 arguments are formatted at once instead.  When the queue is full the line is dropped and counted (ln_log_counts; the
+ * manager shows the count per client).  The queue and its thread start with the first line
+ * and end with the client (ln_client_destroy sends what is queued first, waiting at most the
+ * client's timeout).  Texts longer than LN_LOG_TEXT_MAX - 1 bytes are cut; bytes that are
+ * not UTF-8 become '?'. */
+#define LN_LOG_DEBUG 10 /* the numbers of Python's logging levels */
+#define LN_LOG_INFO 20
+#define LN_LOG_WARNING 30
+#define LN_LOG_ERROR 40
+#define LN_LOG_CRITICAL 50
+#define LN_LOG_TEXT_MAX 512 /* bytes of one line's text, NUL included */
+#define LN_LOG_QUEUE 1024   /* lines a client's queue holds */
+
+/* LN_OK (queued), LN_EAGAIN (the queue is full: dropped and counted), LN_EINVAL (a level
+ * outside LN_LOG_DEBUG..LN_LOG_CRITICAL or fmt NULL), LN_EBADHANDLE; a line below the
+ * client's level (ln_log_set_level) is LN_OK and not sent.  Thread-safe. */
+LN_EXPORT int ln_log(ln_client* clnt, int level, const char* fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+/* The same with where it was logged: `file` (NULL: none) and `line`. */
+LN_EXPORT int ln_log_at(ln_client* clnt, int level, const char* file, int line, const char* fmt,
+                        ...) __attribute__((format(printf, 5, 6)));
+/* For bindings: a ready text (no formatting) and the name of the logger it came from (Python's
+ * logger name; NULL or "": none). */
+LN_EXPORT int ln_log_text(ln_client* clnt, int level, const char* file, int line,
+                          const char* logger, const char* text);
+/* `LN_LOG(clnt, LN_LOG_WARNING, "speed %g", v)`: ln_log_at with __FILE__ and __LINE__. */
+#define LN_LOG(clnt, level, ...) ln_log_at((clnt), (level), __FILE__, __LINE__, __VA_ARGS__)
+/* Lines below `level` are not sent (default LN_LOG_DEBUG: all). */
+LN_EXPORT int ln_log_set_level(ln_client* clnt, int level);
+/* Lines queued so far and lines dropped so far (the queue was full, or the manager could
+ * not be reached when they were sent); either pointer may be NULL. */
+LN_EXPORT int ln_log_counts(ln_client* clnt, uint64_t* queued, uint64_t* dropped);
+/* Wait until every line queued before the call has been sent (or dropped): LN_OK, or
+ * LN_ETIMEOUT after `timeout` seconds (< 0: forever).  Not for the fast path: it waits. */
+LN_EXPORT int ln_log_flush(ln_client* clnt, double timeout);
+
 /* ==== parameter blocks (docs/parameters.md) ================================================
  * A block is a named set of typed parameters of one client.  Each parameter has an input
  * (a variable of the program, or none: then its default) and an output the program uses; the

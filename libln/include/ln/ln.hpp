@@ -83,6 +83,18 @@ public:
     detail::client_ptr share() const noexcept { return c_; }
     std::string name() const { return ln_client_name(c_.get()); }
 
+    // A log line for the manager (ln.h, ln_log): never blocks; false when the queue was full
+    // and the line was dropped (counted).  file/line default to the caller's (GCC, Clang).
+    bool log(int level, const std::string& text, const char* file = __builtin_FILE(),
+             int line = __builtin_LINE())
+    {
+        int rc = ln_log_text(c_.get(), level, file, line, nullptr, text.c_str());
+        if (rc == LN_EAGAIN)
+            return false;
+        check(rc);
+        return true;
+    }
+
     // The replay clock: after use_clock(), now() follows the ln_play --clock on `topic`
     // ("" = "ln.clock"); before that it is CLOCK_REALTIME.  ns since the epoch; 0 before the
     // first clock sample.  Never blocks (ln.h, ln_now).

@@ -7,7 +7,8 @@ lists: a topic with a publisher that the rules select becomes a channel, a servi
 service; a topic without publishers or gone, or a service gone, is unadvertised.  The sdk calls
 on_subscribe/on_unsubscribe (ServerListener) from its threads: a channel reads its topic while
 at least one client subscribes.  The lock guards the dicts only; sdk calls are made without it,
-as the sdk may call back into the listener from within them.
+as the sdk may call back into the listener from within them.  While a client subscribes to
+the connection graph, `poll()` also publishes the manager's `graph` when it changed (graph.py).
 """
 
 from __future__ import annotations
@@ -21,7 +22,9 @@ from ..tools.introspection.client import load_md
 from ..tools.introspection.commands import CommandError, topic_layout
 from .config import FoxgloveConfig
 from .front import LEGACY, SDK, Front
+from .graph import ConnectionGraphFeed
 from .link import ManagerLink
+from .log_feed import LogFeed
 from .services import BridgedService
 from .topics import TopicChannel
 
@@ -47,6 +50,9 @@ class Bridge:
         self._failed: dict[str, float] = {}  # "kind:name" -> when it may be tried again
         self._reasons: dict[str, str] = {}
         self._listing_error: str | None = None
+        self.graph = ConnectionGraphFeed()
+        self.logs: LogFeed | None = None  # the ln.log channel (log_feed.py), from start()
+        self._graph_error: str | None = None
 
     def say(self, text: str, verbose: bool = False) -> None:
         if self.config.verbose or not verbose:
@@ -73,8 +79,10 @@ class Bridge:
             name=f"links_and_nodes {self.link.instance}",
             host=self.config.host if direct else "127.0.0.1",
             port=self.config.port if direct else 0,
-            capabilities=[Capability.Services] if self.config.offer_services else [],
+            capabilities=[Capability.ConnectionGraph]
+            + ([Capability.Services] if self.config.offer_services else []),
             supported_encodings=["json"], server_listener=self, context=self.context)
+        self.logs = LogFeed(self.context)
         if direct:
             self.port = self.server.port
             protocols = SDK
@@ -117,6 +125,12 @@ class Bridge:
             else:
                 topic.unsubscribe(client.id)
 
+    def on_connection_graph_subscribe(self) -> None:
+        self.graph.subscribe()  # published by the next poll: never from within this call
+
+    def on_connection_graph_unsubscribe(self) -> None:
+        self.graph.unsubscribe()
+
     # ---- following the manager -------------------------------------------------------------
     def poll(self) -> None:
         """Advertise what appeared in the manager's lists, unadvertise what went."""
@@ -136,6 +150,22 @@ class Bridge:
         self._follow_topics({str(t["name"]): t for t in topics
                              if t.get("md_name") and int(t.get("publishers", 0)) > 0}, now)
         self._follow_services({str(s["name"]): s for s in services if s.get("md_name")}, now)
+        if self.graph.wanted:
+            self._publish_graph()
+        if self.logs is not None:
+            self.logs.poll(self.link.control, self.say)
+
+    def _publish_graph(self) -> None:
+        try:
+            answer = self.link.control("graph", window=0)
+        except CommandError as exc:
+            if str(exc) != self._graph_error:  # said once per reason
+                self._graph_error = str(exc)
+                self.warn(f"cannot get the manager's graph (no connection graph): {exc}")
+            return
+        self._graph_error = None
+        if self.graph.publish(self.server, answer):
+            self.say("connection graph updated", verbose=True)
 
     def _follow_topics(self, present: dict[str, dict[str, Any]], now: float) -> None:
         with self._lock:
@@ -225,6 +255,7 @@ class Bridge:
                  f"errors {t.stats.errors}" for t in topics]
         lines += [f"service '{s.name}': {s.calls} calls, {s.failures} failed"
                   for s in sorted(self.services.values(), key=lambda s: s.name)]
+        lines.append(f"connection graph: {self.graph.published} updates published")
         if self.front is not None:
             lines.append(f"connections: {self.front.connections} "
                          f"({self.front.legacy_connections} asked for {LEGACY}), "

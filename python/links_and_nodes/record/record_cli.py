@@ -89,6 +89,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--services", action="append", default=[], metavar="RE",
                     help="also record the calls of the services whose whole name matches RE "
                     "(may be repeated; docs/recording.md, Service calls)")
+    ap.add_argument("--logs", action="store_true",
+                    help="also record the manager's log lines (ln_log, ln.LogHandler, "
+                         "log_level_regex) as foxglove.Log on channel ln.log")
     ap.add_argument("--poll", type=_seconds, default=1.0, metavar="S",
                     help="look for new topics every S seconds (default 1)")
     ap.add_argument("-q", "--quiet", action="store_true",
@@ -155,6 +158,11 @@ class Session:
         self.tty = sys.stderr.isatty()
         self.services = (ServiceRecording(self.recorder, address, args.services, self._line)
                          if args.services else None)
+        self.logs = None
+        if args.logs:
+            from .log_recording import LogRecording
+
+            self.logs = LogRecording(self.recorder, address, connect, self._line)
         self._last = (time.monotonic(), 0, 0)
         self._rates = (0.0, 0.0)
 
@@ -204,6 +212,8 @@ class Session:
     def finish(self) -> int:
         if self.services is not None:
             self.services.stop()
+        if self.logs is not None:
+            self.logs.stop()
         self.recorder.stop()
         error = self.recorder.error
         try:
@@ -218,7 +228,9 @@ class Session:
         rec = self.recorder
         files = ", ".join(str(p) for p in self.out.files)
         _say(self.args, f"{rec.samples} samples ({_mb(rec.bytes)}) of {len(rec.topics)} topics, "
-             f"{rec.drops} dropped, {_calls(self.services)}in {len(self.out.files)} files: "
+             f"{rec.drops} dropped, {_calls(self.services)}"
+             f"{'' if self.logs is None else f'{self.logs.lines} log lines, '}"
+             f"in {len(self.out.files)} files: "
              f"{files}")
         if error:
             print(f"ln_record: error: {error}", file=sys.stderr)
@@ -281,8 +293,8 @@ def run(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     ap = parser()
     args = ap.parse_args(argv)
-    if not (args.topics or args.all or args.regex or args.services):
-        ap.error("name topics to record, or give --all, --regex or --services")
+    if not (args.topics or args.all or args.regex or args.services or args.logs):
+        ap.error("name topics to record, or give --all, --regex, --services or --logs")
     for r in args.services:
         try:
             re.compile(r)

@@ -22,6 +22,12 @@ pub const LN_SUBSCRIBE_TCP: u32 = 0x200;
 pub const LN_DEFAULT_SPIN_US: u32 = 20;
 pub const LN_SERVICE_DEFAULT_MAX_SIZE: usize = 16 << 20;
 pub const LN_EVENT_MAX_NAME: usize = 160;
+pub const LN_LOG_DEBUG: c_int = 10;
+pub const LN_LOG_INFO: c_int = 20;
+pub const LN_LOG_WARNING: c_int = 30;
+pub const LN_LOG_ERROR: c_int = 40;
+pub const LN_LOG_CRITICAL: c_int = 50;
+pub const LN_LOG_TEXT_MAX: usize = 512;
 pub const LN_EVENT_MAX_CONNECT_SIZE: usize = 1024;
 pub const LN_EVENT_MAX_HANDLERS: usize = 256;
 pub const LN_PARAMETER_MIN: u32 = 0x1;
@@ -353,6 +359,28 @@ extern "C" {
     pub fn ln_logger_disable(lg: *mut ln_logger) -> c_int;
     pub fn ln_logger_save(lg: *mut ln_logger, path: *const c_char) -> c_int;
     pub fn ln_logger_close(lg: *mut ln_logger);
+
+    // ---- client logging
+    pub fn ln_log(clnt: *mut ln_client, level: c_int, fmt: *const c_char, ...) -> c_int;
+    pub fn ln_log_at(
+        clnt: *mut ln_client,
+        level: c_int,
+        file: *const c_char,
+        line: c_int,
+        fmt: *const c_char,
+        ...
+    ) -> c_int;
+    pub fn ln_log_text(
+        clnt: *mut ln_client,
+        level: c_int,
+        file: *const c_char,
+        line: c_int,
+        logger: *const c_char,
+        text: *const c_char,
+    ) -> c_int;
+    pub fn ln_log_set_level(clnt: *mut ln_client, level: c_int) -> c_int;
+    pub fn ln_log_counts(clnt: *mut ln_client, queued: *mut u64, dropped: *mut u64) -> c_int;
+    pub fn ln_log_flush(clnt: *mut ln_client, timeout: f64) -> c_int;
 
     // ---- parameter blocks
     pub fn ln_parameter_block_create(

@@ -43,6 +43,11 @@ class FoxClient:
     statuses: list[dict[str, Any]] = field(default_factory=list)
     messages: list[Message] = field(default_factory=list)
     replies: dict[int, ServiceReply] = field(default_factory=dict)
+    # the connection graph as its updates built it: "published", "subscribed", "services",
+    # each a name -> set of ids
+    graph: dict[str, dict[str, set[str]]] = field(default_factory=lambda: {
+        "published": {}, "subscribed": {}, "services": {}})
+    graph_updates: int = 0
     _next_call: int = 1
 
     @property
@@ -90,6 +95,22 @@ class FoxClient:
             self.replies[msg["callId"]] = ServiceReply(False, msg["message"])
         elif op == "status":
             self.statuses.append(msg)
+        elif op == "connectionGraphUpdate":
+            self._graph_update(msg)
+
+    def _graph_update(self, msg: dict[str, Any]) -> None:
+        g = self.graph
+        for key, field_name, ids in (("published", "publishedTopics", "publisherIds"),
+                                     ("subscribed", "subscribedTopics", "subscriberIds"),
+                                     ("services", "advertisedServices", "providerIds")):
+            for entry in msg.get(field_name, []):
+                g[key][entry["name"]] = set(entry[ids])
+        for name in msg.get("removedTopics", []):
+            g["published"].pop(name, None)
+            g["subscribed"].pop(name, None)
+        for name in msg.get("removedServices", []):
+            g["services"].pop(name, None)
+        self.graph_updates += 1
 
     async def until(self, predicate: Any, what: str, timeout: float = LIMIT) -> Any:
         """Receive until `predicate()` is true; its value.  AssertionError after `timeout`."""
@@ -109,6 +130,9 @@ class FoxClient:
     async def subscribe(self, subscription: int, channel_id: int) -> None:
         await self.ws.send(json.dumps({"op": "subscribe", "subscriptions": [
             {"id": subscription, "channelId": channel_id}]}))
+
+    async def subscribe_graph(self) -> None:
+        await self.ws.send(json.dumps({"op": "subscribeConnectionGraph"}))
 
     async def unsubscribe(self, subscription: int) -> None:
         await self.ws.send(json.dumps({"op": "unsubscribe", "subscriptionIds": [subscription]}))

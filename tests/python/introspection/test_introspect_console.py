@@ -152,3 +152,16 @@ def test_quit_while_following(console: ConsoleManager) -> None:
     console.expect(lambda line: line.startswith("rate: "), "a rate line")
     console.send("quit")
     assert console.console.proc.wait(LIMIT) == 0
+
+
+def test_graph_in_the_console(console: ConsoleManager) -> None:
+    """`graph` (docs/introspection.md): the same command in the console, here as DOT."""
+    console.publisher()
+    console.send("graph --dot --window 0")
+    lines = console.expect(lambda line: line == "}", "the end of the DOT text")
+    start = lines.index("digraph links_and_nodes {")
+    # the manager's first look: no rates yet, so no labels
+    assert '  "c:probe_pub" -> "t:probe.state";' in lines[start:]
+    console.send("graph --window x")
+    assert console.expect(lambda line: line.startswith("error: "), "the error")[-1] == \
+        "error: --window: 'x' is not a number of seconds 0..10"

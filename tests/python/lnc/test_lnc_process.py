@@ -12,6 +12,7 @@ from links_and_nodes.manager.config import parse_text
 from links_and_nodes.manager.config.model import (
     Config,
     Instance,
+    OnLimit,
     OutputLog,
     Policy,
     Process,
@@ -285,3 +286,11 @@ def test_relative_paths_resolve_against_the_including_files_directory(tmp_path: 
     assert p.change_directory == str(tmp_path / "run")
     assert p.output_log == OutputLog(str(tmp_path / "sub/log/p.log"))
     assert (q.change_directory, q.output_log) == ("/abs", OutputLog("~/q.log"))
+
+
+def test_resource_limit_keys() -> None:
+    config = parse_text(HEAD + "process p\ncommand: p\nmax_rss: 512M\nmax_cpu: 150.5\n"
+                        "on_limit: restart\nprocess q\ncommand: q\n", "/n/x.lnc")
+    p, q = config.processes["p"], config.processes["q"]
+    assert (p.max_rss, p.max_cpu, p.on_limit) == (512 << 20, 150.5, OnLimit.RESTART)
+    assert (q.max_rss, q.max_cpu, q.on_limit) == (None, None, OnLimit.WARN)

@@ -320,7 +320,7 @@ def test_direction_is_recorded() -> None:
     assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "RECLAIM_PORT", "CLOSE_PORT",
                            "TOPIC_INFO",
                            "REGISTER_SERVICE", "UNREGISTER_SERVICE", "FIND_SERVICE",
-                           "SERVICE_CALLED", "LIST_SERVICES", "CONTROL"}
+                           "SERVICE_CALLED", "LIST_SERVICES", "CONTROL", "LOG"}
 
 
 def test_control_text_field_round_trip() -> None:

@@ -209,7 +209,8 @@ def test_console_on_stdin(lab: Lab) -> None:
     proc.stdin.flush()
     out, _ = proc.communicate(timeout=LIMIT)
     lines = out.splitlines()
-    assert lines[0].split() == ["process", "state", "pid", "node", "restarts", "reason"]
+    assert lines[0].split() == ["process", "state", "pid", "node", "cpu", "%", "rss", "threads",
+                                "restarts", "reason"]
     assert lines[1].split()[:2] == ["a", "ready"]
     assert "a: hello-from-a" in lines
     assert "error: unknown command 'bogus' (try help)" in lines

@@ -33,6 +33,14 @@ class Restart(enum.Enum):
     ALWAYS = "always"
 
 
+class OnLimit(enum.Enum):
+    """What a process over its `max_rss`/`max_cpu` gets: a warning and its flag, or also a
+    restart."""
+
+    WARN = "warn"
+    RESTART = "restart"
+
+
 class Policy(enum.Enum):
     OTHER = "SCHED_OTHER"
     FIFO = "SCHED_FIFO"
@@ -214,6 +222,9 @@ class Process:
     # Processes started as soon as this one is ready.
     start_on_ready: list[str] = field(default_factory=list)
     ready_regex: str | None = None  # Python re syntax, searched in each output line
+    # Python re syntax: an output line it matches is a log line, its level the group `level`
+    # (debug, info, warning/warn, error, critical/fatal, ...), its text the group `text`
+    log_level_regex: str | None = None
     ready_time: float | None = None  # seconds after start
     ready_on_topic: str | None = None  # ready once that topic has a publisher
     ready_on_service: str | None = None  # ready once that service is registered
@@ -234,6 +245,9 @@ class Process:
     restart_limit: int = 5  # restarts in a row before giving up (state failed)
     restart_delay: float = 1.0  # seconds before the first restart; doubles, at most 30 s
     watchdog: Watchdog | None = None
+    max_rss: int | None = None  # bytes of resident memory before it is flagged
+    max_cpu: float | None = None  # % of one core (a sample's) before it is flagged
+    on_limit: OnLimit = OnLimit.WARN
     message_definition_dirs: list[str] = field(default_factory=list)
     # Initial overrides of its parameter blocks: block -> parameter -> value (plain JSON
     # values); passed as $LN_PARAMETERS (docs/parameters.md).

@@ -20,7 +20,9 @@ from .values import (
     parse_affinity,
     parse_duration,
     parse_env_entry,
+    parse_float,
     parse_int,
+    parse_on_limit,
     parse_policy,
     parse_resource_limits,
     parse_restart,
@@ -102,6 +104,17 @@ def _regex(d: ProcessDraft, v: Value, p: Parser, kl: KeyLine) -> None:
     d.process.ready_regex = v.text
 
 
+def _log_level_regex(d: ProcessDraft, v: Value, p: Parser, kl: KeyLine) -> None:
+    try:
+        compiled = re.compile(v.text)
+    except re.error as exc:
+        raise fail(v, f"bad 'log_level_regex': {exc.msg}", exc.pos or 0) from None
+    if "level" not in compiled.groupindex:
+        raise fail(v, "'log_level_regex' needs a group named level, as in "
+                      "'^\\[(?P<level>[A-Z]+)\\] (?P<text>.*)'")
+    d.process.log_level_regex = v.text
+
+
 def _encoding(d: ProcessDraft, v: Value, p: Parser, kl: KeyLine) -> None:
     try:
         d.process.output_encoding = codecs.lookup(v.text).name
@@ -127,6 +140,7 @@ SCALARS: dict[str, Scalar] = {
     "change_directory": lambda d, v, p, kl: setattr(
         d.process, "change_directory", p.path(_nonempty(v, kl.key), kl)),
     "ready_regex": _regex,
+    "log_level_regex": _log_level_regex,
     "ready_time": _set("ready_time", parse_duration),
     "ready_on_topic": _set("ready_on_topic", lambda v, k: parse_topic(v, "topic")),
     "ready_on_service": _set("ready_on_service", lambda v, k: parse_topic(v, "service")),
@@ -146,6 +160,9 @@ SCALARS: dict[str, Scalar] = {
     "restart_delay": _set("restart_delay", parse_duration),
     "watchdog_topic": _set("watchdog", parse_watchdog),
     "stack_size": lambda d, v, p, kl: _stack_size(d, v),
+    "max_rss": _set("max_rss", lambda v, k: _positive_size(v, k)),
+    "max_cpu": _set("max_cpu", lambda v, k: parse_float(v, k, 0, above=True)),
+    "on_limit": _set("on_limit", parse_on_limit),
 }
 
 

@@ -11,7 +11,7 @@ import signal
 from ... import addresses
 from ...naming import topic_name_problem
 from .errors import LineError, Problem, did_you_mean
-from .model import Policy, ResourceLimit, Restart, Watchdog
+from .model import OnLimit, Policy, ResourceLimit, Restart, Watchdog
 from .text import Value, split_value
 
 _INT_RE = re.compile(r"[+-]?[0-9]+\Z")
@@ -109,6 +109,15 @@ def parse_restart(v: Value, key: str) -> Restart:
             return r
     hint = did_you_mean(word, [r.value for r in Restart])
     raise fail(v, f"'{key}' must be never, on-failure or always, got '{v.text}'{hint}")
+
+
+def parse_on_limit(v: Value, key: str) -> OnLimit:
+    word = v.text.strip().lower()
+    for r in OnLimit:
+        if word == r.value:
+            return r
+    hint = did_you_mean(word, [r.value for r in OnLimit])
+    raise fail(v, f"'{key}' must be warn or restart, got '{v.text}'{hint}")
 
 
 def parse_affinity(v: Value, key: str) -> list[int]:

@@ -9,10 +9,11 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Protocol
 
+from .daemon_resources import ResourceSample
 from .daemon_wire import Exited, OutputLine, ProcessInfo, SpawnSpec, StateChanged
 
 # The daemon's events as its client queues them; None, last, when the connection is gone.
-DaemonEvent = OutputLine | Exited | StateChanged
+DaemonEvent = OutputLine | Exited | StateChanged | ResourceSample
 
 
 class DaemonLink(Protocol):

@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 
 from ...wire.codec import WireError
 from ..network import daemon_pull
+from .daemon_resources import ResourceSample, decode_resources
 from .daemon_wire import (
     EXIT_CODE,
     EXIT_SIGNAL,
@@ -78,8 +79,10 @@ class DaemonClient:
         self._seq_in = 0
         self._next_req = 1
         self._pending: dict[int, asyncio.Future[tuple[int, bytes]]] = {}
-        self._events: asyncio.Queue[OutputLine | Exited | StateChanged | None] = asyncio.Queue()
+        self._events: asyncio.Queue[OutputLine | Exited | StateChanged | ResourceSample | None] \
+            = asyncio.Queue()
         self._state_events = state_events
+        self._resource_events = False  # after resources(): ResourceSample events
         self._closed: str | None = None
         self._task = asyncio.get_running_loop().create_task(self._read_loop())
 
@@ -200,6 +203,9 @@ class DaemonClient:
             f = decode("EV_STATE", payload)
             if self._state_events:
                 self._events.put_nowait(StateChanged(f["name"], f["pid"], STATES[f["state"]]))
+        elif mtype == Msg.EV_RESOURCES:
+            if self._resource_events:
+                self._events.put_nowait(decode_resources(payload))
         elif mtype == Msg.ERROR:
             code, text = decode_error(payload)
             raise WireError(f"daemon closes the connection: {text}")
@@ -285,6 +291,13 @@ class DaemonClient:
 
     async def ping(self) -> None:
         await self._ok(Msg.PING)
+
+    async def resources(self, period: float = 0.0) -> None:
+        """Resource samples (ResourceSample events) every `period` seconds (0: the daemon's
+        --resource-period; the daemon keeps it within 0.1..3600); a negative period stops
+        them.  DaemonError (LIMIT) when the daemon samples nothing (--resource-period 0)."""
+        self._resource_events = period >= 0
+        await self._ok(Msg.RESOURCES, period=period)
 
     # -- rings and forwarding (docs/daemon.md, "Rings and forwarding") --
     # Ring names must lie in this instance's namespace, /ln.<sanitized instance>.*; a
@@ -423,7 +436,7 @@ class DaemonClient:
         return await self._request(mtype, fields, Msg.VALUE,
                                    lambda p: int(decode("VALUE", p)["value"]))
 
-    def events(self) -> asyncio.Queue[OutputLine | Exited | StateChanged | None]:
+    def events(self) -> asyncio.Queue[OutputLine | Exited | StateChanged | ResourceSample | None]:
         """The queue of events; None, as the last item, means the connection is gone."""
         return self._events
 

@@ -20,7 +20,9 @@ from typing import Any, Protocol
 from ..config import model
 from .backend import Backend, DaemonLink, Registry, StartError
 from .changes import Changes
+from .daemon_resources import ProcessSample
 from .daemon_wire import Exited, OutputLine, ProcessInfo, SpawnSpec
+from .resources import limit_problem
 from .states import ALIVE, STARTABLE, ProcState, check_transition
 
 log = logging.getLogger("ln_manager")
@@ -117,12 +119,15 @@ class ManagedProcess:
         self.task: asyncio.Task[None] | None = None  # starting (dependencies, spawn, readiness)
         self.side_tasks: set[asyncio.Task[Any]] = set()  # watchdog, ready and restart timers
         self.restart_task: asyncio.Task[None] | None = None  # the last restart timer
+        self.limit = ""  # why its run is over its max_rss/max_cpu, "" while it is not
+        self._limits_hit: frozenset[str] = frozenset()  # which of them
 
     def as_dict(self) -> dict[str, Any]:
         return {"name": self.cfg.name, "state": self.state.value, "pid": self.pid,
                 "node": self.cfg.node, "reason": self.reason, "exit_code": self.exit_code,
                 "exit_signal": self.exit_signal, "restarts": self.restarts,
-                "started_at": self.started_at, "ready_at": self.ready_wall}
+                "started_at": self.started_at, "ready_at": self.ready_wall,
+                "limit": self.limit}
 
     @property
     def stop_asked(self) -> bool:
@@ -406,6 +411,7 @@ class ManagedProcess:
     def on_exit(self, code: int | None, sig: int | None) -> None:
         self.exit_code, self.exit_signal = code, sig
         self.pid = None
+        self.limit, self._limits_hit = "", frozenset()
         self.cancel_side()
         if self.state not in ALIVE and self.state != S.STARTING:
             return
@@ -492,6 +498,28 @@ class ManagedProcess:
                 self.transition(S.STOPPING, why)
                 await self._daemon_stop()
                 return  # its exit is a failure that restarts it (on_exit)
+
+    def resources(self, sample: ProcessSample) -> None:
+        """A resource sample of its current run: over `max_rss`/`max_cpu` it is flagged with a
+        warning (once per limit it goes over), and with `on_limit: restart` restarted as a
+        failure; the flag goes when a sample is within its limits again."""
+        problem = limit_problem(self.cfg, sample)
+        hit = frozenset(k for k in ("max_rss", "max_cpu") if k in problem)
+        changed = problem != self.limit
+        new = hit - self._limits_hit
+        self.limit, self._limits_hit = problem, hit
+        if new:
+            log.warning("process %s: over its limit: %s", self.cfg.name, problem)
+            if self.cfg.on_limit is model.OnLimit.RESTART and self.state in (S.STARTED, S.READY) \
+                    and self.pending is Pending.NONE:
+                why = f"over its limit: {problem}"
+                self.pending, self.why = Pending.WATCHDOG, why  # its exit is a failure
+                self.transition(S.STOPPING, why)
+                self.side(self._daemon_stop())
+        elif changed and not hit and not problem:
+            log.info("process %s: within its limits again", self.cfg.name)
+        if changed:
+            self.owner.changed.notify()
 
     # ---- side tasks ----------------------------------------------------------------------
     def side(self, coro: Awaitable[None]) -> asyncio.Task[None]:

@@ -18,8 +18,11 @@ from typing import Any
 from ..config import model
 from .backend import Backend, DaemonEvent, DaemonLink, Registry, StartError
 from .changes import Changes
+from .daemon_resources import ResourceSample
 from .daemon_wire import OutputLine, ProcessInfo, SpawnSpec
 from .managed import ManagedProcess, Pending, Transition
+from .output_levels import output_level, process_finder
+from .resources import Resources
 from .spawning import RateLimiter, RateLimiters, environment, spawn_fields
 from .state_commands import StateCommands, StateRuntime
 from .states import STARTABLE, ProcState
@@ -54,9 +57,12 @@ class Scheduler:
         self._limiters = RateLimiters(lambda: self.config)
         self._event_tasks: dict[int, asyncio.Task[None]] = {}
         self._bg: set[asyncio.Task[Any]] = set()  # stops of dependents
+        self.resources = Resources()  # the newest resource samples of hosts and processes
         self.output_listeners: list[Callable[[str, OutputLine], None]] = []
         self.transition_listeners: list[Callable[[str, Transition], None]] = []
         registry.listeners.append(self._registry_changed)
+        if getattr(registry, "logs", None) is not None:  # which process a logging client is
+            registry.logs.process_of = process_finder(self.procs)  # type: ignore[attr-defined]
 
     @property
     def states(self) -> dict[str, StateRuntime]:
@@ -146,7 +152,8 @@ class Scheduler:
                         fail_on={S.FAILED}, final=final)
 
     def status(self) -> list[dict[str, Any]]:
-        return [p.as_dict() for p in self.procs.values()]
+        return [{**p.as_dict(), **self.resources.process_fields(name, p.pid)}
+                for name, p in self.procs.items()]
 
     def history(self, name: str) -> list[Transition]:
         return list(self.procs[name].transitions)
@@ -371,7 +378,19 @@ class Scheduler:
         if id(link) not in self._event_tasks:
             self._event_tasks[id(link)] = asyncio.get_running_loop().create_task(
                 self._pump(link, node))
+            self._background(asyncio.get_running_loop().create_task(
+                self._ask_resources(link, node)))
         return link
+
+    async def _ask_resources(self, link: DaemonLink, node: str) -> None:
+        """Resource samples from a new daemon connection, at the daemon's default period."""
+        ask = getattr(link, "resources", None)  # (a test's stand-in may have none)
+        if ask is None:
+            return
+        try:
+            await ask()
+        except (OSError, self.backend.error_type) as exc:
+            log.info("no resource samples from the ln_daemon of node %r: %s", node, exc)
 
     async def _pump(self, link: DaemonLink, node: str) -> None:
         queue = link.events()
@@ -382,9 +401,22 @@ class Scheduler:
                 self._daemon_lost(link, node)
                 return
             try:
-                self._on_event(event)
+                if isinstance(event, ResourceSample):
+                    self._on_resources(event, id(link))
+                else:
+                    self._on_event(event)
             except Exception:  # one bad event must not stop supervision
                 log.exception("handling daemon event %r", event)
+
+    def _log_line(self, proc: ManagedProcess, line: OutputLine) -> None:
+        """An output line that the process's log_level_regex matches, into the log store."""
+        found = output_level(proc.cfg.log_level_regex, line.text)
+        logs = getattr(self.registry, "logs", None)
+        if found is None or logs is None:
+            return
+        logs.add(time_ns=int(line.time * 1e9), level=found[0], source="output",
+                 client=proc.cfg.name, process=proc.cfg.name, host=proc.cfg.node,
+                 pid=proc.pid or 0, file=line.stream, text=found[1])
 
     def _on_event(self, event: DaemonEvent) -> None:
         if isinstance(event, self.backend.output_type):
@@ -393,6 +425,7 @@ class Scheduler:
                 return
             proc.output.append(event)
             _tell(self.output_listeners, event.name, event)
+            self._log_line(proc, event)
             proc.saw_line(event)
         elif isinstance(event, self.backend.exited_type):
             if self.state_commands.exited(event):
@@ -400,6 +433,14 @@ class Scheduler:
             proc = self.procs.get(event.name)
             if proc is not None:
                 proc.exited(event)
+
+    def _on_resources(self, sample: ResourceSample, source: int) -> None:
+        """A sample from the daemon connection `source` (an id)."""
+        self.resources.take(sample, source)
+        for p in sample.processes:
+            proc = self.procs.get(p.name)
+            if proc is not None and proc.pid == p.pid:
+                proc.resources(p)
 
     def _daemon_lost(self, link: DaemonLink, node: str) -> None:
         """The daemon connection `link` (first used for `node`) ended: what ran through it is

@@ -17,6 +17,7 @@ from typing import Any, Protocol
 
 from ... import _libln
 from ...tools import protocol as p
+from .logs import LogBatchError, LogStore
 from .model import Client, Port, PortKind, PortPlan, PortRequest, Registry, RequestError, Topic
 from .rings import LocalRings, Rings
 from .runtime import purge_service_sockets, remove_service_socket
@@ -99,7 +100,8 @@ class HandshakeRefused(Exception):
 class Core:
     def __init__(self, instance: str, registry: Registry, segments: Segments,
                  services: Services | None = None,
-                 hosts: Callable[[Core], HostRings] | None = None) -> None:
+                 hosts: Callable[[Core], HostRings] | None = None,
+                 logs: LogStore | None = None) -> None:
         """`hosts` builds the view of the other hosts (network.Network) for a manager that
         has some, given this core (their rings and the local ones are kept consistent
         under the core's lock); None: every client is on the manager's own host."""
@@ -116,6 +118,8 @@ class Core:
         # Provider sockets found at start-up, kept for their providers until the adoption
         # window closes (end_adoption).
         self._held_sockets: tuple[Path, list[str]] | None = None
+        # The log lines of every client (LOG) and of process output (registry/logs.py).
+        self.logs = logs if logs is not None else LogStore()
 
     def _changed(self) -> None:
         for listener in list(self.listeners):
@@ -211,6 +215,27 @@ class Core:
                     exc.text)
             return p.Error(request_id, error_code(exc.code), exc.text)
         raise AssertionError(f"not a request: {msg.TYPE.name}")
+
+    def log_batch(self, session: Session, msg: p.Log) -> p.Message:
+        """A client's LOG batch into the log store: OK, or ERROR (EINVAL) for entries that
+        do not follow the format (none of them is kept).  Not under the core's lock: it
+        touches nothing else."""
+        client = session.client
+        assert client is not None
+        try:
+            self.logs.add_batch(client.name, self.client_host(client), client.pid,
+                                msg.dropped, msg.count, msg.entries)
+        except LogBatchError as exc:
+            log.info("%s: LOG refused: %s", session.label, exc)
+            return p.Error(msg.request_id, error_code("EINVAL"), f"LOG: {exc}")
+        return p.Ok(msg.request_id)
+
+    def client_host(self, client: Client) -> str:
+        """The host a client runs on, as the configuration names it where the manager
+        knows its hosts, else the host name of its host id."""
+        if self.hosts is not None:
+            return self.hosts.host_label(client)
+        return client.host_id.split("/", 1)[0] or client.address.rsplit(":", 1)[0]
 
     # ---- adoption after a restart --------------------------------------------------------
     def adopt(self, rings: list[AdoptedRing], socket_dir: Path | None,
@@ -356,6 +381,7 @@ class Core:
             return p.Ok(msg.request_id)
         if isinstance(msg, p.FindService):
             service = services.find(msg.name, msg.md_name, msg.layout_hash)
+            services.found(client, msg.name)
             o = service.offer
             tcp_host = o.tcp_host
             if self.hosts is not None:

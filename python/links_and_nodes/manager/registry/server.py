@@ -186,6 +186,9 @@ class Server:
             if isinstance(msg, p.Control):
                 await self._send(writer, await self._control(msg))
                 continue
+            if isinstance(msg, p.Log):
+                await self._send(writer, self.core.log_batch(session, msg))
+                continue
             if msg.TYPE not in _REQUESTS:
                 raise Closing(f"unexpected {msg.TYPE.name} frame from a client")
             await self._send(writer, await self.core.request(session, msg))

@@ -98,6 +98,9 @@ class Services:
             raise ValueError(f"service limit must be at least 1, not {limit}")
         self.limit = limit
         self.by_name: dict[str, Service] = {}
+        # the clients that looked a service up (FIND_SERVICE), by service name and client
+        # id: the callers the graph shows (docs/introspection.md, "graph")
+        self.callers: dict[str, dict[int, Client]] = {}
 
     def register(self, client: Client, offer: ServiceOffer) -> tuple[Service, Service | None]:
         """Register (or, for the same provider, replace) a service; (new, replaced)."""
@@ -142,6 +145,10 @@ class Services:
             raise RequestError("ELAYOUT", layout_mismatch(name, md_name, layout_hash, service))
         return service
 
+    def found(self, client: Client, name: str) -> None:
+        """Note that `client` looked service `name` up (it is about to call it)."""
+        self.callers.setdefault(name, {})[client.id] = client
+
     def called(self, client: Client, name: str, calls: int, errors: int) -> Service:
         """Store the cumulative counts a provider reports."""
         service = self.provided(client, name)
@@ -153,6 +160,9 @@ class Services:
         gone = [s for s in self.by_name.values() if s.provider is client]
         for service in gone:
             del self.by_name[service.name]
+        for name in [n for n, who in self.callers.items() if who.pop(client.id, None)
+                     and not who]:
+            del self.callers[name]
         return gone
 
     def sorted(self) -> list[Service]:

@@ -1,7 +1,16 @@
 """Rows of text as aligned columns: the layout of every table the commands' text views
-print (processes, topics, loggers, parameters)."""
+print (processes, topics, loggers, parameters); sizes in binary units."""
 
 from __future__ import annotations
+
+
+def size_text(n: float) -> str:
+    """Bytes in binary units: `512.0 MiB`."""
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if n < 1024 or unit == "GiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} GiB"
 
 
 def table(rows: list[list[str]]) -> list[str]:

@@ -14,9 +14,12 @@ from .spec import Command, Verb
 
 # modules whose import registers commands, in the order their commands are listed
 BUILTIN = ("links_and_nodes.manager.frontends.commands.process",
+           "links_and_nodes.manager.frontends.commands.resource_view",
            "links_and_nodes.manager.frontends.commands.pull_view",
            "links_and_nodes.manager.introspection.control",
+           "links_and_nodes.manager.introspection.graph",
            "links_and_nodes.manager.frontends.commands.event_control",
+           "links_and_nodes.manager.frontends.commands.log_view",
            "links_and_nodes.manager.loggers.commands",
            "links_and_nodes.manager.parameters.commands")
 

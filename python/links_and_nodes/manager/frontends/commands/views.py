@@ -7,7 +7,7 @@ import json
 import time
 from typing import Any
 
-from ....tools.commands.columns import table
+from ....tools.commands.columns import size_text, table
 
 
 def bytes_text(n: float) -> str:
@@ -19,10 +19,15 @@ def bytes_text(n: float) -> str:
 
 
 def format_status(result: dict[str, Any], args: dict[str, Any] | None = None) -> list[str]:
-    rows = [["process", "state", "pid", "node", "restarts", "reason"]]
+    rows = [["process", "state", "pid", "node", "cpu %", "rss", "threads", "restarts",
+             "reason"]]
     for p in result["processes"]:
+        cpu, rss = p.get("cpu"), p.get("rss")  # resources (resource_view.py), if sampled
+        reason = "; ".join(x for x in (p.get("limit"), p["reason"]) if x)
         rows.append([p["name"], p["state"], str(p["pid"] or "-"), p["node"],
-                     str(p["restarts"]), p["reason"] or ""])
+                     "-" if cpu is None else f"{cpu:.1f}",
+                     "-" if rss is None else size_text(rss),
+                     str(p.get("threads") or "-"), str(p["restarts"]), reason])
     lines = table(rows)
     for st in result["states"]:
         up = {True: "UP", False: "DOWN", None: "unknown"}[st["up"]]

@@ -151,6 +151,23 @@ class Subscriptions:
         box.append(self._new(lambda: _remove(self.log.listeners, record)))
         return {"sub": box[0], "records": list(self.log.records)}
 
+    async def subscribe_logs(self, command: dict[str, Any]) -> dict[str, Any]:
+        """The log lines of clients and process output (registry/logs.py): the last `n`,
+        then each new one as {"event": "logs", "sub", ...the line}."""
+        from ...registry.logs import LogFilter
+
+        store = self.control.core.logs
+        box: list[int] = []
+
+        def line(entry: Any) -> None:
+            self.send({"event": "logs", "sub": box[0], **entry.to_json()}, False)
+
+        store.listeners.append(line)
+        box.append(self._new(lambda: _remove(store.listeners, line)))
+        n = int(command.get("n", 1000))
+        return {"sub": box[0], "entries": [e.to_json() for e in
+                                           store.query(LogFilter(), 0, n)]}
+
     async def subscribe_topic(self, command: dict[str, Any]) -> dict[str, Any]:
         """{"name", "fields": [paths]}: batches {"event": "samples", "t": [publish s],
         "seq": [..], "v": [[field 0 values], ...]}; without "fields": {"event": "sample",
@@ -268,6 +285,11 @@ def register_streams() -> None:
               "{sub, lines, transitions}; events {event: output, name, line}"),
         entry("subscribe_log", "the manager's own log messages, live", (),
               "{sub, records}; events {event: log, time, level, text}"),
+        entry("subscribe_logs", "the log lines of clients and process output, live",
+              (Arg("n", "int", "lines of the past first", default=1000, low=0,
+                   high=20000),),
+              "{sub, entries}; events {event: logs, seq, time, level, level_name, client, "
+              "process, host, file, line, logger, text}"),
         entry("subscribe_topic", "a topic's samples: chosen numeric fields in batches, or "
                                  "whole decoded samples",
               (Arg("name", "str", "the topic", required=True, nonempty=True),

@@ -7,8 +7,10 @@ import {Topics} from './topics.js';
 import {Services} from './services.js';
 import {Params} from './params.js';
 import {Hosts} from './hosts.js';
+import {Graph} from './graph.js';
 import {Scope} from './scope.js';
 import {Log} from './log.js';
+import {Logs} from './logs.js';
 
 const csrf = document.querySelector('meta[name="csrf-token"]').content;
 const conn = document.getElementById('conn');
@@ -32,7 +34,7 @@ async function main() {
   lnm.views = {
     processes: new Processes(api), output: new Output(api), topics: new Topics(api),
     services: new Services(api), params: new Params(api), hosts: new Hosts(api),
-    scope: new Scope(api), log: new Log(api),
+    scope: new Scope(api), log: new Log(api), logs: new Logs(api), graph: new Graph(api),
   };
   lnm.scope = lnm.views.scope;
   lnm.show = show;

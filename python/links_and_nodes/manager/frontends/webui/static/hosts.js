@@ -1,5 +1,6 @@
 // Hosts (daemon state, host id, data port) and network statistics: topic streams between
-// hosts with rates and drops, per host pair, and the pull producers' counters.
+// hosts with rates and drops, per host pair, and the pull producers' counters; the resources of
+// each host (`top`: load, CPU per core, memory, network per interface).
 import {el, fill, human} from './api.js';
 
 function table(id, rows) {
@@ -34,5 +35,13 @@ export class Hosts {
     table('host-table', hosts.hosts);
     table('stream-table', net.streams.concat(net.pairs.map((p) => ({pair: true, ...p}))));
     table('pull-table', net.pull || []);
+    const top = await this.api.call('top');
+    table('host-resources', top.hosts.map((h) => ({
+      host: h.host, load: h.load.map((x) => x.toFixed(2)).join(' '), 'cpu %': h.cpu.toFixed(1),
+      'per cpu %': h.cpus.map((c) => c.toFixed(0)).join(' '),
+      memory: `${human(h.mem_total - h.mem_available, 'B')} of ${human(h.mem_total, 'B')}`,
+      swap: `${human(h.swap_total - h.swap_free, 'B')} of ${human(h.swap_total, 'B')}`,
+      network: h.nets.map((n) => `${n.interface} ↓${human(n.rx, 'B/s')} ↑${human(n.tx, 'B/s')}`)
+        .join(', ')})));
   }
 }

@@ -3,8 +3,12 @@
 // "fields") into rings of CAPACITY points per signal; a requestAnimationFrame loop redraws
 // when something new came.  Pause, zoom (drag; double click resets), cursor values (the
 // legend), CSV and PNG export.  `buffers()`, `received`, `frames` and `latency` are read by
-// the tests and the benchmark.
+// the tests and the benchmark.  The pseudo topic RESOURCES offers the resource signals
+// (`process/<name>/cpu`, `host/<host>/mem_used`, ...: docs/webui.md, "Resources"), read from
+// `top` once per second.
 import {el, download} from './api.js';
+
+export const RESOURCES = '(resources)';
 
 export const CAPACITY = 10000;
 const COLORS = ['#1f77b4', '#d62728', '#2ca02c', '#ff7f0e', '#9467bd', '#8c564b', '#e377c2',
@@ -59,7 +63,8 @@ export class Scope {
     const r = await this.api.call('topics');
     const sel = this.$('scope-topic');
     const chosen = sel.value;
-    sel.replaceChildren(...r.topics.map((t) => el('option', {value: t.name}, t.name)));
+    sel.replaceChildren(...r.topics.map((t) => el('option', {value: t.name}, t.name)),
+      el('option', {value: RESOURCES}, RESOURCES));
     if (chosen) sel.value = chosen;
     await this.loadFields();
     this.resize();
@@ -69,6 +74,12 @@ export class Scope {
     const name = this.$('scope-topic').value;
     if (!name) return;
     try {
+      if (name === RESOURCES) {
+        const top = await this.api.call('top');
+        this.$('scope-field').replaceChildren(...Object.keys(top.signals).sort().map(
+          (k) => el('option', {value: k}, k)));
+        return;
+      }
       const r = await this.api.call('topic_fields', {name});
       this.$('scope-field').replaceChildren(
         ...r.fields.map((f) => el('option', {value: f.path}, `${f.path} (${f.type})`)));
@@ -85,6 +96,7 @@ export class Scope {
 
   async add(topic, fields) {
     const group = new Group(topic, fields);
+    if (topic === RESOURCES) return this.addResources(group);
     const r = await this.api.subscribe('subscribe_topic', {name: topic, fields}, (ev) => {
       if (ev.event === 'error') { this.status(ev.error); return; }
       const now = performance.timeOrigin + performance.now();
@@ -102,8 +114,26 @@ export class Scope {
     this.status(`${this.signals().length} signals`);
   }
 
+  // Resource signals: `top` once per second; a signal without a sample is a gap.
+  addResources(group) {
+    const poll = async () => {
+      const top = await this.api.call('top');
+      group.t.push(Date.now() / 1000);
+      group.fields.forEach((f, k) => group.v[k].push(top.signals[f] ?? NaN));
+      this.received++;
+      this.dirty = true;
+    };
+    group.poll = setInterval(() => poll().catch((e) => this.status(e.message)), 1000);
+    this.groups.push(group);
+    this.build();
+    this.status(`${this.signals().length} signals`);
+  }
+
   async clear() {
-    for (const g of this.groups) await this.api.unsubscribe(g.sub);
+    for (const g of this.groups) {
+      if (g.poll) clearInterval(g.poll);
+      else await this.api.unsubscribe(g.sub);
+    }
     this.groups = [];
     this.build();
   }
