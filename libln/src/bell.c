@@ -61,6 +61,10 @@ void ln_ring_ring_bells(ln_ring_header* h, int all)
         uint32_t i = (uint32_t)__builtin_ctzll(mask);
         mask &= mask - 1;
         ln_ring_reader* r = &h->readers[i];
+        /* rung already and not looked at yet: a plain load, no locked exchange on the line
+         * the waitset writes (its store of 0 precedes its look at write_seq, seq_cst) */
+        if (!all && atomic_load_explicit(&r->bell_pending, memory_order_seq_cst))
+            continue;
         uint32_t was = atomic_exchange_explicit(&r->bell_pending, 1, memory_order_seq_cst);
         if (was == 0 || all)
             ln_bell_ring(atomic_load_explicit(&r->bell, memory_order_acquire),

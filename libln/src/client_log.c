@@ -16,11 +16,12 @@
 
 #include "client_conn.h"
 #include "log_format.h"
+#include "net.h"
 
-#define LOG_FILE_MAX 256      /* bytes of a file name kept (its end), NUL included */
-#define LOG_LOGGER_MAX 128    /* bytes of a logger name, NUL included */
-#define LOG_BATCH 256         /* lines per LOG frame, so a frame stays far below 1 MiB */
-#define LOG_IDLE_NS 10000000L /* the sender looks at the queue every 10 ms when idle */
+#define LOG_FILE_MAX 256   /* bytes of a file name kept (its end), NUL included */
+#define LOG_LOGGER_MAX 128 /* bytes of a logger name, NUL included */
+#define LOG_BATCH 256      /* lines per LOG frame, so a frame stays far below 1 MiB */
+#define LOG_IDLE_S 0.01    /* the sender looks at the queue every 10 ms when idle */
 
 typedef struct log_entry {
     int level;
@@ -200,13 +201,7 @@ static void* log_sender_main(void* arg)
             break;
         if (!q->stop && !q->flushing) {
             struct timespec ts;
-            clock_gettime(CLOCK_REALTIME, &ts);
-            ts.tv_nsec += LOG_IDLE_NS;
-            if (ts.tv_nsec >= 1000000000L) {
-                ts.tv_sec++;
-                ts.tv_nsec -= 1000000000L;
-            }
-            pthread_cond_timedwait(&q->wake, &q->lock, &ts);
+            pthread_cond_timedwait(&q->wake, &q->lock, ln_net_deadline(&ts, LOG_IDLE_S));
         }
     }
     pthread_mutex_unlock(&q->lock);
@@ -242,8 +237,12 @@ static int log_queue_of(ln_client* clnt, struct ln_log_queue** out)
     for (size_t i = 0; i < LN_LOG_QUEUE; i++)
         atomic_init(&q->slots[i].seq, i);
     pthread_mutex_init(&q->lock, NULL);
-    pthread_cond_init(&q->wake, NULL);
-    pthread_cond_init(&q->done, NULL);
+    pthread_condattr_t monotonic; /* the deadlines of ln_net_deadline */
+    pthread_condattr_init(&monotonic);
+    pthread_condattr_setclock(&monotonic, CLOCK_MONOTONIC);
+    pthread_cond_init(&q->wake, &monotonic);
+    pthread_cond_init(&q->done, &monotonic);
+    pthread_condattr_destroy(&monotonic);
     int err = pthread_create(&q->thread, NULL, log_sender_main, q);
     if (err != 0) {
         pthread_cond_destroy(&q->done);
@@ -429,15 +428,8 @@ int ln_log_flush(ln_client* clnt, double timeout)
     if (q == NULL)
         return LN_OK;
     struct timespec ts;
-    const struct timespec* deadline = NULL;
-    if (timeout >= 0) {
-        clock_gettime(CLOCK_REALTIME, &ts);
-        double whole = (double)ts.tv_sec + ts.tv_nsec / 1e9 + timeout;
-        ts.tv_sec = (time_t)whole;
-        ts.tv_nsec = (long)((whole - (double)ts.tv_sec) * 1e9);
-        deadline = &ts;
-    }
-    rc = log_wait_sent(q, atomic_load_explicit(&q->head, memory_order_acquire), deadline);
+    rc = log_wait_sent(q, atomic_load_explicit(&q->head, memory_order_acquire),
+                       ln_net_deadline(&ts, timeout));
     if (rc != LN_OK)
         return ln_set_error(clnt, rc, "ln_log_flush: lines still queued after %g s", timeout);
     return LN_OK;

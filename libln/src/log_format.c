@@ -110,11 +110,11 @@ static unsigned long long unsigned_arg(char length, va_list* ap)
 /* One argument of conversion `s` into *a; 0, or -1 if it is not taken. */
 static int take(const spec* s, ln_log_arg* a, char* data, size_t cap, size_t* used, va_list* ap)
 {
+    if (s->length == 'L')
+        return -1; /* long double: formatted at once */
     switch (s->conv) {
     case 'd':
     case 'i':
-        if (s->length == 'L')
-            return -1;
         a->kind = 'i';
         a->v.i = signed_arg(s->length, ap);
         return 0;
@@ -122,8 +122,6 @@ static int take(const spec* s, ln_log_arg* a, char* data, size_t cap, size_t* us
     case 'u':
     case 'x':
     case 'X':
-        if (s->length == 'L')
-            return -1;
         a->kind = 'u';
         a->v.u = unsigned_arg(s->length, ap);
         return 0;
@@ -141,8 +139,6 @@ static int take(const spec* s, ln_log_arg* a, char* data, size_t cap, size_t* us
     case 'G':
     case 'a':
     case 'A':
-        if (s->length == 'L')
-            return -1;
         a->kind = 'd';
         a->v.d = va_arg(*ap, double);
         return 0;

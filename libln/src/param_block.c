@@ -45,7 +45,7 @@ int ln_param_find(const ln_parameter_block* b, const char* name)
 
 static void block_free(ln_parameter_block* b)
 {
-    ln_waitset_forget(b->ws, b->ws_id, b);
+    ln_waitset_forget(b->ws, atomic_load_explicit(&b->bell_tag, memory_order_relaxed), b);
     for (uint32_t i = 0; i < b->n; i++)
         free(b->params[i].description);
     free(b->params);
@@ -371,7 +371,7 @@ int ln_param_check_handle(const ln_parameter_block* b, const char* what)
     return LN_OK;
 }
 
-int ln_param_bell(ln_parameter_block* b, ln_waitset* ws, uint32_t id, uint64_t bell, uint32_t tag)
+int ln_param_bell(ln_parameter_block* b, ln_waitset* ws, uint32_t id, uint64_t bell)
 {
     pthread_mutex_lock(&b->lock);
     int rc = LN_OK;
@@ -380,8 +380,7 @@ int ln_param_bell(ln_parameter_block* b, ln_waitset* ws, uint32_t id, uint64_t b
                           b->name);
     else {
         b->ws = ws;
-        b->ws_id = id;
-        atomic_store_explicit(&b->bell_tag, tag, memory_order_relaxed);
+        atomic_store_explicit(&b->bell_tag, id, memory_order_relaxed);
         atomic_store_explicit(&b->bell, ws != NULL ? bell : 0, memory_order_seq_cst);
     }
     pthread_mutex_unlock(&b->lock);

@@ -119,9 +119,8 @@ struct ln_parameter_block {
 
     /* a waitset attached to it (waitset.c): rung when overrides are handed to the loop */
     ln_waitset* ws; /* under `lock` */
-    uint32_t ws_id;
     _Atomic uint64_t bell;
-    _Atomic uint32_t bell_tag;
+    _Atomic uint32_t bell_tag; /* the attachment's id, which the bell carries */
 
     /* reports */
     _Atomic uint32_t report_state;

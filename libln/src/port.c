@@ -50,9 +50,7 @@ struct ln_inport {
     uint32_t spin_us;
     ln_ring_slot* borrowed;
     uint64_t borrowed_word;
-    /* the waitset it is attached to (waitset.c), under its lock */
-    ln_waitset* ws;
-    uint32_t ws_id;
+    ln_waitset* ws; /* the waitset it is attached to (waitset.c; its id: cur.bell_tag) */
 };
 
 void ln_port_options_init(ln_port_options* opts)
@@ -374,7 +372,7 @@ int ln_unsubscribe(ln_inport* port)
     int rc = bad_port(port, LN_INPORT_MAGIC, "ln_unsubscribe");
     if (rc != LN_OK)
         return rc;
-    ln_waitset_forget(port->ws, port->ws_id, port);
+    ln_waitset_forget(port->ws, port->cur.bell_tag, port);
     return close_port(&port->c);
 }
 
@@ -664,16 +662,15 @@ int ln_inport_check(const ln_inport* p, const char* what)
     return bad_port(p, LN_INPORT_MAGIC, what);
 }
 
-int ln_inport_bell(ln_inport* p, ln_waitset* ws, uint32_t id, uint64_t bell, uint32_t tag)
+int ln_inport_bell(ln_inport* p, ln_waitset* ws, uint32_t id, uint64_t bell)
 {
     if (p->cur.reader < 0)
         return ln_set_error(p->c.clnt, LN_EINVAL, "topic '%s': this subscriber has no reader slot",
                             p->c.topic);
     p->ws = ws;
-    p->ws_id = id;
     p->cur.bell = bell;
-    p->cur.bell_tag = tag;
-    ln_ring_set_bell(p->c.ring.hdr, (uint32_t)p->cur.reader, bell, tag);
+    p->cur.bell_tag = id;
+    ln_ring_set_bell(p->c.ring.hdr, (uint32_t)p->cur.reader, bell, id);
     return LN_OK;
 }
 

@@ -34,6 +34,7 @@
 #define DRAIN_BATCH 64
 
 enum att_kind { ATT_FREE, ATT_INPORT, ATT_GROUP, ATT_PARAMS, ATT_FD, ATT_TIMER };
+enum { RECHECK, TIMED, LISTS }; /* the unordered lists of attachments (push, unlink_from) */
 
 /* fired bits: one per kind of event */
 #define FIRE(kind) (1u << (kind))
@@ -51,7 +52,6 @@ typedef struct att {
     int64_t last_ns;   /* CLOCK_MONOTONIC of the last sample or deadline report */
     ln_parameter_block* blk;
     int fd;          /* ATT_FD, ATT_GROUP */
-    uint32_t want;   /* LN_WAIT_READABLE | _WRITABLE */
     int64_t next_ns; /* timers: next expiry */
     int64_t period;  /* ns, 0: once */
     /* what fired and is not reported yet */
@@ -59,10 +59,8 @@ typedef struct att {
     uint32_t fd_events, timer_count, deadline_count;
     int next_fired;
     int in_fired;
-    int next_recheck;
-    int in_recheck;
-    int next_timed;
-    int in_timed;
+    int next[LISTS]; /* in the lists below */
+    int in[LISTS];
 } att;
 
 struct ln_waitset {
@@ -77,8 +75,7 @@ struct ln_waitset {
     uint32_t polled; /* attached descriptors and service groups (in the epoll set) */
     int free_head;   /* free slots chained through next_fired */
     int fired_head, fired_tail;
-    int recheck_head;
-    int timed_head;
+    int head[LISTS];
     _Atomic uint32_t triggers;
     _Atomic int waiting;
 };
@@ -163,7 +160,7 @@ int ln_waitset_create(ln_waitset** out)
         return ln_set_error(NULL, LN_ENOMEM, "ln_waitset_create: out of memory");
     ws->sock = -1;
     ws->free_head = ws->fired_head = ws->fired_tail = NONE;
-    ws->recheck_head = ws->timed_head = NONE;
+    ws->head[RECHECK] = ws->head[TIMED] = NONE;
     ws->qlen = read_qlen();
     int rc = LN_OK;
     ws->epfd = epoll_create1(EPOLL_CLOEXEC);
@@ -236,42 +233,25 @@ static void unlink_fired(ln_waitset* ws, int i)
     ws->a[i].in_fired = 0;
 }
 
-static void push_recheck(ln_waitset* ws, int i)
+/* The other lists: RECHECK (looked at by the next wait: inports reported with data last time,
+ * new attachments) and TIMED (timers, inports with a deadline); order does not matter. */
+static void push(ln_waitset* ws, int list, int i)
 {
-    if (ws->a[i].in_recheck)
+    if (ws->a[i].in[list])
         return;
-    ws->a[i].in_recheck = 1;
-    ws->a[i].next_recheck = ws->recheck_head;
-    ws->recheck_head = i;
+    ws->a[i].in[list] = 1;
+    ws->a[i].next[list] = ws->head[list];
+    ws->head[list] = i;
 }
 
-static void unlink_recheck(ln_waitset* ws, int i)
+static void unlink_from(ln_waitset* ws, int list, int i)
 {
-    int* link = &ws->recheck_head;
+    int* link = &ws->head[list];
     while (*link != NONE && *link != i)
-        link = &ws->a[*link].next_recheck;
+        link = &ws->a[*link].next[list];
     if (*link == i)
-        *link = ws->a[i].next_recheck;
-    ws->a[i].in_recheck = 0;
-}
-
-static void push_timed(ln_waitset* ws, int i)
-{
-    if (ws->a[i].in_timed)
-        return;
-    ws->a[i].in_timed = 1;
-    ws->a[i].next_timed = ws->timed_head;
-    ws->timed_head = i;
-}
-
-static void unlink_timed(ln_waitset* ws, int i)
-{
-    int* link = &ws->timed_head;
-    while (*link != NONE && *link != i)
-        link = &ws->a[*link].next_timed;
-    if (*link == i)
-        *link = ws->a[i].next_timed;
-    ws->a[i].in_timed = 0;
+        *link = ws->a[i].next[list];
+    ws->a[i].in[list] = 0;
 }
 
 /* ---- attaching ---- */
@@ -310,7 +290,7 @@ static int new_slot(ln_waitset* ws, uint8_t kind, void* user_data, int* rc)
     t->kind = kind;
     t->user_data = user_data;
     t->fd = -1;
-    t->next_fired = t->next_recheck = t->next_timed = NONE;
+    t->next_fired = t->next[RECHECK] = t->next[TIMED] = NONE;
     ws->used++;
     return i;
 }
@@ -320,10 +300,9 @@ static void free_slot(ln_waitset* ws, int i)
     att* t = &ws->a[i];
     if (t->in_fired)
         unlink_fired(ws, i);
-    if (t->in_recheck)
-        unlink_recheck(ws, i);
-    if (t->in_timed)
-        unlink_timed(ws, i);
+    for (int list = 0; list < LISTS; list++)
+        if (t->in[list])
+            unlink_from(ws, list, i);
     t->kind = ATT_FREE;
     t->next_fired = ws->free_head;
     ws->free_head = i;
@@ -336,10 +315,10 @@ static void release(ln_waitset* ws, int i)
     att* t = &ws->a[i];
     switch (t->kind) {
     case ATT_INPORT:
-        ln_inport_bell(t->port, NULL, 0, 0, 0);
+        ln_inport_bell(t->port, NULL, 0, 0);
         break;
     case ATT_PARAMS:
-        ln_param_bell(t->blk, NULL, 0, 0, 0);
+        ln_param_bell(t->blk, NULL, 0, 0);
         break;
     case ATT_FD:
     case ATT_GROUP:
@@ -367,7 +346,7 @@ static int finish(ln_waitset* ws, int i, int rc, uint32_t* id)
     if (rc == LN_OK && id != NULL)
         *id = id_of(ws, i);
     if (rc == LN_OK)
-        push_recheck(ws, i); /* looked at by the next wait, ready or not */
+        push(ws, RECHECK, i); /* looked at by the next wait, ready or not */
     pthread_mutex_unlock(&ws->mu);
     if (rc == LN_OK && atomic_load_explicit(&ws->waiting, memory_order_seq_cst))
         ln_bell_ring(ws->bell, 0);
@@ -409,12 +388,12 @@ int ln_waitset_attach_inport(ln_waitset* ws, ln_inport* port, uint32_t flags, do
     t->last_seq = ln_inport_write_seq(port);
     int pubs = ln_inport_live_publishers(port);
     t->alive = pubs > 0;
-    if ((rc = ln_inport_bell(port, ws, id_of(ws, i), ws->bell, id_of(ws, i))) != LN_OK) {
+    if ((rc = ln_inport_bell(port, ws, id_of(ws, i), ws->bell)) != LN_OK) {
         free_slot(ws, i);
         goto out;
     }
     if (t->deadline > 0)
-        push_timed(ws, i);
+        push(ws, TIMED, i);
 out:
     return finish(ws, i, rc, id);
 }
@@ -438,9 +417,9 @@ int ln_waitset_set_deadline(ln_waitset* ws, uint32_t id, double deadline)
         t->deadline_count = 0;
         t->fired &= ~FIRE(LN_WAIT_DEADLINE);
         if (t->deadline > 0)
-            push_timed(ws, i);
-        else if (t->in_timed)
-            unlink_timed(ws, i);
+            push(ws, TIMED, i);
+        else if (t->in[TIMED])
+            unlink_from(ws, TIMED, i);
     }
     return finish(ws, i, rc, NULL);
 }
@@ -454,7 +433,6 @@ static int add_fd(ln_waitset* ws, int i, int fd, uint32_t want)
     if (epoll_ctl(ws->epfd, EPOLL_CTL_ADD, fd, &ev) != 0)
         return ln_set_errno_error(NULL, errno, "waitset: cannot wait on file descriptor %d", fd);
     ws->a[i].fd = fd;
-    ws->a[i].want = want;
     ws->polled++;
     return LN_OK;
 }
@@ -504,7 +482,7 @@ int ln_waitset_attach_parameter_block(ln_waitset* ws, ln_parameter_block* blk, v
     int i = new_slot(ws, ATT_PARAMS, user_data, &rc);
     if (i != NONE) {
         ws->a[i].blk = blk;
-        if ((rc = ln_param_bell(blk, ws, id_of(ws, i), ws->bell, id_of(ws, i))) != LN_OK) {
+        if ((rc = ln_param_bell(blk, ws, id_of(ws, i), ws->bell)) != LN_OK) {
             free_slot(ws, i);
             i = NONE;
         }
@@ -544,7 +522,7 @@ int ln_waitset_attach_timer(ln_waitset* ws, int64_t first_ns, double period, voi
         att* t = &ws->a[i];
         t->period = seconds_ns(period);
         t->next_ns = first_ns ? first_ns : now_ns() + t->period;
-        push_timed(ws, i);
+        push(ws, TIMED, i);
     }
     return finish(ws, i, rc, id);
 }
@@ -632,30 +610,40 @@ static void look(ln_waitset* ws, int i, int64_t now)
         push_fired(ws, i, FIRE(LN_WAIT_PARAMETERS));
 }
 
-/* Timers and deadlines that fell due by `now`; the earliest one still ahead into *next. */
+/* When a timer or an inport's deadline falls due next, and its period. */
+static int64_t due_of(const att* t)
+{
+    return t->kind == ATT_TIMER ? t->next_ns : t->last_ns + t->deadline;
+}
+
+static int64_t step_of(const att* t) { return t->kind == ATT_TIMER ? t->period : t->deadline; }
+
+/* Timers and deadlines that fell due by `now`; the earliest one still ahead into *next.  A
+ * one-shot timer leaves the list once it fired. */
 static void look_timed(ln_waitset* ws, int64_t now, int64_t* next)
 {
-    for (int i = ws->timed_head; i != NONE; i = ws->a[i].next_timed) {
+    for (int i = ws->head[TIMED], following; i != NONE; i = following) {
         att* t = &ws->a[i];
-        int64_t due = t->kind == ATT_TIMER ? t->next_ns : t->last_ns + t->deadline;
-        if (t->kind == ATT_TIMER && t->next_ns == INT64_MAX)
-            continue; /* a one-shot timer that expired */
+        following = t->next[TIMED];
+        int64_t due = due_of(t), step = step_of(t);
         if (now >= due) {
-            int64_t step = t->kind == ATT_TIMER ? t->period : t->deadline;
             uint64_t times = step > 0 ? 1 + (uint64_t)((now - due) / step) : 1;
             if (t->kind == ATT_TIMER) {
                 t->timer_count += (uint32_t)times;
-                t->next_ns = step > 0 ? due + (int64_t)times * step : INT64_MAX;
+                t->next_ns = due + (int64_t)times * step;
                 push_fired(ws, i, FIRE(LN_WAIT_TIMER));
+                if (step == 0) {
+                    unlink_from(ws, TIMED, i);
+                    continue;
+                }
             } else {
                 t->deadline_count += (uint32_t)times;
                 t->last_ns = due + (int64_t)(times - 1) * step;
                 push_fired(ws, i, FIRE(LN_WAIT_DEADLINE));
             }
-            due = t->kind == ATT_TIMER ? t->next_ns : t->last_ns + t->deadline;
         }
-        if (due < *next)
-            *next = due;
+        if (due_of(t) < *next)
+            *next = due_of(t);
     }
 }
 
@@ -730,11 +718,11 @@ static void on_epoll(ln_waitset* ws, const struct epoll_event* ev, int64_t now)
 /* What is ready without sleeping: the re-checks, triggers, timers; *next the earliest due. */
 static void collect(ln_waitset* ws, int64_t now, int64_t* next)
 {
-    int i = ws->recheck_head;
-    ws->recheck_head = NONE;
+    int i = ws->head[RECHECK];
+    ws->head[RECHECK] = NONE;
     while (i != NONE) {
-        int following = ws->a[i].next_recheck;
-        ws->a[i].in_recheck = 0;
+        int following = ws->a[i].next[RECHECK];
+        ws->a[i].in[RECHECK] = 0;
         att* t = &ws->a[i];
         if (t->kind == ATT_INPORT || t->kind == ATT_PARAMS)
             look(ws, i, now);
@@ -792,7 +780,7 @@ static size_t report(ln_waitset* ws, ln_waitset_event* ready, size_t n)
             /* level-triggered: again while unread samples remain (requests and descriptors:
              * epoll reports them again while they hold) */
             if (kind == LN_WAIT_DATA)
-                push_recheck(ws, i);
+                push(ws, RECHECK, i);
         }
         if (t->fired == 0)
             pop_fired(ws);

@@ -10,9 +10,9 @@
 /* ---- port.c ---- */
 /* LN_OK for a live subscriber handle, else LN_EBADHANDLE (recorded, `what` names the call). */
 int ln_inport_check(const ln_inport* p, const char* what);
-/* Registers the port with waitset ws as attachment id: its reader slot rings bell/tag (bell 0,
- * ws NULL: unregisters).  LN_EINVAL for a subscriber without reader slot. */
-int ln_inport_bell(ln_inport* p, ln_waitset* ws, uint32_t id, uint64_t bell, uint32_t tag);
+/* Registers the port with waitset ws as attachment id: its reader slot rings `bell` with the
+ * id (bell 0, ws NULL: unregisters).  LN_EINVAL for a subscriber without reader slot. */
+int ln_inport_bell(ln_inport* p, ln_waitset* ws, uint32_t id, uint64_t bell);
 ln_waitset* ln_inport_waitset(const ln_inport* p);
 /* Re-arms the bell, then 1 if a read would find a sample now, 0 if not, < 0 an error. */
 int ln_inport_ready(ln_inport* p);
@@ -23,9 +23,9 @@ int ln_inport_live_publishers(const ln_inport* p);
 /* ---- param_block.c ---- */
 int ln_param_check_handle(const ln_parameter_block* blk, const char* what);
 /* Registers the block with waitset ws as attachment id (ws NULL: unregisters); LN_EBUSY if
- * another waitset has it.  From then on every override handed to the loop rings bell/tag. */
-int ln_param_bell(ln_parameter_block* blk, ln_waitset* ws, uint32_t id, uint64_t bell,
-                  uint32_t tag);
+ * another waitset has it.  From then on every override handed to the loop rings `bell` with
+ * the id. */
+int ln_param_bell(ln_parameter_block* blk, ln_waitset* ws, uint32_t id, uint64_t bell);
 /* 1 if overrides wait for the block's next update(). */
 int ln_param_pending(const ln_parameter_block* blk);
 
