@@ -36,7 +36,7 @@ def loop_waitset(loop: asyncio.AbstractEventLoop | None = None) -> LoopWaitSet:
     if loop is None:
         loop = asyncio.get_running_loop()
     found = _loops.get(loop)
-    if found is None or found.waitset.closed:
+    if found is None:
         found = _loops[loop] = LoopWaitSet(loop)
     return found
 
@@ -71,8 +71,6 @@ class LoopWaitSet:
     def collect(self) -> None:
         """Take every ready event (without sleeping) and hand each to its callback."""
         waitset = self.waitset
-        if waitset.closed:
-            return
         while True:
             events = waitset.wait(0)
             for event in events:
@@ -94,8 +92,6 @@ class LoopWaitSet:
 
     def schedule(self) -> None:
         """Have the loop collect when the waitset's next timer or deadline falls due."""
-        if self.waitset.closed:
-            return
         due = self.waitset.next_due()
         if due == self._due_ns and self._due is not None:
             return
@@ -129,15 +125,6 @@ class LoopWaitSet:
             if not watch.waiters:
                 del self._watches[key]
                 watch.end()
-
-    def close(self) -> None:
-        """Stop watching the descriptor and close the waitset (the loop's end)."""
-        loop = self._loop()
-        if loop is not None and not loop.is_closed():
-            loop.remove_reader(self._fd)
-        if self._due is not None:
-            self._due.cancel()
-        self.waitset.close()
 
 
 class _Waiter:

@@ -83,6 +83,8 @@ class Bridge:
             + ([Capability.Services] if self.config.offer_services else []),
             supported_encodings=["json"], server_listener=self, context=self.context)
         self.logs = LogFeed(self.context)
+        # where the manager's log is now: lines after this (and after "serving") go out
+        self.logs.poll(self.link.control, self.say)
         if direct:
             self.port = self.server.port
             protocols = SDK

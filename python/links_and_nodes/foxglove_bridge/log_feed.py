@@ -29,7 +29,8 @@ class LogFeed:
     def poll(self, control: Callable[..., dict[str, Any]], say: Callable[[str], None]) -> None:
         """Publish the lines after the last poll's (the first poll only notes where it is)."""
         try:
-            result = control("log", since=self.last or 0, n=0 if self.last is None else 20000)
+            result = control("log", since=self.last or 0,
+                             n=0 if self.last is None else foxglove_log.LOG_LINES)
         except CommandError as exc:
             if str(exc) != self.error:  # said once per reason
                 self.error = str(exc)

@@ -12,7 +12,7 @@ from typing import Any
 from ..tools import foxglove_log
 
 WAIT = 0.5  # seconds one `log` request waits for new lines (also how soon stop() is seen)
-ALL = 20000  # `log`'s most lines: with since 0 (no line yet) `n` still limits the answer
+ALL = foxglove_log.LOG_LINES  # with since 0 (no line yet) `n` still limits the answer
 
 
 class LogChannel:

@@ -7,6 +7,8 @@ from __future__ import annotations
 import json
 from typing import Any
 
+# the most lines one `log` answer holds (the manager keeps as many: registry/defaults.py)
+LOG_LINES = 20000
 TOPIC = "ln.log"
 SCHEMA_NAME = "foxglove.Log"
 SCHEMA_ENCODING = "jsonschema"

@@ -145,11 +145,12 @@ class Builder:
         sched = self.control.scheduler
         if sched is None:
             return None
-        host = self.client_host[client.id]
-        single = self.control.core.hosts is None
-        for name, proc in sched.procs.items():
-            if proc.pid and proc.pid == client.pid and (single or proc.cfg.node == host):
-                return f"p:{name}"
+        from ..processes.output_levels import process_finder
+
+        found = process_finder(sched.procs, any_node=self.control.core.hosts is None)(
+            self.client_host[client.id], client.pid)
+        if found:
+            return f"p:{found}"
         base = _SUFFIX.sub("", client.name)
         for name in sched.procs:
             if base in (name, name.replace("/", ".")):

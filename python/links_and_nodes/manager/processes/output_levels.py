@@ -39,17 +39,18 @@ def output_level(regex: str | None, text: str) -> tuple[int, str] | None:
     return level, said if said is not None else text
 
 
-def process_finder(procs: Mapping[str, _Proc]) -> Callable[[str, int], str]:
+def process_finder(procs: Mapping[str, _Proc],
+                   any_node: bool | None = None) -> Callable[[str, int], str]:
     """host, pid -> the configured process running as that pid ("" if none): on its node, or
-    on any node of a configuration with one node only (whose host names differ from the
-    clients' host ids)."""
+    on any node if `any_node` (default: for a configuration with one node only, whose host
+    names differ from the clients' host ids)."""
     def find(host: str, pid: int) -> str:
         if pid <= 0:
             return ""
-        found = [p for p in procs.values() if p.pid == pid]
-        nodes = {p.cfg.node for p in procs.values()}
-        for p in found:
-            if p.cfg.node == host or len(nodes) == 1:
-                return str(p.cfg.name)
+        anywhere = any_node if any_node is not None else \
+            len({p.cfg.node for p in procs.values()}) == 1
+        for name, p in procs.items():
+            if p.pid == pid and (p.cfg.node == host or anywhere):
+                return name
         return ""
     return find

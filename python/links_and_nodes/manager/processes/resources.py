@@ -5,7 +5,6 @@ docs/process_management.md "Resources and limits"), and the `.lnc` limits `max_r
 
 from __future__ import annotations
 
-from dataclasses import asdict
 from typing import Any
 
 from ...tools.commands.columns import size_text
@@ -68,13 +67,13 @@ class Resources:
         """Every resource signal with its newest value (the scheme above)."""
         out: dict[str, float] = {}
         for name, h in self.hosts.items():
-            out[f"host/{name}/cpu"] = h.cpu
-            out[f"host/{name}/load1"] = h.load[0]
-            out[f"host/{name}/mem_used"] = float(h.mem_total - h.mem_available)
-            out[f"host/{name}/mem_available"] = float(h.mem_available)
+            host = {"cpu": h.cpu, "load1": h.load[0], "mem_used": h.mem_total - h.mem_available,
+                    "mem_available": h.mem_available}
+            for figure in HOST_SIGNALS:
+                out[f"host/{name}/{figure}"] = float(host[figure])
         for name, p in self.processes.items():
-            values = asdict(p)
             for figure in PROCESS_SIGNALS:
-                if values[figure] is not None:
-                    out[f"process/{name}/{figure}"] = float(values[figure])
+                value = getattr(p, figure)
+                if value is not None:
+                    out[f"process/{name}/{figure}"] = float(value)
         return out

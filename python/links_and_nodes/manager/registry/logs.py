@@ -14,8 +14,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...tools import protocol as p
+from .defaults import LOG_LINES
 
-DEFAULT_CAPACITY = 20000  # lines kept
+DEFAULT_CAPACITY = LOG_LINES  # lines kept
 LEVELS = {"debug": 10, "info": 20, "warning": 30, "error": 40, "critical": 50}
 LEVEL_NAMES = {number: name for name, number in LEVELS.items()}
 # ln.h's levels are Python's; other spellings a regex's level group may have
@@ -130,7 +131,7 @@ class LogStore:
         self.last_seq = 0
         self.evicted = 0
         self.client_dropped: dict[tuple[str, str], int] = {}  # (client, host) -> count
-        self._new = asyncio.Event() if _has_loop() else None
+        self._new = asyncio.Event()  # bound to a loop by its first wait (Python >= 3.10)
         # called with each new line (the web UI's live log page)
         self.listeners: list[Callable[[LogEntry], None]] = []
         # (host, pid) -> the configured process of that pid, when the scheduler knows it
@@ -151,8 +152,7 @@ class LogStore:
             self.evicted += 1
         self._entries.append(entry)
         self.last_seq = seq
-        if self._new is not None:
-            self._new.set()
+        self._new.set()
         for listener in list(self.listeners):
             listener(entry)
         return entry
@@ -184,8 +184,6 @@ class LogStore:
 
     async def wait(self, since: int, timeout: float) -> None:
         """Until there is a line after `since`, at most `timeout` seconds."""
-        if self._new is None:
-            self._new = asyncio.Event()
         while self.last_seq <= since:
             self._new.clear()
             try:
@@ -197,10 +195,3 @@ class LogStore:
         return [{"client": client, "host": host, "dropped": count}
                 for (client, host), count in sorted(self.client_dropped.items()) if count]
 
-
-def _has_loop() -> bool:
-    try:
-        asyncio.get_running_loop()
-    except RuntimeError:
-        return False
-    return True

@@ -10,8 +10,9 @@ from collections.abc import Iterator
 from typing import Any
 
 from ....tools.commands import Arg, ArgError, Command, register
+from ...registry.defaults import LOG_LINES
 
-MAX_LINES = 20000  # registry/logs.py DEFAULT_CAPACITY
+MAX_LINES = LOG_LINES
 FOLLOW_WAIT = 5.0  # seconds one request of `log -f` waits for new lines
 
 
@@ -46,12 +47,16 @@ ARGS = (
 )
 
 
-async def log_lines(control: Any, args: dict[str, Any]) -> dict[str, Any]:
+def _filter(args: dict[str, Any]) -> Any:
+    """The registry's LogFilter of the command's level, process, host and grep."""
     from ...registry.logs import LogFilter, level_number
 
+    return LogFilter(level_number(args["level"]), args["process"], args["host"], args["grep"])
+
+
+async def log_lines(control: Any, args: dict[str, Any]) -> dict[str, Any]:
     store = control.core.logs
-    wanted = LogFilter(level_number(args["level"]), args["process"], args["host"],
-                       args["grep"])
+    wanted = _filter(args)
     since = args["since"]
     if args["timeout"] > 0 and since >= store.last_seq:
         await store.wait(since, args["timeout"])
@@ -106,11 +111,8 @@ async def _console_log(console: Any, args: dict[str, Any]) -> None:
         console.say(text)
     if not args["follow"]:
         return
-    from ...registry.logs import LogFilter, level_number
-
     store = console.control.core.logs
-    wanted = LogFilter(level_number(args["level"]), args["process"], args["host"],
-                       args["grep"])
+    wanted = _filter(args)
 
     def follow(entry: Any) -> None:
         if wanted(entry):
