@@ -131,6 +131,12 @@ class InstanceDraft:
     webui_auth_file: str | None = None
     webui: bool = False
     webui_port: int | None = None
+    security: str | None = None
+    client_key_file: str | None = None
+    client_uids: list[str] | None = None
+    client_gids: list[str] | None = None
+    webui_tls_cert: str | None = None
+    webui_tls_key: str | None = None
     failed: set[str] = field(default_factory=set)
 
 

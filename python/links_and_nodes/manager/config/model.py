@@ -81,6 +81,14 @@ class Instance:
     webui_auth_file: str | None = None  # absolute path; LNM_WEBUI_AUTH_FILE overrides it
     webui: bool = False  # `webui: on`: serve the web UI (docs/webui.md)
     webui_port: int | None = None  # its own port; None: the manager's
+    # docs/security.md: "none" | "authenticate" | "encrypt"; None: the default
+    # (authenticate, since every daemon has a key)
+    security: str | None = None
+    client_key_file: str | None = None  # absolute path; LN_CLIENT_KEY_FILE overrides it
+    client_uids: list[str] | None = None  # users (names or numbers) admitted locally
+    client_gids: list[str] | None = None  # groups (names or numbers) admitted locally
+    webui_tls_cert: str | None = None  # absolute path of a PEM certificate (chain)
+    webui_tls_key: str | None = None  # absolute path of its PEM private key
 
 
 @dataclass

@@ -76,7 +76,9 @@ class _Resolver:
         if draft.name is None or address is None:
             return None
         return Instance(draft.name, address, draft.loc, draft.documentation,
-                        draft.webui_auth_file, draft.webui, draft.webui_port)
+                        draft.webui_auth_file, draft.webui, draft.webui_port,
+                        draft.security, draft.client_key_file, draft.client_uids,
+                        draft.client_gids, draft.webui_tls_cert, draft.webui_tls_key)
 
     # ------------------------------------------------------------------ processes
 

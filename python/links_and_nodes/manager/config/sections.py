@@ -73,10 +73,25 @@ def _no_add(kl: KeyLine) -> None:
         raise LineError.at(kl.loc, f"'add' works on list keys only; '{kl.key}' takes one value")
 
 
+SECURITY_LEVELS = ("none", "authenticate", "encrypt")
+
+
+def _id_list(v: Value, key: str) -> list[str]:
+    """`client_uids`/`client_gids`: user or group names and numbers, separated by spaces
+    or commas; resolved to numbers where the manager runs."""
+    items = [x for x in v.text.replace(",", " ").split() if x]
+    if not items:
+        raise fail(v, f"{key} needs at least one user or group name or number")
+    return items
+
+
 class InstanceSection(Section):
     kind = "instance"
     KEYS = frozenset({"name", "manager", "documentation", "webui_auth_file", "webui",
-                      "webui_port"})
+                      "webui_port", "security", "client_key_file", "client_uids",
+                      "client_gids", "webui_tls_cert", "webui_tls_key"})
+    PATH_KEYS = frozenset({"webui_auth_file", "client_key_file", "webui_tls_cert",
+                           "webui_tls_key"})
     IGNORED = frozenset({"enable_auto_groups", "groups_opened_default",
                          "groups_sorted_default"})
     UNSUPPORTED = {"verbose2_base": "the manager's log verbosity is "
@@ -114,8 +129,15 @@ class InstanceSection(Section):
             if not v.text.isdigit() or not 0 <= int(v.text) <= 65535:
                 raise fail(v, f"webui_port must be a TCP port 0..65535, not {v.text!r}")
             self.draft.webui_port = int(v.text)
+        elif kl.key == "security":  # docs/security.md
+            if v.text not in SECURITY_LEVELS:
+                raise fail(v, "security must be none, authenticate or encrypt, not "
+                              f"{v.text!r}")
+            self.draft.security = v.text
+        elif kl.key in ("client_uids", "client_gids"):
+            setattr(self.draft, kl.key, _id_list(v, kl.key))
         else:
-            self.draft.webui_auth_file = p.path(v.text, kl)
+            setattr(self.draft, kl.key, p.path(v.text, kl))
 
     def failed(self, key: str) -> None:
         self.draft.failed.add(key)
