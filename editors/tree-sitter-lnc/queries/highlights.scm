@@ -42,7 +42,7 @@
     "gui" "line_highlight_bg_color" "line_highlight_fg_color" "line_highlight_regexes"
     "mantis_project_id" "max_output_frequency" "max_queued_output_bytes" "notebook"
     "output_buffer_size" "vte_color_style" "warning_msg" "warning_regex" "manager" "name"
-    "webui" "webui_auth_file" "webui_port" "enable_auto_groups" "groups_opened_default"
+    "webui" "webui_auth_file" "webui_port" "webui_tls_cert" "webui_tls_key" "security" "client_key_file" "client_uids" "client_gids" "enable_auto_groups" "groups_opened_default"
     "groups_sorted_default" "check" "down" "min_check_interval" "up" "members"
     "member_interfaces" "preferred_gateways" "undef"))
 
@@ -61,7 +61,7 @@
         "gui" "line_highlight_bg_color" "line_highlight_fg_color" "line_highlight_regexes"
         "mantis_project_id" "max_output_frequency" "max_queued_output_bytes" "notebook"
         "output_buffer_size" "vte_color_style" "warning_msg" "warning_regex" "manager" "name"
-        "webui" "webui_auth_file" "webui_port" "enable_auto_groups" "groups_opened_default"
+        "webui" "webui_auth_file" "webui_port" "webui_tls_cert" "webui_tls_key" "security" "client_key_file" "client_uids" "client_gids" "enable_auto_groups" "groups_opened_default"
         "groups_sorted_default" "check" "down" "min_check_interval" "up" "members"
         "member_interfaces" "preferred_gateways" "undef")))
 
@@ -78,7 +78,7 @@
         "gui" "line_highlight_bg_color" "line_highlight_fg_color" "line_highlight_regexes"
         "mantis_project_id" "max_output_frequency" "max_queued_output_bytes" "notebook"
         "output_buffer_size" "vte_color_style" "warning_msg" "warning_regex" "manager" "name"
-        "webui" "webui_auth_file" "webui_port" "enable_auto_groups" "groups_opened_default"
+        "webui" "webui_auth_file" "webui_port" "webui_tls_cert" "webui_tls_key" "security" "client_key_file" "client_uids" "client_gids" "enable_auto_groups" "groups_opened_default"
         "groups_sorted_default" "check" "down" "min_check_interval" "up" "members"
         "member_interfaces" "preferred_gateways" "undef")))
 
@@ -95,7 +95,7 @@
         "gui" "line_highlight_bg_color" "line_highlight_fg_color" "line_highlight_regexes"
         "mantis_project_id" "max_output_frequency" "max_queued_output_bytes" "notebook"
         "output_buffer_size" "vte_color_style" "warning_msg" "warning_regex" "manager" "name"
-        "webui" "webui_auth_file" "webui_port" "enable_auto_groups" "groups_opened_default"
+        "webui" "webui_auth_file" "webui_port" "webui_tls_cert" "webui_tls_key" "security" "client_key_file" "client_uids" "client_gids" "enable_auto_groups" "groups_opened_default"
         "groups_sorted_default" "check" "down" "min_check_interval" "up" "members"
         "member_interfaces" "preferred_gateways" "undef")))
 
@@ -112,7 +112,7 @@
         "gui" "line_highlight_bg_color" "line_highlight_fg_color" "line_highlight_regexes"
         "mantis_project_id" "max_output_frequency" "max_queued_output_bytes" "notebook"
         "output_buffer_size" "vte_color_style" "warning_msg" "warning_regex" "manager" "name"
-        "webui" "webui_auth_file" "webui_port" "enable_auto_groups" "groups_opened_default"
+        "webui" "webui_auth_file" "webui_port" "webui_tls_cert" "webui_tls_key" "security" "client_key_file" "client_uids" "client_gids" "enable_auto_groups" "groups_opened_default"
         "groups_sorted_default" "check" "down" "min_check_interval" "up" "members"
         "member_interfaces" "preferred_gateways" "undef")))
 
@@ -129,7 +129,7 @@
         "gui" "line_highlight_bg_color" "line_highlight_fg_color" "line_highlight_regexes"
         "mantis_project_id" "max_output_frequency" "max_queued_output_bytes" "notebook"
         "output_buffer_size" "vte_color_style" "warning_msg" "warning_regex" "manager" "name"
-        "webui" "webui_auth_file" "webui_port" "enable_auto_groups" "groups_opened_default"
+        "webui" "webui_auth_file" "webui_port" "webui_tls_cert" "webui_tls_key" "security" "client_key_file" "client_uids" "client_gids" "enable_auto_groups" "groups_opened_default"
         "groups_sorted_default" "check" "down" "min_check_interval" "up" "members"
         "member_interfaces" "preferred_gateways" "undef")))
 
@@ -146,7 +146,7 @@
         "gui" "line_highlight_bg_color" "line_highlight_fg_color" "line_highlight_regexes"
         "mantis_project_id" "max_output_frequency" "max_queued_output_bytes" "notebook"
         "output_buffer_size" "vte_color_style" "warning_msg" "warning_regex" "manager" "name"
-        "webui" "webui_auth_file" "webui_port" "enable_auto_groups" "groups_opened_default"
+        "webui" "webui_auth_file" "webui_port" "webui_tls_cert" "webui_tls_key" "security" "client_key_file" "client_uids" "client_gids" "enable_auto_groups" "groups_opened_default"
         "groups_sorted_default" "check" "down" "min_check_interval" "up" "members"
         "member_interfaces" "preferred_gateways" "undef")))
 
