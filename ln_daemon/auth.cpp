@@ -26,6 +26,17 @@ Key::~Key() { sodium_memzero(bytes, kBytes); }
 
 bool crypto_init() noexcept { return sodium_init() >= 0; }
 
+std::string key_id(const Key &key)
+{
+    static constexpr char kLabel[] = "ln key id";
+    uint8_t hash[4];
+    crypto_generichash(hash, sizeof hash, reinterpret_cast<const uint8_t *>(kLabel),
+                       sizeof kLabel - 1, key.bytes, Key::kBytes);
+    char text[9];
+    std::snprintf(text, sizeof text, "%02x%02x%02x%02x", hash[0], hash[1], hash[2], hash[3]);
+    return text;
+}
+
 namespace {
 
 Outcome unusable(std::string text) { return outcome::error(proto::Err::os_error, std::move(text)); }

@@ -33,6 +33,10 @@ Outcome load_key_file(const std::string &path, Key &key);
 
 void random_bytes(void *out, size_t n) noexcept;
 
+// A short name of a key for logs (8 hex digits of a BLAKE2b hash of it, not the key): hosts
+// that log the same id hold the same key.
+std::string key_id(const Key &key);
+
 // HMAC-SHA256(key, label || 0 || each part in turn).
 void hmac(const uint8_t *key, size_t key_len, std::string_view label,
           std::initializer_list<std::string_view> parts, Tag out) noexcept;

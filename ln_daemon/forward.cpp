@@ -69,7 +69,7 @@ Outcome not_started(const std::exception &e)
 
 struct Forwarder::Impl {
     explicit Impl(const Options &o)
-        : options(checked(o)),
+        : options(checked(o)), key(o.key),
           sockets(bind_data_sockets(o.bind_address, o.data_port, o.socket_buffer)),
           budget(o.udp_reassembly_bytes), udp(sockets.udp.get(), receivers, totals, options),
           tcp(sockets.tcp.get(), receivers, totals, options.spin_us)
@@ -120,7 +120,18 @@ struct Forwarder::Impl {
             tcp.drop_stream(old->spec.token);
     }
 
+    // The options with the current key (set_key()).
+    Options current() const
+    {
+        Options o = options;
+        std::lock_guard<std::mutex> lock(key_mutex);
+        o.key = key;
+        return o;
+    }
+
     const Options options;
+    mutable std::mutex key_mutex;
+    Key key; // options.key until set_key()
     DataSockets sockets;
     ReassemblyBudget budget; // before the streams, whose reassemblers give memory back
     TotalCounters totals;
@@ -148,9 +159,10 @@ Outcome Forwarder::set_send(const SendSpec &spec)
         return refused("no receiving port named");
     try {
         std::unique_ptr<SendStream> stream;
+        const Options options = impl_->current();
         Outcome created = spec.transport == Transport::tcp
-                              ? TcpSender::create(spec, impl_->options, stream)
-                              : UdpSender::create(spec, impl_->options, stream);
+                              ? TcpSender::create(spec, options, stream)
+                              : UdpSender::create(spec, options, stream);
         if (created.failed())
             return created;
         std::lock_guard<std::mutex> lock(impl_->control);
@@ -173,8 +185,8 @@ Outcome Forwarder::set_recv(const RecvSpec &spec)
         return o;
     try {
         std::shared_ptr<RecvStream> stream;
-        if (Outcome o =
-                RecvStream::open(spec, impl_->budget, impl_->options.udp_max_incomplete, stream);
+        if (Outcome o = RecvStream::open(spec, impl_->current().key, impl_->budget,
+                                         impl_->options.udp_max_incomplete, stream);
             o.failed())
             return o;
         std::lock_guard<std::mutex> lock(impl_->control);
@@ -215,6 +227,32 @@ std::vector<StreamStats> Forwarder::stats() const
     std::stable_sort(out.begin(), out.end(),
                      [](const StreamStats &a, const StreamStats &b) { return a.token < b.token; });
     return out;
+}
+
+Outcome Forwarder::set_key(const Key &key)
+{
+    {
+        std::lock_guard<std::mutex> lock(impl_->key_mutex);
+        impl_->key = key;
+    }
+    // Each stream again from its spec: new stream keys, salts and connections.  The daemon
+    // calls this from its poll loop, the thread that also adds and removes streams.
+    std::vector<SendSpec> sending;
+    {
+        std::lock_guard<std::mutex> lock(impl_->senders_mutex);
+        for (const auto &entry : impl_->senders)
+            sending.push_back(entry.second->spec());
+    }
+    Outcome result = outcome::ok();
+    auto keep_first = [&result](Outcome o) {
+        if (o.failed() && !result.failed())
+            result = std::move(o);
+    };
+    for (const auto &stream : impl_->receivers.all())
+        keep_first(set_recv(stream->spec));
+    for (const SendSpec &spec : sending)
+        keep_first(set_send(spec));
+    return result;
 }
 
 Totals Forwarder::totals() const

@@ -3,7 +3,9 @@
 // subscribers, over UDP (fragmented, newest sample wins) or TCP (in order, bounded queue);
 // the receiving daemon reassembles and writes samples into its local ring under their
 // original sequence numbers and timestamps.  Streams are identified by a random 64-bit
-// token the manager hands to both ends; every counter is kept per stream.
+// token the manager hands to both ends; every counter is kept per stream.  Every datagram and
+// frame is authenticated (or also encrypted) under a key derived per stream from the daemon
+// key (forward_crypto.hpp), unless the stream's security level is none.
 #pragma once
 
 #include <cstdint>
@@ -11,11 +13,14 @@
 #include <string>
 #include <vector>
 
+#include "auth.hpp"
+#include "forward_crypto.hpp"
 #include "outcome.hpp"
 
 namespace lnd::fwd {
 
 enum class Transport : uint8_t { udp = 0, tcp = 1 };
+using sec::Level;
 
 // Where one topic's samples go from this host.
 struct SendSpec {
@@ -26,6 +31,7 @@ struct SendSpec {
     Transport transport = Transport::udp;
     std::string host; // receiving daemon: address and data port
     uint16_t port = 0;
+    Level security = Level::authenticate;
 };
 
 // Which local ring one incoming stream is written into.
@@ -35,6 +41,7 @@ struct RecvSpec {
     uint64_t layout_hash = 0;
     uint64_t message_size = 0;
     Transport transport = Transport::udp;
+    Level security = Level::authenticate;
 };
 
 struct StreamStats {
@@ -50,6 +57,8 @@ struct StreamStats {
     uint64_t stale = 0;     // receiver: samples not newer than the ring's newest (duplicates,
                             // reordered)
     uint64_t invalid = 0;   // receiver: malformed datagrams/frames for this stream
+    uint64_t rejected = 0;  // receiver: datagrams/frames/hellos that failed authentication
+                            // (forged, replayed, truncated, too old, wrong key or level)
     bool connected = true;  // TCP: connection up (UDP: always true)
     std::string last_error; // most recent problem, "" if none
 };
@@ -57,7 +66,7 @@ struct StreamStats {
 struct Options {
     std::string bind_address;                 // "" = all interfaces
     uint16_t data_port = 0;                   // UDP and TCP data port; 0 = ephemeral
-    size_t udp_payload = 1400;                // payload bytes per datagram (fragment)
+    size_t udp_payload = 1368;                // payload bytes per datagram (fragment)
     size_t udp_max_incomplete = 4;            // samples being reassembled per stream, at most
     size_t udp_reassembly_bytes = 256u << 20; // memory of all reassembly buffers, at most
     double udp_incomplete_timeout = 1.0;      // seconds without a fragment before an
@@ -71,6 +80,7 @@ struct Options {
     // the next sample / datagram / frame before sleeping, which saves a wake-up per hop on
     // hosts with CPUs to spare; 0 sleeps at once.
     unsigned spin_us = 0;
+    Key key; // the daemon key every stream key is derived from (set_key() replaces it)
 };
 
 // Global counters of the receive side that belong to no stream.
@@ -103,6 +113,10 @@ public:
     // none.  Once it returned nothing more is sent or written into the ring for it.
     bool remove(uint64_t token);
     std::vector<StreamStats> stats() const;
+    // A new daemon key: every stream is started again (new salts, new connections) with keys
+    // derived from it; samples in flight meanwhile may be lost.  The first stream that could
+    // not start again says why (the others did).
+    Outcome set_key(const Key &key);
     Totals totals() const;
 
 private:

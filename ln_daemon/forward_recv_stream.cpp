@@ -6,23 +6,41 @@
 
 namespace lnd::fwd {
 
-Outcome RecvStream::open(const RecvSpec &spec, ReassemblyBudget &budget, size_t max_incomplete,
-                         std::shared_ptr<RecvStream> &out)
+Outcome RecvStream::open(const RecvSpec &spec, const Key &daemon_key, ReassemblyBudget &budget,
+                         size_t max_incomplete, std::shared_ptr<RecvStream> &out)
 {
     Tap tap;
     if (Outcome o = open_tap(tap, spec.ring, spec.layout_hash, spec.message_size, LN_TAP_NEWEST);
         o.failed())
         return o;
-    out = std::make_shared<RecvStream>(spec, std::move(tap), budget, max_incomplete);
+    out = std::make_shared<RecvStream>(spec, daemon_key, std::move(tap), budget, max_incomplete);
     return outcome::ok();
 }
 
-RecvStream::RecvStream(const RecvSpec &spec_, Tap tap, ReassemblyBudget &budget,
-                       size_t max_incomplete)
-    : spec(spec_), counters(spec_.token, false, spec_.transport, spec_.transport == Transport::udp),
-      reassembler(budget, max_incomplete), tap_(std::move(tap))
+namespace {
+
+Key derived(const Key &daemon_key, const RecvSpec &spec)
+{
+    Key k;
+    sec::stream_key(daemon_key, spec.token, static_cast<uint8_t>(spec.transport), k);
+    return k;
+}
+
+} // namespace
+
+RecvStream::RecvStream(const RecvSpec &spec_, const Key &daemon_key, Tap tap,
+                       ReassemblyBudget &budget, size_t max_incomplete)
+    : spec(spec_), key(derived(daemon_key, spec_)),
+      counters(spec_.token, false, spec_.transport, spec_.transport == Transport::udp),
+      reassembler(budget, max_incomplete), guard(spec_.security, key), tap_(std::move(tap))
 {
     counters.note_segment(ln_ring_tap_segment(tap_.get()));
+}
+
+void RecvStream::reject(const std::string &why)
+{
+    StreamCounters::add(counters.rejected);
+    counters.set_error(why);
 }
 
 void RecvStream::write(const uint8_t *data, uint64_t seq, int64_t timestamp_ns)
@@ -56,12 +74,13 @@ bool RecvStream::begin(uint64_t seq, void **payload)
     return false;
 }
 
-void RecvStream::finish(bool intact, int64_t timestamp_ns)
+void RecvStream::finish(bool intact, int64_t timestamp_ns, bool counted)
 {
     std::lock_guard<std::mutex> lock(mutex_, std::adopt_lock);
     if (!intact) {
         ln_ring_tap_inject_abort(tap_.get());
-        StreamCounters::add(counters.drops);
+        if (!counted)
+            StreamCounters::add(counters.drops);
         return;
     }
     count_write(ln_ring_tap_inject_commit(tap_.get(), timestamp_ns));

@@ -18,18 +18,23 @@
 #include "forward_reassembly.hpp"
 #include "forward_stats.hpp"
 #include "forward_tap.hpp"
+#include "forward_udp_guard.hpp"
 
 namespace lnd::fwd {
 
 class RecvStream {
 public:
     // Opens the ring into `out`, or refuses (error stream_failed).
-    static Outcome open(const RecvSpec &spec, ReassemblyBudget &budget, size_t max_incomplete,
-                        std::shared_ptr<RecvStream> &out);
-    RecvStream(const RecvSpec &spec, Tap tap, ReassemblyBudget &budget, size_t max_incomplete);
+    static Outcome open(const RecvSpec &spec, const Key &daemon_key, ReassemblyBudget &budget,
+                        size_t max_incomplete, std::shared_ptr<RecvStream> &out);
+    RecvStream(const RecvSpec &spec, const Key &daemon_key, Tap tap, ReassemblyBudget &budget,
+               size_t max_incomplete);
 
     const RecvSpec spec;
+    const Key key; // the stream key (sec::stream_key), for every salt or connection
     StreamCounters counters;
+    // Counts a datagram, frame or hello that failed authentication, with why.
+    void reject(const std::string &why);
 
     // Writes a complete sample into the ring and counts it (written, or stale if it is not
     // newer than the ring's newest).  Nothing happens once the stream is closed.
@@ -40,7 +45,8 @@ public:
     // refuses (then write() a copy, which counts why).  finish publishes the sample
     // (`intact`) or leaves nothing (a torn frame, a failed read: counted as a drop).
     bool begin(uint64_t seq, void **payload);
-    void finish(bool intact, int64_t timestamp_ns);
+    // `counted`: the caller counts a sample left unpublished itself (a rejected frame).
+    void finish(bool intact, int64_t timestamp_ns, bool counted = false);
     // The ring's newest sequence number (0 when closed: nothing will be written anyway).
     uint64_t newest();
     void close() noexcept;
@@ -53,6 +59,7 @@ public:
     // UDP receive thread only.
     Reassembler reassembler;
     Address last_source; // to update the peer text only when the source changes
+    UdpGuard guard;      // authenticates every datagram before anything else looks at it
 
 private:
     // Counts the outcome of a write into the ring (under mutex_): a sample, a stale one, or a

@@ -23,6 +23,7 @@ public:
     std::atomic<uint64_t> drops{0};
     std::atomic<uint64_t> stale{0};
     std::atomic<uint64_t> invalid{0};
+    std::atomic<uint64_t> rejected{0};
 
     static void add(std::atomic<uint64_t> &counter, uint64_t n = 1) noexcept
     {
@@ -63,6 +64,7 @@ public:
         s.drops = drops.load(std::memory_order_relaxed);
         s.stale = stale.load(std::memory_order_relaxed);
         s.invalid = invalid.load(std::memory_order_relaxed);
+        s.rejected = rejected.load(std::memory_order_relaxed);
         s.connected = connected_.load(std::memory_order_acquire);
         std::lock_guard<std::mutex> lock(mutex_);
         s.ring = ring_;

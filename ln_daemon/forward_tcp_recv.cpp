@@ -2,7 +2,8 @@
 // stream before its payload is read, so a bad sender costs its connection, never memory.
 // The socket wakes its thread once a whole frame is buffered (SO_RCVLOWAT), whose payload
 // is then received straight into a ring slot; a frame's trailer decides whether it is
-// published (intact) or dropped (torn while sent).
+// published (intact) or dropped (torn while sent), once its tag was found authentic (else
+// the connection is closed and the frame counted as rejected).
 #include "forward_tcp_recv.hpp"
 
 #include <cerrno>
@@ -92,17 +93,20 @@ Io TcpReceiver::wait_frame(int fd, size_t frame, bool &in_place, std::string &er
     return Io::ok;
 }
 
-bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, uint8_t *payload, bool in_place)
+bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, TcpSession &session, uint8_t *payload,
+                                bool in_place)
 {
     const int fd = c.fd.get();
     std::string error;
     uint8_t head[wire::kFrameHeaderSize];
-    uint8_t tail[wire::kFrameTrailerSize];
+    uint8_t tail[wire::kFrameTrailerSize + sec::kTagBytes];
+    const size_t tail_size = wire::kFrameTrailerSize + session.tag_size();
+    const uint8_t *tag = tail + wire::kFrameTrailerSize;
     Io io = read_full(fd, head, sizeof head, stop_, -1, error, in_place ? 0 : spin_ns_);
     if (io != Io::ok)
         return ended(c, s, io, error);
-    wire::FrameHeader f = wire::decode_frame_header(head);
-    if (f.size != s.spec.message_size) {
+    wire::FrameHeader f;
+    if (session.header(head, f) != TcpSession::Frame::intact) {
         StreamCounters::add(s.counters.invalid);
         s.counters.set_error("frame of " + std::to_string(f.size) + " bytes from " + c.peer +
                              ", the stream's messages have " + std::to_string(s.spec.message_size));
@@ -113,35 +117,46 @@ bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, uint8_t *payload, 
         // All of it is buffered: these reads do not wait (the timeout only guards the lock).
         io = read_full(fd, slot, f.size, stop_, kInPlaceTimeoutMs, error);
         if (io == Io::ok)
-            io = read_full(fd, tail, sizeof tail, stop_, kInPlaceTimeoutMs, error);
-        wire::Trailer t = io == Io::ok ? wire::decode_frame_trailer(tail) : wire::Trailer::torn;
-        s.finish(t == wire::Trailer::intact, f.timestamp_ns);
+            io = read_full(fd, tail, tail_size, stop_, kInPlaceTimeoutMs, error);
+        TcpSession::Frame v = TcpSession::Frame::torn;
+        if (io == Io::ok)
+            v = session.frame(head, static_cast<uint8_t *>(slot), tail, tag);
+        s.finish(v == TcpSession::Frame::intact, f.timestamp_ns, v == TcpSession::Frame::rejected);
         if (io != Io::ok)
             return ended(c, s, io, error);
-        return trailer_ok(c, s, t);
+        if (v == TcpSession::Frame::torn)
+            return !s.closed(); // finish() counted the drop
+        return judged(c, s, v);
     }
     io = read_full(fd, payload, f.size, stop_, -1, error);
     if (io == Io::ok)
-        io = read_full(fd, tail, sizeof tail, stop_, -1, error);
+        io = read_full(fd, tail, tail_size, stop_, -1, error);
     if (io != Io::ok)
         return ended(c, s, io, error);
-    wire::Trailer t = wire::decode_frame_trailer(tail);
+    TcpSession::Frame v = session.frame(head, payload, tail, tag);
     if (s.closed())
         return false;
-    if (t == wire::Trailer::intact)
+    if (v == TcpSession::Frame::intact)
         s.write(payload, f.seq, f.timestamp_ns);
-    else if (t == wire::Trailer::torn)
-        StreamCounters::add(s.counters.drops);
-    return trailer_ok(c, s, t);
+    return judged(c, s, v);
 }
 
-bool TcpReceiver::trailer_ok(const Connection &c, RecvStream &s, wire::Trailer t)
+bool TcpReceiver::judged(const Connection &c, RecvStream &s, TcpSession::Frame verdict)
 {
-    if (t != wire::Trailer::invalid)
+    switch (verdict) {
+    case TcpSession::Frame::intact:
         return !s.closed();
-    StreamCounters::add(s.counters.invalid);
-    s.counters.set_error("a frame from " + c.peer + " does not end in a frame trailer");
-    return false;
+    case TcpSession::Frame::torn:
+        StreamCounters::add(s.counters.drops);
+        return !s.closed();
+    case TcpSession::Frame::rejected:
+        s.reject("a frame from " + c.peer + " failed authentication; connection closed");
+        return false;
+    default:
+        StreamCounters::add(s.counters.invalid);
+        s.counters.set_error("a frame from " + c.peer + " does not end in a frame trailer");
+        return false;
+    }
 }
 
 bool TcpReceiver::ended(const Connection &c, RecvStream &s, Io io, const std::string &error)
@@ -280,11 +295,26 @@ void TcpReceiver::serve(Connection &c)
         c.done.store(true);
         return;
     }
-    if (hello.message_size != s->spec.message_size || hello.layout_hash != s->spec.layout_hash) {
-        StreamCounters::add(s->counters.invalid);
-        s->counters.set_error(c.peer + " sends messages of " + std::to_string(hello.message_size) +
-                              " bytes with another layout hash or size");
-        send_reply(fd, wire::Kind::reject, wire::Reject::layout, hello.token, stop_);
+    TcpSession session;
+    uint8_t nonce[wire::kHandshakeNonce];
+    random_bytes(nonce, sizeof nonce);
+    uint8_t reply[wire::kReplySize];
+    HelloRules rules{s->spec.message_size, s->spec.layout_hash, s->spec.security, &s->key};
+    wire::Reject refused = session.accept(hello, raw, rules, nonce, reply);
+    if (refused != wire::Reject::none) {
+        if (refused == wire::Reject::layout) {
+            StreamCounters::add(s->counters.invalid);
+            s->counters.set_error(c.peer + " sends messages of " +
+                                  std::to_string(hello.message_size) +
+                                  " bytes with another layout hash or size");
+        } else {
+            s->reject("connection from " + c.peer + " refused: " +
+                      (refused == wire::Reject::key
+                           ? "its hello is not authentic (another key?)"
+                           : "its protection does not match the stream's security level " +
+                                 std::string(sec::level_name(s->spec.security))));
+        }
+        send_reply(fd, wire::Kind::reject, refused, hello.token, stop_);
         c.done.store(true);
         return;
     }
@@ -294,9 +324,11 @@ void TcpReceiver::serve(Connection &c)
         c.done.store(true);
         return; // closing tells the sender, which tries again later
     }
-    send_reply(fd, wire::Kind::accept, wire::Reject::none, hello.token, stop_);
+    iovec iov = {reply, sizeof reply};
+    write_full(fd, &iov, 1, stop_, error);
     s->attach(c.peer);
-    const size_t frame = wire::kFrameHeaderSize + s->spec.message_size + wire::kFrameTrailerSize;
+    const size_t frame = wire::kFrameHeaderSize + s->spec.message_size + wire::kFrameTrailerSize +
+                         session.tag_size();
     const bool gather = frame >= kGatherBytes && wake_for_whole_frames(fd, frame);
     for (;;) {
         // With the whole frame in the socket's buffer, its payload goes straight into the
@@ -310,7 +342,7 @@ void TcpReceiver::serve(Connection &c)
                 break;
             }
         }
-        if (!receive_frame(c, *s, payload.get(), in_place))
+        if (!receive_frame(c, *s, session, payload.get(), in_place))
             break;
     }
     s->detach();

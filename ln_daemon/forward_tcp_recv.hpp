@@ -1,6 +1,7 @@
 // The TCP receive side: an accept thread on the data port's listener and one thread per
 // connection, which reads the hello, answers accept or reject, then reads frames and
 // writes them into the stream's ring (straight into a slot when a whole frame is buffered).
+// What the bytes mean is decided by TcpSession (forward_tcp_frame.hpp).
 #pragma once
 
 #include <atomic>
@@ -14,6 +15,7 @@
 #include "fd.hpp"
 #include "forward_net.hpp"
 #include "forward_recv_stream.hpp"
+#include "forward_tcp_frame.hpp"
 #include "forward_wire.hpp"
 
 namespace lnd::fwd {
@@ -52,8 +54,10 @@ private:
     Io wait_frame(int fd, size_t frame, bool &in_place, std::string &error);
     // Reads one frame into the ring (in place: straight into a slot, else through
     // `payload`); false once the connection is to end.
-    bool receive_frame(Connection &c, RecvStream &s, uint8_t *payload, bool in_place);
-    static bool trailer_ok(const Connection &c, RecvStream &s, wire::Trailer t);
+    bool receive_frame(Connection &c, RecvStream &s, TcpSession &session, uint8_t *payload,
+                       bool in_place);
+    // Counts and records a frame's verdict; false if the connection is to end.
+    static bool judged(const Connection &c, RecvStream &s, TcpSession::Frame verdict);
     static bool ended(const Connection &c, RecvStream &s, Io io, const std::string &error);
     void reap(); // joins connections whose thread ended
 

@@ -19,6 +19,7 @@
 #include <sys/socket.h>
 #include <thread>
 
+#include "forward_tcp_frame.hpp"
 #include "forward_wire.hpp"
 
 namespace lnd::fwd {
@@ -49,6 +50,10 @@ const char *reject_text(wire::Reject reason)
         return "the receiver's stream has another message size or layout";
     case wire::Reject::busy:
         return "the receiver has too many connections";
+    case wire::Reject::security:
+        return "the receiver's stream has another security level";
+    case wire::Reject::key:
+        return "the receiver did not accept this daemon's key (the key files differ)";
     default:
         return "the receiver refused the stream";
     }
@@ -97,9 +102,24 @@ Outcome TcpSender::create(const SendSpec &spec, const Options &options,
 
 TcpSender::TcpSender(const SendSpec &spec, const Options &options, Tap tap, size_t capacity)
     : SendStream(spec), tap_(std::move(tap)), capacity_(capacity),
-      socket_buffer_(options.socket_buffer), spin_ns_(int64_t{options.spin_us} * 1000)
+      socket_buffer_(options.socket_buffer), spin_ns_(int64_t{options.spin_us} * 1000),
+      suite_(sec::suite_for(spec.security))
 {
     counters_.note_segment(ln_ring_tap_segment(tap_.get()));
+    sec::stream_key(options.key, spec.token, static_cast<uint8_t>(spec.transport), stream_key_);
+    if (suite_ == sec::Suite::chacha20poly1305 || suite_ == sec::Suite::aes256gcm)
+        cipher_.reset(new uint8_t[spec.message_size ? spec.message_size : 1]);
+}
+
+const uint8_t *TcpSender::seal(const Sample &s, const uint8_t *header, const uint8_t *trailer,
+                               const uint8_t *plain)
+{
+    if (!box_)
+        return plain;
+    if (s.sent == 0) // the frame's counter: counter_ counts the frames written whole
+        box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, plain, spec_.message_size,
+                   cipher_.get(), tag_, trailer, wire::kFrameTrailerSize);
+    return cipher_ ? cipher_.get() : plain;
 }
 
 TcpSender::~TcpSender()
@@ -157,7 +177,7 @@ void TcpSender::give_buffer(Buffer b) { free_.push_back(std::move(b)); }
 void TcpSender::read_loop()
 {
     Buffer buf = take_buffer();
-    const bool borrow = spec_.message_size >= kBorrowBytes;
+    const bool borrow = spec_.message_size >= kBorrowBytes && suite_ == sec::Suite::none;
     while (!stop_.raised()) {
         ln_sample_info info;
         const void *payload = nullptr;
@@ -209,7 +229,8 @@ void TcpSender::read_loop()
 
 size_t TcpSender::frame_size() const noexcept
 {
-    return wire::kFrameHeaderSize + spec_.message_size + wire::kFrameTrailerSize;
+    return wire::kFrameHeaderSize + spec_.message_size + wire::kFrameTrailerSize +
+           sec::tag_bytes(suite_);
 }
 
 void TcpSender::count_sent(const Sample &s)
@@ -239,14 +260,16 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
     uint8_t trailer[wire::kFrameTrailerSize];
     wire::encode_frame_header(header, {s.seq, s.timestamp_ns, spec_.message_size});
     wire::encode_frame_trailer(trailer, true);
+    if (!borrowed) // with a key never borrowed: the copy is sealed once, before any byte goes
+        payload = seal(s, header, trailer, payload);
     auto send_part = [&](size_t end) {
         while (s.sent < end) {
-            iovec iov[3];
+            iovec iov[4];
             msghdr msg = {};
             msg.msg_iov = iov;
             msg.msg_iovlen = frame_iov(header, trailer, payload, s, iov);
             if (end < frame_size())
-                --msg.msg_iovlen; // header and payload only: the trailer is the last iovec
+                --msg.msg_iovlen; // header and payload only (borrowed: no key, no tag)
             ssize_t n = ::sendmsg(fd, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
             if (n > 0)
                 s.sent += static_cast<size_t>(n);
@@ -271,6 +294,8 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
         send_part(frame_size()); // a copy: the whole frame in one go
     }
     const bool whole = s.sent == frame_size();
+    if (whole)
+        ++counter_; // still the reader's: reader_sending_ is cleared below
     const bool queue = !whole && (s.sent > 0 || s.intact); // a torn frame not begun is dropped
     {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -292,9 +317,10 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
 }
 
 size_t TcpSender::frame_iov(uint8_t *header, uint8_t *trailer, const uint8_t *payload,
-                            const Sample &s, iovec iov[3]) const
+                            const Sample &s, iovec iov[4]) const
 {
     const size_t h = wire::kFrameHeaderSize, body = h + spec_.message_size;
+    const size_t end = body + wire::kFrameTrailerSize;
     size_t count = 0, at = s.sent;
     if (at < h) {
         iov[count++] = {header + at, h - at};
@@ -304,7 +330,12 @@ size_t TcpSender::frame_iov(uint8_t *header, uint8_t *trailer, const uint8_t *pa
         iov[count++] = {const_cast<uint8_t *>(payload) + (at - h), body - at};
         at = body;
     }
-    iov[count++] = {trailer + (at - body), wire::kFrameTrailerSize - (at - body)};
+    if (at < end) {
+        iov[count++] = {trailer + (at - body), end - at};
+        at = end;
+    }
+    if (box_)
+        iov[count++] = {const_cast<uint8_t *>(tag_) + (at - end), sec::kTagBytes - (at - end)};
     return count;
 }
 
@@ -314,8 +345,9 @@ Io TcpSender::write_sample(Sample &s, std::string &error)
     uint8_t trailer[wire::kFrameTrailerSize];
     wire::encode_frame_header(header, {s.seq, s.timestamp_ns, spec_.message_size});
     wire::encode_frame_trailer(trailer, s.intact);
-    iovec iov[3];
-    size_t count = frame_iov(header, trailer, s.data.get(), s, iov);
+    const uint8_t *payload = seal(s, header, trailer, s.data.get());
+    iovec iov[4];
+    size_t count = frame_iov(header, trailer, payload, s, iov);
     return write_full(sock_.get(), iov, static_cast<int>(count), stop_, error);
 }
 
@@ -362,8 +394,10 @@ Outcome TcpSender::try_connect()
     if (!fd)
         return refused(error);
 
+    uint8_t nonce[wire::kHandshakeNonce];
+    random_bytes(nonce, sizeof nonce);
     uint8_t hello[wire::kHelloSize];
-    wire::encode_hello(hello, {spec_.token, spec_.message_size, spec_.layout_hash});
+    encode_tcp_hello(spec_, stream_key_, suite_, nonce, hello);
     iovec iov = {hello, sizeof hello};
     std::string io_error;
     Io io = write_full(fd.get(), &iov, 1, stop_, io_error);
@@ -378,6 +412,9 @@ Outcome TcpSender::try_connect()
                 return refused(reject_text(reply.reason));
             if (reply.token != spec_.token)
                 return refused("the receiver accepted another stream");
+            if (!check_tcp_reply(hello, reply, raw, stream_key_, suite_, box_))
+                return refused("the receiver's accept is not authentic (the key files differ?)");
+            counter_ = 0;
             sock_ = std::move(fd);
             return outcome::ok();
         }
@@ -459,6 +496,7 @@ void TcpSender::write_loop()
         const Io io = write_sample(current, error);
         switch (io) {
         case Io::ok: {
+            ++counter_;
             count_sent(current);
             std::lock_guard<std::mutex> lock(mutex_);
             give_buffer(std::move(current.data));

@@ -6,7 +6,9 @@
 // samples straight from the ring slot (no copy), and queues a copy of only what the socket
 // did not take at once.  The frame's trailer says whether the slot stayed intact while it was sent (the
 // publisher overwrites it only when the stream falls a whole ring behind); a torn frame is
-// dropped by the receiver and counted as a drop here.  The publisher is never held up: the
+// dropped by the receiver and counted as a drop here.  With a security level other than
+// none, samples are always copied out of the ring first and every frame ends in a tag under
+// a key of the connection (forward_tcp_frame.hpp).  The publisher is never held up: the
 // tap holds no reader slot and the reader never waits for the writer or the network.
 #pragma once
 
@@ -60,9 +62,13 @@ private:
     bool send_direct(const void *borrowed, Buffer &buf, const ln_sample_info &info);
     // Counts a frame written whole: a sample, or a drop if it was torn.
     void count_sent(const Sample &s);
-    // The frame of `s` (header, payload, trailer) from byte s.sent on, as 1 to 3 iovecs.
+    // The frame of `s` (header, payload, trailer, tag) from byte s.sent on, as 1 to 4 iovecs.
     size_t frame_iov(uint8_t *header, uint8_t *trailer, const uint8_t *payload, const Sample &s,
-                     iovec iov[3]) const;
+                     iovec iov[4]) const;
+    // With a key: tags (and encrypts) the frame of `s` when none of it was sent yet, else
+    // keeps what was sealed for it; returns the payload to send (the cipher text or `plain`).
+    const uint8_t *seal(const Sample &s, const uint8_t *header, const uint8_t *trailer,
+                        const uint8_t *plain);
     size_t frame_size() const noexcept;
     // Writer: writes `s` from s.sent on; Io::ok once all of it went out.
     Io write_sample(Sample &s, std::string &error);
@@ -89,6 +95,13 @@ private:
     size_t allocated_ = 0;        // buffers in existence: at most capacity_ + 1
 
     UniqueFd sock_; // the writer's; the reader uses it only while reader_sending_
+    // The connection's key and what was sealed last, used like sock_.
+    const sec::Suite suite_;
+    Key stream_key_;
+    std::unique_ptr<sec::Box> box_;
+    uint64_t counter_ = 0;              // frames written whole on this connection
+    std::unique_ptr<uint8_t[]> cipher_; // encrypt: the payload of the frame being sent
+    uint8_t tag_[sec::kTagBytes] = {};  // of the frame being sent
     StopSignal stop_;
     std::thread reader_, writer_;
 };

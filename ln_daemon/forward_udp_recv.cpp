@@ -1,6 +1,7 @@
 // The UDP receive thread (forward_udp_recv.hpp).  Order of checks on a datagram: does it
 // parse (else Totals.malformed), is its token a UDP stream here (else unknown_stream), does
-// its geometry fit that stream (else the stream's invalid); only then is anything stored.
+// its tag authentic and its counter new (else the stream's rejected), does its geometry fit
+// that stream (else the stream's invalid); only then is anything stored.
 #include "forward_udp_recv.hpp"
 
 #include <algorithm>
@@ -105,7 +106,7 @@ void UdpReceiver::sweep(int64_t now_ns)
     }
 }
 
-void UdpReceiver::handle(const uint8_t *datagram, size_t size, const Address &from, int64_t now_ns)
+void UdpReceiver::handle(uint8_t *datagram, size_t size, const Address &from, int64_t now_ns)
 {
     wire::Fragment f;
     if (!wire::decode_fragment(datagram, size, f)) {
@@ -115,6 +116,10 @@ void UdpReceiver::handle(const uint8_t *datagram, size_t size, const Address &fr
     RecvStream *s = lookup(f.token);
     if (!s) {
         StreamCounters::add(totals_.unknown_stream);
+        return;
+    }
+    if (const char *why = s->guard.admit(f, datagram)) {
+        s->reject(std::string("datagram from ") + address_text(from.get()) + " rejected: " + why);
         return;
     }
     if (from.length != s->last_source.length ||
@@ -207,7 +212,7 @@ void UdpReceiver::run()
                 continue;
             }
             from[i].length = msgs[i].msg_hdr.msg_namelen;
-            const auto *data = static_cast<const uint8_t *>(iov[i].iov_base);
+            auto *data = static_cast<uint8_t *>(iov[i].iov_base);
             const size_t len = msgs[i].msg_len, step = coalesced_size(msgs[i].msg_hdr);
             if (step == 0) {
                 handle(data, len, from[i], now);

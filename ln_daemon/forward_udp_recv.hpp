@@ -1,5 +1,5 @@
 // The UDP receive thread: reads batches of datagrams from the data socket with recvmmsg,
-// validates each, and writes single-fragment samples straight from the receive buffer into
+// authenticates (and decrypts) and validates each, and writes single-fragment samples straight from the receive buffer into
 // their ring; larger samples go through the stream's Reassembler first.
 #pragma once
 
@@ -28,7 +28,8 @@ public:
 
 private:
     void run();
-    void handle(const uint8_t *datagram, size_t size, const Address &from, int64_t now_ns);
+    // `datagram` is the receive buffer: an encrypted payload is decrypted in place.
+    void handle(uint8_t *datagram, size_t size, const Address &from, int64_t now_ns);
     RecvStream *lookup(uint64_t token);
     void sweep(int64_t now_ns);
 

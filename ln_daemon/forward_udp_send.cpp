@@ -4,11 +4,14 @@
 #include "forward_udp_send.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <netinet/in.h>
 #include <netinet/udp.h>
 #include <poll.h>
+#include <sodium.h>
+#include <time.h>
 
 #include "forward_wire.hpp"
 
@@ -56,13 +59,52 @@ Outcome UdpSender::create(const SendSpec &spec, const Options &options,
 UdpSender::UdpSender(const SendSpec &spec, const Options &options, Tap tap)
     : SendStream(spec), tap_(std::move(tap)), chunk_(static_cast<uint16_t>(options.udp_payload)),
       socket_buffer_(options.socket_buffer), spin_ns_(int64_t{options.spin_us} * 1000),
-      rate_(options.udp_max_rate), batch_(batch_size(rate_, wire::kFragmentHeaderSize + chunk_)),
-      segments_(segments_per_send(wire::kFragmentHeaderSize + chunk_)),
+      rate_(options.udp_max_rate),
+      batch_(batch_size(rate_, wire::kFragmentHeaderSize + chunk_ +
+                                   sec::tag_bytes(sec::suite_for(spec.security)))),
+      segments_(segments_per_send(wire::kFragmentHeaderSize + chunk_ +
+                                  sec::tag_bytes(sec::suite_for(spec.security)))),
+      suite_(sec::suite_for(spec.security)), tag_size_(sec::tag_bytes(suite_)),
       sample_(new uint8_t[spec.message_size ? spec.message_size : 1]),
-      headers_(kBatch * wire::kFragmentHeaderSize), msgs_(kBatch), iov_(2 * kBatch),
+      headers_(kBatch * wire::kFragmentHeaderSize), msgs_(kBatch), iov_(3 * kBatch),
       control_(kBatch)
 {
     counters_.note_segment(ln_ring_tap_segment(tap_.get()));
+    sec::stream_key(options.key, spec.token, static_cast<uint8_t>(spec.transport), stream_key_);
+    if (suite_ == sec::Suite::chacha20poly1305 || suite_ == sec::Suite::aes256gcm)
+        cipher_.reset(new uint8_t[spec.message_size ? spec.message_size : 1]);
+    tags_.resize(kBatch * sec::kTagBytes);
+    if (suite_ != sec::Suite::none)
+        new_salt();
+}
+
+uint64_t UdpSender::fresh_salt() noexcept
+{
+    // Also greater than the last one of this process, should the clock step back.
+    static std::atomic<uint64_t> last{0};
+    timespec ts;
+    ::clock_gettime(CLOCK_REALTIME, &ts);
+    const uint64_t us =
+        static_cast<uint64_t>(ts.tv_sec) * 1000000 + static_cast<uint64_t>(ts.tv_nsec) / 1000;
+    uint64_t salt = us << 12 | (randombytes_random() & 0xfff);
+    uint64_t prev = last.load(std::memory_order_relaxed);
+    while (true) {
+        uint64_t next = salt > prev ? salt : prev + 1;
+        if (last.compare_exchange_weak(prev, next, std::memory_order_relaxed))
+            return next;
+    }
+}
+
+void UdpSender::new_salt()
+{
+    salt_ = fresh_salt();
+    uint8_t raw[8];
+    for (int i = 0; i < 8; ++i)
+        raw[i] = static_cast<uint8_t>(salt_ >> (8 * i));
+    Key k;
+    sec::sub_key(stream_key_, "udp salt", raw, sizeof raw, k);
+    box_ = std::make_unique<sec::Box>(k, suite_);
+    counter_ = 0;
 }
 
 UdpSender::~UdpSender()
@@ -136,8 +178,13 @@ UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
     f.sample_size = spec_.message_size;
     f.chunk_size = chunk_;
     f.count = static_cast<uint32_t>(wire::fragment_count(f.sample_size, chunk_));
+    f.suite = static_cast<uint8_t>(suite_);
+    if (box_ && counter_ + f.count > sec::kMaxCounter)
+        new_salt(); // never in practice: 2^56 datagrams
+    f.salt = salt_;
     uint8_t header[wire::kFragmentHeaderSize];
     wire::encode_fragment_header(header, f);
+    const uint8_t *body = cipher_ ? cipher_.get() : sample_.get(); // what goes on the wire
 
     int refused = 0;
     int64_t backoff_us = kMinBackoffUs;
@@ -146,7 +193,7 @@ UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
         if (rate_ > 0) {
             uint64_t offset = static_cast<uint64_t>(first) * chunk_;
             uint64_t payload = std::min<uint64_t>(uint64_t(n) * chunk_, f.sample_size - offset);
-            if (!pace(n * wire::kFragmentHeaderSize + payload))
+            if (!pace(n * (wire::kFragmentHeaderSize + tag_size_) + payload))
                 return Sent::stopped;
         }
         for (unsigned i = 0; i < n; ++i) {
@@ -154,9 +201,17 @@ UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
             uint8_t *h = headers_.data() + i * wire::kFragmentHeaderSize;
             std::memcpy(h, header, sizeof header);
             wire::set_fragment_index(h, index);
-            iov_[2 * i] = {h, wire::kFragmentHeaderSize};
-            iov_[2 * i + 1] = {sample_.get() + static_cast<uint64_t>(index) * chunk_,
-                               wire::fragment_length(f.sample_size, chunk_, index)};
+            const uint64_t offset = static_cast<uint64_t>(index) * chunk_;
+            const size_t length = wire::fragment_length(f.sample_size, chunk_, index);
+            iov_[3 * i] = {h, wire::kFragmentHeaderSize};
+            iov_[3 * i + 1] = {const_cast<uint8_t *>(body) + offset, length};
+            iov_[3 * i + 2] = {tags_.data() + i * sec::kTagBytes, tag_size_};
+            if (box_) { // every datagram a new counter, also one built again below
+                wire::set_fragment_counter(h, f.suite, ++counter_);
+                box_->seal(counter_, h, wire::kFragmentHeaderSize, sample_.get() + offset, length,
+                           cipher_ ? cipher_.get() + offset : nullptr,
+                           tags_.data() + i * sec::kTagBytes);
+            }
         }
         // One message per datagram, or, with segmentation offload, per run of datagrams the
         // kernel cuts at the datagram size (all are that size but a sample's last one, which
@@ -166,8 +221,8 @@ UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
             unsigned k = gso_ ? std::min(segments_, n - i) : 1;
             msgs_[count] = {};
             msghdr &m = msgs_[count].msg_hdr;
-            m.msg_iov = &iov_[2 * i];
-            m.msg_iovlen = 2 * k;
+            m.msg_iov = &iov_[3 * i];
+            m.msg_iovlen = 3 * k;
             if (k > 1) {
                 m.msg_control = control_[count].data();
                 m.msg_controllen = sizeof(control_[count]);
@@ -175,7 +230,8 @@ UdpSender::Sent UdpSender::send_sample(uint64_t seq, int64_t timestamp_ns)
                 c->cmsg_level = SOL_UDP;
                 c->cmsg_type = UDP_SEGMENT;
                 c->cmsg_len = CMSG_LEN(sizeof(uint16_t));
-                uint16_t size = static_cast<uint16_t>(wire::kFragmentHeaderSize + chunk_);
+                uint16_t size =
+                    static_cast<uint16_t>(wire::kFragmentHeaderSize + chunk_ + tag_size_);
                 std::memcpy(CMSG_DATA(c), &size, sizeof size);
             }
             i += k;

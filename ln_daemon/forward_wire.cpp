@@ -83,9 +83,12 @@ uint64_t fragment_length(uint64_t sample_size, uint16_t chunk_size, uint32_t ind
 // Layout (offsets in bytes):
 //   0 magic "LNF1"   4 u8 version   5 u8 kind (0)   6 u16 chunk_size
 //   8 u64 token     16 u64 seq     24 i64 timestamp_ns   32 u64 sample_size
-//  40 u32 index     44 u32 count   48 payload
+//  40 u32 index     44 u32 count   48 u64 salt   56 u56 counter | u8 suite << 56
+//  64 payload, then the 16-byte tag unless the suite is 0
 void encode_fragment_header(uint8_t *out, const Fragment &f) noexcept
 {
+    put64(out + 48, f.salt);
+    set_fragment_counter(out, f.suite, f.counter);
     put_prefix(out, Kind::fragment, f.chunk_size);
     put64(out + 8, f.token);
     put64(out + 16, f.seq);
@@ -96,6 +99,11 @@ void encode_fragment_header(uint8_t *out, const Fragment &f) noexcept
 }
 
 void set_fragment_index(uint8_t *header, uint32_t index) noexcept { put32(header + 40, index); }
+
+void set_fragment_counter(uint8_t *header, uint8_t suite, uint64_t counter) noexcept
+{
+    put64(header + 56, (counter & 0x00ffffffffffffffu) | uint64_t{suite} << 56);
+}
 
 bool decode_fragment(const uint8_t *d, size_t size, Fragment &f) noexcept
 {
@@ -108,8 +116,19 @@ bool decode_fragment(const uint8_t *d, size_t size, Fragment &f) noexcept
     f.sample_size = get64(d + 32);
     f.index = get32(d + 40);
     f.count = get32(d + 44);
+    f.salt = get64(d + 48);
+    uint64_t word = get64(d + 56);
+    f.suite = static_cast<uint8_t>(word >> 56);
+    f.counter = word & 0x00ffffffffffffffu;
     f.data = d + kFragmentHeaderSize;
     f.length = size - kFragmentHeaderSize;
+    f.tag = nullptr;
+    if (f.suite != 0) {
+        if (f.length < kFragmentTagSize)
+            return false;
+        f.length -= kFragmentTagSize;
+        f.tag = f.data + f.length;
+    }
     return true;
 }
 
@@ -130,30 +149,39 @@ const char *check_fragment(const Fragment &f, uint64_t message_size) noexcept
     return nullptr;
 }
 
-// Hello: prefix (kind 1, 0) | u64 token | u64 message_size | u64 layout_hash
+// Hello: prefix (kind 1, 0) | u64 token | u64 message_size | u64 layout_hash | u8 suite,
+// 7 zero bytes | 16 nonce | 16 tag
 void encode_hello(uint8_t *out, const Hello &h) noexcept
 {
     put_prefix(out, Kind::hello, 0);
     put64(out + 8, h.token);
     put64(out + 16, h.message_size);
     put64(out + 24, h.layout_hash);
+    put64(out + 32, h.suite);
+    std::memcpy(out + 40, h.nonce, kHandshakeNonce);
+    std::memcpy(out + 56, h.tag, kHandshakeTag);
 }
 
 bool decode_hello(const uint8_t *in, Hello &h) noexcept
 {
-    if (!prefix_is(in, Kind::hello) || get16(in + 6) != 0)
+    if (!prefix_is(in, Kind::hello) || get16(in + 6) != 0 || get64(in + 32) > 0xff)
         return false;
     h.token = get64(in + 8);
     h.message_size = get64(in + 16);
     h.layout_hash = get64(in + 24);
+    h.suite = in[32];
+    std::memcpy(h.nonce, in + 40, kHandshakeNonce);
+    std::memcpy(h.tag, in + 56, kHandshakeTag);
     return true;
 }
 
-// Reply: prefix (kind 2 or 3, u16 reason) | u64 token
+// Reply: prefix (kind 2 or 3, u16 reason) | u64 token | 16 nonce | 16 tag
 void encode_reply(uint8_t *out, const Reply &r) noexcept
 {
     put_prefix(out, r.kind, static_cast<uint16_t>(r.reason));
     put64(out + 8, r.token);
+    std::memcpy(out + 16, r.nonce, kHandshakeNonce);
+    std::memcpy(out + 32, r.tag, kHandshakeTag);
 }
 
 bool decode_reply(const uint8_t *in, Reply &r) noexcept
@@ -166,6 +194,8 @@ bool decode_reply(const uint8_t *in, Reply &r) noexcept
         return false;
     r.reason = static_cast<Reject>(get16(in + 6));
     r.token = get64(in + 8);
+    std::memcpy(r.nonce, in + 16, kHandshakeNonce);
+    std::memcpy(r.tag, in + 32, kHandshakeTag);
     return true;
 }
 

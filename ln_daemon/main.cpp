@@ -93,6 +93,7 @@ int main(int argc, char **argv)
     fwd_options.data_port = static_cast<uint16_t>(opt.data_port);
     fwd_options.udp_payload = opt.udp_fragment;
     fwd_options.spin_us = static_cast<unsigned>(opt.spin_us);
+    fwd_options.key = key;
     std::unique_ptr<lnd::fwd::Forwarder> forwarder;
     if (Outcome o = lnd::open_data_port(fwd_options, opt.default_data_port, forwarder); o.failed())
         return detacher.fail(o.text);
@@ -107,10 +108,10 @@ int main(int argc, char **argv)
     if (!signals)
         return detacher.fail(std::string("signalfd: ") + std::strerror(errno));
     detacher.started(where, data_port, !opt.log_file.empty());
-    lnd::logf("listening on %s, data port %u (advertised %u), host id %s, key file %s, "
-              "logger memory %" PRIu64 " bytes",
+    lnd::logf("listening on %s, data port %u (advertised %u), host id %s, key file %s "
+              "(key %s), logger memory %" PRIu64 " bytes",
               where.c_str(), data_port, advertised, host_id, opt.key_file.c_str(),
-              opt.logger_memory);
+              lnd::key_id(key).c_str(), opt.logger_memory);
 
     lnd::LinuxOs os;
     lnd::NetCommands net(host_id, static_cast<uint16_t>(advertised), *forwarder);
@@ -118,5 +119,10 @@ int main(int argc, char **argv)
     lnd::Pulls pulls;
     lnd::Server server(os, key, std::move(listener), std::move(signals), opt.log_file, host_id,
                        {&net, &loggers, &pulls}, opt.resource_period);
+    lnd::fwd::Forwarder &fwd = *forwarder;
+    server.reload_key_on_hangup(opt.key_file, [&fwd](const lnd::Key &k) {
+        if (Outcome o = fwd.set_key(k); o.failed())
+            lnd::logf("after the key change: %s", o.text.c_str());
+    });
     return server.run();
 }

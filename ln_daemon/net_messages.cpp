@@ -11,6 +11,18 @@ fwd::Transport transport(wire::Transport t)
     return t == wire::Transport::tcp ? fwd::Transport::tcp : fwd::Transport::udp;
 }
 
+fwd::Level level(wire::Security s)
+{
+    switch (s) {
+    case wire::Security::none:
+        return fwd::Level::none;
+    case wire::Security::encrypt:
+        return fwd::Level::encrypt;
+    default:
+        return fwd::Level::authenticate;
+    }
+}
+
 std::string cut(const std::string &s) { return s.substr(0, kMaxStatText); }
 
 // The fields STREAM_SEND and STREAM_RECV share.
@@ -22,6 +34,7 @@ void stream_fields(Request &req, Spec &out)
     out.layout_hash = req.layout_hash;
     out.message_size = req.message_size;
     out.transport = transport(req.transport);
+    out.security = level(req.security);
 }
 
 } // namespace
@@ -87,6 +100,7 @@ void encode_stream_list(proto::Writer &w, const fwd::Totals &totals,
         o.drops = s.drops;
         o.stale = s.stale;
         o.invalid = s.invalid;
+        o.rejected = s.rejected;
         o.connected = s.connected;
         o.last_error = cut(s.last_error);
     }

@@ -39,7 +39,7 @@ const char kUsage[] =
                                 "real one; for relays)\n"
                                 "  --udp-fragment-size N\n"
                                 "                  payload bytes per forwarded UDP datagram, "
-                                "256..65000 (default 1400)\n"
+                                "256..65000 (default 1368)\n"
                                 "  --spin-us N     forwarding polls up to N microseconds for the "
                                 "next sample, datagram\n"
                                 "                  or frame before sleeping, 0..10000 (default 0; "

@@ -581,6 +581,7 @@ void Server::read_signals()
                 else
                     logf("log file reopened");
             }
+            reload_key();
             break;
         default:
             break;
@@ -588,6 +589,32 @@ void Server::read_signals()
     }
     if (child)
         supervisor_.reap();
+}
+
+void Server::reload_key_on_hangup(std::string path, std::function<void(const Key &)> apply)
+{
+    key_path_ = std::move(path);
+    key_apply_ = std::move(apply);
+}
+
+void Server::reload_key()
+{
+    if (key_path_.empty())
+        return;
+    Key fresh;
+    if (Outcome o = load_key_file(key_path_, fresh); o.failed()) {
+        logf("key file not re-read, the old key stays in use: %s", o.text.c_str());
+        return;
+    }
+    if (std::memcmp(fresh.bytes, key_.bytes, Key::kBytes) == 0) {
+        logf("key file re-read: the key is unchanged");
+        return;
+    }
+    key_ = fresh;
+    logf("key file re-read: new key %s; streams start again with keys derived from it",
+         key_id(key_).c_str());
+    if (key_apply_)
+        key_apply_(key_);
 }
 
 int Server::run()

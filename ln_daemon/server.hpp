@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <functional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -45,6 +46,9 @@ public:
     // Runs until SIGTERM/SIGINT has stopped every process, then shuts the features down;
     // returns the exit status.
     int run();
+    // On SIGHUP, also read the key file at `path` again; a key that changed is used for new
+    // manager connections from then on and handed to `apply` (the forwarder's set_key).
+    void reload_key_on_hangup(std::string path, std::function<void(const Key &)> apply);
 
     void spawn_result(const Process &p, const Outcome &result) override;
     void line(const Process &p, const Line &line) override;
@@ -76,8 +80,12 @@ private:
     double resources_due() const noexcept;
     void send_resources(double now);
 
+    void reload_key();
+
     Os &os_;
     Key key_;
+    std::string key_path_; // "" : SIGHUP leaves the key alone
+    std::function<void(const Key &)> key_apply_;
     UniqueFd listener_;
     UniqueFd signals_;
     std::string log_path_;

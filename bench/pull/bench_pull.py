@@ -158,8 +158,8 @@ def size_report() -> str | None:
     if not script.exists():
         return None
     try:
-        proc = subprocess.run(["bash", str(script)], capture_output=True, text=True,
-                              timeout=300, cwd=REPO)
+        proc = subprocess.run([sys.executable, str(script), str(REPO / "build" / "pull_size.json")],
+                              capture_output=True, text=True, timeout=300, cwd=REPO)
     except subprocess.TimeoutExpired:
         return "scripts/pull-size did not finish in 300 s"
     return (proc.stdout + proc.stderr).strip()

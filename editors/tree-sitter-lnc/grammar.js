@@ -12,6 +12,7 @@ const PLAIN_SECTIONS = {
   hosts_section: 'hosts',
   node_map_section: 'node_map',
   topics_section: 'topics',
+  access_section: 'access',
 };
 const NAMED_SECTIONS = {
   process_section: 'process',

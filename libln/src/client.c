@@ -256,6 +256,7 @@ static void free_client(ln_client* c)
     pthread_mutex_destroy(&c->ports_lock);
     pthread_mutex_destroy(&c->request_lock);
     pthread_mutex_destroy(&c->state_lock);
+    explicit_bzero(c->svc_key, sizeof c->svc_key);
     c->magic = 0; /* a stale handle now fails ln_client_check (while the memory is not reused) */
     free(c);
 }

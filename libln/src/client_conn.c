@@ -15,6 +15,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "client_auth.h"
 #include "client_conn.h"
 #include "net.h"
 
@@ -141,6 +142,68 @@ static int take_error(ln_client* c, const char* request, ln_rbuf* r, const char*
 
 /* ---- handshake ------------------------------------------------------------------------- */
 
+/* The manager did not admit the client by its credentials and sent CHALLENGE (in *r): prove
+ * the client key with AUTH, take AUTH_OK and check the manager's proof, so that *type and *r
+ * hold the frame after it (WELCOME, or the ERROR of a refusal).  Without a key file AUTH
+ * carries no proof: the manager's refusal says why. */
+static int answer_challenge(ln_client* c, struct ln_conn* k, const char* name,
+                            const struct timespec* deadline, uint16_t* type, ln_rbuf* r)
+{
+    ln_msg_challenge ch = {0};
+    ln_msg_challenge_read(r, &ch); /* read_frame checked it */
+    char instance[LN_PROTO_MAX_STR + 1];
+    ln_strv_copy(ch.instance_name, instance, sizeof instance);
+    uint8_t key[LN_AUTH_BYTES], mine[LN_AUTH_BYTES], theirs[LN_AUTH_BYTES];
+    uint8_t proof[LN_AUTH_BYTES];
+    if (ln_auth_from_hex(ch.nonce.s, ch.nonce.len, theirs) != 0)
+        return malformed(c, k, "HELLO", "CHALLENGE nonce is not 64 hex digits");
+    char path[4096], why[LN_ERROR_TEXT_MAX];
+    int keyed = ln_auth_load_key(key, path, sizeof path, why, sizeof why);
+    if (keyed == LN_EPERM) {
+        disconnect(c, k);
+        return ln_set_error(c, LN_EPERM,
+                            "manager %s admits client \"%s\" of instance \"%s\" "
+                            "only with the client key: %s",
+                            c->address, name, instance, why);
+    }
+    char nonce_hex[LN_AUTH_HEX + 1], proof_hex[LN_AUTH_HEX + 1] = "";
+    ln_auth_random(mine, sizeof mine);
+    ln_auth_to_hex(mine, nonce_hex);
+    if (keyed == LN_OK) {
+        ln_auth_mac(key, LN_AUTH_CLIENT, instance, name, theirs, mine, proof);
+        ln_auth_to_hex(proof, proof_hex);
+    }
+    ln_wbuf_reset(&k->tx);
+    ln_msg_auth auth = {.nonce = ln_strv_of(nonce_hex), .proof = ln_strv_of(proof_hex)};
+    int rc = ln_msg_auth_frame(&k->tx, &auth);
+    if (rc == LN_OK)
+        rc = send_tx(c, k, "AUTH", deadline);
+    if (rc == LN_OK)
+        rc = read_frame(c, k, "AUTH", deadline, type, r);
+    if (rc == LN_OK && *type == LN_MSG_AUTH_OK) {
+        ln_msg_auth_ok ok = {0};
+        ln_msg_auth_ok_read(r, &ok);
+        uint8_t expected[LN_AUTH_BYTES];
+        ln_auth_mac(key, LN_AUTH_MANAGER, instance, name, theirs, mine, expected);
+        if (ln_auth_from_hex(ok.proof.s, ok.proof.len, proof) != 0 ||
+            ln_auth_differ(proof, expected)) {
+            disconnect(c, k);
+            rc = ln_set_error(c, LN_EPERM,
+                              "manager %s failed to prove the client key of "
+                              "instance \"%s\": it is not that instance's manager or its key "
+                              "differs from '%s'; connection closed",
+                              c->address, instance, path);
+        }
+        if (rc == LN_OK) {
+            ln_auth_mac(key, LN_AUTH_SESSION, instance, name, theirs, mine, k->session_key);
+            k->has_session_key = 1;
+            rc = read_frame(c, k, "AUTH", deadline, type, r);
+        }
+    }
+    ln_auth_wipe(key, sizeof key);
+    return rc;
+}
+
 /* HELLO as `name` with `flags`, then WELCOME.  A first handshake takes the manager's client
  * id, name and instance; a reconnect keeps the client's name (the manager's may differ if it
  * was taken meanwhile) and insists on the same instance. */
@@ -165,6 +228,8 @@ static int handshake(ln_client* c, struct ln_conn* k, const char* name, uint32_t
     ln_rbuf r;
     if (rc == LN_OK)
         rc = read_frame(c, k, "HELLO", deadline, &type, &r);
+    if (rc == LN_OK && type == LN_MSG_CHALLENGE)
+        rc = answer_challenge(c, k, name, deadline, &type, &r);
     if (rc != LN_OK)
         return rc;
     if (type == LN_MSG_ERROR) {
@@ -326,6 +391,16 @@ static _Thread_local uint64_t request_gen;
 
 uint64_t ln_client_request_gen(void) { return request_gen; }
 
+int ln_client_session_key(ln_client* clnt, uint8_t out[32])
+{
+    pthread_mutex_lock(&clnt->request_lock);
+    int has = clnt->conn.has_session_key;
+    if (has)
+        memcpy(out, clnt->conn.session_key, sizeof clnt->conn.session_key);
+    pthread_mutex_unlock(&clnt->request_lock);
+    return has ? LN_OK : LN_ENOTFOUND;
+}
+
 static int check_body(ln_client* clnt, uint16_t type, const ln_wbuf* body)
 {
     if (body != NULL && body->failed)
@@ -413,6 +488,8 @@ static void conn_init(struct ln_conn* k)
 
 static void conn_free(struct ln_conn* k)
 {
+    ln_auth_wipe(k->session_key, sizeof k->session_key);
+    k->has_session_key = 0;
     if (k->fd >= 0)
         close(k->fd);
     k->fd = -1;

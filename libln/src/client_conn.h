@@ -19,6 +19,10 @@ struct ln_conn {
     ln_wbuf tx;
     uint8_t* rx;
     size_t rx_cap;
+    /* Derived by admission by key (client_auth.h), for sealing what the manager hands out;
+     * none after admission by credentials. */
+    int has_session_key;
+    uint8_t session_key[32];
 };
 
 struct ln_client_port {
@@ -61,6 +65,10 @@ struct ln_client {
     pthread_t monitor;
 
     struct ln_svc_state* svc; /* service groups and pools (svc_group.c), created on first use */
+    /* The service key the manager gave last (svc_key.c), under state_lock; wiped by destroy. */
+    int svc_key_known;
+    int svc_key_level;
+    uint8_t svc_key[32];
 
     struct ln_replay_clock* _Atomic clock; /* what ln_now follows (clock.c); NULL: realtime */
 

@@ -88,6 +88,11 @@ const char* ln_client_instance(const ln_client* clnt);
  * manager), e.g. "192.168.1.5".  LN_OK, or LN_ECONNECTION (recorded) when disconnected. */
 int ln_client_local_host(ln_client* clnt, char* out, size_t size);
 
+/* The session key of the current manager connection (docs/security.md, "Client admission to
+ * the manager"): LN_OK with it in `out`, LN_ENOTFOUND if that connection was admitted without
+ * the client key.  Each connection (a reconnect too) has its own. */
+int ln_client_session_key(ln_client* clnt, uint8_t out[32]);
+
 /* For lasterror.c: copy an already formatted error into the client. */
 void ln_client_store_error(ln_client* clnt, int code, const char* text);
 

@@ -11,6 +11,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <sodium.h>
+
 #include "naming.h"
 #include "net.h"
 #include "svc_internal.h"
@@ -291,8 +293,8 @@ int ln_service_provider_register(ln_service_provider* p, const char* group)
     ln_client_lock_ports(p->clnt);
     p->group = g;
     ln_client_settle_port(p->clnt, p, gen);
-    if ((ufd >= 0 && (rc = ln_svc_group_add_listener(g, p, ufd)) != LN_OK) ||
-        (tfd >= 0 && (rc = ln_svc_group_add_listener(g, p, tfd)) != LN_OK)) {
+    if ((ufd >= 0 && (rc = ln_svc_group_add_listener(g, p, ufd, 0)) != LN_OK) ||
+        (tfd >= 0 && (rc = ln_svc_group_add_listener(g, p, tfd, 1)) != LN_OK)) {
         ln_svc_group_remove_provider(g, p); /* closes what was added */
         ln_client_lock_ports(p->clnt);
         p->group = NULL;
@@ -365,6 +367,7 @@ void ln_svc_endpoint_free(ln_svc_endpoint* ep)
     if (ep->tap_id > 0)
         ln_svc_tap_hangup(ep->prov, ep->tap_id);
     close(ep->fd);
+    ln_svc_channel_wipe(&ep->ch);
     free(ep->rx);
     ln_wbuf_free(&ep->tx);
     ln_arena_free(&ep->arena);
@@ -378,6 +381,11 @@ static int send_tx(ln_svc_endpoint* ep)
     struct timespec ts;
     if (ep->tx.failed)
         return -1;
+    if (ep->ch.level != LN_SVC_SEC_NONE && ln_svc_seal(&ep->ch, &ep->tx, 0) != LN_OK) {
+        ln_wbuf_reset(&ep->tx);
+        ep->broken = 1;
+        return -1;
+    }
     int err = ln_net_write_all(ep->fd, ep->tx.data, ep->tx.len,
                                ln_net_deadline(&ts, LN_SVC_SEND_TIMEOUT), -1);
     ln_wbuf_reset(&ep->tx);
@@ -547,6 +555,114 @@ static int handle_request(ln_svc_endpoint* ep, ln_rbuf* r)
     return ep->broken ? -1 : 1;
 }
 
+/* ---- protected connections (TCP; svc_secure.h) ---- */
+
+/* A refusal the caller may not be able to authenticate: sent plain, then the connection
+ * closes (-1). */
+static int refuse_plain(ln_svc_endpoint* ep, int code, const char* fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int refuse_plain(ln_svc_endpoint* ep, int code, const char* fmt, ...)
+{
+    char text[LN_SVC_MAX_ERROR_TEXT + 1];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    ln_svc_channel_wipe(&ep->ch);
+    send_error(ep, 0, code, "%s", text);
+    return -1;
+}
+
+/* The caller's SECURE: answer SECURED with our nonce and derive the keys.  0 or -1. */
+static int handle_secure(ln_svc_endpoint* ep, ln_rbuf* r, const ln_svc_key* key)
+{
+    ln_service_provider* p = ep->prov;
+    char name[LN_PROTO_MAX_STR + 1];
+    uint8_t theirs[LN_SVC_NONCE_BYTES], mine[LN_SVC_NONCE_BYTES];
+    uint32_t magic = ln_rbuf_u32(r);
+    uint16_t version = ln_rbuf_u16(r);
+    uint16_t level = ln_rbuf_u16(r);
+    unsigned offer = ln_rbuf_u16(r);
+    ln_rbuf_str(r, name, sizeof name);
+    ln_svc_read_nonce(r, theirs);
+    if (check_greeting(ep, r, magic, version, name, "malformed SECURE frame") < 0)
+        return -1;
+    if (level != key->level)
+        return refuse_plain(ep, LN_EPERM,
+                            "service \"%s\": the provider's instance has security %s, the "
+                            "caller asks for %s",
+                            p->name, ln_svc_level_name(key->level), ln_svc_level_name(level));
+    int aead = ln_svc_aead_pick(ln_svc_aead_offer(), offer);
+    if (aead == 0)
+        return refuse_plain(ep, LN_EPERM, "service \"%s\": no AEAD in common with the caller",
+                            p->name);
+    ln_svc_nonce(mine);
+    ln_wbuf_reset(&ep->tx);
+    size_t start = ln_proto_frame_begin(&ep->tx, LN_SVC_SECURED);
+    ln_wbuf_u16(&ep->tx, level);
+    ln_wbuf_u16(&ep->tx, (uint16_t)aead);
+    ln_wbuf_bytes(&ep->tx, mine, sizeof mine);
+    if (ln_svc_frame_end(&ep->tx, start) != LN_OK || send_tx(ep) != LN_OK)
+        return -1;
+    return ln_svc_channel_init(&ep->ch, key, aead, theirs, mine, p->name, 0) == LN_OK ? 0 : -1;
+}
+
+/* The first frame on a TCP connection: SECURE, or anything else only with security none.
+ * 1: it was SECURE (taken), 0: go on with it as a plain frame, -1: close. */
+static int first_tcp_frame(ln_svc_endpoint* ep, uint16_t type, ln_rbuf* r)
+{
+    ln_service_provider* p = ep->prov;
+    ln_svc_key key;
+    if (ln_svc_key_get(p->clnt, &key) != LN_OK)
+        return refuse_plain(ep, LN_ECONNECTION,
+                            "service \"%s\": the provider has no service key: %s", p->name,
+                            ln_last_error());
+    int rc;
+    if (type == LN_SVC_SECURE && key.level == LN_SVC_SEC_NONE)
+        rc = refuse_plain(ep, LN_EPERM,
+                          "service \"%s\": the provider's instance has security none, the "
+                          "caller asks for protected calls",
+                          p->name);
+    else if (type == LN_SVC_SECURE)
+        rc = handle_secure(ep, r, &key) < 0 ? -1 : 1;
+    else if (key.level == LN_SVC_SEC_NONE)
+        rc = 0;
+    else
+        rc = refuse_plain(
+            ep, LN_EPERM, "service \"%s\" takes calls over TCP only protected (security %s)%s",
+            p->name, ln_svc_level_name(key.level),
+            type == LN_SVC_TAP ? "; record calls on the provider's host instead"
+                               : ": the caller asked without (its instance has security none, "
+                                 "or its libln is older)");
+    sodium_memzero(&key, sizeof key);
+    return rc;
+}
+
+/* A frame on a protected connection: opened into *type and *r, or -1 (close) after telling
+ * the caller.  A frame that fails to open never reaches a handler. */
+static int open_sealed(ln_svc_endpoint* ep, uint8_t* frame, size_t len, uint16_t* type, ln_rbuf* r)
+{
+    ln_service_provider* p = ep->prov;
+    uint8_t* body;
+    size_t body_len;
+    int rc = *type == LN_SVC_SEALED ? ln_svc_open(&ep->ch, frame, len, type, &body, &body_len)
+                                    : LN_EPERM;
+    if (rc == LN_EPERM) {
+        atomic_fetch_add(&p->errors, 1);
+        return refuse_plain(ep, LN_EPERM,
+                            "service \"%s\": a frame from the caller failed authentication "
+                            "(forged, replayed, reordered or cut on the way); connection closed",
+                            p->name);
+    }
+    if (rc != LN_OK) {
+        send_error(ep, 0, LN_EPROTOCOL, "service \"%s\": malformed frame inside a sealed frame",
+                   p->name);
+        return -1;
+    }
+    ln_rbuf_init(r, body, body_len);
+    return 0;
+}
+
 int ln_svc_conn_readable(ln_svc_endpoint* ep)
 {
     ln_service_provider* p = ep->prov;
@@ -594,11 +710,23 @@ int ln_svc_conn_readable(ln_svc_endpoint* ep)
         if (ep->rx_len - used - LN_SVC_HEADER_SIZE < body_len)
             break;
         ln_rbuf r;
-        ln_rbuf_init(&r, ep->rx + used + LN_SVC_HEADER_SIZE, body_len);
+        uint8_t* frame = ep->rx + used;
         used += LN_SVC_HEADER_SIZE + body_len;
+        ln_rbuf_init(&r, frame + LN_SVC_HEADER_SIZE, body_len);
+        if (ep->ch.level != LN_SVC_SEC_NONE) {
+            if (open_sealed(ep, frame, LN_SVC_HEADER_SIZE + body_len, &type, &r) < 0)
+                return -1;
+        } else if (ep->tcp && !ep->first_done) {
+            ep->first_done = 1;
+            int first = first_tcp_frame(ep, type, &r);
+            if (first < 0)
+                return -1;
+            if (first > 0)
+                continue;
+        }
         if (ep->tap_id > 0) {
             return -1; /* a recorder sends nothing after TAP */
-        } else if (!ep->greeted && type == LN_SVC_TAP) {
+        } else if (!ep->greeted && type == LN_SVC_TAP && ep->ch.level == LN_SVC_SEC_NONE) {
             if (handle_tap(ep, &r) < 0)
                 return -1;
         } else if (!ep->greeted) {

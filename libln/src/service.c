@@ -1,5 +1,6 @@
 /* service.c — the caller side of services: looking a service up in the manager, connecting to
- * its provider (Unix socket on the same host, TCP otherwise), and calls over that connection. */
+ * its provider (Unix socket on the same host, TCP otherwise, protected as svc_secure.h says),
+ * and calls over that connection. */
 #include <errno.h>
 #include <math.h>
 #include <poll.h>
@@ -9,8 +10,11 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <sodium.h>
+
 #include "net.h"
 #include "svc_internal.h"
+#include "svc_secure.h"
 
 #define LN_SERVICE_MAGIC 0x4c4e5343u
 #define RX_INITIAL 4096
@@ -29,6 +33,7 @@ struct ln_service {
     int fd;               /* -1: not connected */
     int is_unix;          /* fd is a Unix socket: a send to a closed one fails at once */
     int send_errno;       /* of the last send_tx, 0 if it went out */
+    ln_svc_channel ch;    /* TCP with security: the keys; level NONE: plain */
     char provider[LN_PROTO_MAX_STR + 1];
     char via[LN_PROTO_MAX_STR + 16]; /* "unix:PATH" or "tcp:HOST:PORT", for texts */
     uint32_t last_call;
@@ -50,6 +55,7 @@ static void disconnect(ln_service* s)
     if (s->fd >= 0)
         close(s->fd);
     s->fd = -1;
+    ln_svc_channel_wipe(&s->ch);
 }
 
 static void service_free(ln_service* s)
@@ -160,6 +166,44 @@ static int fill(ln_service* s, size_t need, const struct timespec* deadline)
     return 0;
 }
 
+/* The frame in s->rx on a protected connection: only SEALED frames that open count.  A plain
+ * ERROR is the provider refusing this connection before it could prove anything (the keys
+ * differ, or a frame was altered on the way): reported as LN_EPERM, its text marked. */
+static int open_frame(ln_service* s, uint16_t* type, ln_rbuf* body)
+{
+    size_t len = s->rx_len - LN_SVC_HEADER_SIZE;
+    if (*type == LN_SVC_ERROR) {
+        char text[LN_PROTO_MAX_STR + 1];
+        ln_rbuf_init(body, s->rx + LN_SVC_HEADER_SIZE, len);
+        ln_rbuf_u32(body);
+        ln_rbuf_i32(body);
+        ln_rbuf_str(body, text, sizeof text);
+        return ln_set_error(s->clnt, LN_EPERM,
+                            "service \"%s\": provider \"%s\" (%s) refused the protected "
+                            "connection (unauthenticated answer): %s",
+                            s->name, s->provider, s->via,
+                            ln_rbuf_end(body) == LN_OK ? text : "(malformed)");
+    }
+    uint8_t* inner;
+    size_t inner_len;
+    int rc = *type == LN_SVC_SEALED
+                 ? ln_svc_open(&s->ch, s->rx, s->rx_len, type, &inner, &inner_len)
+                 : LN_EPERM;
+    if (rc == LN_EPERM)
+        return ln_set_error(s->clnt, LN_EPERM,
+                            "service \"%s\": a frame from provider \"%s\" (%s) failed "
+                            "authentication (forged, replayed, reordered or cut on the way); "
+                            "connection closed",
+                            s->name, s->provider, s->via);
+    if (rc != LN_OK)
+        return ln_set_error(s->clnt, LN_EPROTOCOL,
+                            "service \"%s\": malformed frame inside a sealed frame from "
+                            "provider \"%s\" (%s)",
+                            s->name, s->provider, s->via);
+    ln_rbuf_init(body, inner, inner_len);
+    return LN_OK;
+}
+
 /* Reads one whole frame into s->rx.  LN_OK with type and body, or an error (recorded; the
  * caller disconnects).  The provider answers one frame per request, so any byte beyond the
  * frame is a protocol error. */
@@ -215,6 +259,8 @@ static int read_frame(ln_service* s, const struct timespec* deadline, uint16_t* 
         return ln_set_errno_error(s->clnt, err,
                                   "service \"%s\": connection to provider \"%s\" (%s) failed",
                                   s->name, s->provider, s->via);
+    if (s->ch.level != LN_SVC_SEC_NONE)
+        return open_frame(s, type, body);
     ln_rbuf_init(body, s->rx + LN_SVC_HEADER_SIZE, len);
     return LN_OK;
 }
@@ -234,8 +280,15 @@ static int take_error(ln_service* s, ln_rbuf* body)
                         text);
 }
 
-static int send_buf(ln_service* s, const ln_wbuf* b, const struct timespec* deadline)
+/* Sends the one frame in b (sealed first on a protected connection: b changes). */
+static int send_buf(ln_service* s, ln_wbuf* b, const struct timespec* deadline)
 {
+    if (s->ch.level != LN_SVC_SEC_NONE) {
+        int rc = ln_svc_seal(&s->ch, b, 0);
+        if (rc != LN_OK)
+            return ln_set_error(s->clnt, rc, "service \"%s\": cannot seal a frame: %s", s->name,
+                                ln_strerror(rc));
+    }
     int err = ln_net_write_all(s->fd, b->data, b->len, deadline, -1);
     s->send_errno = err;
     if (err == ETIMEDOUT)
@@ -292,6 +345,64 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
                               s->provider, s->via);
 }
 
+/* On a new TCP connection: SECURE with our nonce, SECURED with the provider's, then the keys
+ * (svc_secure.h).  Level none sends nothing: the provider refuses HELLO unless it has none
+ * too.  LN_OK or an error (recorded). */
+static int secure_connection(ln_service* s, const struct timespec* deadline)
+{
+    ln_svc_key key;
+    int rc = ln_svc_key_get(s->clnt, &key);
+    if (rc != LN_OK)
+        return ln_set_error(s->clnt, rc, "service \"%s\": %s", s->name, ln_last_error());
+    if (key.level == LN_SVC_SEC_NONE)
+        return LN_OK;
+    if (sodium_init() < 0)
+        return ln_set_error(s->clnt, LN_ESYS, "service \"%s\": libsodium is unusable", s->name);
+    uint8_t mine[LN_SVC_NONCE_BYTES];
+    ln_svc_nonce(mine);
+    unsigned offer = ln_svc_aead_offer();
+    ln_wbuf b;
+    ln_wbuf_init(&b);
+    size_t start = ln_proto_frame_begin(&b, LN_SVC_SECURE);
+    ln_wbuf_u32(&b, LN_SVC_MAGIC);
+    ln_wbuf_u16(&b, LN_SVC_VERSION);
+    ln_wbuf_u16(&b, (uint16_t)key.level);
+    ln_wbuf_u16(&b, (uint16_t)offer);
+    ln_wbuf_str(&b, s->name);
+    ln_wbuf_bytes(&b, mine, sizeof mine);
+    rc = ln_svc_frame_end(&b, start);
+    if (rc == LN_OK)
+        rc = send_buf(s, &b, deadline);
+    ln_wbuf_free(&b);
+    uint16_t type;
+    ln_rbuf answer;
+    if (rc == LN_OK)
+        rc = read_frame(s, deadline, &type, &answer);
+    if (rc != LN_OK)
+        return rc;
+    if (type == LN_SVC_ERROR)
+        return take_error(s, &answer);
+    uint16_t level = ln_rbuf_u16(&answer);
+    int aead = ln_rbuf_u16(&answer);
+    uint8_t theirs[LN_SVC_NONCE_BYTES];
+    ln_svc_read_nonce(&answer, theirs);
+    if (type != LN_SVC_SECURED || ln_rbuf_end(&answer) != LN_OK)
+        return ln_set_error(s->clnt, LN_EPROTOCOL,
+                            "service \"%s\": provider \"%s\" (%s) did not answer SECURE", s->name,
+                            s->provider, s->via);
+    if (level != key.level || ln_svc_aead_pick(offer, (unsigned)aead) != aead)
+        return ln_set_error(s->clnt, LN_EPERM,
+                            "service \"%s\": provider \"%s\" (%s) answered with security "
+                            "%s and AEAD %d, this caller uses %s (AEADs 0x%x)",
+                            s->name, s->provider, s->via, ln_svc_level_name(level), aead,
+                            ln_svc_level_name(key.level), offer);
+    rc = ln_svc_channel_init(&s->ch, &key, aead, mine, theirs, s->name, 1);
+    sodium_memzero(key.key, sizeof key.key);
+    if (rc != LN_OK)
+        return ln_set_error(s->clnt, rc, "service \"%s\": cannot derive the channel keys", s->name);
+    return LN_OK;
+}
+
 /* Looks the service up, connects and greets the provider. */
 static int connect_service(ln_service* s, const struct timespec* deadline)
 {
@@ -323,8 +434,12 @@ static int connect_service(ln_service* s, const struct timespec* deadline)
                             s->name);
     uint16_t tcp_port = info.tcp_port;
     rc = open_connection(s, host_id, unix_path, tcp_host, tcp_port, deadline);
-    if (rc != LN_OK)
+    if (rc == LN_OK && !s->is_unix)
+        rc = secure_connection(s, deadline);
+    if (rc != LN_OK) {
+        disconnect(s);
         return rc;
+    }
 
     ln_wbuf hello;
     ln_wbuf_init(&hello);

@@ -203,7 +203,7 @@ static ln_svc_endpoint* lookup(ln_svc_group* g, uint64_t key)
     return ep;
 }
 
-int ln_svc_group_add_listener(ln_svc_group* g, ln_service_provider* prov, int fd)
+int ln_svc_group_add_listener(ln_svc_group* g, ln_service_provider* prov, int fd, int tcp)
 {
     ln_svc_endpoint* ep = calloc(1, sizeof *ep);
     if (ep == NULL)
@@ -211,6 +211,7 @@ int ln_svc_group_add_listener(ln_svc_group* g, ln_service_provider* prov, int fd
     ep->kind = LN_SVC_EP_LISTEN;
     ep->fd = fd;
     ep->prov = prov;
+    ep->tcp = tcp;
     int rc = add_endpoint(g, ep);
     if (rc != LN_OK) {
         free(ep);
@@ -257,6 +258,7 @@ static void accept_connections(ln_svc_group* g, ln_svc_endpoint* listener)
         ep->kind = LN_SVC_EP_CONN;
         ep->fd = fd;
         ep->prov = listener->prov;
+        ep->tcp = listener->tcp;
         ln_wbuf_init(&ep->tx);
         ln_arena_init(&ep->arena, 0);
         if (add_endpoint(g, ep) != LN_OK)

@@ -18,6 +18,7 @@
 #include "arena.h"
 #include "client_internal.h"
 #include "sigcodec.h"
+#include "svc_secure.h"
 #include "svc_tap.h"
 #include "svc_wire.h"
 
@@ -34,6 +35,7 @@ typedef struct ln_svc_endpoint {
     int fd;
     uint32_t index; /* slot in the group's table */
     ln_service_provider* prov;
+    int tcp; /* a TCP listener, or a connection it accepted: protected (svc_secure.h) */
     /* connections only */
     int greeted; /* the caller's HELLO was accepted */
     int broken;  /* a send failed: close after this event */
@@ -44,6 +46,8 @@ typedef struct ln_svc_endpoint {
     void* request;                    /* decoded request struct, prov->request_size bytes */
     char caller[LN_SVC_MAX_NAME + 1]; /* the caller's client name from HELLO ("" if none) */
     int64_t tap_id;                   /* > 0: a recorder's connection (svc_tap.h) */
+    int first_done;                   /* TCP: the first frame (SECURE or not) was taken */
+    ln_svc_channel ch;                /* TCP with security: the keys; level NONE: plain */
 } ln_svc_endpoint;
 
 struct ln_service_provider {
@@ -88,8 +92,9 @@ struct ln_service_request {
 /* The group `name` (NULL or "" for the default one) of the client in *out, created if `create`.
  * LN_OK, LN_ENOTFOUND if it does not exist (and !create), LN_EINVAL, LN_ENOMEM (recorded). */
 int ln_svc_group_get(ln_client* clnt, const char* name, int create, ln_svc_group** out);
-/* Adds a listening socket of `prov` to its group and arms it.  LN_OK or an error (recorded). */
-int ln_svc_group_add_listener(ln_svc_group* g, ln_service_provider* prov, int fd);
+/* Adds a listening socket of `prov` to its group and arms it (`tcp`: its connections are
+ * protected as svc_secure.h says).  LN_OK or an error (recorded). */
+int ln_svc_group_add_listener(ln_svc_group* g, ln_service_provider* prov, int fd, int tcp);
 /* Removes every endpoint of `prov` from its group (waits for running handlers of the group).
  * LN_EBUSY if called from a handler of that group. */
 int ln_svc_group_remove_provider(ln_svc_group* g, ln_service_provider* prov);

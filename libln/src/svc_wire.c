@@ -24,7 +24,7 @@ int ln_svc_parse_header(const uint8_t header[LN_SVC_HEADER_SIZE], size_t max_pay
     ln_rbuf_init(&r, header, LN_SVC_HEADER_SIZE);
     uint32_t length = ln_rbuf_u32(&r);
     uint16_t t = ln_rbuf_u16(&r);
-    if (length < 2 || t < LN_SVC_HELLO || t > LN_SVC_CALL)
+    if (length < 2 || t < LN_SVC_HELLO || t > LN_SVC_SEALED)
         return LN_EPROTOCOL;
     *body_len = length - 2;
     *type = t;

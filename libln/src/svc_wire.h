@@ -34,6 +34,13 @@ enum ln_svc_msg {
     LN_SVC_TAP = 6,    /* r -> p: u32 magic, u16 version, str service, str recorder */
     LN_SVC_TAPPED = 7, /* p -> r: str md_name, u64 layout_hash, str provider, str signature */
     LN_SVC_CALL = 8,   /* p -> r: see svc_tap.h */
+    /* Protected connections (TCP, security authenticate or encrypt; svc_secure.h): the
+     * caller's first frame instead of HELLO, the provider's answer, then only SEALED frames,
+     * each holding one of the frames above. */
+    LN_SVC_SECURE = 9,   /* c -> p: u32 magic, u16 version, u16 level, u16 aead offer (bits),
+                            str service, 32 bytes caller nonce */
+    LN_SVC_SECURED = 10, /* p -> c: u16 level, u16 aead, 32 bytes provider nonce */
+    LN_SVC_SEALED = 11,  /* both: a whole frame (encrypt: enciphered), then a 16-byte tag */
 };
 
 /* Checks a frame header: LN_OK with the body size and type; LN_EPROTOCOL for a length < 2 or

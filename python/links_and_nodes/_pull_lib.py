@@ -40,29 +40,30 @@ class Options(ctypes.Structure):
 class Stats(ctypes.Structure):
     _fields_ = [(name, ctypes.c_uint32) for name in
                 ("interests", "syncs", "data", "timeouts", "nacks", "late", "bad",
-                 "refreshes")]
+                 "refreshes", "rejected")]
 
 
 class Slot(ctypes.Structure):
     _fields_ = [("seq", ctypes.c_uint64), ("sent_ms", ctypes.c_uint32),
-                ("nonce", ctypes.c_uint32), ("retries", ctypes.c_uint8),
-                ("flags", ctypes.c_uint8)]
+                ("nonce", ctypes.c_uint32)]
 
 
 class Sub(ctypes.Structure):
     """struct ln_pull_sub; its fields are the core's, read here only for stats and t."""
 
-    _fields_ = [("opt", Options), ("send", SendFn), ("on_data", DataFn),
-                ("on_event", EventFn), ("user", ctypes.c_void_p),
-                ("name", ctypes.c_uint8 * MAX_NAME), ("name_size", ctypes.c_uint16),
-                ("syncing", ctypes.c_uint8), ("timeouts_in_row", ctypes.c_uint8),
+    _fields_ = [("opt", Options), ("syncing", ctypes.c_uint8),
+                ("timeouts_in_row", ctypes.c_uint8), ("window", ctypes.c_uint8),
+                ("since_loss", ctypes.c_uint8), ("name_size", ctypes.c_uint16),
                 ("t_ms", ctypes.c_uint32), ("sync_sent_ms", ctypes.c_uint32),
                 ("sync_nonce", ctypes.c_uint32), ("period_ewma_us", ctypes.c_uint32),
-                ("last_arrival_ms", ctypes.c_uint32), ("delivered_seq", ctypes.c_uint64),
-                ("next_seq", ctypes.c_uint64), ("latest_seq", ctypes.c_uint64),
-                ("rng", ctypes.c_uint32), ("srtt_us", ctypes.c_uint32),
-                ("window", ctypes.c_uint8), ("since_loss", ctypes.c_uint8),
-                ("slots", Slot * MAX_WINDOW), ("stats", Stats)]
+                ("last_arrival_ms", ctypes.c_uint32), ("rng", ctypes.c_uint32),
+                ("srtt_us", ctypes.c_uint32), ("send", SendFn), ("on_data", DataFn),
+                ("on_event", EventFn), ("user", ctypes.c_void_p),
+                ("delivered_seq", ctypes.c_uint64), ("next_seq", ctypes.c_uint64),
+                ("latest_seq", ctypes.c_uint64), ("stats", Stats),
+                ("slot_state", ctypes.c_uint8 * MAX_WINDOW), ("slots", Slot * MAX_WINDOW),
+                ("name", ctypes.c_uint8 * MAX_NAME),
+                ("key", ctypes.c_void_p), ("key_size", ctypes.c_size_t)]
 
 
 _declare = functools.partial(_native.declare, lib)

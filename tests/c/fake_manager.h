@@ -22,6 +22,7 @@
 #include "../../libln/src/net.c"
 #include "../../libln/src/client.c"
 #include "../../libln/src/client_conn.c"
+#include "../../libln/src/client_auth.c" /* admission by key: hidden in libln.so */
 #include "../../libln/src/log_format.c"
 #include "../../libln/src/client_log.c"
 #include "../../libln/src/host_id.c" /* ln_host_id: not exported by libln.so */

@@ -304,7 +304,7 @@ static void test_header_bounds(void)
         {LN_PROTO_MAX_FRAME + 1, LN_MSG_OK, LN_EPROTOCOL},
         {UINT32_MAX, LN_MSG_OK, LN_EPROTOCOL},
         {6, 0, LN_EPROTOCOL},
-        {6, 4, LN_EPROTOCOL},
+        {6, 7, LN_EPROTOCOL}, /* 4..6 are the admission messages */
         {6, 9, LN_EPROTOCOL},
         {6, 18, LN_EPROTOCOL},
         {6, UINT16_MAX, LN_EPROTOCOL},
@@ -356,7 +356,7 @@ static void test_message_types(void)
     int known = 0;
     for (uint32_t t = 0; t <= UINT16_MAX; t++)
         known += ln_proto_type_known((uint16_t)t);
-    LN_CHECK_EQ(known, 19);
+    LN_CHECK_EQ(known, 24);
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_RECLAIM_PORT), LN_MSG_PORT_OK);
     LN_CHECK_STREQ(ln_proto_type_name(LN_MSG_RECLAIM_PORT), "RECLAIM_PORT");
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_REGISTER_SERVICE), LN_MSG_OK);
@@ -368,6 +368,12 @@ static void test_message_types(void)
     LN_CHECK(ln_proto_to_client(LN_MSG_CONTROL_RESULT) && !ln_proto_to_client(LN_MSG_CONTROL));
     LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_LOG), LN_MSG_OK);
     LN_CHECK(!ln_proto_to_client(LN_MSG_LOG));
+    LN_CHECK(ln_proto_to_client(LN_MSG_CHALLENGE) && ln_proto_to_client(LN_MSG_AUTH_OK));
+    LN_CHECK(!ln_proto_to_client(LN_MSG_AUTH));
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_AUTH), 0); /* no request id, like HELLO */
+    LN_CHECK_EQ(ln_proto_answer_type(LN_MSG_SERVICE_KEY), LN_MSG_SERVICE_KEY_INFO);
+    LN_CHECK(ln_proto_to_client(LN_MSG_SERVICE_KEY_INFO) &&
+             !ln_proto_to_client(LN_MSG_SERVICE_KEY));
 }
 
 static void test_text_fields(void)

@@ -1,7 +1,8 @@
 /* test_pull_dit.c — the pull consumer of libln_pull (ln/pull.h) with a fake clock and a
  * scripted producer: the exact sequence of DIT timeouts t for naive DIT (dit_transport
  * §1.3) and each hardening (§5.4), pipeline slots, re-bootstrap, NACKs, the latest-seq jump,
- * Karn's rule, the polling baseline, late Data, and uint32 ms wrap-around. */
+ * Karn's rule, the polling baseline, late Data, uint32 ms wrap-around and 64-bit seqs (a
+ * device build keeps 32-bit offsets). */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -106,6 +107,10 @@ static void on_event(void* user, int ev, uint64_t seq, uint32_t t)
 }
 
 /* ---- a scripted producer ------------------------------------------------------------------ */
+/* How reply() signs (NULL: DigestSha256), and whether it then flips a byte of the payload */
+static const ln_ndn_signer* reply_signer;
+static int reply_tampered;
+
 /* Data /TOPIC/seq=<seq> (or /TOPIC/sync/seq=<seq>), payload = the seq's 8 bytes, header
  * latest; a NACK (ContentType 3, only the latest) when nack. */
 static int reply(ln_pull_sub* s, uint32_t now, int sync, uint64_t seq, uint64_t latest, int nack)
@@ -135,8 +140,10 @@ static int reply(ln_pull_sub* s, uint32_t now, int sync, uint64_t seq, uint64_t 
     d.content.size = (size_t)ln_ndn_encode_pull_content(content, sizeof content, &c);
     d.content_type = nack ? LN_NDN_CONTENT_NACK : LN_NDN_CONTENT_BLOB;
     d.freshness_ms = nack || sync ? 0 : 1000;
-    n = ln_ndn_encode_data(out, sizeof out, &d, &sig);
-    LN_CHECK(n > 0);
+    n = ln_ndn_encode_data(out, sizeof out, &d, reply_signer ? reply_signer : &sig);
+    LN_CHECK(n > 40);
+    if (reply_tampered) /* the payload's last byte: before SignatureInfo (5) and Value (34) */
+        out[n - 40] ^= 1;
     return ln_pull_receive(s, out, (size_t)n, now);
 }
 #define DATA(s, now, seq, latest) LN_CHECK_EQ(reply(s, now, 0, seq, latest, 0), 1)
@@ -508,7 +515,7 @@ static void test_sync_quarter_and_karn(void)
         start(&s, &o, 0);
         SYNC(&s, 0, 5);        /* /seq=6 at 0 */
         ln_pull_poll(&s, 400); /* timeout: t 400 (cap), retransmitted at 400 */
-        LN_CHECK_EQ(s.slots[0].retries, 1);
+        LN_CHECK_EQ(s.slot_state[0] & LN_PULL_SLOT_RETRIES, 1);
         DATA(&s, 401, 6, 6); /* 1*4 < 400 */
         LN_CHECK_EQ(s.t_ms, karn ? 400 : 200);
         DATA(&s, 402, 7, 7); /* a first transmission: halves either way */
@@ -625,7 +632,7 @@ static void test_refresh(void)
     LN_CHECK_EQ(s.stats.refreshes, 2);
     LN_CHECK(tx[ntx - 3].seq == 12 && tx[ntx - 3].nonce != n12 && tx[ntx - 2].seq == 13 &&
              tx[ntx - 2].nonce != n13 && tx[ntx - 1].seq == 14);
-    LN_CHECK(s.slots[1].sent_ms == 20 && s.slots[1].flags == 1 && s.slots[1].retries == 0);
+    LN_CHECK(s.slots[1].sent_ms == 20 && s.slot_state[1] == LN_PULL_SLOT_REFRESHED);
     LN_CHECK_EQ(s.t_ms, 50); /* 20*4 < 100 */
     /* a refreshed reply is not a retransmission: its Δ counts from the refresh */
     DATA(&s, 25, 12, 12); /* 13 was refreshed already, 14 only 5 ms ago: none; 15 at 25 */
@@ -698,7 +705,7 @@ static void test_auto_window(void)
     LN_CHECK(tx[ntx - 1].seq == 106);
     /* a NACK jump asks for a published seq: its reply is an RTT sample */
     NACK(&s, 61, 102, 110); /* 102 -> 110 (published), 111 next */
-    LN_CHECK(pending(&s, 110) && s.slots[1].flags == 2);
+    LN_CHECK(pending(&s, 110) && s.slot_state[1] == LN_PULL_SLOT_PUBLISHED);
     DATA(&s, 63, 110, 110); /* RTT 2 ms: SRTT = 45 - 43/8 = 39.625 ms */
     LN_CHECK_EQ(s.srtt_us, 39625);
     /* P̂ = 18.75 - (18.75 - 0.333)/8 = 16.45 ms: ceil(39.6/16.45)+2 = 5 */
@@ -764,13 +771,20 @@ static void test_start_name(void)
                 LN_NDN_EINVAL);
 }
 
-/* ---- the polling baseline -------------------------------------------------------------------- */
+/* ---- the polling baseline (not in a device build, which refuses it) -------------------------- */
 static void test_polling(void)
 {
     ln_pull_sub s;
     ln_pull_options o;
     ln_pull_options_naive(&o);
     o.poll_ms = 50;
+#ifdef LN_NDN_CONSUMER
+    reset();
+    LN_CHECK_EQ(ln_pull_start(&s, TOPIC, &o, on_send, on_data, on_event, NULL, 1000, 7),
+                LN_NDN_EINVAL);
+    LN_CHECK_EQ(ntx, 0);
+    return;
+#endif
     start(&s, &o, 1000);
     LN_CHECK(ntx == 1 && tx[0].sync && tx[0].lifetime == 50);
     LN_CHECK_EQ(ln_pull_poll(&s, 1049), 1);
@@ -850,6 +864,99 @@ static void test_wrap_around(void)
     LN_CHECK_EQ(s.t_ms, 50);
 }
 
+/* ---- 64-bit seqs (a device build keeps 32-bit offsets from a base: docs/pull.md, "Sizes") --- */
+static void test_big_seqs(void)
+{
+    ln_pull_sub s;
+    ln_pull_options o;
+    const uint64_t big = ((uint64_t)1 << 40) + 5, edge = 0xffff0000u;
+    ln_pull_options_naive(&o);
+    o.t_max_ms = 100;
+    start(&s, &o, 0);
+    SYNC(&s, 10, big); /* far above 2^32 from the start */
+    LN_CHECK(nrx == 1 && rx[0] == big && tx[ntx - 1].seq == big + 1);
+    DATA(&s, 20, big + 1, big + 1);
+    LN_CHECK(nrx == 2 && rx[1] == big + 1 && tx[ntx - 1].seq == big + 2);
+    LN_CHECK_EQ(reply(&s, 21, 0, big + 2 + ((uint64_t)1 << 33), 0, 0), 1); /* no such Interest */
+    LN_CHECK(s.stats.late == 1 && nrx == 2);
+    ln_pull_poll(&s, 200); /* /seq=big+2 times out: reported with its 64-bit seq, then sync */
+    LN_CHECK(nev >= 2 && evs[nev - 2].ev == LN_PULL_EV_TIMEOUT && evs[nev - 2].seq == big + 2);
+    LN_CHECK(evs[nev - 1].ev == LN_PULL_EV_SYNC && evs[nev - 1].seq == big + 1);
+    SYNC(&s, 210, 3); /* the producer started over */
+    LN_CHECK(nrx == 3 && rx[2] == 3 && tx[ntx - 1].seq == 4);
+    DATA(&s, 220, 4, 4);
+    LN_CHECK(nrx == 4 && rx[3] == 4 && tx[ntx - 1].seq == 5);
+    /* 2^32 - 2^16 seqs past the base (0 here) */
+    start(&s, &o, 0);
+    SYNC(&s, 10, edge);
+    LN_CHECK(nrx == 1 && rx[0] == edge && tx[ntx - 1].seq == edge + 1);
+#ifdef LN_NDN_CONSUMER
+    /* beyond the range a device build follows: late, then one re-bootstrap re-bases it */
+    DATA(&s, 20, edge + 1, edge + 1);
+    LN_CHECK(nrx == 1 && s.stats.late == 1);
+    ln_pull_poll(&s, 200);
+    LN_CHECK(tx[ntx - 1].sync);
+    SYNC(&s, 210, edge + 1);
+#else
+    DATA(&s, 20, edge + 1, edge + 1);
+#endif
+    LN_CHECK(nrx == 2 && rx[1] == edge + 1 && tx[ntx - 1].seq == edge + 2);
+    DATA(&s, 230, edge + 2, edge + 2);
+    LN_CHECK(nrx == 3 && rx[2] == edge + 2 && tx[ntx - 1].seq == edge + 3);
+}
+
+#if !defined(LN_NDN_CONSUMER) || defined(LN_PULL_HMAC)
+/* ---- HMAC-SHA256 verification (a device build has it with -DLN_PULL_HMAC) ------------------ */
+static void test_verify_key(void)
+{
+    static const uint8_t key[20] = "0123456789abcdefghij", other_key[3] = "key";
+    uint8_t long_key[100];
+    ln_ndn_signer hmac = {LN_NDN_SIG_HMAC_SHA256, key, sizeof key, {NULL, 0}};
+    ln_ndn_signer other = {LN_NDN_SIG_HMAC_SHA256, other_key, sizeof other_key, {NULL, 0}};
+    ln_ndn_signer digest = {LN_NDN_SIG_DIGEST_SHA256, NULL, 0, {NULL, 0}};
+    ln_pull_sub s;
+    ln_pull_options o;
+    ln_pull_options_naive(&o);
+    start(&s, &o, 0);
+    LN_CHECK_EQ(ln_pull_set_verify_key(NULL, key, sizeof key), LN_NDN_EINVAL);
+    LN_CHECK_EQ(ln_pull_set_verify_key(&s, NULL, 3), LN_NDN_EINVAL);
+    LN_CHECK_EQ(ln_pull_set_verify_key(&s, key, sizeof key), LN_NDN_OK);
+    const ln_ndn_signer* refused[] = {&digest, &other, &hmac};
+    for (int i = 0; i < 3; i++) { /* unsigned, another key, tampered: none is taken */
+        reply_signer = refused[i];
+        reply_tampered = i == 2;
+        LN_CHECK_EQ(reply(&s, 5, 1, 7, 7, 0), LN_NDN_ESIGNATURE);
+    }
+    reply_tampered = 0;
+    LN_CHECK(nrx == 0 && s.stats.rejected == 3 && s.stats.bad == 0 && s.syncing);
+    reply_signer = &hmac;
+    SYNC(&s, 6, 7);
+    LN_CHECK(nrx == 1 && rx[0] == 7 && s.stats.rejected == 3);
+    reply_signer = &other; /* a NACK must verify as well */
+    LN_CHECK_EQ(reply(&s, 7, 0, 8, 9, 1), LN_NDN_ESIGNATURE);
+    LN_CHECK(s.stats.nacks == 0 && s.stats.rejected == 4);
+    /* a key longer than a block is hashed first (RFC 2104) */
+    for (int i = 0; i < 100; i++)
+        long_key[i] = (uint8_t)(i * 7);
+    hmac.key = long_key;
+    hmac.key_size = sizeof long_key;
+    LN_CHECK_EQ(ln_pull_set_verify_key(&s, long_key, sizeof long_key), LN_NDN_OK);
+    reply_signer = &hmac;
+    DATA(&s, 8, 8, 8);
+    LN_CHECK(nrx == 2 && rx[1] == 8);
+    /* verification off: both kinds are taken again */
+    LN_CHECK_EQ(ln_pull_set_verify_key(&s, NULL, 0), LN_NDN_OK);
+    reply_signer = NULL;
+    DATA(&s, 9, 9, 9);
+    LN_CHECK(nrx == 3 && s.stats.rejected == 4);
+    /* ln_pull_start clears it */
+    LN_CHECK_EQ(ln_pull_set_verify_key(&s, key, sizeof key), LN_NDN_OK);
+    start(&s, &o, 20);
+    SYNC(&s, 25, 30);
+    LN_CHECK(nrx == 1 && s.stats.rejected == 0);
+}
+#endif
+
 int main(void)
 {
     LN_TEST_RUN(test_naive_sequence);
@@ -867,6 +974,10 @@ int main(void)
     LN_TEST_RUN(test_polling);
     LN_TEST_RUN(test_other_packets);
     LN_TEST_RUN(test_wrap_around);
+    LN_TEST_RUN(test_big_seqs);
+#if !defined(LN_NDN_CONSUMER) || defined(LN_PULL_HMAC)
+    LN_TEST_RUN(test_verify_key);
+#endif
     printf("sizeof(ln_pull_sub) = %zu\n", sizeof(ln_pull_sub));
     LN_TEST_EXIT();
 }

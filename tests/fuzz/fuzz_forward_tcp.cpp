@@ -1,9 +1,16 @@
-// fuzz_forward_tcp.cpp — fuzz target: the forwarder's TCP stream wire (forward_wire.cpp):
-// a receiver reading a sender's hello and then frame headers, payloads and trailers, as
-// forward_tcp_recv.cpp does, and a sender reading the receiver's reply, on the same bytes.
+// fuzz_forward_tcp.cpp — fuzz target: the forwarder's TCP stream receive code
+// (forward_tcp_frame.cpp's TcpSession, which forward_tcp_recv.cpp runs on the socket's bytes):
+// a sender's hello judged against the stream, then frame headers, payloads, trailers and tags,
+// in the order and sizes the receive thread reads them; and a sender reading the receiver's
+// reply, on the same bytes.  The stream's level is the hello's suite's, so the seeds cover
+// none, authenticate and encrypt; the receiver's nonce is fixed so that seeds can be sealed.
 #include <cstdint>
 #include <cstring>
+#include <memory>
+#include <vector>
 
+#include "forward_crypto.hpp"
+#include "forward_tcp_frame.hpp"
 #include "forward_wire.hpp"
 
 extern "C" {
@@ -17,70 +24,120 @@ namespace {
 constexpr uint64_t kMessageSize = 64; // the RecvSpec of the stream
 constexpr uint64_t kLayoutHash = 0x1122334455667788u;
 constexpr uint64_t kToken = 0xfeed;
+constexpr uint8_t kReceiverNonce[wire::kHandshakeNonce] = {7, 7, 7, 7, 7, 7, 7, 7,
+                                                           7, 7, 7, 7, 7, 7, 7, 7};
+
+const lnd::Key &stream_key()
+{
+    static const lnd::Key key = [] {
+        lnd::Key daemon, out;
+        std::memset(daemon.bytes, 0x24, lnd::Key::kBytes);
+        sec::stream_key(daemon, kToken, 1, out);
+        return out;
+    }();
+    return key;
+}
+
+sec::Level level_of(uint8_t suite)
+{
+    switch (static_cast<sec::Suite>(suite)) {
+    case sec::Suite::none:
+        return sec::Level::none;
+    case sec::Suite::poly1305:
+        return sec::Level::authenticate;
+    default:
+        return sec::Level::encrypt;
+    }
+}
 
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    if (size >= wire::kReplySize) {
+    if (size >= wire::kReplySize) { // the sender's side: a reply
         wire::Reply reply;
-        wire::decode_reply(data, reply);
+        std::unique_ptr<sec::Box> box;
+        uint8_t hello[wire::kHelloSize] = {};
+        if (wire::decode_reply(data, reply))
+            check_tcp_reply(hello, reply, data, stream_key(), sec::Suite::poly1305, box);
     }
     if (size < wire::kHelloSize)
         return 0;
     wire::Hello hello;
-    if (!wire::decode_hello(data, hello) || hello.token != kToken ||
-        hello.message_size != kMessageSize || hello.layout_hash != kLayoutHash)
+    if (!wire::decode_hello(data, hello) || hello.token != kToken)
+        return 0;
+    HelloRules rules{kMessageSize, kLayoutHash, level_of(hello.suite), &stream_key()};
+    TcpSession session;
+    uint8_t reply[wire::kReplySize];
+    if (session.accept(hello, data, rules, kReceiverNonce, reply) != wire::Reject::none)
         return 0;
     data += wire::kHelloSize;
     size -= wire::kHelloSize;
-    uint8_t payload[kMessageSize];
-    uint64_t last_seq = 0;
+    std::vector<uint8_t> payload(kMessageSize);
+    uint8_t tail[wire::kFrameTrailerSize + sec::kTagBytes];
+    const size_t tail_size = wire::kFrameTrailerSize + session.tag_size();
     while (size >= wire::kFrameHeaderSize) {
-        wire::FrameHeader f = wire::decode_frame_header(data);
+        wire::FrameHeader f;
+        const uint8_t *head = data;
+        if (session.header(head, f) != TcpSession::Frame::intact)
+            break;
         data += wire::kFrameHeaderSize;
         size -= wire::kFrameHeaderSize;
-        if (f.size != kMessageSize || size < f.size + wire::kFrameTrailerSize)
+        if (size < f.size + tail_size)
             break;
-        std::memcpy(payload, data, f.size);
-        data += f.size;
-        size -= f.size;
-        wire::Trailer t = wire::decode_frame_trailer(data);
-        data += wire::kFrameTrailerSize;
-        size -= wire::kFrameTrailerSize;
-        if (t == wire::Trailer::invalid)
-            break;
-        if (t == wire::Trailer::intact)
-            last_seq = f.seq;
+        std::memcpy(payload.data(), data, f.size);
+        std::memcpy(tail, data + f.size, tail_size);
+        data += f.size + tail_size;
+        size -= f.size + tail_size;
+        TcpSession::Frame v =
+            session.frame(head, payload.data(), tail, tail + wire::kFrameTrailerSize);
+        if (v != TcpSession::Frame::intact && v != TcpSession::Frame::torn)
+            break; // the connection ends
     }
-    (void)last_seq;
     return 0;
 }
 
 extern "C" void ln_fuzz_seeds(ln_fuzz_emit *emit)
 {
-    uint8_t buf[wire::kHelloSize +
-                3 * (wire::kFrameHeaderSize + kMessageSize + wire::kFrameTrailerSize)];
-    size_t n = 0;
-    wire::Hello h;
-    h.token = kToken;
-    h.message_size = kMessageSize;
-    h.layout_hash = kLayoutHash;
-    wire::encode_hello(buf, h);
-    n += wire::kHelloSize;
-    for (uint64_t seq = 1; seq <= 3; ++seq) {
-        wire::FrameHeader f;
-        f.seq = seq;
-        f.timestamp_ns = static_cast<int64_t>(seq) * 1000;
-        f.size = kMessageSize;
-        wire::encode_frame_header(buf + n, f);
-        n += wire::kFrameHeaderSize;
-        std::memset(buf + n, static_cast<int>(seq), kMessageSize);
-        n += kMessageSize;
-        wire::encode_frame_trailer(buf + n, seq != 2); // the second one torn
-        n += wire::kFrameTrailerSize;
+    for (sec::Level level : {sec::Level::none, sec::Level::authenticate, sec::Level::encrypt}) {
+        const sec::Suite suite =
+            level == sec::Level::encrypt ? sec::Suite::chacha20poly1305 : sec::suite_for(level);
+        SendSpec spec;
+        spec.token = kToken;
+        spec.message_size = kMessageSize;
+        spec.layout_hash = kLayoutHash;
+        uint8_t nonce[wire::kHandshakeNonce] = {1, 2, 3};
+        std::vector<uint8_t> buf(wire::kHelloSize);
+        encode_tcp_hello(spec, stream_key(), suite, nonce, buf.data());
+        // The receiver's reply, to derive the sender's key as a real sender would.
+        wire::Hello hello;
+        wire::decode_hello(buf.data(), hello);
+        TcpSession session;
+        uint8_t raw[wire::kReplySize];
+        HelloRules rules{kMessageSize, kLayoutHash, level, &stream_key()};
+        session.accept(hello, buf.data(), rules, kReceiverNonce, raw);
+        wire::Reply reply;
+        wire::decode_reply(raw, reply);
+        std::unique_ptr<sec::Box> box;
+        check_tcp_reply(buf.data(), reply, raw, stream_key(), suite, box);
+        for (uint64_t seq = 1; seq <= 3; ++seq) {
+            size_t at = buf.size();
+            buf.resize(at + wire::kFrameHeaderSize + kMessageSize + wire::kFrameTrailerSize +
+                       sec::tag_bytes(suite));
+            uint8_t *p = buf.data() + at;
+            wire::encode_frame_header(p, {seq, static_cast<int64_t>(seq) * 1000, kMessageSize});
+            uint8_t *payload = p + wire::kFrameHeaderSize;
+            std::memset(payload, static_cast<int>(seq), kMessageSize);
+            uint8_t *trailer = payload + kMessageSize;
+            wire::encode_frame_trailer(trailer, seq != 2); // the second one torn
+            if (box)
+                box->seal(seq, p, wire::kFrameHeaderSize, payload, kMessageSize, payload,
+                          trailer + wire::kFrameTrailerSize, trailer, wire::kFrameTrailerSize);
+        }
+        const char *names[] = {"hello_three_frames", "authenticated_three_frames",
+                               "encrypted_three_frames"};
+        emit(names[static_cast<int>(level)], buf.data(), buf.size());
     }
-    emit("hello_three_frames", buf, n);
     uint8_t reply[wire::kReplySize];
     wire::Reply r;
     r.kind = wire::Kind::reject;

@@ -49,7 +49,7 @@ static void caller_headers(const uint8_t* data, size_t size)
         int rc = ln_svc_parse_header(data, 4096, &len, &type);
         if (rc != LN_OK)
             return;
-        assert(type >= LN_SVC_HELLO && type <= LN_SVC_CALL && len <= 4096 + LN_SVC_OVERHEAD);
+        assert(type >= LN_SVC_HELLO && type <= LN_SVC_SEALED && len <= 4096 + LN_SVC_OVERHEAD);
         if (size - LN_SVC_HEADER_SIZE < len)
             return;
         data += LN_SVC_HEADER_SIZE + len;

@@ -172,9 +172,11 @@ inline lnd::fwd::Options local_options()
 }
 
 inline lnd::fwd::SendSpec send_spec(uint64_t token, const TestRing &ring, lnd::fwd::Transport t,
-                                    uint16_t port)
+                                    uint16_t port,
+                                    lnd::fwd::Level level = lnd::fwd::Level::authenticate)
 {
     lnd::fwd::SendSpec s;
+    s.security = level;
     s.token = token;
     s.ring = ring.name();
     s.layout_hash = ring.hash();
@@ -185,7 +187,9 @@ inline lnd::fwd::SendSpec send_spec(uint64_t token, const TestRing &ring, lnd::f
     return s;
 }
 
-inline lnd::fwd::RecvSpec recv_spec(uint64_t token, const TestRing &ring, lnd::fwd::Transport t)
+// Level none for the tests that hand-craft datagrams and frames without tags.
+inline lnd::fwd::RecvSpec recv_spec(uint64_t token, const TestRing &ring, lnd::fwd::Transport t,
+                                    lnd::fwd::Level level = lnd::fwd::Level::authenticate)
 {
     lnd::fwd::RecvSpec r;
     r.token = token;
@@ -193,6 +197,7 @@ inline lnd::fwd::RecvSpec recv_spec(uint64_t token, const TestRing &ring, lnd::f
     r.layout_hash = ring.hash();
     r.message_size = ring.size();
     r.transport = t;
+    r.security = level;
     return r;
 }
 

@@ -104,9 +104,10 @@ void test_spawn_defaults_are_the_schema_s()
 void test_refusals()
 {
     proto::Writer w;
-    wire::encode(w, wire::StreamRecv{1, "/ln.i.1", 2, 3, wire::Transport::tcp});
+    wire::encode(
+        w, wire::StreamRecv{1, "/ln.i.1", 2, 3, wire::Transport::tcp, wire::Security::encrypt});
     std::string bad = w.buffer();
-    bad.back() = 2; // no Transport
+    bad.back() = 3; // no Security
     wire::StreamRecv recv;
     proto::Reader r(bad.data(), bad.size());
     LN_CHECK(!wire::decode(r, recv));

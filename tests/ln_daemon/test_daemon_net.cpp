@@ -129,6 +129,7 @@ std::string stream_send_payload(uint8_t transport)
     w.u8(transport);
     w.str("10.0.0.2");
     w.u16(54377);
+    w.u8(2); // security: encrypt
     return w.buffer();
 }
 
@@ -143,6 +144,7 @@ void test_decode_streams()
     LN_CHECK(send.transport == fwd::Transport::tcp);
     CHECK_STR(send.host, "10.0.0.2");
     LN_CHECK_EQ(send.port, 54377);
+    LN_CHECK(send.security == fwd::Level::encrypt);
     LN_CHECK(decodes(stream_send_payload(0), decode_stream_send, send));
     LN_CHECK(send.transport == fwd::Transport::udp);
     std::string bad = stream_send_payload(2);
@@ -155,11 +157,21 @@ void test_decode_streams()
     recv.u64(42);
     recv.u64(96);
     recv.u8(0);
+    recv.u8(0); // security: none
     fwd::RecvSpec spec;
     LN_CHECK(decodes(recv.buffer(), decode_stream_recv, spec));
     LN_CHECK_EQ(spec.token, 7);
     CHECK_STR(spec.ring, "/ln.i.1.1");
     LN_CHECK(spec.transport == fwd::Transport::udp);
+    LN_CHECK(spec.security == fwd::Level::none);
+    std::string no_level = recv.buffer();
+    no_level.back() = 3; // no such security level: refused, never taken for a default
+    proto::Reader nl(no_level.data(), no_level.size());
+    LN_CHECK(!decode_stream_recv(nl, spec));
+    std::string old_manager = recv.buffer();
+    old_manager.pop_back(); // a STREAM_RECV of protocol version 1 has no level
+    proto::Reader om(old_manager.data(), old_manager.size());
+    LN_CHECK(!decode_stream_recv(om, spec));
 
     proto::Writer token;
     token.u64(99);
@@ -181,6 +193,7 @@ void test_encode_stream_list()
     s.drops = 1;
     s.stale = 2;
     s.invalid = 3;
+    s.rejected = 4;
     s.connected = false;
     s.last_error = std::string(1000, 'e'); // cut to kMaxStatText
     fwd::Totals totals;
@@ -198,7 +211,7 @@ void test_encode_stream_list()
     LN_CHECK_EQ(r.u8(), 1);
     CHECK_STR(r.str(), "/ln.i.1.1");
     CHECK_STR(r.str(), "10.0.0.2:54377");
-    for (uint64_t want : {10, 960, 1, 2, 3})
+    for (uint64_t want : {10, 960, 1, 2, 3, 4})
         LN_CHECK_EQ(r.u64(), want);
     LN_CHECK_EQ(r.u8(), 0);
     LN_CHECK_EQ(r.str().size(), kMaxStatText);

@@ -15,6 +15,7 @@
 
 using namespace fwdtest;
 using lnd::fwd::Forwarder;
+using lnd::fwd::Level;
 using lnd::fwd::Options;
 using lnd::fwd::Transport;
 namespace wire = lnd::fwd::wire;
@@ -105,10 +106,11 @@ private:
 };
 
 // Stream kToken from `src` (tx) to `dst` (rx) over TCP, connected.
-void connect_tcp(Forwarder &rx, Forwarder &tx, const TestRing &src, const TestRing &dst)
+void connect_tcp(Forwarder &rx, Forwarder &tx, const TestRing &src, const TestRing &dst,
+                 Level level = Level::authenticate)
 {
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port())).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp, level)).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, rx.data_port(), level)).text, "");
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
 }
 
@@ -186,7 +188,8 @@ void test_receiver_never_answers()
     Options o = local_options();
     o.tcp_queue_samples = 8;
     Forwarder tx(o);
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port())).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port(), Level::none)).text,
+              "");
     Publisher pub(src);
     for (uint64_t seq = 1; seq <= 100; ++seq)
         LN_CHECK_EQ(pub.publish(seq), LN_OK);
@@ -208,7 +211,8 @@ void test_receiver_stops_reading()
     o.tcp_queue_samples = kQueue;
     o.socket_buffer = 4096;
     Forwarder tx(o);
-    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port())).text, "");
+    CHECK_STR(tx.set_send(send_spec(kToken, src, Transport::tcp, stuck.port(), Level::none)).text,
+              "");
     LN_CHECK(wait_until([&] { return stats_of(tx, kToken, true).connected; }));
     Publisher pub(src);
     for (uint64_t seq = 1; seq <= kSamples; ++seq)
@@ -304,7 +308,7 @@ void test_bad_hello_and_frames()
 {
     TestRing dst(128, 8);
     Forwarder rx(local_options());
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp, Level::none)).text, "");
     {
         Client c(rx.data_port());
         uint8_t junk[wire::kHelloSize];
@@ -358,7 +362,7 @@ void test_frame_trailers()
                      kFrame = wire::kFrameHeaderSize + kSize + wire::kFrameTrailerSize;
     TestRing dst(kSize, 8);
     Forwarder rx(local_options());
-    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp, Level::none)).text, "");
     auto frame = [](uint64_t seq, bool intact) {
         std::vector<uint8_t> f(kFrame);
         wire::encode_frame_header(f.data(), {seq, stamp(seq), kSize});
@@ -399,16 +403,17 @@ void test_frame_trailers()
 }
 
 // The publisher floods a ring of two slots far faster than the stream sends: the sender,
-// sending straight from the slots, has samples overwritten under it.  Every sample that
-// arrives is intact and in order; the rest is counted as dropped on the sending side.
-void test_overwritten_while_sent()
+// sending straight from the slots (level none; with a key it copies them out first), has
+// samples overwritten under it.  Every sample that arrives is intact and in order; the
+// rest is counted as dropped on the sending side.
+void overwritten_while_sent(Level level)
 {
     constexpr uint64_t kSize = 64 * 1024, kPublished = 400;
     TestRing src(kSize, 2), dst(kSize, 512);
     Options o = local_options();
     o.socket_buffer = 16 * 1024; // the socket takes little at once: sending takes a while
     Forwarder rx(o), tx(o);
-    connect_tcp(rx, tx, src, dst);
+    connect_tcp(rx, tx, src, dst, level);
     Reader reader(dst);
     Publisher pub(src);
     for (uint64_t seq = 1; seq <= kPublished; ++seq)
@@ -440,6 +445,9 @@ void test_overwritten_while_sent()
                 static_cast<unsigned long long>(s.drops), static_cast<unsigned long long>(r.drops));
 }
 
+void test_overwritten_while_sent() { overwritten_while_sent(Level::none); }
+void test_overwritten_while_sent_with_a_key() { overwritten_while_sent(Level::authenticate); }
+
 } // namespace
 
 int main()
@@ -454,5 +462,6 @@ int main()
     LN_TEST_RUN(test_bad_hello_and_frames);
     LN_TEST_RUN(test_frame_trailers);
     LN_TEST_RUN(test_overwritten_while_sent);
+    LN_TEST_RUN(test_overwritten_while_sent_with_a_key);
     LN_TEST_EXIT();
 }

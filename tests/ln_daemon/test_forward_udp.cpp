@@ -14,6 +14,7 @@
 
 using namespace fwdtest;
 using lnd::fwd::Forwarder;
+using lnd::fwd::Level;
 using lnd::fwd::Options;
 using lnd::fwd::Transport;
 
@@ -209,17 +210,19 @@ void test_lossy_link()
     LN_CHECK_EQ(s.drops, 0);
 }
 
-// Every datagram arrives twice.  A single-fragment sample is the whole sample, so its copy
-// counts as stale; copies of fragments are ignored.  The ring gets every sample once.
-void test_duplicated_datagrams()
+// Every datagram arrives twice.  Unprotected (level none), a single-fragment sample is the
+// whole sample, so its copy counts as stale, and copies of fragments are ignored; protected,
+// every copy is a replay the window rejects before anything else looks at it.  The ring gets
+// every sample once.
+void duplicated_datagrams(Level level)
 {
     TestRing src1(64, 4), dst1(64, 256), src2(5000, 4), dst2(5000, 256);
     Forwarder rx(local_options()), tx(local_options());
     UdpRelay relay(rx.data_port(), [](uint64_t) { return 2; });
-    CHECK_STR(rx.set_recv(recv_spec(1, dst1, Transport::udp)).text, "");
-    CHECK_STR(rx.set_recv(recv_spec(2, dst2, Transport::udp)).text, "");
-    CHECK_STR(tx.set_send(send_spec(1, src1, Transport::udp, relay.port())).text, "");
-    CHECK_STR(tx.set_send(send_spec(2, src2, Transport::udp, relay.port())).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(1, dst1, Transport::udp, level)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(2, dst2, Transport::udp, level)).text, "");
+    CHECK_STR(tx.set_send(send_spec(1, src1, Transport::udp, relay.port(), level)).text, "");
+    CHECK_STR(tx.set_send(send_spec(2, src2, Transport::udp, relay.port(), level)).text, "");
     Reader reader1(dst1), reader2(dst2);
     Publisher pub1(src1), pub2(src2);
     for (uint64_t seq = 1; seq <= 200; ++seq) {
@@ -227,7 +230,12 @@ void test_duplicated_datagrams()
         LN_CHECK_EQ(pub2.publish(seq), LN_OK);
         LN_CHECK(wait_until([&] { return dst1.newest() >= seq && dst2.newest() >= seq; }));
     }
-    LN_CHECK(wait_until([&] { return stats_of(rx, 1, false).stale >= 200; }));
+    const bool none = level == Level::none;
+    const uint64_t fragments = lnd::fwd::wire::fragment_count(5000, Options().udp_payload);
+    LN_CHECK(wait_until([&] {
+        auto a = stats_of(rx, 1, false), b = stats_of(rx, 2, false);
+        return none ? a.stale >= 200 : a.rejected >= 200 && b.rejected >= 200 * fragments;
+    }));
     std::vector<uint64_t> all(200);
     for (uint64_t i = 0; i < 200; ++i)
         all[i] = i + 1;
@@ -235,10 +243,15 @@ void test_duplicated_datagrams()
     LN_CHECK(drain(reader2) == all);
     auto r1 = stats_of(rx, 1, false), r2 = stats_of(rx, 2, false);
     LN_CHECK_EQ(r1.samples, 200);
-    LN_CHECK_EQ(r1.stale, 200);
+    LN_CHECK_EQ(r1.stale, none ? 200 : 0);
+    LN_CHECK_EQ(r1.rejected, none ? 0 : 200);
     LN_CHECK_EQ(r2.samples, 200);
     LN_CHECK_EQ(r2.stale + r2.drops + r2.invalid, 0);
+    LN_CHECK_EQ(r2.rejected, none ? 0 : 200 * fragments);
 }
+
+void test_duplicated_datagrams() { duplicated_datagrams(Level::none); }
+void test_duplicated_datagrams_are_replays() { duplicated_datagrams(Level::authenticate); }
 
 // Crafted datagrams in a chosen order: older and repeated samples are stale, fragments may
 // come in any order and twice, an incomplete sample overtaken by a newer complete one is
@@ -247,8 +260,8 @@ void test_reordered_datagrams()
 {
     TestRing small(64, 64), big(3000, 64);
     Forwarder rx(local_options());
-    CHECK_STR(rx.set_recv(recv_spec(1, small, Transport::udp)).text, "");
-    CHECK_STR(rx.set_recv(recv_spec(2, big, Transport::udp)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(1, small, Transport::udp, Level::none)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(2, big, Transport::udp, Level::none)).text, "");
     Reader small_reader(small), big_reader(big);
     UdpSocket sock;
     auto send = [&](const std::vector<uint8_t> &d) {
@@ -296,8 +309,8 @@ void test_garbage_datagrams()
 {
     TestRing ring(3000, 8), tcp_ring(3000, 8);
     Forwarder rx(local_options());
-    CHECK_STR(rx.set_recv(recv_spec(7, ring, Transport::udp)).text, "");
-    CHECK_STR(rx.set_recv(recv_spec(8, tcp_ring, Transport::tcp)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(7, ring, Transport::udp, Level::none)).text, "");
+    CHECK_STR(rx.set_recv(recv_spec(8, tcp_ring, Transport::tcp, Level::none)).text, "");
     UdpSocket sock;
     auto send = [&](std::vector<uint8_t> d) { sock.send_to(rx.data_port(), d.data(), d.size()); };
     namespace wire = lnd::fwd::wire;
@@ -353,6 +366,7 @@ int main()
     LN_TEST_RUN(test_64mib_sample);
     LN_TEST_RUN(test_lossy_link);
     LN_TEST_RUN(test_duplicated_datagrams);
+    LN_TEST_RUN(test_duplicated_datagrams_are_replays);
     LN_TEST_RUN(test_reordered_datagrams);
     LN_TEST_RUN(test_garbage_datagrams);
     LN_TEST_EXIT();

@@ -22,22 +22,38 @@ void test_fragment_header_layout()
     f.index = 0x31323334;
     f.count = 0x41424344;
     f.chunk_size = 0x5152;
+    f.salt = 0x6162636465666768ull;
+    f.suite = 1;
+    f.counter = 0x71727374757677ull;
     uint8_t h[wire::kFragmentHeaderSize];
     wire::encode_fragment_header(h, f);
-    const uint8_t want[48] = {
-        'L',  'N',  'F',  '1',  2,    0,    0x52, 0x51, // magic, version, kind, chunk
+    const uint8_t want[64] = {
+        'L',  'N',  'F',  '1',  3,    0,    0x52, 0x51, // magic, version, kind, chunk
         0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01, // token
         0x18, 0x17, 0x16, 0x15, 0x14, 0x13, 0x12, 0x11, // seq
         0xfe, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, // timestamp
         0x28, 0x27, 0x26, 0x25, 0x24, 0x23, 0x22, 0x21, // sample size
         0x34, 0x33, 0x32, 0x31, 0x44, 0x43, 0x42, 0x41, // index, count
+        0x68, 0x67, 0x66, 0x65, 0x64, 0x63, 0x62, 0x61, // salt
+        0x77, 0x76, 0x75, 0x74, 0x73, 0x72, 0x71, 0x01, // counter, suite
     };
     LN_CHECK(std::memcmp(h, want, sizeof want) == 0);
     wire::set_fragment_index(h, 7);
     wire::Fragment g;
     std::vector<uint8_t> d(h, h + sizeof h);
     d.push_back(0xaa);
+    d.resize(d.size() + wire::kFragmentTagSize, 0xcc); // the tag
     LN_CHECK(wire::decode_fragment(d.data(), d.size(), g));
+    LN_CHECK_EQ(g.salt, f.salt);
+    LN_CHECK_EQ(g.counter, f.counter);
+    LN_CHECK_EQ(g.suite, 1);
+    LN_CHECK(g.tag == d.data() + 65);
+    // A tagged datagram too short for its tag is not one of ours.
+    LN_CHECK(!wire::decode_fragment(d.data(), 64 + wire::kFragmentTagSize - 1, g));
+    d.resize(65);
+    d[63] = 0; // suite none: no tag
+    LN_CHECK(wire::decode_fragment(d.data(), d.size(), g));
+    LN_CHECK(g.tag == nullptr);
     LN_CHECK_EQ(g.token, f.token);
     LN_CHECK_EQ(g.seq, f.seq);
     LN_CHECK_EQ(g.timestamp_ns, -2);
@@ -46,29 +62,42 @@ void test_fragment_header_layout()
     LN_CHECK_EQ(g.count, f.count);
     LN_CHECK_EQ(g.chunk_size, 0x5152);
     LN_CHECK_EQ(g.length, 1);
-    LN_CHECK(g.data == d.data() + 48);
-    LN_CHECK(!wire::decode_fragment(d.data(), 47, g));
-    d[4] = 1; // the version before frame trailers
+    LN_CHECK(g.data == d.data() + 64);
+    LN_CHECK(!wire::decode_fragment(d.data(), 63, g));
+    d[4] = 2; // the version before security
     LN_CHECK(!wire::decode_fragment(d.data(), d.size(), g));
 }
 
 void test_tcp_messages_layout()
 {
     uint8_t hello[wire::kHelloSize];
-    wire::encode_hello(hello, {0x0102030405060708ull, 64, 0xa1a2a3a4a5a6a7a8ull});
-    const uint8_t want[32] = {'L', 'N', 'F',  '1',  2,    1,    0,    0,    8,    7,   6,
-                              5,   4,   3,    2,    1,    64,   0,    0,    0,    0,   0,
-                              0,   0,   0xa8, 0xa7, 0xa6, 0xa5, 0xa4, 0xa3, 0xa2, 0xa1};
+    wire::Hello hi;
+    hi.token = 0x0102030405060708ull;
+    hi.message_size = 64;
+    hi.layout_hash = 0xa1a2a3a4a5a6a7a8ull;
+    hi.suite = 2;
+    std::memset(hi.nonce, 0xbb, sizeof hi.nonce);
+    std::memset(hi.tag, 0xcc, sizeof hi.tag);
+    wire::encode_hello(hello, hi);
+    const uint8_t want[40] = {'L',  'N',  'F',  '1',  3, 1, 0, 0, 8, 7, 6,    5,    4,    3,
+                              2,    1,    64,   0,    0, 0, 0, 0, 0, 0, 0xa8, 0xa7, 0xa6, 0xa5,
+                              0xa4, 0xa3, 0xa2, 0xa1, 2, 0, 0, 0, 0, 0, 0,    0};
     LN_CHECK(std::memcmp(hello, want, sizeof want) == 0);
+    LN_CHECK(hello[40] == 0xbb && hello[55] == 0xbb && hello[56] == 0xcc && hello[71] == 0xcc);
     wire::Hello h;
     LN_CHECK(wire::decode_hello(hello, h));
     LN_CHECK_EQ(h.message_size, 64);
+    LN_CHECK_EQ(h.suite, 2);
+    LN_CHECK(std::memcmp(h.nonce, hi.nonce, sizeof h.nonce) == 0);
+    hello[33] = 1; // the suite's reserved bytes
+    LN_CHECK(!wire::decode_hello(hello, h));
+    hello[33] = 0;
     hello[5] = 0; // a fragment's kind
     LN_CHECK(!wire::decode_hello(hello, h));
 
     uint8_t reply[wire::kReplySize];
     wire::encode_reply(reply, {wire::Kind::reject, wire::Reject::layout, 9});
-    const uint8_t want_reply[16] = {'L', 'N', 'F', '1', 2, 3, 2, 0, 9, 0, 0, 0, 0, 0, 0, 0};
+    const uint8_t want_reply[16] = {'L', 'N', 'F', '1', 3, 3, 2, 0, 9, 0, 0, 0, 0, 0, 0, 0};
     LN_CHECK(std::memcmp(reply, want_reply, sizeof want_reply) == 0);
     wire::Reply r;
     LN_CHECK(wire::decode_reply(reply, r));

@@ -6,6 +6,7 @@
   (hosts_section)
   (node_map_section)
   (topics_section)
+  (access_section)
   (process_section)
   (state_section)
   (group_section)

@@ -11,6 +11,7 @@
   "hosts"
   "node_map"
   "topics"
+  "access"
   "process"
   "state"
   "group"
@@ -173,6 +174,9 @@
     (key_line
       key: (key) @string.special))
   (logger_section
+    (key_line
+      key: (key) @string.special))
+  (access_section
     (key_line
       key: (key) @string.special))
 ]

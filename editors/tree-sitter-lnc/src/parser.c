@@ -15,11 +15,11 @@
 #endif
 
 #define LANGUAGE_VERSION 14
-#define STATE_COUNT 240
-#define LARGE_STATE_COUNT 2
-#define SYMBOL_COUNT 126
+#define STATE_COUNT 242
+#define LARGE_STATE_COUNT 3
+#define SYMBOL_COUNT 128
 #define ALIAS_COUNT 1
-#define TOKEN_COUNT 69
+#define TOKEN_COUNT 70
 #define EXTERNAL_TOKEN_COUNT 0
 #define FIELD_COUNT 12
 #define MAX_ALIAS_SEQUENCE_LENGTH 6
@@ -33,127 +33,129 @@ enum ts_symbol_identifiers {
   anon_sym_hosts = 3,
   anon_sym_node_map = 4,
   anon_sym_topics = 5,
-  anon_sym_process = 6,
-  anon_sym_state = 7,
-  anon_sym_group = 8,
-  anon_sym_network = 9,
-  anon_sym_logger = 10,
-  anon_sym_template = 11,
-  anon_sym_process_template = 12,
-  anon_sym_LPAREN = 13,
-  anon_sym_COMMA = 14,
-  anon_sym_RPAREN = 15,
-  anon_sym_EQ = 16,
-  anon_sym_add = 17,
-  anon_sym_COLON = 18,
-  anon_sym_depends_on = 19,
-  anon_sym_start_before = 20,
-  anon_sym_start_on_ready = 21,
-  anon_sym_members = 22,
-  anon_sym_flags = 23,
-  anon_sym_LBRACK = 24,
-  anon_sym_RBRACK = 25,
-  anon_sym_include = 26,
-  anon_sym_optional_include = 27,
-  anon_sym_include_glob = 28,
-  anon_sym_optional_include_glob = 29,
-  anon_sym_pipe_include = 30,
-  anon_sym_push_name_prefix = 31,
-  anon_sym_pop_name_prefix = 32,
-  anon_sym_add_message_definition_dir = 33,
-  anon_sym_requires_version = 34,
-  anon_sym_add_process_default_template = 35,
-  anon_sym_use_template = 36,
-  anon_sym_ifdef = 37,
-  anon_sym_ifndef = 38,
-  anon_sym_append = 39,
-  anon_sym_environment = 40,
-  anon_sym_PERCENT_LPAREN = 41,
-  anon_sym_env = 42,
-  anon_sym_dirname = 43,
-  anon_sym_basename = 44,
-  anon_sym_subst = 45,
-  anon_sym_get_port_from_string = 46,
-  anon_sym_shell = 47,
-  anon_sym_ifeq = 48,
-  anon_sym_ifexists = 49,
-  anon_sym_DQUOTE = 50,
-  anon_sym_PERCENT = 51,
-  anon_sym_DQUOTE2 = 52,
-  sym_string_content = 53,
-  sym_escape_sequence = 54,
-  anon_sym_PERCENT2 = 55,
-  sym_text = 56,
-  sym__first_text = 57,
-  sym__item_text = 58,
-  sym__argument_text = 59,
-  sym__key_text = 60,
-  sym__word_key = 61,
-  sym__name_text = 62,
-  sym__block_text = 63,
-  sym__block_more_text = 64,
-  sym_template_name = 65,
-  sym_identifier = 66,
-  sym_comment = 67,
-  sym__newline = 68,
-  sym_source_file = 69,
-  sym__section = 70,
-  sym_instance_section = 71,
-  sym_defines_section = 72,
-  sym_hosts_section = 73,
-  sym_node_map_section = 74,
-  sym_topics_section = 75,
-  sym_process_section = 76,
-  sym_state_section = 77,
-  sym_group_section = 78,
-  sym_network_section = 79,
-  sym_logger_section = 80,
-  sym_template_section = 81,
-  sym_template_parameters = 82,
-  sym_template_parameter = 83,
-  sym_section_name = 84,
-  sym__line = 85,
-  sym_key_line = 86,
-  sym_key = 87,
-  sym_list_line = 88,
-  sym_list = 89,
-  sym_flags_line = 90,
-  sym_flags = 91,
-  sym_list_item = 92,
-  sym_value = 93,
-  sym__value_piece = 94,
-  sym_block = 95,
-  sym_block_line = 96,
-  sym_directive = 97,
-  sym__argument_value = 98,
-  sym_template_use = 99,
-  sym_template_arguments = 100,
-  sym_conditional = 101,
-  sym_append_environment = 102,
-  sym_expansion = 103,
-  sym_function_name = 104,
-  sym_arguments = 105,
-  sym_argument = 106,
-  sym_parenthesized = 107,
-  sym_define_name = 108,
-  sym_string = 109,
-  sym__percent = 110,
-  aux_sym_source_file_repeat1 = 111,
-  aux_sym_source_file_repeat2 = 112,
-  aux_sym_template_parameters_repeat1 = 113,
-  aux_sym_section_name_repeat1 = 114,
-  aux_sym_key_repeat1 = 115,
-  aux_sym_list_repeat1 = 116,
-  aux_sym_flags_repeat1 = 117,
-  aux_sym_list_item_repeat1 = 118,
-  aux_sym_block_repeat1 = 119,
-  aux_sym_block_line_repeat1 = 120,
-  aux_sym_arguments_repeat1 = 121,
-  aux_sym_argument_repeat1 = 122,
-  aux_sym_parenthesized_repeat1 = 123,
-  aux_sym_define_name_repeat1 = 124,
-  aux_sym_string_repeat1 = 125,
-  alias_sym_flag = 126,
+  anon_sym_access = 6,
+  anon_sym_process = 7,
+  anon_sym_state = 8,
+  anon_sym_group = 9,
+  anon_sym_network = 10,
+  anon_sym_logger = 11,
+  anon_sym_template = 12,
+  anon_sym_process_template = 13,
+  anon_sym_LPAREN = 14,
+  anon_sym_COMMA = 15,
+  anon_sym_RPAREN = 16,
+  anon_sym_EQ = 17,
+  anon_sym_add = 18,
+  anon_sym_COLON = 19,
+  anon_sym_depends_on = 20,
+  anon_sym_start_before = 21,
+  anon_sym_start_on_ready = 22,
+  anon_sym_members = 23,
+  anon_sym_flags = 24,
+  anon_sym_LBRACK = 25,
+  anon_sym_RBRACK = 26,
+  anon_sym_include = 27,
+  anon_sym_optional_include = 28,
+  anon_sym_include_glob = 29,
+  anon_sym_optional_include_glob = 30,
+  anon_sym_pipe_include = 31,
+  anon_sym_push_name_prefix = 32,
+  anon_sym_pop_name_prefix = 33,
+  anon_sym_add_message_definition_dir = 34,
+  anon_sym_requires_version = 35,
+  anon_sym_add_process_default_template = 36,
+  anon_sym_use_template = 37,
+  anon_sym_ifdef = 38,
+  anon_sym_ifndef = 39,
+  anon_sym_append = 40,
+  anon_sym_environment = 41,
+  anon_sym_PERCENT_LPAREN = 42,
+  anon_sym_env = 43,
+  anon_sym_dirname = 44,
+  anon_sym_basename = 45,
+  anon_sym_subst = 46,
+  anon_sym_get_port_from_string = 47,
+  anon_sym_shell = 48,
+  anon_sym_ifeq = 49,
+  anon_sym_ifexists = 50,
+  anon_sym_DQUOTE = 51,
+  anon_sym_PERCENT = 52,
+  anon_sym_DQUOTE2 = 53,
+  sym_string_content = 54,
+  sym_escape_sequence = 55,
+  anon_sym_PERCENT2 = 56,
+  sym_text = 57,
+  sym__first_text = 58,
+  sym__item_text = 59,
+  sym__argument_text = 60,
+  sym__key_text = 61,
+  sym__word_key = 62,
+  sym__name_text = 63,
+  sym__block_text = 64,
+  sym__block_more_text = 65,
+  sym_template_name = 66,
+  sym_identifier = 67,
+  sym_comment = 68,
+  sym__newline = 69,
+  sym_source_file = 70,
+  sym__section = 71,
+  sym_instance_section = 72,
+  sym_defines_section = 73,
+  sym_hosts_section = 74,
+  sym_node_map_section = 75,
+  sym_topics_section = 76,
+  sym_access_section = 77,
+  sym_process_section = 78,
+  sym_state_section = 79,
+  sym_group_section = 80,
+  sym_network_section = 81,
+  sym_logger_section = 82,
+  sym_template_section = 83,
+  sym_template_parameters = 84,
+  sym_template_parameter = 85,
+  sym_section_name = 86,
+  sym__line = 87,
+  sym_key_line = 88,
+  sym_key = 89,
+  sym_list_line = 90,
+  sym_list = 91,
+  sym_flags_line = 92,
+  sym_flags = 93,
+  sym_list_item = 94,
+  sym_value = 95,
+  sym__value_piece = 96,
+  sym_block = 97,
+  sym_block_line = 98,
+  sym_directive = 99,
+  sym__argument_value = 100,
+  sym_template_use = 101,
+  sym_template_arguments = 102,
+  sym_conditional = 103,
+  sym_append_environment = 104,
+  sym_expansion = 105,
+  sym_function_name = 106,
+  sym_arguments = 107,
+  sym_argument = 108,
+  sym_parenthesized = 109,
+  sym_define_name = 110,
+  sym_string = 111,
+  sym__percent = 112,
+  aux_sym_source_file_repeat1 = 113,
+  aux_sym_source_file_repeat2 = 114,
+  aux_sym_template_parameters_repeat1 = 115,
+  aux_sym_section_name_repeat1 = 116,
+  aux_sym_key_repeat1 = 117,
+  aux_sym_list_repeat1 = 118,
+  aux_sym_flags_repeat1 = 119,
+  aux_sym_list_item_repeat1 = 120,
+  aux_sym_block_repeat1 = 121,
+  aux_sym_block_line_repeat1 = 122,
+  aux_sym_arguments_repeat1 = 123,
+  aux_sym_argument_repeat1 = 124,
+  aux_sym_parenthesized_repeat1 = 125,
+  aux_sym_define_name_repeat1 = 126,
+  aux_sym_string_repeat1 = 127,
+  alias_sym_flag = 128,
 };
 
 static const char * const ts_symbol_names[] = {
@@ -163,6 +165,7 @@ static const char * const ts_symbol_names[] = {
   [anon_sym_hosts] = "hosts",
   [anon_sym_node_map] = "node_map",
   [anon_sym_topics] = "topics",
+  [anon_sym_access] = "access",
   [anon_sym_process] = "process",
   [anon_sym_state] = "state",
   [anon_sym_group] = "group",
@@ -233,6 +236,7 @@ static const char * const ts_symbol_names[] = {
   [sym_hosts_section] = "hosts_section",
   [sym_node_map_section] = "node_map_section",
   [sym_topics_section] = "topics_section",
+  [sym_access_section] = "access_section",
   [sym_process_section] = "process_section",
   [sym_state_section] = "state_section",
   [sym_group_section] = "group_section",
@@ -293,6 +297,7 @@ static const TSSymbol ts_symbol_map[] = {
   [anon_sym_hosts] = anon_sym_hosts,
   [anon_sym_node_map] = anon_sym_node_map,
   [anon_sym_topics] = anon_sym_topics,
+  [anon_sym_access] = anon_sym_access,
   [anon_sym_process] = anon_sym_process,
   [anon_sym_state] = anon_sym_state,
   [anon_sym_group] = anon_sym_group,
@@ -363,6 +368,7 @@ static const TSSymbol ts_symbol_map[] = {
   [sym_hosts_section] = sym_hosts_section,
   [sym_node_map_section] = sym_node_map_section,
   [sym_topics_section] = sym_topics_section,
+  [sym_access_section] = sym_access_section,
   [sym_process_section] = sym_process_section,
   [sym_state_section] = sym_state_section,
   [sym_group_section] = sym_group_section,
@@ -438,6 +444,10 @@ static const TSSymbolMetadata ts_symbol_metadata[] = {
     .named = false,
   },
   [anon_sym_topics] = {
+    .visible = true,
+    .named = false,
+  },
+  [anon_sym_access] = {
     .visible = true,
     .named = false,
   },
@@ -719,6 +729,10 @@ static const TSSymbolMetadata ts_symbol_metadata[] = {
     .named = true,
   },
   [sym_topics_section] = {
+    .visible = true,
+    .named = true,
+  },
+  [sym_access_section] = {
     .visible = true,
     .named = true,
   },
@@ -1088,25 +1102,25 @@ static const TSStateId ts_primary_state_ids[STATE_COUNT] = {
   [9] = 9,
   [10] = 10,
   [11] = 11,
-  [12] = 12,
-  [13] = 11,
-  [14] = 12,
-  [15] = 11,
-  [16] = 12,
-  [17] = 11,
-  [18] = 12,
-  [19] = 11,
-  [20] = 12,
-  [21] = 11,
-  [22] = 12,
-  [23] = 11,
-  [24] = 12,
+  [12] = 10,
+  [13] = 13,
+  [14] = 13,
+  [15] = 10,
+  [16] = 13,
+  [17] = 10,
+  [18] = 13,
+  [19] = 13,
+  [20] = 13,
+  [21] = 10,
+  [22] = 13,
+  [23] = 10,
+  [24] = 10,
   [25] = 25,
   [26] = 26,
   [27] = 27,
-  [28] = 27,
+  [28] = 28,
   [29] = 29,
-  [30] = 30,
+  [30] = 27,
   [31] = 27,
   [32] = 27,
   [33] = 27,
@@ -1152,63 +1166,63 @@ static const TSStateId ts_primary_state_ids[STATE_COUNT] = {
   [73] = 73,
   [74] = 74,
   [75] = 75,
-  [76] = 76,
-  [77] = 77,
-  [78] = 78,
-  [79] = 77,
+  [76] = 71,
+  [77] = 72,
+  [78] = 74,
+  [79] = 75,
   [80] = 80,
-  [81] = 81,
-  [82] = 78,
-  [83] = 83,
-  [84] = 84,
-  [85] = 80,
-  [86] = 81,
-  [87] = 83,
-  [88] = 84,
-  [89] = 69,
-  [90] = 76,
-  [91] = 69,
-  [92] = 76,
-  [93] = 69,
-  [94] = 76,
-  [95] = 80,
-  [96] = 77,
-  [97] = 81,
-  [98] = 78,
-  [99] = 83,
-  [100] = 84,
-  [101] = 81,
-  [102] = 84,
-  [103] = 80,
-  [104] = 83,
-  [105] = 105,
-  [106] = 83,
-  [107] = 80,
-  [108] = 84,
-  [109] = 81,
-  [110] = 110,
-  [111] = 111,
+  [81] = 73,
+  [82] = 82,
+  [83] = 82,
+  [84] = 80,
+  [85] = 82,
+  [86] = 80,
+  [87] = 82,
+  [88] = 80,
+  [89] = 89,
+  [90] = 90,
+  [91] = 91,
+  [92] = 70,
+  [93] = 93,
+  [94] = 94,
+  [95] = 71,
+  [96] = 73,
+  [97] = 72,
+  [98] = 74,
+  [99] = 70,
+  [100] = 75,
+  [101] = 72,
+  [102] = 102,
+  [103] = 74,
+  [104] = 75,
+  [105] = 71,
+  [106] = 106,
+  [107] = 74,
+  [108] = 72,
+  [109] = 109,
+  [110] = 75,
+  [111] = 71,
   [112] = 112,
-  [113] = 113,
-  [114] = 114,
-  [115] = 81,
-  [116] = 78,
+  [113] = 73,
+  [114] = 71,
+  [115] = 72,
+  [116] = 116,
   [117] = 117,
   [118] = 118,
   [119] = 119,
-  [120] = 80,
-  [121] = 121,
-  [122] = 122,
+  [120] = 120,
+  [121] = 74,
+  [122] = 75,
   [123] = 123,
-  [124] = 124,
+  [124] = 70,
   [125] = 125,
   [126] = 126,
-  [127] = 83,
-  [128] = 84,
+  [127] = 127,
+  [128] = 128,
   [129] = 129,
   [130] = 130,
   [131] = 131,
-  [132] = 77,
+  [132] = 132,
   [133] = 133,
   [134] = 134,
   [135] = 135,
@@ -1221,20 +1235,20 @@ static const TSStateId ts_primary_state_ids[STATE_COUNT] = {
   [142] = 142,
   [143] = 143,
   [144] = 144,
-  [145] = 145,
-  [146] = 146,
-  [147] = 147,
-  [148] = 148,
+  [145] = 71,
+  [146] = 72,
+  [147] = 74,
+  [148] = 75,
   [149] = 149,
   [150] = 150,
   [151] = 151,
   [152] = 152,
   [153] = 153,
-  [154] = 80,
-  [155] = 81,
+  [154] = 154,
+  [155] = 155,
   [156] = 156,
-  [157] = 83,
-  [158] = 84,
+  [157] = 157,
+  [158] = 158,
   [159] = 159,
   [160] = 160,
   [161] = 161,
@@ -1295,27 +1309,29 @@ static const TSStateId ts_primary_state_ids[STATE_COUNT] = {
   [216] = 216,
   [217] = 217,
   [218] = 218,
-  [219] = 219,
-  [220] = 216,
-  [221] = 215,
-  [222] = 222,
-  [223] = 223,
-  [224] = 216,
-  [225] = 215,
+  [219] = 216,
+  [220] = 220,
+  [221] = 221,
+  [222] = 216,
+  [223] = 217,
+  [224] = 224,
+  [225] = 225,
   [226] = 216,
-  [227] = 227,
-  [228] = 216,
-  [229] = 215,
-  [230] = 215,
-  [231] = 231,
-  [232] = 216,
-  [233] = 215,
-  [234] = 234,
-  [235] = 235,
+  [227] = 217,
+  [228] = 228,
+  [229] = 216,
+  [230] = 216,
+  [231] = 217,
+  [232] = 217,
+  [233] = 233,
+  [234] = 216,
+  [235] = 217,
   [236] = 236,
   [237] = 237,
-  [238] = 215,
-  [239] = 216,
+  [238] = 238,
+  [239] = 239,
+  [240] = 240,
+  [241] = 217,
 };
 
 static bool ts_lex(TSLexer *lexer, TSStateId state) {
@@ -1323,335 +1339,335 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
   eof = lexer->eof(lexer);
   switch (state) {
     case 0:
-      if (eof) ADVANCE(419);
+      if (eof) ADVANCE(428);
       ADVANCE_MAP(
-        '\n', 944,
-        '"', 530,
-        '#', 943,
-        '%', 529,
-        '(', 456,
-        ')', 458,
-        ',', 457,
-        ':', 462,
-        '=', 459,
-        '[', 474,
-        '\\', 409,
-        ']', 477,
-        'a', 92,
+        '\n', 964,
+        '"', 542,
+        '#', 963,
+        '%', 541,
+        '(', 468,
+        ')', 470,
+        ',', 469,
+        ':', 474,
+        '=', 471,
+        '[', 486,
+        '\\', 418,
+        ']', 489,
+        'a', 82,
         'b', 65,
-        'd', 107,
-        'e', 242,
-        'f', 211,
-        'g', 108,
-        'h', 269,
-        'i', 167,
-        'l', 266,
-        'm', 109,
-        'n', 128,
-        'o', 292,
-        'p', 200,
-        'r', 110,
-        's', 187,
-        't', 129,
-        'u', 341,
+        'd', 110,
+        'e', 247,
+        'f', 216,
+        'g', 111,
+        'h', 273,
+        'i', 172,
+        'l', 271,
+        'm', 112,
+        'n', 131,
+        'o', 297,
+        'p', 205,
+        'r', 113,
+        's', 192,
+        't', 132,
+        'u', 348,
       );
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ' ||
-          lookahead == 0xfeff) SKIP(410);
+          lookahead == 0xfeff) SKIP(419);
       END_STATE();
     case 1:
       ADVANCE_MAP(
-        '\n', 944,
-        '"', 528,
-        '#', 943,
-        '%', 537,
-        ',', 457,
-        '[', 475,
-        0xfeff, 548,
+        '\n', 964,
+        '"', 540,
+        '#', 963,
+        '%', 549,
+        ',', 469,
+        '[', 487,
+        0xfeff, 560,
         '\t', 1,
         ' ', 1,
       );
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(2);
-      if (lookahead != 0) ADVANCE(550);
+      if (lookahead != 0) ADVANCE(562);
       END_STATE();
     case 2:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(537);
-      if (lookahead == ',') ADVANCE(457);
-      if (lookahead == '[') ADVANCE(475);
-      if (lookahead == 0xfeff) ADVANCE(548);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(549);
+      if (lookahead == ',') ADVANCE(469);
+      if (lookahead == '[') ADVANCE(487);
+      if (lookahead == 0xfeff) ADVANCE(560);
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(2);
-      if (lookahead != 0) ADVANCE(550);
+      if (lookahead != 0) ADVANCE(562);
       END_STATE();
     case 3:
       ADVANCE_MAP(
-        '\n', 944,
-        '"', 528,
-        '#', 943,
-        '%', 537,
-        ',', 457,
-        0xfeff, 549,
+        '\n', 964,
+        '"', 540,
+        '#', 963,
+        '%', 549,
+        ',', 469,
+        0xfeff, 561,
         '\t', 3,
         ' ', 3,
       );
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(4);
-      if (lookahead != 0) ADVANCE(550);
+      if (lookahead != 0) ADVANCE(562);
       END_STATE();
     case 4:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(537);
-      if (lookahead == ',') ADVANCE(457);
-      if (lookahead == 0xfeff) ADVANCE(549);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(549);
+      if (lookahead == ',') ADVANCE(469);
+      if (lookahead == 0xfeff) ADVANCE(561);
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(4);
-      if (lookahead != 0) ADVANCE(550);
+      if (lookahead != 0) ADVANCE(562);
       END_STATE();
     case 5:
       ADVANCE_MAP(
-        '\n', 944,
-        '"', 528,
-        '#', 943,
-        '%', 539,
-        '[', 476,
-        0xfeff, 542,
+        '\n', 964,
+        '"', 540,
+        '#', 963,
+        '%', 551,
+        '[', 488,
+        0xfeff, 554,
         '\t', 5,
         ' ', 5,
       );
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(6);
-      if (lookahead != 0) ADVANCE(544);
+      if (lookahead != 0) ADVANCE(556);
       END_STATE();
     case 6:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(539);
-      if (lookahead == '[') ADVANCE(476);
-      if (lookahead == 0xfeff) ADVANCE(542);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(551);
+      if (lookahead == '[') ADVANCE(488);
+      if (lookahead == 0xfeff) ADVANCE(554);
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(6);
-      if (lookahead != 0) ADVANCE(544);
+      if (lookahead != 0) ADVANCE(556);
       END_STATE();
     case 7:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(539);
-      if (lookahead == 0xfeff) ADVANCE(543);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(551);
+      if (lookahead == 0xfeff) ADVANCE(555);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(7);
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(8);
-      if (lookahead != 0) ADVANCE(544);
+      if (lookahead != 0) ADVANCE(556);
       END_STATE();
     case 8:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(539);
-      if (lookahead == 0xfeff) ADVANCE(543);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(551);
+      if (lookahead == 0xfeff) ADVANCE(555);
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(8);
-      if (lookahead != 0) ADVANCE(544);
+      if (lookahead != 0) ADVANCE(556);
       END_STATE();
     case 9:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(538);
-      if (lookahead == ':') ADVANCE(462);
-      if (lookahead == 0xfeff) ADVANCE(546);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(550);
+      if (lookahead == ':') ADVANCE(474);
+      if (lookahead == 0xfeff) ADVANCE(558);
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(9);
-      if (lookahead != 0) ADVANCE(547);
+      if (lookahead != 0) ADVANCE(559);
       END_STATE();
     case 10:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(538);
-      if (lookahead == 0xfeff) ADVANCE(545);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(550);
+      if (lookahead == 0xfeff) ADVANCE(557);
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(10);
       if (lookahead != 0 &&
-          lookahead != ':') ADVANCE(547);
+          lookahead != ':') ADVANCE(559);
       END_STATE();
     case 11:
       ADVANCE_MAP(
-        '\n', 944,
-        '"', 528,
-        '#', 943,
-        '%', 535,
-        ':', 547,
-        0xfeff, 545,
+        '\n', 964,
+        '"', 540,
+        '#', 963,
+        '%', 547,
+        ':', 559,
+        0xfeff, 557,
         '\t', 11,
         ' ', 11,
       );
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(10);
-      if (lookahead != 0) ADVANCE(547);
+      if (lookahead != 0) ADVANCE(559);
       END_STATE();
     case 12:
       ADVANCE_MAP(
-        '\n', 944,
-        '"', 528,
-        '#', 943,
-        '%', 535,
-        ':', 463,
-        0xfeff, 546,
+        '\n', 964,
+        '"', 540,
+        '#', 963,
+        '%', 547,
+        ':', 475,
+        0xfeff, 558,
         '\t', 12,
         ' ', 12,
       );
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(9);
-      if (lookahead != 0) ADVANCE(547);
+      if (lookahead != 0) ADVANCE(559);
       END_STATE();
     case 13:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(540);
-      if (lookahead == ']') ADVANCE(479);
-      if (lookahead == 0xfeff) ADVANCE(930);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(552);
+      if (lookahead == ']') ADVANCE(491);
+      if (lookahead == 0xfeff) ADVANCE(950);
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(13);
-      if (lookahead != 0) ADVANCE(932);
+      if (lookahead != 0) ADVANCE(952);
       END_STATE();
     case 14:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '#') ADVANCE(935);
-      if (lookahead == '%') ADVANCE(541);
-      if (lookahead == ']') ADVANCE(936);
-      if (lookahead == 0xfeff) ADVANCE(934);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '#') ADVANCE(955);
+      if (lookahead == '%') ADVANCE(553);
+      if (lookahead == ']') ADVANCE(956);
+      if (lookahead == 0xfeff) ADVANCE(954);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(14);
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(15);
-      if (lookahead != 0) ADVANCE(936);
+      if (lookahead != 0) ADVANCE(956);
       END_STATE();
     case 15:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '#') ADVANCE(935);
-      if (lookahead == '%') ADVANCE(541);
-      if (lookahead == ']') ADVANCE(936);
-      if (lookahead == 0xfeff) ADVANCE(934);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '#') ADVANCE(955);
+      if (lookahead == '%') ADVANCE(553);
+      if (lookahead == ']') ADVANCE(956);
+      if (lookahead == 0xfeff) ADVANCE(954);
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(15);
-      if (lookahead != 0) ADVANCE(936);
+      if (lookahead != 0) ADVANCE(956);
       END_STATE();
     case 16:
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '#') ADVANCE(931);
-      if (lookahead == '%') ADVANCE(540);
-      if (lookahead == ']') ADVANCE(478);
-      if (lookahead == 0xfeff) ADVANCE(930);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '#') ADVANCE(951);
+      if (lookahead == '%') ADVANCE(552);
+      if (lookahead == ']') ADVANCE(490);
+      if (lookahead == 0xfeff) ADVANCE(950);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(16);
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(13);
-      if (lookahead != 0) ADVANCE(932);
+      if (lookahead != 0) ADVANCE(952);
       END_STATE();
     case 17:
-      if (lookahead == '"') ADVANCE(530);
-      if (lookahead == '#') ADVANCE(532);
-      if (lookahead == '%') ADVANCE(529);
-      if (lookahead == '\\') ADVANCE(409);
+      if (lookahead == '"') ADVANCE(542);
+      if (lookahead == '#') ADVANCE(544);
+      if (lookahead == '%') ADVANCE(541);
+      if (lookahead == '\\') ADVANCE(418);
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
           lookahead == ' ' ||
-          lookahead == 0xfeff) ADVANCE(531);
+          lookahead == 0xfeff) ADVANCE(543);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(532);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(544);
       END_STATE();
     case 18:
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
       if (lookahead == '%') ADVANCE(33);
-      if (lookahead == ':') ADVANCE(462);
-      if (lookahead == 0xfeff) ADVANCE(556);
+      if (lookahead == ':') ADVANCE(474);
+      if (lookahead == 0xfeff) ADVANCE(568);
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(18);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(873);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(893);
       END_STATE();
     case 19:
       ADVANCE_MAP(
-        '"', 528,
-        '#', 943,
+        '"', 540,
+        '#', 963,
         '%', 33,
-        'a', 616,
-        'd', 674,
-        'f', 722,
-        'g', 813,
-        'h', 779,
-        'i', 691,
-        'l', 777,
-        'm', 629,
-        'n', 666,
-        'p', 816,
-        's', 853,
-        't', 679,
-        0xfeff, 555,
+        'a', 623,
+        'd', 691,
+        'f', 739,
+        'g', 830,
+        'h', 795,
+        'i', 708,
+        'l', 794,
+        'm', 644,
+        'n', 681,
+        'p', 833,
+        's', 873,
+        't', 696,
+        0xfeff, 566,
       );
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(19);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 20:
       ADVANCE_MAP(
-        '"', 528,
-        '#', 943,
-        '%', 536,
-        '(', 456,
-        ')', 458,
-        ',', 457,
-        0xfeff, 551,
+        '"', 540,
+        '#', 963,
+        '%', 548,
+        '(', 468,
+        ')', 470,
+        ',', 469,
+        0xfeff, 563,
         '\t', 20,
         ' ', 20,
       );
       if ((0x0b <= lookahead && lookahead <= '\r')) SKIP(21);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(552);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(564);
       END_STATE();
     case 21:
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(536);
-      if (lookahead == '(') ADVANCE(456);
-      if (lookahead == ')') ADVANCE(458);
-      if (lookahead == ',') ADVANCE(457);
-      if (lookahead == 0xfeff) ADVANCE(551);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(548);
+      if (lookahead == '(') ADVANCE(468);
+      if (lookahead == ')') ADVANCE(470);
+      if (lookahead == ',') ADVANCE(469);
+      if (lookahead == 0xfeff) ADVANCE(563);
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
           lookahead == ' ') SKIP(21);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(552);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(564);
       END_STATE();
     case 22:
-      if (lookahead == '#') ADVANCE(943);
+      if (lookahead == '#') ADVANCE(963);
       if (lookahead == '%') ADVANCE(32);
-      if (lookahead == ':') ADVANCE(462);
+      if (lookahead == ':') ADVANCE(474);
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
           lookahead == ' ' ||
           lookahead == 0xfeff) SKIP(22);
       if (('A' <= lookahead && lookahead <= 'Z') ||
           lookahead == '_' ||
-          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(937);
+          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(957);
       END_STATE();
     case 23:
       ADVANCE_MAP(
-        '#', 943,
+        '#', 963,
         '%', 32,
-        'b', 878,
-        'd', 898,
-        'e', 906,
-        'g', 885,
-        'i', 892,
-        's', 897,
-        0xfeff, 881,
+        'b', 898,
+        'd', 918,
+        'e', 926,
+        'g', 905,
+        'i', 912,
+        's', 917,
+        0xfeff, 901,
       );
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
@@ -1662,33 +1678,34 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '#' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 24:
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == ')') ADVANCE(458);
-      if (lookahead == ':') ADVANCE(462);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == ')') ADVANCE(470);
+      if (lookahead == ':') ADVANCE(474);
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
           lookahead == ' ' ||
           lookahead == 0xfeff) SKIP(24);
       if (('A' <= lookahead && lookahead <= 'Z') ||
           lookahead == '_' ||
-          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(938);
+          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(958);
       END_STATE();
     case 25:
       ADVANCE_MAP(
-        '#', 943,
-        'd', 155,
-        'e', 246,
-        'g', 322,
-        'h', 286,
-        'i', 262,
-        'l', 283,
-        'n', 159,
-        'p', 328,
-        's', 380,
-        't', 165,
+        '#', 963,
+        'a', 93,
+        'd', 158,
+        'e', 252,
+        'g', 327,
+        'h', 290,
+        'i', 267,
+        'l', 288,
+        'n', 164,
+        'p', 333,
+        's', 389,
+        't', 170,
       );
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
@@ -1696,17 +1713,17 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead == 0xfeff) SKIP(25);
       END_STATE();
     case 26:
-      if (lookahead == '%') ADVANCE(403);
+      if (lookahead == '%') ADVANCE(412);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(26);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ',') ADVANCE(550);
+          lookahead != ',') ADVANCE(562);
       END_STATE();
     case 27:
-      if (lookahead == '%') ADVANCE(402);
+      if (lookahead == '%') ADVANCE(411);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(27);
       if (lookahead != 0 &&
@@ -1715,55 +1732,55 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '#' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(552);
+          lookahead != ',') ADVANCE(564);
       END_STATE();
     case 28:
-      if (lookahead == '%') ADVANCE(405);
+      if (lookahead == '%') ADVANCE(414);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(28);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(544);
+          lookahead != '#') ADVANCE(556);
       END_STATE();
     case 29:
-      if (lookahead == '%') ADVANCE(408);
+      if (lookahead == '%') ADVANCE(417);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(29);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(936);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(956);
       END_STATE();
     case 30:
-      if (lookahead == '%') ADVANCE(406);
+      if (lookahead == '%') ADVANCE(415);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(30);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(547);
+          lookahead != '#') ADVANCE(559);
       END_STATE();
     case 31:
-      if (lookahead == '%') ADVANCE(407);
+      if (lookahead == '%') ADVANCE(416);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(31);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(932);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(952);
       END_STATE();
     case 32:
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       END_STATE();
     case 33:
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
           lookahead != '%' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 34:
-      if (lookahead == ':') ADVANCE(874);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
@@ -1771,1127 +1788,1155 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
       if (lookahead == '_') ADVANCE(80);
       END_STATE();
     case 36:
-      if (lookahead == '_') ADVANCE(395);
+      if (lookahead == '_') ADVANCE(404);
       END_STATE();
     case 37:
-      if (lookahead == '_') ADVANCE(228);
+      if (lookahead == '_') ADVANCE(233);
       END_STATE();
     case 38:
-      if (lookahead == '_') ADVANCE(174);
+      if (lookahead == '_') ADVANCE(179);
       END_STATE();
     case 39:
-      if (lookahead == '_') ADVANCE(298);
+      if (lookahead == '_') ADVANCE(303);
       END_STATE();
     case 40:
-      if (lookahead == '_') ADVANCE(105);
+      if (lookahead == '_') ADVANCE(108);
       END_STATE();
     case 41:
-      if (lookahead == '_') ADVANCE(275);
+      if (lookahead == '_') ADVANCE(279);
       END_STATE();
     case 42:
-      if (lookahead == '_') ADVANCE(377);
+      if (lookahead == '_') ADVANCE(386);
       END_STATE();
     case 43:
-      if (lookahead == '_') ADVANCE(299);
+      if (lookahead == '_') ADVANCE(304);
       END_STATE();
     case 44:
-      if (lookahead == '_') ADVANCE(193);
+      if (lookahead == '_') ADVANCE(198);
       END_STATE();
     case 45:
-      if (lookahead == '_') ADVANCE(318);
+      if (lookahead == '_') ADVANCE(323);
       END_STATE();
     case 46:
-      if (lookahead == '_') ADVANCE(346);
+      if (lookahead == '_') ADVANCE(354);
       END_STATE();
     case 47:
-      if (lookahead == '_') ADVANCE(102);
+      if (lookahead == '_') ADVANCE(105);
       END_STATE();
     case 48:
-      if (lookahead == '_') ADVANCE(103);
+      if (lookahead == '_') ADVANCE(106);
       END_STATE();
     case 49:
-      if (lookahead == '_') ADVANCE(234);
+      if (lookahead == '_') ADVANCE(239);
       END_STATE();
     case 50:
-      if (lookahead == '_') ADVANCE(300);
+      if (lookahead == '_') ADVANCE(305);
       END_STATE();
     case 51:
-      if (lookahead == '_') ADVANCE(261);
+      if (lookahead == '_') ADVANCE(266);
       END_STATE();
     case 52:
-      if (lookahead == '_') ADVANCE(264);
+      if (lookahead == '_') ADVANCE(269);
       END_STATE();
     case 53:
-      if (lookahead == '_') ADVANCE(207);
+      if (lookahead == '_') ADVANCE(212);
       END_STATE();
     case 54:
-      if (lookahead == '_') ADVANCE(383);
+      if (lookahead == '_') ADVANCE(392);
       END_STATE();
     case 55:
-      if (lookahead == 'a') ADVANCE(321);
+      if (lookahead == 'a') ADVANCE(326);
       END_STATE();
     case 56:
-      if (lookahead == 'a') ADVANCE(180);
+      if (lookahead == 'a') ADVANCE(185);
       END_STATE();
     case 57:
-      if (lookahead == 'a') ADVANCE(230);
+      if (lookahead == 'a') ADVANCE(235);
       END_STATE();
     case 58:
-      if (lookahead == 'a') ADVANCE(387);
+      if (lookahead == 'a') ADVANCE(396);
       END_STATE();
     case 59:
-      if (lookahead == 'a') ADVANCE(258);
+      if (lookahead == 'a') ADVANCE(263);
       END_STATE();
     case 60:
-      if (lookahead == 'a') ADVANCE(225);
+      if (lookahead == 'a') ADVANCE(230);
       END_STATE();
     case 61:
-      if (lookahead == 'a') ADVANCE(95);
+      if (lookahead == 'a') ADVANCE(98);
       END_STATE();
     case 62:
-      if (lookahead == 'a') ADVANCE(288);
+      if (lookahead == 'a') ADVANCE(293);
       END_STATE();
     case 63:
-      if (lookahead == 'a') ADVANCE(370);
+      if (lookahead == 'a') ADVANCE(379);
       END_STATE();
     case 64:
-      if (lookahead == 'a') ADVANCE(290);
+      if (lookahead == 'a') ADVANCE(295);
       END_STATE();
     case 65:
-      if (lookahead == 'a') ADVANCE(343);
+      if (lookahead == 'a') ADVANCE(351);
       END_STATE();
     case 66:
-      if (lookahead == 'a') ADVANCE(183);
+      if (lookahead == 'a') ADVANCE(188);
       END_STATE();
     case 67:
-      if (lookahead == 'a') ADVANCE(231);
+      if (lookahead == 'a') ADVANCE(236);
       END_STATE();
     case 68:
-      if (lookahead == 'a') ADVANCE(371);
+      if (lookahead == 'a') ADVANCE(380);
       END_STATE();
     case 69:
-      if (lookahead == 'a') ADVANCE(232);
-      END_STATE();
-    case 70:
-      if (lookahead == 'a') ADVANCE(372);
-      END_STATE();
-    case 71:
-      if (lookahead == 'a') ADVANCE(373);
-      END_STATE();
-    case 72:
-      if (lookahead == 'a') ADVANCE(374);
-      END_STATE();
-    case 73:
-      if (lookahead == 'a') ADVANCE(375);
-      END_STATE();
-    case 74:
-      if (lookahead == 'a') ADVANCE(376);
-      END_STATE();
-    case 75:
-      if (lookahead == 'a') ADVANCE(260);
-      END_STATE();
-    case 76:
       if (lookahead == 'a') ADVANCE(237);
       END_STATE();
+    case 70:
+      if (lookahead == 'a') ADVANCE(381);
+      END_STATE();
+    case 71:
+      if (lookahead == 'a') ADVANCE(382);
+      END_STATE();
+    case 72:
+      if (lookahead == 'a') ADVANCE(383);
+      END_STATE();
+    case 73:
+      if (lookahead == 'a') ADVANCE(384);
+      END_STATE();
+    case 74:
+      if (lookahead == 'a') ADVANCE(385);
+      END_STATE();
+    case 75:
+      if (lookahead == 'a') ADVANCE(265);
+      END_STATE();
+    case 76:
+      if (lookahead == 'a') ADVANCE(242);
+      END_STATE();
     case 77:
-      if (lookahead == 'b') ADVANCE(484);
+      if (lookahead == 'b') ADVANCE(496);
       END_STATE();
     case 78:
-      if (lookahead == 'b') ADVANCE(486);
+      if (lookahead == 'b') ADVANCE(498);
       END_STATE();
     case 79:
-      if (lookahead == 'b') ADVANCE(136);
+      if (lookahead == 'b') ADVANCE(140);
       END_STATE();
     case 80:
-      if (lookahead == 'b') ADVANCE(135);
-      if (lookahead == 'o') ADVANCE(253);
+      if (lookahead == 'b') ADVANCE(138);
+      if (lookahead == 'o') ADVANCE(258);
       END_STATE();
     case 81:
-      if (lookahead == 'b') ADVANCE(344);
+      if (lookahead == 'b') ADVANCE(350);
       END_STATE();
     case 82:
-      if (lookahead == 'c') ADVANCE(212);
-      if (lookahead == 's') ADVANCE(363);
+      if (lookahead == 'c') ADVANCE(84);
+      if (lookahead == 'd') ADVANCE(96);
+      if (lookahead == 'p') ADVANCE(299);
       END_STATE();
     case 83:
-      if (lookahead == 'c') ADVANCE(332);
+      if (lookahead == 'c') ADVANCE(217);
+      if (lookahead == 's') ADVANCE(372);
       END_STATE();
     case 84:
-      if (lookahead == 'c') ADVANCE(140);
+      if (lookahead == 'c') ADVANCE(139);
       END_STATE();
     case 85:
       if (lookahead == 'c') ADVANCE(338);
       END_STATE();
     case 86:
-      if (lookahead == 'c') ADVANCE(116);
+      if (lookahead == 'c') ADVANCE(119);
       END_STATE();
     case 87:
-      if (lookahead == 'c') ADVANCE(125);
+      if (lookahead == 'c') ADVANCE(345);
       END_STATE();
     case 88:
-      if (lookahead == 'c') ADVANCE(156);
+      if (lookahead == 'c') ADVANCE(128);
       END_STATE();
     case 89:
-      if (lookahead == 'c') ADVANCE(157);
+      if (lookahead == 'c') ADVANCE(155);
       END_STATE();
     case 90:
-      if (lookahead == 'c') ADVANCE(218);
+      if (lookahead == 'c') ADVANCE(160);
       END_STATE();
     case 91:
-      if (lookahead == 'c') ADVANCE(220);
+      if (lookahead == 'c') ADVANCE(161);
       END_STATE();
     case 92:
-      if (lookahead == 'd') ADVANCE(93);
-      if (lookahead == 'p') ADVANCE(294);
+      if (lookahead == 'c') ADVANCE(162);
       END_STATE();
     case 93:
-      if (lookahead == 'd') ADVANCE(461);
+      if (lookahead == 'c') ADVANCE(91);
       END_STATE();
     case 94:
-      if (lookahead == 'd') ADVANCE(509);
+      if (lookahead == 'c') ADVANCE(223);
       END_STATE();
     case 95:
-      if (lookahead == 'd') ADVANCE(400);
+      if (lookahead == 'c') ADVANCE(225);
       END_STATE();
     case 96:
-      if (lookahead == 'd') ADVANCE(111);
-      if (lookahead == 'e') ADVANCE(306);
-      if (lookahead == 'n') ADVANCE(99);
+      if (lookahead == 'd') ADVANCE(473);
       END_STATE();
     case 97:
-      if (lookahead == 'd') ADVANCE(137);
+      if (lookahead == 'd') ADVANCE(521);
       END_STATE();
     case 98:
-      if (lookahead == 'd') ADVANCE(345);
+      if (lookahead == 'd') ADVANCE(409);
       END_STATE();
     case 99:
-      if (lookahead == 'd') ADVANCE(130);
+      if (lookahead == 'd') ADVANCE(114);
+      if (lookahead == 'e') ADVANCE(311);
+      if (lookahead == 'n') ADVANCE(102);
       END_STATE();
     case 100:
-      if (lookahead == 'd') ADVANCE(114);
-      END_STATE();
-    case 101:
-      if (lookahead == 'd') ADVANCE(118);
-      END_STATE();
-    case 102:
       if (lookahead == 'd') ADVANCE(141);
       END_STATE();
+    case 101:
+      if (lookahead == 'd') ADVANCE(353);
+      END_STATE();
+    case 102:
+      if (lookahead == 'd') ADVANCE(133);
+      END_STATE();
     case 103:
-      if (lookahead == 'd') ADVANCE(142);
+      if (lookahead == 'd') ADVANCE(117);
       END_STATE();
     case 104:
       if (lookahead == 'd') ADVANCE(121);
       END_STATE();
     case 105:
-      if (lookahead == 'd') ADVANCE(196);
+      if (lookahead == 'd') ADVANCE(144);
       END_STATE();
     case 106:
-      if (lookahead == 'd') ADVANCE(160);
+      if (lookahead == 'd') ADVANCE(145);
       END_STATE();
     case 107:
-      if (lookahead == 'e') ADVANCE(168);
-      if (lookahead == 'i') ADVANCE(312);
+      if (lookahead == 'd') ADVANCE(124);
       END_STATE();
     case 108:
-      if (lookahead == 'e') ADVANCE(358);
-      if (lookahead == 'r') ADVANCE(267);
+      if (lookahead == 'd') ADVANCE(201);
       END_STATE();
     case 109:
-      if (lookahead == 'e') ADVANCE(226);
+      if (lookahead == 'd') ADVANCE(165);
       END_STATE();
     case 110:
-      if (lookahead == 'e') ADVANCE(307);
+      if (lookahead == 'e') ADVANCE(173);
+      if (lookahead == 'i') ADVANCE(317);
       END_STATE();
     case 111:
-      if (lookahead == 'e') ADVANCE(169);
+      if (lookahead == 'e') ADVANCE(367);
+      if (lookahead == 'r') ADVANCE(272);
       END_STATE();
     case 112:
-      if (lookahead == 'e') ADVANCE(440);
+      if (lookahead == 'e') ADVANCE(231);
       END_STATE();
     case 113:
-      if (lookahead == 'e') ADVANCE(514);
+      if (lookahead == 'e') ADVANCE(312);
       END_STATE();
     case 114:
-      if (lookahead == 'e') ADVANCE(481);
+      if (lookahead == 'e') ADVANCE(174);
       END_STATE();
     case 115:
-      if (lookahead == 'e') ADVANCE(516);
-      END_STATE();
-    case 116:
-      if (lookahead == 'e') ADVANCE(422);
-      END_STATE();
-    case 117:
       if (lookahead == 'e') ADVANCE(452);
       END_STATE();
+    case 116:
+      if (lookahead == 'e') ADVANCE(526);
+      END_STATE();
+    case 117:
+      if (lookahead == 'e') ADVANCE(493);
+      END_STATE();
     case 118:
-      if (lookahead == 'e') ADVANCE(488);
+      if (lookahead == 'e') ADVANCE(528);
       END_STATE();
     case 119:
-      if (lookahead == 'e') ADVANCE(466);
+      if (lookahead == 'e') ADVANCE(431);
       END_STATE();
     case 120:
-      if (lookahead == 'e') ADVANCE(500);
+      if (lookahead == 'e') ADVANCE(464);
       END_STATE();
     case 121:
-      if (lookahead == 'e') ADVANCE(483);
+      if (lookahead == 'e') ADVANCE(500);
       END_STATE();
     case 122:
-      if (lookahead == 'e') ADVANCE(455);
+      if (lookahead == 'e') ADVANCE(478);
       END_STATE();
     case 123:
-      if (lookahead == 'e') ADVANCE(498);
+      if (lookahead == 'e') ADVANCE(512);
       END_STATE();
     case 124:
-      if (lookahead == 'e') ADVANCE(438);
+      if (lookahead == 'e') ADVANCE(495);
       END_STATE();
     case 125:
-      if (lookahead == 'e') ADVANCE(420);
+      if (lookahead == 'e') ADVANCE(467);
       END_STATE();
     case 126:
-      if (lookahead == 'e') ADVANCE(450);
+      if (lookahead == 'e') ADVANCE(510);
       END_STATE();
     case 127:
-      if (lookahead == 'e') ADVANCE(453);
+      if (lookahead == 'e') ADVANCE(450);
       END_STATE();
     case 128:
-      if (lookahead == 'e') ADVANCE(359);
-      if (lookahead == 'o') ADVANCE(97);
+      if (lookahead == 'e') ADVANCE(429);
       END_STATE();
     case 129:
-      if (lookahead == 'e') ADVANCE(227);
-      if (lookahead == 'o') ADVANCE(293);
+      if (lookahead == 'e') ADVANCE(462);
       END_STATE();
     case 130:
-      if (lookahead == 'e') ADVANCE(170);
+      if (lookahead == 'e') ADVANCE(465);
       END_STATE();
     case 131:
-      if (lookahead == 'e') ADVANCE(245);
+      if (lookahead == 'e') ADVANCE(368);
+      if (lookahead == 'o') ADVANCE(100);
       END_STATE();
     case 132:
-      if (lookahead == 'e') ADVANCE(213);
+      if (lookahead == 'e') ADVANCE(232);
+      if (lookahead == 'o') ADVANCE(298);
       END_STATE();
     case 133:
-      if (lookahead == 'e') ADVANCE(308);
-      END_STATE();
-    case 134:
-      if (lookahead == 'e') ADVANCE(42);
-      END_STATE();
-    case 135:
-      if (lookahead == 'e') ADVANCE(176);
-      END_STATE();
-    case 136:
-      if (lookahead == 'e') ADVANCE(315);
-      END_STATE();
-    case 137:
-      if (lookahead == 'e') ADVANCE(37);
-      END_STATE();
-    case 138:
-      if (lookahead == 'e') ADVANCE(44);
-      END_STATE();
-    case 139:
-      if (lookahead == 'e') ADVANCE(171);
-      END_STATE();
-    case 140:
-      if (lookahead == 'e') ADVANCE(348);
-      END_STATE();
-    case 141:
       if (lookahead == 'e') ADVANCE(175);
       END_STATE();
+    case 134:
+      if (lookahead == 'e') ADVANCE(251);
+      END_STATE();
+    case 135:
+      if (lookahead == 'e') ADVANCE(218);
+      END_STATE();
+    case 136:
+      if (lookahead == 'e') ADVANCE(313);
+      END_STATE();
+    case 137:
+      if (lookahead == 'e') ADVANCE(42);
+      END_STATE();
+    case 138:
+      if (lookahead == 'e') ADVANCE(181);
+      END_STATE();
+    case 139:
+      if (lookahead == 'e') ADVANCE(352);
+      END_STATE();
+    case 140:
+      if (lookahead == 'e') ADVANCE(320);
+      END_STATE();
+    case 141:
+      if (lookahead == 'e') ADVANCE(37);
+      END_STATE();
     case 142:
-      if (lookahead == 'e') ADVANCE(173);
+      if (lookahead == 'e') ADVANCE(44);
       END_STATE();
     case 143:
-      if (lookahead == 'e') ADVANCE(333);
+      if (lookahead == 'e') ADVANCE(176);
       END_STATE();
     case 144:
-      if (lookahead == 'e') ADVANCE(61);
+      if (lookahead == 'e') ADVANCE(180);
       END_STATE();
     case 145:
-      if (lookahead == 'e') ADVANCE(311);
+      if (lookahead == 'e') ADVANCE(178);
       END_STATE();
     case 146:
-      if (lookahead == 'e') ADVANCE(47);
+      if (lookahead == 'e') ADVANCE(61);
       END_STATE();
     case 147:
-      if (lookahead == 'e') ADVANCE(254);
-      END_STATE();
-    case 148:
-      if (lookahead == 'e') ADVANCE(347);
-      END_STATE();
-    case 149:
       if (lookahead == 'e') ADVANCE(339);
       END_STATE();
-    case 150:
-      if (lookahead == 'e') ADVANCE(43);
-      END_STATE();
-    case 151:
-      if (lookahead == 'e') ADVANCE(249);
-      END_STATE();
-    case 152:
+    case 148:
       if (lookahead == 'e') ADVANCE(316);
       END_STATE();
-    case 153:
-      if (lookahead == 'e') ADVANCE(172);
+    case 149:
+      if (lookahead == 'e') ADVANCE(47);
       END_STATE();
-    case 154:
-      if (lookahead == 'e') ADVANCE(349);
-      END_STATE();
-    case 155:
-      if (lookahead == 'e') ADVANCE(177);
-      END_STATE();
-    case 156:
-      if (lookahead == 'e') ADVANCE(350);
-      END_STATE();
-    case 157:
-      if (lookahead == 'e') ADVANCE(351);
-      END_STATE();
-    case 158:
+    case 150:
       if (lookahead == 'e') ADVANCE(259);
       END_STATE();
+    case 151:
+      if (lookahead == 'e') ADVANCE(355);
+      END_STATE();
+    case 152:
+      if (lookahead == 'e') ADVANCE(346);
+      END_STATE();
+    case 153:
+      if (lookahead == 'e') ADVANCE(43);
+      END_STATE();
+    case 154:
+      if (lookahead == 'e') ADVANCE(254);
+      END_STATE();
+    case 155:
+      if (lookahead == 'e') ADVANCE(356);
+      END_STATE();
+    case 156:
+      if (lookahead == 'e') ADVANCE(321);
+      END_STATE();
+    case 157:
+      if (lookahead == 'e') ADVANCE(177);
+      END_STATE();
+    case 158:
+      if (lookahead == 'e') ADVANCE(182);
+      END_STATE();
     case 159:
-      if (lookahead == 'e') ADVANCE(379);
-      if (lookahead == 'o') ADVANCE(106);
+      if (lookahead == 'e') ADVANCE(357);
       END_STATE();
     case 160:
-      if (lookahead == 'e') ADVANCE(49);
+      if (lookahead == 'e') ADVANCE(358);
       END_STATE();
     case 161:
-      if (lookahead == 'e') ADVANCE(50);
+      if (lookahead == 'e') ADVANCE(359);
       END_STATE();
     case 162:
-      if (lookahead == 'e') ADVANCE(236);
+      if (lookahead == 'e') ADVANCE(360);
       END_STATE();
     case 163:
-      if (lookahead == 'e') ADVANCE(238);
+      if (lookahead == 'e') ADVANCE(264);
       END_STATE();
     case 164:
-      if (lookahead == 'e') ADVANCE(239);
+      if (lookahead == 'e') ADVANCE(388);
+      if (lookahead == 'o') ADVANCE(109);
       END_STATE();
     case 165:
-      if (lookahead == 'e') ADVANCE(240);
-      if (lookahead == 'o') ADVANCE(297);
+      if (lookahead == 'e') ADVANCE(49);
       END_STATE();
     case 166:
-      if (lookahead == 'e') ADVANCE(241);
+      if (lookahead == 'e') ADVANCE(50);
       END_STATE();
     case 167:
-      if (lookahead == 'f') ADVANCE(96);
-      if (lookahead == 'n') ADVANCE(82);
+      if (lookahead == 'e') ADVANCE(241);
       END_STATE();
     case 168:
-      if (lookahead == 'f') ADVANCE(192);
-      if (lookahead == 'p') ADVANCE(151);
+      if (lookahead == 'e') ADVANCE(243);
       END_STATE();
     case 169:
-      if (lookahead == 'f') ADVANCE(503);
+      if (lookahead == 'e') ADVANCE(244);
       END_STATE();
     case 170:
-      if (lookahead == 'f') ADVANCE(506);
+      if (lookahead == 'e') ADVANCE(245);
+      if (lookahead == 'o') ADVANCE(302);
       END_STATE();
     case 171:
-      if (lookahead == 'f') ADVANCE(189);
+      if (lookahead == 'e') ADVANCE(246);
       END_STATE();
     case 172:
-      if (lookahead == 'f') ADVANCE(191);
+      if (lookahead == 'f') ADVANCE(99);
+      if (lookahead == 'n') ADVANCE(83);
       END_STATE();
     case 173:
-      if (lookahead == 'f') ADVANCE(58);
+      if (lookahead == 'f') ADVANCE(197);
+      if (lookahead == 'p') ADVANCE(154);
       END_STATE();
     case 174:
-      if (lookahead == 'f') ADVANCE(314);
+      if (lookahead == 'f') ADVANCE(515);
       END_STATE();
     case 175:
-      if (lookahead == 'f') ADVANCE(197);
+      if (lookahead == 'f') ADVANCE(518);
       END_STATE();
     case 176:
-      if (lookahead == 'f') ADVANCE(282);
+      if (lookahead == 'f') ADVANCE(194);
       END_STATE();
     case 177:
-      if (lookahead == 'f') ADVANCE(203);
+      if (lookahead == 'f') ADVANCE(196);
       END_STATE();
     case 178:
-      if (lookahead == 'g') ADVANCE(520);
+      if (lookahead == 'f') ADVANCE(58);
       END_STATE();
     case 179:
-      if (lookahead == 'g') ADVANCE(182);
+      if (lookahead == 'f') ADVANCE(319);
       END_STATE();
     case 180:
-      if (lookahead == 'g') ADVANCE(330);
+      if (lookahead == 'f') ADVANCE(202);
       END_STATE();
     case 181:
-      if (lookahead == 'g') ADVANCE(215);
+      if (lookahead == 'f') ADVANCE(286);
       END_STATE();
     case 182:
-      if (lookahead == 'g') ADVANCE(133);
+      if (lookahead == 'f') ADVANCE(208);
       END_STATE();
     case 183:
-      if (lookahead == 'g') ADVANCE(146);
+      if (lookahead == 'g') ADVANCE(532);
       END_STATE();
     case 184:
-      if (lookahead == 'g') ADVANCE(145);
+      if (lookahead == 'g') ADVANCE(187);
       END_STATE();
     case 185:
-      if (lookahead == 'g') ADVANCE(216);
+      if (lookahead == 'g') ADVANCE(335);
       END_STATE();
     case 186:
-      if (lookahead == 'g') ADVANCE(184);
+      if (lookahead == 'g') ADVANCE(220);
       END_STATE();
     case 187:
-      if (lookahead == 'h') ADVANCE(132);
+      if (lookahead == 'g') ADVANCE(136);
+      END_STATE();
+    case 188:
+      if (lookahead == 'g') ADVANCE(149);
+      END_STATE();
+    case 189:
+      if (lookahead == 'g') ADVANCE(148);
+      END_STATE();
+    case 190:
+      if (lookahead == 'g') ADVANCE(221);
+      END_STATE();
+    case 191:
+      if (lookahead == 'g') ADVANCE(189);
+      END_STATE();
+    case 192:
+      if (lookahead == 'h') ADVANCE(135);
       if (lookahead == 't') ADVANCE(55);
       if (lookahead == 'u') ADVANCE(81);
       END_STATE();
-    case 188:
+    case 193:
       if (lookahead == 'h') ADVANCE(52);
       END_STATE();
-    case 189:
-      if (lookahead == 'i') ADVANCE(398);
-      END_STATE();
-    case 190:
-      if (lookahead == 'i') ADVANCE(83);
-      END_STATE();
-    case 191:
-      if (lookahead == 'i') ADVANCE(399);
-      END_STATE();
-    case 192:
-      if (lookahead == 'i') ADVANCE(256);
-      END_STATE();
-    case 193:
-      if (lookahead == 'i') ADVANCE(247);
-      END_STATE();
     case 194:
-      if (lookahead == 'i') ADVANCE(280);
+      if (lookahead == 'i') ADVANCE(407);
       END_STATE();
     case 195:
-      if (lookahead == 'i') ADVANCE(317);
+      if (lookahead == 'i') ADVANCE(85);
       END_STATE();
     case 196:
-      if (lookahead == 'i') ADVANCE(310);
+      if (lookahead == 'i') ADVANCE(408);
       END_STATE();
     case 197:
-      if (lookahead == 'i') ADVANCE(252);
+      if (lookahead == 'i') ADVANCE(261);
       END_STATE();
     case 198:
       if (lookahead == 'i') ADVANCE(250);
       END_STATE();
     case 199:
-      if (lookahead == 'i') ADVANCE(281);
+      if (lookahead == 'i') ADVANCE(284);
       END_STATE();
     case 200:
-      if (lookahead == 'i') ADVANCE(295);
-      if (lookahead == 'o') ADVANCE(291);
-      if (lookahead == 'r') ADVANCE(268);
-      if (lookahead == 'u') ADVANCE(329);
+      if (lookahead == 'i') ADVANCE(322);
       END_STATE();
     case 201:
-      if (lookahead == 'i') ADVANCE(85);
+      if (lookahead == 'i') ADVANCE(315);
       END_STATE();
     case 202:
-      if (lookahead == 'i') ADVANCE(378);
-      END_STATE();
-    case 203:
       if (lookahead == 'i') ADVANCE(257);
       END_STATE();
+    case 203:
+      if (lookahead == 'i') ADVANCE(255);
+      END_STATE();
     case 204:
-      if (lookahead == 'i') ADVANCE(276);
+      if (lookahead == 'i') ADVANCE(285);
       END_STATE();
     case 205:
-      if (lookahead == 'i') ADVANCE(325);
+      if (lookahead == 'i') ADVANCE(300);
+      if (lookahead == 'o') ADVANCE(296);
+      if (lookahead == 'r') ADVANCE(287);
+      if (lookahead == 'u') ADVANCE(334);
       END_STATE();
     case 206:
-      if (lookahead == 'i') ADVANCE(354);
+      if (lookahead == 'i') ADVANCE(87);
       END_STATE();
     case 207:
-      if (lookahead == 'i') ADVANCE(265);
+      if (lookahead == 'i') ADVANCE(387);
       END_STATE();
     case 208:
-      if (lookahead == 'k') ADVANCE(446);
+      if (lookahead == 'i') ADVANCE(262);
       END_STATE();
     case 209:
-      if (lookahead == 'k') ADVANCE(444);
+      if (lookahead == 'i') ADVANCE(280);
       END_STATE();
     case 210:
-      if (lookahead == 'l') ADVANCE(522);
+      if (lookahead == 'i') ADVANCE(330);
       END_STATE();
     case 211:
-      if (lookahead == 'l') ADVANCE(56);
+      if (lookahead == 'i') ADVANCE(363);
       END_STATE();
     case 212:
-      if (lookahead == 'l') ADVANCE(390);
+      if (lookahead == 'i') ADVANCE(270);
       END_STATE();
     case 213:
-      if (lookahead == 'l') ADVANCE(210);
+      if (lookahead == 'k') ADVANCE(458);
       END_STATE();
     case 214:
-      if (lookahead == 'l') ADVANCE(63);
+      if (lookahead == 'k') ADVANCE(456);
       END_STATE();
     case 215:
-      if (lookahead == 'l') ADVANCE(270);
+      if (lookahead == 'l') ADVANCE(534);
       END_STATE();
     case 216:
-      if (lookahead == 'l') ADVANCE(271);
+      if (lookahead == 'l') ADVANCE(56);
       END_STATE();
     case 217:
-      if (lookahead == 'l') ADVANCE(385);
+      if (lookahead == 'l') ADVANCE(399);
       END_STATE();
     case 218:
-      if (lookahead == 'l') ADVANCE(391);
+      if (lookahead == 'l') ADVANCE(215);
       END_STATE();
     case 219:
-      if (lookahead == 'l') ADVANCE(68);
+      if (lookahead == 'l') ADVANCE(63);
       END_STATE();
     case 220:
-      if (lookahead == 'l') ADVANCE(392);
+      if (lookahead == 'l') ADVANCE(274);
       END_STATE();
     case 221:
-      if (lookahead == 'l') ADVANCE(70);
+      if (lookahead == 'l') ADVANCE(275);
       END_STATE();
     case 222:
-      if (lookahead == 'l') ADVANCE(71);
+      if (lookahead == 'l') ADVANCE(394);
       END_STATE();
     case 223:
-      if (lookahead == 'l') ADVANCE(73);
+      if (lookahead == 'l') ADVANCE(400);
       END_STATE();
     case 224:
-      if (lookahead == 'l') ADVANCE(74);
+      if (lookahead == 'l') ADVANCE(68);
       END_STATE();
     case 225:
-      if (lookahead == 'l') ADVANCE(53);
+      if (lookahead == 'l') ADVANCE(401);
       END_STATE();
     case 226:
-      if (lookahead == 'm') ADVANCE(79);
+      if (lookahead == 'l') ADVANCE(70);
       END_STATE();
     case 227:
-      if (lookahead == 'm') ADVANCE(296);
+      if (lookahead == 'l') ADVANCE(71);
       END_STATE();
     case 228:
-      if (lookahead == 'm') ADVANCE(62);
+      if (lookahead == 'l') ADVANCE(73);
       END_STATE();
     case 229:
-      if (lookahead == 'm') ADVANCE(46);
+      if (lookahead == 'l') ADVANCE(74);
       END_STATE();
     case 230:
-      if (lookahead == 'm') ADVANCE(113);
+      if (lookahead == 'l') ADVANCE(53);
       END_STATE();
     case 231:
-      if (lookahead == 'm') ADVANCE(115);
+      if (lookahead == 'm') ADVANCE(79);
       END_STATE();
     case 232:
-      if (lookahead == 'm') ADVANCE(150);
-      END_STATE();
-    case 233:
-      if (lookahead == 'm') ADVANCE(147);
-      END_STATE();
-    case 234:
-      if (lookahead == 'm') ADVANCE(64);
-      END_STATE();
-    case 235:
-      if (lookahead == 'm') ADVANCE(154);
-      if (lookahead == 'p') ADVANCE(327);
-      END_STATE();
-    case 236:
       if (lookahead == 'm') ADVANCE(301);
       END_STATE();
+    case 233:
+      if (lookahead == 'm') ADVANCE(62);
+      END_STATE();
+    case 234:
+      if (lookahead == 'm') ADVANCE(46);
+      END_STATE();
+    case 235:
+      if (lookahead == 'm') ADVANCE(116);
+      END_STATE();
+    case 236:
+      if (lookahead == 'm') ADVANCE(118);
+      END_STATE();
     case 237:
-      if (lookahead == 'm') ADVANCE(161);
+      if (lookahead == 'm') ADVANCE(153);
       END_STATE();
     case 238:
-      if (lookahead == 'm') ADVANCE(302);
+      if (lookahead == 'm') ADVANCE(150);
       END_STATE();
     case 239:
-      if (lookahead == 'm') ADVANCE(303);
+      if (lookahead == 'm') ADVANCE(64);
       END_STATE();
     case 240:
-      if (lookahead == 'm') ADVANCE(304);
+      if (lookahead == 'm') ADVANCE(159);
+      if (lookahead == 'p') ADVANCE(332);
       END_STATE();
     case 241:
-      if (lookahead == 'm') ADVANCE(305);
+      if (lookahead == 'm') ADVANCE(306);
       END_STATE();
     case 242:
-      if (lookahead == 'n') ADVANCE(393);
+      if (lookahead == 'm') ADVANCE(166);
       END_STATE();
     case 243:
-      if (lookahead == 'n') ADVANCE(464);
+      if (lookahead == 'm') ADVANCE(307);
       END_STATE();
     case 244:
-      if (lookahead == 'n') ADVANCE(496);
+      if (lookahead == 'm') ADVANCE(308);
       END_STATE();
     case 245:
-      if (lookahead == 'n') ADVANCE(94);
+      if (lookahead == 'm') ADVANCE(309);
       END_STATE();
     case 246:
-      if (lookahead == 'n') ADVANCE(394);
+      if (lookahead == 'm') ADVANCE(310);
       END_STATE();
     case 247:
-      if (lookahead == 'n') ADVANCE(90);
+      if (lookahead == 'n') ADVANCE(402);
       END_STATE();
     case 248:
-      if (lookahead == 'n') ADVANCE(57);
+      if (lookahead == 'n') ADVANCE(476);
       END_STATE();
     case 249:
-      if (lookahead == 'n') ADVANCE(98);
+      if (lookahead == 'n') ADVANCE(508);
       END_STATE();
     case 250:
-      if (lookahead == 'n') ADVANCE(178);
+      if (lookahead == 'n') ADVANCE(94);
       END_STATE();
     case 251:
-      if (lookahead == 'n') ADVANCE(60);
+      if (lookahead == 'n') ADVANCE(97);
       END_STATE();
     case 252:
-      if (lookahead == 'n') ADVANCE(202);
+      if (lookahead == 'n') ADVANCE(403);
       END_STATE();
     case 253:
-      if (lookahead == 'n') ADVANCE(45);
+      if (lookahead == 'n') ADVANCE(57);
       END_STATE();
     case 254:
-      if (lookahead == 'n') ADVANCE(361);
+      if (lookahead == 'n') ADVANCE(101);
       END_STATE();
     case 255:
-      if (lookahead == 'n') ADVANCE(40);
+      if (lookahead == 'n') ADVANCE(183);
       END_STATE();
     case 256:
-      if (lookahead == 'n') ADVANCE(143);
+      if (lookahead == 'n') ADVANCE(60);
       END_STATE();
     case 257:
-      if (lookahead == 'n') ADVANCE(149);
+      if (lookahead == 'n') ADVANCE(207);
       END_STATE();
     case 258:
-      if (lookahead == 'n') ADVANCE(86);
+      if (lookahead == 'n') ADVANCE(45);
       END_STATE();
     case 259:
-      if (lookahead == 'n') ADVANCE(67);
+      if (lookahead == 'n') ADVANCE(370);
       END_STATE();
     case 260:
-      if (lookahead == 'n') ADVANCE(87);
+      if (lookahead == 'n') ADVANCE(40);
       END_STATE();
     case 261:
-      if (lookahead == 'n') ADVANCE(69);
+      if (lookahead == 'n') ADVANCE(147);
       END_STATE();
     case 262:
-      if (lookahead == 'n') ADVANCE(357);
+      if (lookahead == 'n') ADVANCE(152);
       END_STATE();
     case 263:
-      if (lookahead == 'n') ADVANCE(233);
+      if (lookahead == 'n') ADVANCE(86);
       END_STATE();
     case 264:
-      if (lookahead == 'n') ADVANCE(76);
+      if (lookahead == 'n') ADVANCE(67);
       END_STATE();
     case 265:
-      if (lookahead == 'n') ADVANCE(91);
+      if (lookahead == 'n') ADVANCE(88);
       END_STATE();
     case 266:
-      if (lookahead == 'o') ADVANCE(179);
+      if (lookahead == 'n') ADVANCE(69);
       END_STATE();
     case 267:
-      if (lookahead == 'o') ADVANCE(388);
+      if (lookahead == 'n') ADVANCE(366);
       END_STATE();
     case 268:
-      if (lookahead == 'o') ADVANCE(84);
+      if (lookahead == 'n') ADVANCE(238);
       END_STATE();
     case 269:
-      if (lookahead == 'o') ADVANCE(342);
+      if (lookahead == 'n') ADVANCE(76);
       END_STATE();
     case 270:
-      if (lookahead == 'o') ADVANCE(77);
+      if (lookahead == 'n') ADVANCE(95);
       END_STATE();
     case 271:
-      if (lookahead == 'o') ADVANCE(78);
+      if (lookahead == 'o') ADVANCE(184);
       END_STATE();
     case 272:
-      if (lookahead == 'o') ADVANCE(309);
+      if (lookahead == 'o') ADVANCE(397);
       END_STATE();
     case 273:
-      if (lookahead == 'o') ADVANCE(229);
+      if (lookahead == 'o') ADVANCE(349);
       END_STATE();
     case 274:
-      if (lookahead == 'o') ADVANCE(324);
+      if (lookahead == 'o') ADVANCE(77);
       END_STATE();
     case 275:
-      if (lookahead == 'o') ADVANCE(243);
+      if (lookahead == 'o') ADVANCE(78);
       END_STATE();
     case 276:
-      if (lookahead == 'o') ADVANCE(244);
+      if (lookahead == 'o') ADVANCE(314);
       END_STATE();
     case 277:
-      if (lookahead == 'o') ADVANCE(313);
+      if (lookahead == 'o') ADVANCE(234);
       END_STATE();
     case 278:
-      if (lookahead == 'o') ADVANCE(263);
+      if (lookahead == 'o') ADVANCE(329);
       END_STATE();
     case 279:
-      if (lookahead == 'o') ADVANCE(389);
+      if (lookahead == 'o') ADVANCE(248);
       END_STATE();
     case 280:
-      if (lookahead == 'o') ADVANCE(251);
+      if (lookahead == 'o') ADVANCE(249);
       END_STATE();
     case 281:
-      if (lookahead == 'o') ADVANCE(255);
+      if (lookahead == 'o') ADVANCE(318);
       END_STATE();
     case 282:
-      if (lookahead == 'o') ADVANCE(320);
+      if (lookahead == 'o') ADVANCE(268);
       END_STATE();
     case 283:
-      if (lookahead == 'o') ADVANCE(186);
+      if (lookahead == 'o') ADVANCE(398);
       END_STATE();
     case 284:
-      if (lookahead == 'o') ADVANCE(88);
+      if (lookahead == 'o') ADVANCE(256);
       END_STATE();
     case 285:
-      if (lookahead == 'o') ADVANCE(89);
+      if (lookahead == 'o') ADVANCE(260);
       END_STATE();
     case 286:
-      if (lookahead == 'o') ADVANCE(355);
+      if (lookahead == 'o') ADVANCE(325);
       END_STATE();
     case 287:
-      if (lookahead == 'p') ADVANCE(443);
+      if (lookahead == 'o') ADVANCE(89);
       END_STATE();
     case 288:
-      if (lookahead == 'p') ADVANCE(431);
+      if (lookahead == 'o') ADVANCE(191);
       END_STATE();
     case 289:
-      if (lookahead == 'p') ADVANCE(441);
+      if (lookahead == 'o') ADVANCE(90);
       END_STATE();
     case 290:
-      if (lookahead == 'p') ADVANCE(429);
+      if (lookahead == 'o') ADVANCE(364);
       END_STATE();
     case 291:
-      if (lookahead == 'p') ADVANCE(51);
+      if (lookahead == 'o') ADVANCE(92);
       END_STATE();
     case 292:
-      if (lookahead == 'p') ADVANCE(362);
+      if (lookahead == 'p') ADVANCE(455);
       END_STATE();
     case 293:
-      if (lookahead == 'p') ADVANCE(190);
+      if (lookahead == 'p') ADVANCE(440);
       END_STATE();
     case 294:
-      if (lookahead == 'p') ADVANCE(131);
+      if (lookahead == 'p') ADVANCE(453);
       END_STATE();
     case 295:
-      if (lookahead == 'p') ADVANCE(138);
+      if (lookahead == 'p') ADVANCE(438);
       END_STATE();
     case 296:
-      if (lookahead == 'p') ADVANCE(214);
+      if (lookahead == 'p') ADVANCE(51);
       END_STATE();
     case 297:
-      if (lookahead == 'p') ADVANCE(201);
+      if (lookahead == 'p') ADVANCE(371);
       END_STATE();
     case 298:
-      if (lookahead == 'p') ADVANCE(274);
+      if (lookahead == 'p') ADVANCE(195);
       END_STATE();
     case 299:
-      if (lookahead == 'p') ADVANCE(319);
+      if (lookahead == 'p') ADVANCE(134);
       END_STATE();
     case 300:
-      if (lookahead == 'p') ADVANCE(323);
+      if (lookahead == 'p') ADVANCE(142);
       END_STATE();
     case 301:
       if (lookahead == 'p') ADVANCE(219);
       END_STATE();
     case 302:
-      if (lookahead == 'p') ADVANCE(221);
+      if (lookahead == 'p') ADVANCE(206);
       END_STATE();
     case 303:
-      if (lookahead == 'p') ADVANCE(222);
+      if (lookahead == 'p') ADVANCE(278);
       END_STATE();
     case 304:
-      if (lookahead == 'p') ADVANCE(223);
+      if (lookahead == 'p') ADVANCE(324);
       END_STATE();
     case 305:
-      if (lookahead == 'p') ADVANCE(224);
+      if (lookahead == 'p') ADVANCE(328);
       END_STATE();
     case 306:
-      if (lookahead == 'q') ADVANCE(524);
-      if (lookahead == 'x') ADVANCE(206);
+      if (lookahead == 'p') ADVANCE(224);
       END_STATE();
     case 307:
-      if (lookahead == 'q') ADVANCE(386);
+      if (lookahead == 'p') ADVANCE(226);
       END_STATE();
     case 308:
-      if (lookahead == 'r') ADVANCE(449);
+      if (lookahead == 'p') ADVANCE(227);
       END_STATE();
     case 309:
-      if (lookahead == 'r') ADVANCE(208);
+      if (lookahead == 'p') ADVANCE(228);
       END_STATE();
     case 310:
-      if (lookahead == 'r') ADVANCE(494);
+      if (lookahead == 'p') ADVANCE(229);
       END_STATE();
     case 311:
-      if (lookahead == 'r') ADVANCE(447);
+      if (lookahead == 'q') ADVANCE(536);
+      if (lookahead == 'x') ADVANCE(211);
       END_STATE();
     case 312:
-      if (lookahead == 'r') ADVANCE(248);
+      if (lookahead == 'q') ADVANCE(395);
       END_STATE();
     case 313:
-      if (lookahead == 'r') ADVANCE(209);
+      if (lookahead == 'r') ADVANCE(461);
       END_STATE();
     case 314:
-      if (lookahead == 'r') ADVANCE(273);
+      if (lookahead == 'r') ADVANCE(213);
       END_STATE();
     case 315:
-      if (lookahead == 'r') ADVANCE(334);
+      if (lookahead == 'r') ADVANCE(506);
       END_STATE();
     case 316:
-      if (lookahead == 'r') ADVANCE(353);
+      if (lookahead == 'r') ADVANCE(459);
       END_STATE();
     case 317:
-      if (lookahead == 'r') ADVANCE(148);
+      if (lookahead == 'r') ADVANCE(253);
       END_STATE();
     case 318:
-      if (lookahead == 'r') ADVANCE(144);
+      if (lookahead == 'r') ADVANCE(214);
       END_STATE();
     case 319:
-      if (lookahead == 'r') ADVANCE(139);
+      if (lookahead == 'r') ADVANCE(277);
       END_STATE();
     case 320:
-      if (lookahead == 'r') ADVANCE(119);
+      if (lookahead == 'r') ADVANCE(340);
       END_STATE();
     case 321:
-      if (lookahead == 'r') ADVANCE(365);
-      if (lookahead == 't') ADVANCE(112);
+      if (lookahead == 'r') ADVANCE(362);
       END_STATE();
     case 322:
-      if (lookahead == 'r') ADVANCE(279);
+      if (lookahead == 'r') ADVANCE(151);
       END_STATE();
     case 323:
-      if (lookahead == 'r') ADVANCE(153);
+      if (lookahead == 'r') ADVANCE(146);
       END_STATE();
     case 324:
-      if (lookahead == 'r') ADVANCE(367);
+      if (lookahead == 'r') ADVANCE(143);
       END_STATE();
     case 325:
-      if (lookahead == 'r') ADVANCE(278);
+      if (lookahead == 'r') ADVANCE(122);
       END_STATE();
     case 326:
-      if (lookahead == 'r') ADVANCE(198);
+      if (lookahead == 'r') ADVANCE(374);
+      if (lookahead == 't') ADVANCE(115);
       END_STATE();
     case 327:
-      if (lookahead == 'r') ADVANCE(284);
+      if (lookahead == 'r') ADVANCE(283);
       END_STATE();
     case 328:
-      if (lookahead == 'r') ADVANCE(285);
+      if (lookahead == 'r') ADVANCE(157);
       END_STATE();
     case 329:
-      if (lookahead == 's') ADVANCE(188);
+      if (lookahead == 'r') ADVANCE(376);
       END_STATE();
     case 330:
-      if (lookahead == 's') ADVANCE(472);
+      if (lookahead == 'r') ADVANCE(282);
       END_STATE();
     case 331:
-      if (lookahead == 's') ADVANCE(428);
+      if (lookahead == 'r') ADVANCE(203);
       END_STATE();
     case 332:
-      if (lookahead == 's') ADVANCE(434);
+      if (lookahead == 'r') ADVANCE(289);
       END_STATE();
     case 333:
-      if (lookahead == 's') ADVANCE(425);
+      if (lookahead == 'r') ADVANCE(291);
       END_STATE();
     case 334:
-      if (lookahead == 's') ADVANCE(470);
+      if (lookahead == 's') ADVANCE(193);
       END_STATE();
     case 335:
-      if (lookahead == 's') ADVANCE(436);
+      if (lookahead == 's') ADVANCE(484);
       END_STATE();
     case 336:
-      if (lookahead == 's') ADVANCE(526);
-      END_STATE();
-    case 337:
-      if (lookahead == 's') ADVANCE(426);
-      END_STATE();
-    case 338:
-      if (lookahead == 's') ADVANCE(432);
-      END_STATE();
-    case 339:
-      if (lookahead == 's') ADVANCE(423);
-      END_STATE();
-    case 340:
       if (lookahead == 's') ADVANCE(437);
       END_STATE();
+    case 337:
+      if (lookahead == 's') ADVANCE(446);
+      END_STATE();
+    case 338:
+      if (lookahead == 's') ADVANCE(443);
+      END_STATE();
+    case 339:
+      if (lookahead == 's') ADVANCE(434);
+      END_STATE();
+    case 340:
+      if (lookahead == 's') ADVANCE(482);
+      END_STATE();
     case 341:
-      if (lookahead == 's') ADVANCE(134);
+      if (lookahead == 's') ADVANCE(448);
       END_STATE();
     case 342:
-      if (lookahead == 's') ADVANCE(364);
+      if (lookahead == 's') ADVANCE(538);
       END_STATE();
     case 343:
-      if (lookahead == 's') ADVANCE(158);
+      if (lookahead == 's') ADVANCE(435);
       END_STATE();
     case 344:
-      if (lookahead == 's') ADVANCE(360);
+      if (lookahead == 's') ADVANCE(444);
       END_STATE();
     case 345:
-      if (lookahead == 's') ADVANCE(41);
+      if (lookahead == 's') ADVANCE(441);
       END_STATE();
     case 346:
-      if (lookahead == 's') ADVANCE(366);
+      if (lookahead == 's') ADVANCE(432);
       END_STATE();
     case 347:
-      if (lookahead == 's') ADVANCE(36);
+      if (lookahead == 's') ADVANCE(449);
       END_STATE();
     case 348:
-      if (lookahead == 's') ADVANCE(335);
+      if (lookahead == 's') ADVANCE(137);
       END_STATE();
     case 349:
-      if (lookahead == 's') ADVANCE(352);
+      if (lookahead == 's') ADVANCE(373);
       END_STATE();
     case 350:
-      if (lookahead == 's') ADVANCE(356);
-      END_STATE();
-    case 351:
-      if (lookahead == 's') ADVANCE(340);
-      END_STATE();
-    case 352:
-      if (lookahead == 's') ADVANCE(66);
-      END_STATE();
-    case 353:
-      if (lookahead == 's') ADVANCE(204);
-      END_STATE();
-    case 354:
-      if (lookahead == 's') ADVANCE(368);
-      END_STATE();
-    case 355:
       if (lookahead == 's') ADVANCE(369);
       END_STATE();
+    case 351:
+      if (lookahead == 's') ADVANCE(163);
+      END_STATE();
+    case 352:
+      if (lookahead == 's') ADVANCE(337);
+      END_STATE();
+    case 353:
+      if (lookahead == 's') ADVANCE(41);
+      END_STATE();
+    case 354:
+      if (lookahead == 's') ADVANCE(375);
+      END_STATE();
+    case 355:
+      if (lookahead == 's') ADVANCE(36);
+      END_STATE();
     case 356:
-      if (lookahead == 's') ADVANCE(48);
+      if (lookahead == 's') ADVANCE(341);
       END_STATE();
     case 357:
-      if (lookahead == 's') ADVANCE(381);
+      if (lookahead == 's') ADVANCE(361);
       END_STATE();
     case 358:
-      if (lookahead == 't') ADVANCE(39);
+      if (lookahead == 's') ADVANCE(365);
       END_STATE();
     case 359:
-      if (lookahead == 't') ADVANCE(396);
+      if (lookahead == 's') ADVANCE(344);
       END_STATE();
     case 360:
-      if (lookahead == 't') ADVANCE(518);
+      if (lookahead == 's') ADVANCE(347);
       END_STATE();
     case 361:
-      if (lookahead == 't') ADVANCE(510);
+      if (lookahead == 's') ADVANCE(66);
       END_STATE();
     case 362:
-      if (lookahead == 't') ADVANCE(194);
+      if (lookahead == 's') ADVANCE(209);
       END_STATE();
     case 363:
-      if (lookahead == 't') ADVANCE(59);
+      if (lookahead == 's') ADVANCE(377);
       END_STATE();
     case 364:
-      if (lookahead == 't') ADVANCE(331);
+      if (lookahead == 's') ADVANCE(378);
       END_STATE();
     case 365:
-      if (lookahead == 't') ADVANCE(35);
+      if (lookahead == 's') ADVANCE(48);
       END_STATE();
     case 366:
-      if (lookahead == 't') ADVANCE(326);
+      if (lookahead == 's') ADVANCE(390);
       END_STATE();
     case 367:
-      if (lookahead == 't') ADVANCE(38);
+      if (lookahead == 't') ADVANCE(39);
       END_STATE();
     case 368:
-      if (lookahead == 't') ADVANCE(336);
+      if (lookahead == 't') ADVANCE(405);
       END_STATE();
     case 369:
-      if (lookahead == 't') ADVANCE(337);
+      if (lookahead == 't') ADVANCE(530);
       END_STATE();
     case 370:
-      if (lookahead == 't') ADVANCE(117);
+      if (lookahead == 't') ADVANCE(522);
       END_STATE();
     case 371:
-      if (lookahead == 't') ADVANCE(120);
-      END_STATE();
-    case 372:
-      if (lookahead == 't') ADVANCE(122);
-      END_STATE();
-    case 373:
-      if (lookahead == 't') ADVANCE(123);
-      END_STATE();
-    case 374:
-      if (lookahead == 't') ADVANCE(124);
-      END_STATE();
-    case 375:
-      if (lookahead == 't') ADVANCE(126);
-      END_STATE();
-    case 376:
-      if (lookahead == 't') ADVANCE(127);
-      END_STATE();
-    case 377:
-      if (lookahead == 't') ADVANCE(162);
-      END_STATE();
-    case 378:
       if (lookahead == 't') ADVANCE(199);
       END_STATE();
+    case 372:
+      if (lookahead == 't') ADVANCE(59);
+      END_STATE();
+    case 373:
+      if (lookahead == 't') ADVANCE(336);
+      END_STATE();
+    case 374:
+      if (lookahead == 't') ADVANCE(35);
+      END_STATE();
+    case 375:
+      if (lookahead == 't') ADVANCE(331);
+      END_STATE();
+    case 376:
+      if (lookahead == 't') ADVANCE(38);
+      END_STATE();
+    case 377:
+      if (lookahead == 't') ADVANCE(342);
+      END_STATE();
+    case 378:
+      if (lookahead == 't') ADVANCE(343);
+      END_STATE();
     case 379:
-      if (lookahead == 't') ADVANCE(397);
+      if (lookahead == 't') ADVANCE(120);
       END_STATE();
     case 380:
-      if (lookahead == 't') ADVANCE(72);
+      if (lookahead == 't') ADVANCE(123);
       END_STATE();
     case 381:
-      if (lookahead == 't') ADVANCE(75);
+      if (lookahead == 't') ADVANCE(125);
       END_STATE();
     case 382:
-      if (lookahead == 't') ADVANCE(163);
+      if (lookahead == 't') ADVANCE(126);
       END_STATE();
     case 383:
-      if (lookahead == 't') ADVANCE(164);
+      if (lookahead == 't') ADVANCE(127);
       END_STATE();
     case 384:
-      if (lookahead == 't') ADVANCE(166);
+      if (lookahead == 't') ADVANCE(129);
       END_STATE();
     case 385:
-      if (lookahead == 't') ADVANCE(54);
+      if (lookahead == 't') ADVANCE(130);
       END_STATE();
     case 386:
-      if (lookahead == 'u') ADVANCE(195);
+      if (lookahead == 't') ADVANCE(167);
       END_STATE();
     case 387:
-      if (lookahead == 'u') ADVANCE(217);
+      if (lookahead == 't') ADVANCE(204);
       END_STATE();
     case 388:
-      if (lookahead == 'u') ADVANCE(287);
+      if (lookahead == 't') ADVANCE(406);
       END_STATE();
     case 389:
-      if (lookahead == 'u') ADVANCE(289);
+      if (lookahead == 't') ADVANCE(72);
       END_STATE();
     case 390:
-      if (lookahead == 'u') ADVANCE(100);
+      if (lookahead == 't') ADVANCE(75);
       END_STATE();
     case 391:
-      if (lookahead == 'u') ADVANCE(101);
+      if (lookahead == 't') ADVANCE(168);
       END_STATE();
     case 392:
-      if (lookahead == 'u') ADVANCE(104);
+      if (lookahead == 't') ADVANCE(169);
       END_STATE();
     case 393:
-      if (lookahead == 'v') ADVANCE(512);
+      if (lookahead == 't') ADVANCE(171);
       END_STATE();
     case 394:
-      if (lookahead == 'v') ADVANCE(205);
+      if (lookahead == 't') ADVANCE(54);
       END_STATE();
     case 395:
-      if (lookahead == 'v') ADVANCE(152);
+      if (lookahead == 'u') ADVANCE(200);
       END_STATE();
     case 396:
-      if (lookahead == 'w') ADVANCE(272);
+      if (lookahead == 'u') ADVANCE(222);
       END_STATE();
     case 397:
-      if (lookahead == 'w') ADVANCE(277);
+      if (lookahead == 'u') ADVANCE(292);
       END_STATE();
     case 398:
-      if (lookahead == 'x') ADVANCE(492);
+      if (lookahead == 'u') ADVANCE(294);
       END_STATE();
     case 399:
-      if (lookahead == 'x') ADVANCE(490);
+      if (lookahead == 'u') ADVANCE(103);
       END_STATE();
     case 400:
-      if (lookahead == 'y') ADVANCE(468);
+      if (lookahead == 'u') ADVANCE(104);
       END_STATE();
     case 401:
-      if (('A' <= lookahead && lookahead <= 'Z') ||
-          lookahead == '_' ||
-          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(937);
+      if (lookahead == 'u') ADVANCE(107);
       END_STATE();
     case 402:
+      if (lookahead == 'v') ADVANCE(524);
+      END_STATE();
+    case 403:
+      if (lookahead == 'v') ADVANCE(210);
+      END_STATE();
+    case 404:
+      if (lookahead == 'v') ADVANCE(156);
+      END_STATE();
+    case 405:
+      if (lookahead == 'w') ADVANCE(276);
+      END_STATE();
+    case 406:
+      if (lookahead == 'w') ADVANCE(281);
+      END_STATE();
+    case 407:
+      if (lookahead == 'x') ADVANCE(504);
+      END_STATE();
+    case 408:
+      if (lookahead == 'x') ADVANCE(502);
+      END_STATE();
+    case 409:
+      if (lookahead == 'y') ADVANCE(480);
+      END_STATE();
+    case 410:
+      if (('A' <= lookahead && lookahead <= 'Z') ||
+          lookahead == '_' ||
+          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(957);
+      END_STATE();
+    case 411:
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -2900,9 +2945,9 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(552);
+          lookahead != ',') ADVANCE(564);
       END_STATE();
-    case 403:
+    case 412:
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -2910,9 +2955,9 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '#' &&
           lookahead != '%' &&
           lookahead != '(' &&
-          lookahead != ',') ADVANCE(550);
+          lookahead != ',') ADVANCE(562);
       END_STATE();
-    case 404:
+    case 413:
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -2920,769 +2965,789 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '#' &&
           lookahead != '%' &&
           lookahead != '(' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 405:
+    case 414:
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
           lookahead != '%' &&
-          lookahead != '(') ADVANCE(544);
+          lookahead != '(') ADVANCE(556);
       END_STATE();
-    case 406:
+    case 415:
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
           lookahead != '%' &&
-          lookahead != '(') ADVANCE(547);
+          lookahead != '(') ADVANCE(559);
       END_STATE();
-    case 407:
+    case 416:
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
-          lookahead != '(') ADVANCE(932);
+          lookahead != '(') ADVANCE(952);
       END_STATE();
-    case 408:
+    case 417:
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
-          lookahead != '(') ADVANCE(936);
+          lookahead != '(') ADVANCE(956);
       END_STATE();
-    case 409:
+    case 418:
       if (lookahead != 0 &&
-          lookahead != '\n') ADVANCE(533);
+          lookahead != '\n') ADVANCE(545);
       END_STATE();
-    case 410:
-      if (eof) ADVANCE(419);
+    case 419:
+      if (eof) ADVANCE(428);
       ADVANCE_MAP(
-        '\n', 944,
-        '"', 528,
-        '#', 943,
-        '%', 534,
-        '(', 456,
-        ')', 458,
-        ',', 457,
-        ':', 462,
-        '=', 459,
-        '[', 474,
-        ']', 477,
-        'a', 92,
+        '\n', 964,
+        '"', 540,
+        '#', 963,
+        '%', 546,
+        '(', 468,
+        ')', 470,
+        ',', 469,
+        ':', 474,
+        '=', 471,
+        '[', 486,
+        ']', 489,
+        'a', 82,
         'b', 65,
-        'd', 107,
-        'e', 242,
-        'f', 211,
-        'g', 108,
-        'h', 269,
-        'i', 167,
-        'l', 266,
-        'm', 109,
-        'n', 128,
-        'o', 292,
-        'p', 200,
-        'r', 110,
-        's', 187,
-        't', 129,
-        'u', 341,
+        'd', 110,
+        'e', 247,
+        'f', 216,
+        'g', 111,
+        'h', 273,
+        'i', 172,
+        'l', 271,
+        'm', 112,
+        'n', 131,
+        'o', 297,
+        'p', 205,
+        'r', 113,
+        's', 192,
+        't', 132,
+        'u', 348,
       );
       if (('\t' <= lookahead && lookahead <= '\r') ||
           lookahead == ' ' ||
-          lookahead == 0xfeff) SKIP(410);
-      END_STATE();
-    case 411:
-      if (eof) ADVANCE(419);
-      ADVANCE_MAP(
-        '\n', 944,
-        '"', 528,
-        '#', 943,
-        '%', 33,
-        'a', 609,
-        'd', 628,
-        'f', 722,
-        'g', 804,
-        'h', 766,
-        'i', 681,
-        'l', 763,
-        'm', 629,
-        'n', 645,
-        'o', 785,
-        'p', 713,
-        'r', 630,
-        's', 840,
-        't', 646,
-        'u', 826,
-        0xfeff, 553,
-      );
-      if (('\t' <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ') SKIP(411);
-      if (lookahead != 0 &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 412:
-      if (eof) ADVANCE(419);
-      ADVANCE_MAP(
-        '\n', 944,
-        '"', 528,
-        '#', 943,
-        '%', 33,
-        'a', 609,
-        'd', 674,
-        'f', 722,
-        'g', 813,
-        'h', 779,
-        'i', 682,
-        'l', 777,
-        'm', 629,
-        'n', 666,
-        'o', 785,
-        'p', 714,
-        'r', 630,
-        's', 853,
-        't', 679,
-        'u', 826,
-        0xfeff, 554,
-      );
-      if (('\t' <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ') SKIP(412);
-      if (lookahead != 0 &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 413:
-      if (eof) ADVANCE(419);
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(537);
-      if (lookahead == ',') ADVANCE(457);
-      if (lookahead == '[') ADVANCE(475);
-      if (lookahead == 0xfeff) ADVANCE(548);
-      if (('\t' <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ') SKIP(413);
-      if (lookahead != 0) ADVANCE(550);
-      END_STATE();
-    case 414:
-      if (eof) ADVANCE(419);
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(537);
-      if (lookahead == ',') ADVANCE(457);
-      if (lookahead == 0xfeff) ADVANCE(549);
-      if (('\t' <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ') SKIP(414);
-      if (lookahead != 0) ADVANCE(550);
-      END_STATE();
-    case 415:
-      if (eof) ADVANCE(419);
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(539);
-      if (lookahead == '[') ADVANCE(476);
-      if (lookahead == 0xfeff) ADVANCE(542);
-      if (('\t' <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ') SKIP(415);
-      if (lookahead != 0) ADVANCE(544);
-      END_STATE();
-    case 416:
-      if (eof) ADVANCE(419);
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(539);
-      if (lookahead == 0xfeff) ADVANCE(543);
-      if (('\t' <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ') SKIP(416);
-      if (lookahead != 0) ADVANCE(544);
-      END_STATE();
-    case 417:
-      if (eof) ADVANCE(419);
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(538);
-      if (lookahead == ':') ADVANCE(462);
-      if (lookahead == 0xfeff) ADVANCE(546);
-      if (('\t' <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ') SKIP(417);
-      if (lookahead != 0) ADVANCE(547);
-      END_STATE();
-    case 418:
-      if (eof) ADVANCE(419);
-      if (lookahead == '\n') ADVANCE(944);
-      if (lookahead == '"') ADVANCE(528);
-      if (lookahead == '#') ADVANCE(943);
-      if (lookahead == '%') ADVANCE(538);
-      if (lookahead == 0xfeff) ADVANCE(545);
-      if (('\t' <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ') SKIP(418);
-      if (lookahead != 0 &&
-          lookahead != ':') ADVANCE(547);
-      END_STATE();
-    case 419:
-      ACCEPT_TOKEN(ts_builtin_sym_end);
+          lookahead == 0xfeff) SKIP(419);
       END_STATE();
     case 420:
-      ACCEPT_TOKEN(anon_sym_instance);
+      if (eof) ADVANCE(428);
+      ADVANCE_MAP(
+        '\n', 964,
+        '"', 540,
+        '#', 963,
+        '%', 33,
+        'a', 610,
+        'd', 643,
+        'f', 739,
+        'g', 821,
+        'h', 782,
+        'i', 698,
+        'l', 780,
+        'm', 644,
+        'n', 660,
+        'o', 802,
+        'p', 730,
+        'r', 645,
+        's', 860,
+        't', 661,
+        'u', 844,
+        0xfeff, 565,
+      );
+      if (('\t' <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ') SKIP(420);
+      if (lookahead != 0 &&
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 421:
-      ACCEPT_TOKEN(anon_sym_instance);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
+      if (eof) ADVANCE(428);
+      ADVANCE_MAP(
+        '\n', 964,
+        '"', 540,
+        '#', 963,
+        '%', 33,
+        'a', 622,
+        'd', 691,
+        'f', 739,
+        'g', 830,
+        'h', 795,
+        'i', 699,
+        'l', 794,
+        'm', 644,
+        'n', 681,
+        'o', 802,
+        'p', 731,
+        'r', 645,
+        's', 873,
+        't', 696,
+        'u', 844,
+        0xfeff, 567,
+      );
+      if (('\t' <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ') SKIP(421);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 422:
-      ACCEPT_TOKEN(anon_sym_instance);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
+      if (eof) ADVANCE(428);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(549);
+      if (lookahead == ',') ADVANCE(469);
+      if (lookahead == '[') ADVANCE(487);
+      if (lookahead == 0xfeff) ADVANCE(560);
+      if (('\t' <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ') SKIP(422);
+      if (lookahead != 0) ADVANCE(562);
       END_STATE();
     case 423:
-      ACCEPT_TOKEN(anon_sym_defines);
+      if (eof) ADVANCE(428);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(549);
+      if (lookahead == ',') ADVANCE(469);
+      if (lookahead == 0xfeff) ADVANCE(561);
+      if (('\t' <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ') SKIP(423);
+      if (lookahead != 0) ADVANCE(562);
       END_STATE();
     case 424:
-      ACCEPT_TOKEN(anon_sym_defines);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+      if (eof) ADVANCE(428);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(551);
+      if (lookahead == '[') ADVANCE(488);
+      if (lookahead == 0xfeff) ADVANCE(554);
+      if (('\t' <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ') SKIP(424);
+      if (lookahead != 0) ADVANCE(556);
       END_STATE();
     case 425:
-      ACCEPT_TOKEN(anon_sym_defines);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
+      if (eof) ADVANCE(428);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(551);
+      if (lookahead == 0xfeff) ADVANCE(555);
+      if (('\t' <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ') SKIP(425);
+      if (lookahead != 0) ADVANCE(556);
       END_STATE();
     case 426:
-      ACCEPT_TOKEN(anon_sym_hosts);
+      if (eof) ADVANCE(428);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(550);
+      if (lookahead == ':') ADVANCE(474);
+      if (lookahead == 0xfeff) ADVANCE(558);
+      if (('\t' <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ') SKIP(426);
+      if (lookahead != 0) ADVANCE(559);
       END_STATE();
     case 427:
-      ACCEPT_TOKEN(anon_sym_hosts);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
+      if (eof) ADVANCE(428);
+      if (lookahead == '\n') ADVANCE(964);
+      if (lookahead == '"') ADVANCE(540);
+      if (lookahead == '#') ADVANCE(963);
+      if (lookahead == '%') ADVANCE(550);
+      if (lookahead == 0xfeff) ADVANCE(557);
+      if (('\t' <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ') SKIP(427);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != ':') ADVANCE(559);
       END_STATE();
     case 428:
-      ACCEPT_TOKEN(anon_sym_hosts);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
+      ACCEPT_TOKEN(ts_builtin_sym_end);
       END_STATE();
     case 429:
-      ACCEPT_TOKEN(anon_sym_node_map);
+      ACCEPT_TOKEN(anon_sym_instance);
       END_STATE();
     case 430:
-      ACCEPT_TOKEN(anon_sym_node_map);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_instance);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 431:
-      ACCEPT_TOKEN(anon_sym_node_map);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_instance);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
     case 432:
-      ACCEPT_TOKEN(anon_sym_topics);
+      ACCEPT_TOKEN(anon_sym_defines);
       END_STATE();
     case 433:
-      ACCEPT_TOKEN(anon_sym_topics);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_defines);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 434:
-      ACCEPT_TOKEN(anon_sym_topics);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_defines);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
     case 435:
-      ACCEPT_TOKEN(anon_sym_process);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '_') ADVANCE(856);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+      ACCEPT_TOKEN(anon_sym_hosts);
       END_STATE();
     case 436:
-      ACCEPT_TOKEN(anon_sym_process);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '_') ADVANCE(382);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      END_STATE();
-    case 437:
-      ACCEPT_TOKEN(anon_sym_process);
-      if (lookahead == '_') ADVANCE(384);
-      END_STATE();
-    case 438:
-      ACCEPT_TOKEN(anon_sym_state);
-      END_STATE();
-    case 439:
-      ACCEPT_TOKEN(anon_sym_state);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_hosts);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 437:
+      ACCEPT_TOKEN(anon_sym_hosts);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      END_STATE();
+    case 438:
+      ACCEPT_TOKEN(anon_sym_node_map);
+      END_STATE();
+    case 439:
+      ACCEPT_TOKEN(anon_sym_node_map);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 440:
-      ACCEPT_TOKEN(anon_sym_state);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_node_map);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
     case 441:
-      ACCEPT_TOKEN(anon_sym_group);
+      ACCEPT_TOKEN(anon_sym_topics);
       END_STATE();
     case 442:
-      ACCEPT_TOKEN(anon_sym_group);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_topics);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 443:
-      ACCEPT_TOKEN(anon_sym_group);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_topics);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
     case 444:
-      ACCEPT_TOKEN(anon_sym_network);
+      ACCEPT_TOKEN(anon_sym_access);
       END_STATE();
     case 445:
-      ACCEPT_TOKEN(anon_sym_network);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_access);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 446:
-      ACCEPT_TOKEN(anon_sym_network);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_access);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
     case 447:
-      ACCEPT_TOKEN(anon_sym_logger);
+      ACCEPT_TOKEN(anon_sym_process);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '_') ADVANCE(876);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 448:
-      ACCEPT_TOKEN(anon_sym_logger);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_process);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '_') ADVANCE(391);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
       END_STATE();
     case 449:
-      ACCEPT_TOKEN(anon_sym_logger);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
+      ACCEPT_TOKEN(anon_sym_process);
+      if (lookahead == '_') ADVANCE(393);
       END_STATE();
     case 450:
-      ACCEPT_TOKEN(anon_sym_template);
+      ACCEPT_TOKEN(anon_sym_state);
       END_STATE();
     case 451:
-      ACCEPT_TOKEN(anon_sym_template);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_state);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 452:
-      ACCEPT_TOKEN(anon_sym_template);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_state);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
     case 453:
-      ACCEPT_TOKEN(anon_sym_process_template);
+      ACCEPT_TOKEN(anon_sym_group);
       END_STATE();
     case 454:
-      ACCEPT_TOKEN(anon_sym_process_template);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_group);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 455:
-      ACCEPT_TOKEN(anon_sym_process_template);
-      if (lookahead == ':') ADVANCE(874);
+      ACCEPT_TOKEN(anon_sym_group);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
     case 456:
-      ACCEPT_TOKEN(anon_sym_LPAREN);
+      ACCEPT_TOKEN(anon_sym_network);
       END_STATE();
     case 457:
-      ACCEPT_TOKEN(anon_sym_COMMA);
-      END_STATE();
-    case 458:
-      ACCEPT_TOKEN(anon_sym_RPAREN);
-      END_STATE();
-    case 459:
-      ACCEPT_TOKEN(anon_sym_EQ);
-      END_STATE();
-    case 460:
-      ACCEPT_TOKEN(anon_sym_add);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '_') ADVANCE(740);
+      ACCEPT_TOKEN(anon_sym_network);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 458:
+      ACCEPT_TOKEN(anon_sym_network);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      END_STATE();
+    case 459:
+      ACCEPT_TOKEN(anon_sym_logger);
+      END_STATE();
+    case 460:
+      ACCEPT_TOKEN(anon_sym_logger);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
       END_STATE();
     case 461:
-      ACCEPT_TOKEN(anon_sym_add);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '_') ADVANCE(235);
+      ACCEPT_TOKEN(anon_sym_logger);
+      if (lookahead == ':') ADVANCE(894);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(34);
       END_STATE();
     case 462:
-      ACCEPT_TOKEN(anon_sym_COLON);
+      ACCEPT_TOKEN(anon_sym_template);
       END_STATE();
     case 463:
+      ACCEPT_TOKEN(anon_sym_template);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 464:
+      ACCEPT_TOKEN(anon_sym_template);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      END_STATE();
+    case 465:
+      ACCEPT_TOKEN(anon_sym_process_template);
+      END_STATE();
+    case 466:
+      ACCEPT_TOKEN(anon_sym_process_template);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 467:
+      ACCEPT_TOKEN(anon_sym_process_template);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      END_STATE();
+    case 468:
+      ACCEPT_TOKEN(anon_sym_LPAREN);
+      END_STATE();
+    case 469:
+      ACCEPT_TOKEN(anon_sym_COMMA);
+      END_STATE();
+    case 470:
+      ACCEPT_TOKEN(anon_sym_RPAREN);
+      END_STATE();
+    case 471:
+      ACCEPT_TOKEN(anon_sym_EQ);
+      END_STATE();
+    case 472:
+      ACCEPT_TOKEN(anon_sym_add);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '_') ADVANCE(757);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 473:
+      ACCEPT_TOKEN(anon_sym_add);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '_') ADVANCE(240);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      END_STATE();
+    case 474:
       ACCEPT_TOKEN(anon_sym_COLON);
-      if (lookahead == '%') ADVANCE(406);
+      END_STATE();
+    case 475:
+      ACCEPT_TOKEN(anon_sym_COLON);
+      if (lookahead == '%') ADVANCE(415);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(30);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(547);
+          lookahead != '#') ADVANCE(559);
       END_STATE();
-    case 464:
+    case 476:
       ACCEPT_TOKEN(anon_sym_depends_on);
       END_STATE();
-    case 465:
+    case 477:
       ACCEPT_TOKEN(anon_sym_depends_on);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 466:
+    case 478:
       ACCEPT_TOKEN(anon_sym_start_before);
       END_STATE();
-    case 467:
+    case 479:
       ACCEPT_TOKEN(anon_sym_start_before);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 468:
+    case 480:
       ACCEPT_TOKEN(anon_sym_start_on_ready);
       END_STATE();
-    case 469:
+    case 481:
       ACCEPT_TOKEN(anon_sym_start_on_ready);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 470:
+    case 482:
       ACCEPT_TOKEN(anon_sym_members);
       END_STATE();
-    case 471:
+    case 483:
       ACCEPT_TOKEN(anon_sym_members);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 472:
+    case 484:
       ACCEPT_TOKEN(anon_sym_flags);
       END_STATE();
-    case 473:
+    case 485:
       ACCEPT_TOKEN(anon_sym_flags);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 474:
+    case 486:
       ACCEPT_TOKEN(anon_sym_LBRACK);
       END_STATE();
-    case 475:
+    case 487:
       ACCEPT_TOKEN(anon_sym_LBRACK);
-      if (lookahead == '%') ADVANCE(403);
+      if (lookahead == '%') ADVANCE(412);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(26);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ',') ADVANCE(550);
+          lookahead != ',') ADVANCE(562);
       END_STATE();
-    case 476:
+    case 488:
       ACCEPT_TOKEN(anon_sym_LBRACK);
-      if (lookahead == '%') ADVANCE(405);
+      if (lookahead == '%') ADVANCE(414);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(28);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(544);
+          lookahead != '#') ADVANCE(556);
       END_STATE();
-    case 477:
+    case 489:
       ACCEPT_TOKEN(anon_sym_RBRACK);
       END_STATE();
-    case 478:
+    case 490:
       ACCEPT_TOKEN(anon_sym_RBRACK);
-      if (lookahead == '%') ADVANCE(933);
+      if (lookahead == '%') ADVANCE(953);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(31);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(932);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(952);
       END_STATE();
-    case 479:
+    case 491:
       ACCEPT_TOKEN(anon_sym_RBRACK);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ') ADVANCE(932);
-      END_STATE();
-    case 480:
-      ACCEPT_TOKEN(anon_sym_include);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(695);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 481:
-      ACCEPT_TOKEN(anon_sym_include);
-      if (lookahead == '_') ADVANCE(181);
-      END_STATE();
-    case 482:
-      ACCEPT_TOKEN(anon_sym_optional_include);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(700);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 483:
-      ACCEPT_TOKEN(anon_sym_optional_include);
-      if (lookahead == '_') ADVANCE(185);
-      END_STATE();
-    case 484:
-      ACCEPT_TOKEN(anon_sym_include_glob);
-      END_STATE();
-    case 485:
-      ACCEPT_TOKEN(anon_sym_include_glob);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 486:
-      ACCEPT_TOKEN(anon_sym_optional_include_glob);
-      END_STATE();
-    case 487:
-      ACCEPT_TOKEN(anon_sym_optional_include_glob);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 488:
-      ACCEPT_TOKEN(anon_sym_pipe_include);
-      END_STATE();
-    case 489:
-      ACCEPT_TOKEN(anon_sym_pipe_include);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 490:
-      ACCEPT_TOKEN(anon_sym_push_name_prefix);
-      END_STATE();
-    case 491:
-      ACCEPT_TOKEN(anon_sym_push_name_prefix);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ' ') ADVANCE(952);
       END_STATE();
     case 492:
-      ACCEPT_TOKEN(anon_sym_pop_name_prefix);
+      ACCEPT_TOKEN(anon_sym_include);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(712);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 493:
-      ACCEPT_TOKEN(anon_sym_pop_name_prefix);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+      ACCEPT_TOKEN(anon_sym_include);
+      if (lookahead == '_') ADVANCE(186);
       END_STATE();
     case 494:
-      ACCEPT_TOKEN(anon_sym_add_message_definition_dir);
+      ACCEPT_TOKEN(anon_sym_optional_include);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(717);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 495:
-      ACCEPT_TOKEN(anon_sym_add_message_definition_dir);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+      ACCEPT_TOKEN(anon_sym_optional_include);
+      if (lookahead == '_') ADVANCE(190);
       END_STATE();
     case 496:
-      ACCEPT_TOKEN(anon_sym_requires_version);
+      ACCEPT_TOKEN(anon_sym_include_glob);
       END_STATE();
     case 497:
-      ACCEPT_TOKEN(anon_sym_requires_version);
-      if (lookahead == '%') ADVANCE(404);
+      ACCEPT_TOKEN(anon_sym_include_glob);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 498:
-      ACCEPT_TOKEN(anon_sym_add_process_default_template);
+      ACCEPT_TOKEN(anon_sym_optional_include_glob);
       END_STATE();
     case 499:
-      ACCEPT_TOKEN(anon_sym_add_process_default_template);
-      if (lookahead == '%') ADVANCE(404);
+      ACCEPT_TOKEN(anon_sym_optional_include_glob);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 500:
-      ACCEPT_TOKEN(anon_sym_use_template);
+      ACCEPT_TOKEN(anon_sym_pipe_include);
       END_STATE();
     case 501:
-      ACCEPT_TOKEN(anon_sym_use_template);
-      if (lookahead == '%') ADVANCE(404);
+      ACCEPT_TOKEN(anon_sym_pipe_include);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 502:
-      ACCEPT_TOKEN(anon_sym_ifdef);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
+      ACCEPT_TOKEN(anon_sym_push_name_prefix);
       END_STATE();
     case 503:
-      ACCEPT_TOKEN(anon_sym_ifdef);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
+      ACCEPT_TOKEN(anon_sym_push_name_prefix);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 504:
+      ACCEPT_TOKEN(anon_sym_pop_name_prefix);
+      END_STATE();
+    case 505:
+      ACCEPT_TOKEN(anon_sym_pop_name_prefix);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 506:
+      ACCEPT_TOKEN(anon_sym_add_message_definition_dir);
+      END_STATE();
+    case 507:
+      ACCEPT_TOKEN(anon_sym_add_message_definition_dir);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 508:
+      ACCEPT_TOKEN(anon_sym_requires_version);
+      END_STATE();
+    case 509:
+      ACCEPT_TOKEN(anon_sym_requires_version);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 510:
+      ACCEPT_TOKEN(anon_sym_add_process_default_template);
+      END_STATE();
+    case 511:
+      ACCEPT_TOKEN(anon_sym_add_process_default_template);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 512:
+      ACCEPT_TOKEN(anon_sym_use_template);
+      END_STATE();
+    case 513:
+      ACCEPT_TOKEN(anon_sym_use_template);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 514:
+      ACCEPT_TOKEN(anon_sym_ifdef);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 515:
+      ACCEPT_TOKEN(anon_sym_ifdef);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      END_STATE();
+    case 516:
       ACCEPT_TOKEN(anon_sym_ifdef);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
@@ -3692,94 +3757,94 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 505:
-      ACCEPT_TOKEN(anon_sym_ifndef);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
-      END_STATE();
-    case 506:
-      ACCEPT_TOKEN(anon_sym_ifndef);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      END_STATE();
-    case 507:
-      ACCEPT_TOKEN(anon_sym_ifndef);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 508:
-      ACCEPT_TOKEN(anon_sym_append);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
-      END_STATE();
-    case 509:
-      ACCEPT_TOKEN(anon_sym_append);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      END_STATE();
-    case 510:
-      ACCEPT_TOKEN(anon_sym_environment);
-      END_STATE();
-    case 511:
-      ACCEPT_TOKEN(anon_sym_PERCENT_LPAREN);
-      END_STATE();
-    case 512:
-      ACCEPT_TOKEN(anon_sym_env);
-      END_STATE();
-    case 513:
-      ACCEPT_TOKEN(anon_sym_env);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 514:
-      ACCEPT_TOKEN(anon_sym_dirname);
-      END_STATE();
-    case 515:
-      ACCEPT_TOKEN(anon_sym_dirname);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 516:
-      ACCEPT_TOKEN(anon_sym_basename);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 517:
+      ACCEPT_TOKEN(anon_sym_ifndef);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 518:
+      ACCEPT_TOKEN(anon_sym_ifndef);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      END_STATE();
+    case 519:
+      ACCEPT_TOKEN(anon_sym_ifndef);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 520:
+      ACCEPT_TOKEN(anon_sym_append);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 521:
+      ACCEPT_TOKEN(anon_sym_append);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      END_STATE();
+    case 522:
+      ACCEPT_TOKEN(anon_sym_environment);
+      END_STATE();
+    case 523:
+      ACCEPT_TOKEN(anon_sym_PERCENT_LPAREN);
+      END_STATE();
+    case 524:
+      ACCEPT_TOKEN(anon_sym_env);
+      END_STATE();
+    case 525:
+      ACCEPT_TOKEN(anon_sym_env);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 526:
+      ACCEPT_TOKEN(anon_sym_dirname);
+      END_STATE();
+    case 527:
+      ACCEPT_TOKEN(anon_sym_dirname);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 528:
+      ACCEPT_TOKEN(anon_sym_basename);
+      END_STATE();
+    case 529:
       ACCEPT_TOKEN(anon_sym_basename);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
@@ -3789,136 +3854,136 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 518:
-      ACCEPT_TOKEN(anon_sym_subst);
-      END_STATE();
-    case 519:
-      ACCEPT_TOKEN(anon_sym_subst);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 520:
-      ACCEPT_TOKEN(anon_sym_get_port_from_string);
-      END_STATE();
-    case 521:
-      ACCEPT_TOKEN(anon_sym_get_port_from_string);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 522:
-      ACCEPT_TOKEN(anon_sym_shell);
-      END_STATE();
-    case 523:
-      ACCEPT_TOKEN(anon_sym_shell);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 524:
-      ACCEPT_TOKEN(anon_sym_ifeq);
-      END_STATE();
-    case 525:
-      ACCEPT_TOKEN(anon_sym_ifeq);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 526:
-      ACCEPT_TOKEN(anon_sym_ifexists);
-      END_STATE();
-    case 527:
-      ACCEPT_TOKEN(anon_sym_ifexists);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
-      END_STATE();
-    case 528:
-      ACCEPT_TOKEN(anon_sym_DQUOTE);
-      END_STATE();
-    case 529:
-      ACCEPT_TOKEN(anon_sym_PERCENT);
-      if (lookahead == '(') ADVANCE(511);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 530:
-      ACCEPT_TOKEN(anon_sym_DQUOTE2);
+      ACCEPT_TOKEN(anon_sym_subst);
       END_STATE();
     case 531:
+      ACCEPT_TOKEN(anon_sym_subst);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 532:
+      ACCEPT_TOKEN(anon_sym_get_port_from_string);
+      END_STATE();
+    case 533:
+      ACCEPT_TOKEN(anon_sym_get_port_from_string);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 534:
+      ACCEPT_TOKEN(anon_sym_shell);
+      END_STATE();
+    case 535:
+      ACCEPT_TOKEN(anon_sym_shell);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 536:
+      ACCEPT_TOKEN(anon_sym_ifeq);
+      END_STATE();
+    case 537:
+      ACCEPT_TOKEN(anon_sym_ifeq);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 538:
+      ACCEPT_TOKEN(anon_sym_ifexists);
+      END_STATE();
+    case 539:
+      ACCEPT_TOKEN(anon_sym_ifexists);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 540:
+      ACCEPT_TOKEN(anon_sym_DQUOTE);
+      END_STATE();
+    case 541:
+      ACCEPT_TOKEN(anon_sym_PERCENT);
+      if (lookahead == '(') ADVANCE(523);
+      END_STATE();
+    case 542:
+      ACCEPT_TOKEN(anon_sym_DQUOTE2);
+      END_STATE();
+    case 543:
       ACCEPT_TOKEN(sym_string_content);
-      if (lookahead == '#') ADVANCE(532);
+      if (lookahead == '#') ADVANCE(544);
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
           lookahead == ' ' ||
-          lookahead == 0xfeff) ADVANCE(531);
+          lookahead == 0xfeff) ADVANCE(543);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
           lookahead != '#' &&
           lookahead != '%' &&
-          lookahead != '\\') ADVANCE(532);
+          lookahead != '\\') ADVANCE(544);
       END_STATE();
-    case 532:
+    case 544:
       ACCEPT_TOKEN(sym_string_content);
       if (lookahead != 0 &&
           lookahead != '\n' &&
           lookahead != '"' &&
           lookahead != '%' &&
-          lookahead != '\\') ADVANCE(532);
+          lookahead != '\\') ADVANCE(544);
       END_STATE();
-    case 533:
+    case 545:
       ACCEPT_TOKEN(sym_escape_sequence);
       END_STATE();
-    case 534:
+    case 546:
       ACCEPT_TOKEN(anon_sym_PERCENT2);
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       END_STATE();
-    case 535:
+    case 547:
       ACCEPT_TOKEN(anon_sym_PERCENT2);
-      if (lookahead == '(') ADVANCE(511);
-      if (lookahead == ':') ADVANCE(547);
+      if (lookahead == '(') ADVANCE(523);
+      if (lookahead == ':') ADVANCE(559);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%') ADVANCE(547);
+          lookahead != '%') ADVANCE(559);
       END_STATE();
-    case 536:
+    case 548:
       ACCEPT_TOKEN(anon_sym_PERCENT2);
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -3927,161 +3992,161 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(552);
+          lookahead != ',') ADVANCE(564);
       END_STATE();
-    case 537:
+    case 549:
       ACCEPT_TOKEN(anon_sym_PERCENT2);
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
           lookahead != '%' &&
-          lookahead != ',') ADVANCE(550);
+          lookahead != ',') ADVANCE(562);
       END_STATE();
-    case 538:
+    case 550:
       ACCEPT_TOKEN(anon_sym_PERCENT2);
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
           lookahead != '%' &&
-          lookahead != ':') ADVANCE(547);
+          lookahead != ':') ADVANCE(559);
       END_STATE();
-    case 539:
+    case 551:
       ACCEPT_TOKEN(anon_sym_PERCENT2);
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%') ADVANCE(544);
+          lookahead != '%') ADVANCE(556);
       END_STATE();
-    case 540:
+    case 552:
       ACCEPT_TOKEN(anon_sym_PERCENT2);
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ') ADVANCE(932);
+          lookahead != ' ') ADVANCE(952);
       END_STATE();
-    case 541:
+    case 553:
       ACCEPT_TOKEN(anon_sym_PERCENT2);
-      if (lookahead == '(') ADVANCE(511);
+      if (lookahead == '(') ADVANCE(523);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ') ADVANCE(936);
+          lookahead != ' ') ADVANCE(956);
       END_STATE();
-    case 542:
+    case 554:
       ACCEPT_TOKEN(sym_text);
-      if (lookahead == '%') ADVANCE(539);
-      if (lookahead == '[') ADVANCE(476);
-      if (lookahead == 0xfeff) ADVANCE(542);
+      if (lookahead == '%') ADVANCE(551);
+      if (lookahead == '[') ADVANCE(488);
+      if (lookahead == 0xfeff) ADVANCE(554);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(5);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(544);
+          lookahead != '#') ADVANCE(556);
       END_STATE();
-    case 543:
+    case 555:
       ACCEPT_TOKEN(sym_text);
-      if (lookahead == '%') ADVANCE(539);
-      if (lookahead == 0xfeff) ADVANCE(543);
+      if (lookahead == '%') ADVANCE(551);
+      if (lookahead == 0xfeff) ADVANCE(555);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(7);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(544);
+          lookahead != '#') ADVANCE(556);
       END_STATE();
-    case 544:
+    case 556:
       ACCEPT_TOKEN(sym_text);
-      if (lookahead == '%') ADVANCE(405);
+      if (lookahead == '%') ADVANCE(414);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(28);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(544);
+          lookahead != '#') ADVANCE(556);
       END_STATE();
-    case 545:
+    case 557:
       ACCEPT_TOKEN(sym__first_text);
-      if (lookahead == '%') ADVANCE(535);
-      if (lookahead == ':') ADVANCE(547);
-      if (lookahead == 0xfeff) ADVANCE(545);
+      if (lookahead == '%') ADVANCE(547);
+      if (lookahead == ':') ADVANCE(559);
+      if (lookahead == 0xfeff) ADVANCE(557);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(11);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(547);
+          lookahead != '#') ADVANCE(559);
       END_STATE();
-    case 546:
+    case 558:
       ACCEPT_TOKEN(sym__first_text);
-      if (lookahead == '%') ADVANCE(535);
-      if (lookahead == ':') ADVANCE(463);
-      if (lookahead == 0xfeff) ADVANCE(546);
+      if (lookahead == '%') ADVANCE(547);
+      if (lookahead == ':') ADVANCE(475);
+      if (lookahead == 0xfeff) ADVANCE(558);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(12);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(547);
+          lookahead != '#') ADVANCE(559);
       END_STATE();
-    case 547:
+    case 559:
       ACCEPT_TOKEN(sym__first_text);
-      if (lookahead == '%') ADVANCE(406);
+      if (lookahead == '%') ADVANCE(415);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(30);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
-          lookahead != '#') ADVANCE(547);
+          lookahead != '#') ADVANCE(559);
       END_STATE();
-    case 548:
+    case 560:
       ACCEPT_TOKEN(sym__item_text);
-      if (lookahead == '%') ADVANCE(537);
-      if (lookahead == '[') ADVANCE(475);
-      if (lookahead == 0xfeff) ADVANCE(548);
+      if (lookahead == '%') ADVANCE(549);
+      if (lookahead == '[') ADVANCE(487);
+      if (lookahead == 0xfeff) ADVANCE(560);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(1);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ',') ADVANCE(550);
+          lookahead != ',') ADVANCE(562);
       END_STATE();
-    case 549:
+    case 561:
       ACCEPT_TOKEN(sym__item_text);
-      if (lookahead == '%') ADVANCE(537);
-      if (lookahead == 0xfeff) ADVANCE(549);
+      if (lookahead == '%') ADVANCE(549);
+      if (lookahead == 0xfeff) ADVANCE(561);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(3);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ',') ADVANCE(550);
+          lookahead != ',') ADVANCE(562);
       END_STATE();
-    case 550:
+    case 562:
       ACCEPT_TOKEN(sym__item_text);
-      if (lookahead == '%') ADVANCE(403);
+      if (lookahead == '%') ADVANCE(412);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(26);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ',') ADVANCE(550);
+          lookahead != ',') ADVANCE(562);
       END_STATE();
-    case 551:
+    case 563:
       ACCEPT_TOKEN(sym__argument_text);
-      if (lookahead == '%') ADVANCE(536);
-      if (lookahead == 0xfeff) ADVANCE(551);
+      if (lookahead == '%') ADVANCE(548);
+      if (lookahead == 0xfeff) ADVANCE(563);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(20);
       if (lookahead != 0 &&
@@ -4090,11 +4155,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '#' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(552);
+          lookahead != ',') ADVANCE(564);
       END_STATE();
-    case 552:
+    case 564:
       ACCEPT_TOKEN(sym__argument_text);
-      if (lookahead == '%') ADVANCE(402);
+      if (lookahead == '%') ADVANCE(411);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(27);
       if (lookahead != 0 &&
@@ -4103,3886 +4168,3710 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '#' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(552);
-      END_STATE();
-    case 553:
-      ACCEPT_TOKEN(sym__key_text);
-      ADVANCE_MAP(
-        '%', 33,
-        'a', 609,
-        'd', 628,
-        'f', 722,
-        'g', 804,
-        'h', 766,
-        'i', 681,
-        'l', 763,
-        'm', 629,
-        'n', 645,
-        'o', 785,
-        'p', 713,
-        'r', 630,
-        's', 840,
-        't', 646,
-        'u', 826,
-        0xfeff, 553,
-      );
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 554:
-      ACCEPT_TOKEN(sym__key_text);
-      ADVANCE_MAP(
-        '%', 33,
-        'a', 609,
-        'd', 674,
-        'f', 722,
-        'g', 813,
-        'h', 779,
-        'i', 682,
-        'l', 777,
-        'm', 629,
-        'n', 666,
-        'o', 785,
-        'p', 714,
-        'r', 630,
-        's', 853,
-        't', 679,
-        'u', 826,
-        0xfeff, 554,
-      );
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 555:
-      ACCEPT_TOKEN(sym__key_text);
-      ADVANCE_MAP(
-        '%', 33,
-        'a', 616,
-        'd', 674,
-        'f', 722,
-        'g', 813,
-        'h', 779,
-        'i', 691,
-        'l', 777,
-        'm', 629,
-        'n', 666,
-        'p', 816,
-        's', 853,
-        't', 679,
-        0xfeff, 555,
-      );
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 556:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(33);
-      if (lookahead == 0xfeff) ADVANCE(556);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 557:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '_') ADVANCE(858);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
-      END_STATE();
-    case 558:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == ':') ADVANCE(874);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(34);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != '"' &&
-          lookahead != '#') ADVANCE(873);
-      END_STATE();
-    case 559:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(597);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 560:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(867);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 561:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(737);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 562:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(751);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 563:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(845);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 564:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(626);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ',') ADVANCE(564);
       END_STATE();
     case 565:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(770);
+      ADVANCE_MAP(
+        '%', 33,
+        'a', 610,
+        'd', 643,
+        'f', 739,
+        'g', 821,
+        'h', 782,
+        'i', 698,
+        'l', 780,
+        'm', 644,
+        'n', 660,
+        'o', 802,
+        'p', 730,
+        'r', 645,
+        's', 860,
+        't', 661,
+        'u', 844,
+        0xfeff, 565,
+      );
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 566:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(792);
+      ADVANCE_MAP(
+        '%', 33,
+        'a', 623,
+        'd', 691,
+        'f', 739,
+        'g', 830,
+        'h', 795,
+        'i', 708,
+        'l', 794,
+        'm', 644,
+        'n', 681,
+        'p', 833,
+        's', 873,
+        't', 696,
+        0xfeff, 566,
+      );
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 567:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(708);
+      ADVANCE_MAP(
+        '%', 33,
+        'a', 622,
+        'd', 691,
+        'f', 739,
+        'g', 830,
+        'h', 795,
+        'i', 699,
+        'l', 794,
+        'm', 644,
+        'n', 681,
+        'o', 802,
+        'p', 731,
+        'r', 645,
+        's', 873,
+        't', 696,
+        'u', 844,
+        0xfeff, 567,
+      );
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 568:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(33);
+      if (lookahead == 0xfeff) ADVANCE(568);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 569:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '_') ADVANCE(878);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 570:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == ':') ADVANCE(894);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(34);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != '"' &&
+          lookahead != '#') ADVANCE(893);
+      END_STATE();
+    case 571:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(609);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 572:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(887);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 573:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(754);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 574:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(768);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 575:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(865);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 576:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(641);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 577:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(786);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 578:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(808);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 579:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(725);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 580:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(827);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 581:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(636);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 582:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(637);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 583:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(756);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 584:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead == '_') ADVANCE(810);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 569:
+    case 585:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(621);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(736);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 570:
+    case 586:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(622);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(779);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 571:
+    case 587:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(739);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == '_') ADVANCE(877);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 572:
+    case 588:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(793);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(822);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 573:
+    case 589:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(719);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(713);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 574:
+    case 590:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(762);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(751);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 575:
+    case 591:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == '_') ADVANCE(857);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(755);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 576:
+    case 592:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(805);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(881);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 577:
+    case 593:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(696);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(776);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 578:
+    case 594:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(734);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(628);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 579:
+    case 595:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(738);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(800);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 580:
+    case 596:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(861);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(801);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 581:
+    case 597:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(823);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 598:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(715);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 599:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(867);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 600:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(868);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 601:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(869);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 602:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(870);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 603:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(871);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 604:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'a') ADVANCE(777);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 605:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead == 'a') ADVANCE(759);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 582:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(612);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 583:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(783);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 584:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(784);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 585:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(806);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 586:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(698);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 587:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(847);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 588:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(848);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 589:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(849);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 590:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(850);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 591:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(851);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 592:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(760);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 593:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'a') ADVANCE(742);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 594:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'b') ADVANCE(485);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 595:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'b') ADVANCE(487);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 596:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'b') ADVANCE(649);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 597:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'b') ADVANCE(651);
-      if (lookahead == 'o') ADVANCE(755);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 598:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(723);
-      if (lookahead == 's') ADVANCE(842);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 599:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(723);
-      if (lookahead == 's') ADVANCE(855);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 600:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(820);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 601:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(655);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 602:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(824);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 603:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(635);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 604:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(643);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 605:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(671);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 606:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(672);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'b') ADVANCE(497);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 607:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(728);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'b') ADVANCE(499);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 608:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'c') ADVANCE(730);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'b') ADVANCE(664);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 609:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(610);
-      if (lookahead == 'p') ADVANCE(787);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'b') ADVANCE(666);
+      if (lookahead == 'o') ADVANCE(772);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 610:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(460);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(613);
+      if (lookahead == 'd') ADVANCE(626);
+      if (lookahead == 'p') ADVANCE(804);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 611:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(508);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(740);
+      if (lookahead == 's') ADVANCE(862);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 612:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(872);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(740);
+      if (lookahead == 's') ADVANCE(875);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 613:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(558);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(667);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 614:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(632);
-      if (lookahead == 'n') ADVANCE(617);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(838);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 615:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(650);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(842);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 616:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(613);
-      if (lookahead == 'p') ADVANCE(791);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(650);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 617:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(648);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(658);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 618:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(828);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(683);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 619:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(634);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(687);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 620:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(637);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(688);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 621:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(654);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(689);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 622:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(656);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(620);
+      if (lookahead == 'd') ADVANCE(626);
+      if (lookahead == 'p') ADVANCE(804);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 623:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(640);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(620);
+      if (lookahead == 'd') ADVANCE(629);
+      if (lookahead == 'p') ADVANCE(809);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 624:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(659);
-      if (lookahead == 'n') ADVANCE(625);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(745);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 625:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(659);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'c') ADVANCE(747);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 626:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(709);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(472);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 627:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'd') ADVANCE(673);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(520);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 628:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(683);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(892);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 629:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(735);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(570);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 630:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(798);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(647);
+      if (lookahead == 'n') ADVANCE(632);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 631:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(748);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(665);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 632:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(684);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(663);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 633:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(439);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(846);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 634:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(480);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(649);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 635:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(421);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(652);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 636:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(451);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(670);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 637:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(489);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(671);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 638:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(467);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(655);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 639:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(501);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(674);
+      if (lookahead == 'n') ADVANCE(640);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 640:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(482);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(674);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 641:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(454);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(726);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 642:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(499);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'd') ADVANCE(690);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 643:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(558);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(700);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 644:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(799);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 645:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(839);
-      if (lookahead == 'o') ADVANCE(615);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 646:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(736);
-      if (lookahead == 'o') ADVANCE(786);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 647:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(563);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 648:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(685);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 649:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(807);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 650:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(561);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 651:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(689);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 652:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(567);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 653:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(687);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 654:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(692);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 655:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(830);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 656:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(690);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 657:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(802);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 658:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(566);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 659:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(686);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 660:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(821);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 661:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(582);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 662:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(569);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 663:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(829);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 664:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(824);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 665:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(750);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 666:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(852);
-      if (lookahead == 'o') ADVANCE(627);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 667:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(808);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 668:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(688);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 669:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(831);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 670:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead == 'e') ADVANCE(752);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 671:
+    case 645:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(832);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(815);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 672:
+    case 646:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(833);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(766);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 673:
+    case 647:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(571);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(701);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 674:
+    case 648:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(693);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(451);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 675:
+    case 649:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(572);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(492);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 676:
+    case 650:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(741);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(430);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 677:
+    case 651:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(743);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(463);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 678:
+    case 652:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(744);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(501);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 679:
+    case 653:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(745);
-      if (lookahead == 'o') ADVANCE(790);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(479);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 680:
+    case 654:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'e') ADVANCE(745);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(513);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 681:
+    case 655:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(614);
-      if (lookahead == 'n') ADVANCE(598);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(494);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 682:
+    case 656:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(614);
-      if (lookahead == 'n') ADVANCE(599);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(466);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 683:
+    case 657:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(705);
-      if (lookahead == 'p') ADVANCE(665);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(511);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 684:
+    case 658:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(502);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(570);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 685:
+    case 659:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(505);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(816);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 686:
+    case 660:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(558);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(859);
+      if (lookahead == 'o') ADVANCE(631);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 687:
+    case 661:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(703);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 688:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(706);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 689:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(776);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 690:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(580);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 691:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(624);
-      if (lookahead == 'n') ADVANCE(838);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 692:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(711);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 693:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'f') ADVANCE(716);
-      if (lookahead == 'p') ADVANCE(665);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 694:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'g') ADVANCE(697);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 695:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'g') ADVANCE(726);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 696:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'g') ADVANCE(818);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 697:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'g') ADVANCE(644);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 698:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'g') ADVANCE(662);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 699:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'g') ADVANCE(657);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 700:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'g') ADVANCE(727);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 701:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'g') ADVANCE(699);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 702:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'h') ADVANCE(574);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 703:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(870);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 704:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(600);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 705:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(757);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 706:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(871);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 707:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(809);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 708:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(749);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 709:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(801);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 710:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(774);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 711:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(754);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 712:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(775);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 713:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(788);
-      if (lookahead == 'o') ADVANCE(781);
-      if (lookahead == 'r') ADVANCE(765);
-      if (lookahead == 'u') ADVANCE(817);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 714:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(788);
-      if (lookahead == 'o') ADVANCE(781);
-      if (lookahead == 'r') ADVANCE(780);
-      if (lookahead == 'u') ADVANCE(817);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 715:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(602);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 716:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(758);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 717:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(854);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 718:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(772);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 719:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'i') ADVANCE(761);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 720:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'k') ADVANCE(445);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 721:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'k') ADVANCE(558);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 722:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(577);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 723:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(864);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 724:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(587);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 725:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(859);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 726:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(767);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 727:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(768);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 728:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(865);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 729:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(588);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 730:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(866);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 731:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(589);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 732:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(590);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 733:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(591);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 734:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'l') ADVANCE(573);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 735:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(596);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 736:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(789);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 737:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(583);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 738:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(658);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 739:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(584);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 740:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(669);
-      if (lookahead == 'p') ADVANCE(815);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 741:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(794);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 742:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(675);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 743:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(795);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 744:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(796);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 745:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'm') ADVANCE(797);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 746:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(465);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 747:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(497);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 748:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(611);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 749:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(607);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 750:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(618);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 751:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(579);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 752:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(613);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 753:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(578);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 754:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(717);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 755:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(568);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 756:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(564);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 757:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(660);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 758:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(664);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 759:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(603);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 760:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(604);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 761:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(608);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 762:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'n') ADVANCE(593);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 763:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(694);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 764:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(862);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 765:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(601);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 766:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(827);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 767:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(594);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 768:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(595);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 769:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(800);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 770:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(746);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 771:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(753);
       if (lookahead == 'o') ADVANCE(803);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 662:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(575);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 663:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(702);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 664:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(824);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 665:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(573);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 666:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(706);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 667:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(847);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 668:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(579);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 669:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(704);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 670:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(709);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 671:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(707);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 672:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(819);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 673:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(578);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 674:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(703);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 675:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(594);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 676:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(839);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 677:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(581);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 678:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(848);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 679:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(842);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 680:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(767);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 681:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(872);
+      if (lookahead == 'o') ADVANCE(642);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 682:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(825);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 683:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(849);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 684:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(705);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 685:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(769);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 686:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(850);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 687:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(851);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 688:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(852);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 689:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(853);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 690:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(583);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 691:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(710);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 692:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(584);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 693:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(758);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 694:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(760);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 695:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(761);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 696:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(762);
+      if (lookahead == 'o') ADVANCE(807);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 697:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'e') ADVANCE(762);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 698:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(630);
+      if (lookahead == 'n') ADVANCE(611);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 699:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(630);
+      if (lookahead == 'n') ADVANCE(612);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 700:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(722);
+      if (lookahead == 'p') ADVANCE(680);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 701:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(514);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 702:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(517);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 703:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(570);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 704:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(720);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 705:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(723);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 706:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(792);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 707:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(592);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 708:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(639);
+      if (lookahead == 'n') ADVANCE(858);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 709:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(728);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 710:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'f') ADVANCE(733);
+      if (lookahead == 'p') ADVANCE(680);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 711:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'g') ADVANCE(714);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 712:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'g') ADVANCE(743);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 713:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'g') ADVANCE(835);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 714:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'g') ADVANCE(659);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 715:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'g') ADVANCE(677);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 716:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'g') ADVANCE(672);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 717:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'g') ADVANCE(744);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 718:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'g') ADVANCE(716);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 719:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'h') ADVANCE(586);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 720:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(890);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 721:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(614);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 722:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(774);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 723:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(891);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 724:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(826);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 725:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(765);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 726:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(818);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 727:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(790);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 728:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(771);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 729:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(791);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 730:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(805);
+      if (lookahead == 'o') ADVANCE(798);
+      if (lookahead == 'r') ADVANCE(793);
+      if (lookahead == 'u') ADVANCE(834);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 731:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(805);
+      if (lookahead == 'o') ADVANCE(798);
+      if (lookahead == 'r') ADVANCE(797);
+      if (lookahead == 'u') ADVANCE(834);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 732:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(615);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 733:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(775);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 734:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(874);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 735:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(788);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 736:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'i') ADVANCE(778);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 737:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'k') ADVANCE(457);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 738:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'k') ADVANCE(570);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 739:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(589);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 740:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(884);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 741:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(599);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 742:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(879);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 743:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(783);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 744:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(784);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 745:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(885);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 746:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(600);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 747:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(886);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 748:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(601);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 749:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(602);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 750:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(603);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 751:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'l') ADVANCE(585);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 752:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(608);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 753:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(806);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 754:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(595);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 755:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(673);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 756:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(596);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 757:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(686);
+      if (lookahead == 'p') ADVANCE(832);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 758:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(811);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 759:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(692);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 760:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(812);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 761:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(813);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 762:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'm') ADVANCE(814);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 763:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(477);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 764:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(509);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 765:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(624);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 766:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(627);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 767:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(633);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 768:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(591);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 769:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(629);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 770:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(590);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 771:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(734);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 772:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(747);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(580);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 773:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(863);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(576);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 774:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(753);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(676);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 775:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(756);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(679);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 776:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(812);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(616);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 777:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(701);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(617);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 778:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(605);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(625);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 779:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'o') ADVANCE(836);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'n') ADVANCE(605);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 780:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(711);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 781:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(882);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 782:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(845);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 783:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead == 'o') ADVANCE(606);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 781:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(562);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 782:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(442);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 783:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(430);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 784:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(558);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(607);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 785:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(841);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(817);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 786:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(704);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(763);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 787:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(631);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(820);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 788:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(652);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(764);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 789:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(724);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(883);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 790:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(715);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(770);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 791:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(670);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(773);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 792:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(811);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(829);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 793:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(814);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(618);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 794:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(729);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(718);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 795:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(731);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(856);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 796:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(619);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 797:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'o') ADVANCE(621);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 798:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(574);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 799:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(454);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 800:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(439);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 801:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(570);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 802:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(861);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 803:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(721);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 804:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(646);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 805:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(668);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 806:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(741);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 807:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead == 'p') ADVANCE(732);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 797:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'p') ADVANCE(733);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 798:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'q') ADVANCE(860);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 799:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(448);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 800:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(720);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 801:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(495);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 802:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(558);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 803:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(721);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 804:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(764);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 805:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(844);
-      if (lookahead == 't') ADVANCE(633);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 806:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(844);
-      if (lookahead == 't') ADVANCE(643);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 807:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(822);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 808:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(835);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(828);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 809:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(663);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(685);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 810:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(661);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(831);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 811:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(746);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 812:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(748);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 813:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(749);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 814:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'p') ADVANCE(750);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 815:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'q') ADVANCE(880);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 816:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(460);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 817:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(737);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 818:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(507);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 819:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(570);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 820:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(738);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 821:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(781);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 822:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(863);
+      if (lookahead == 't') ADVANCE(648);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 823:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(863);
+      if (lookahead == 't') ADVANCE(658);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 824:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(840);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 825:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(855);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 826:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(678);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 827:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(675);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 828:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(669);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 829:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead == 'r') ADVANCE(653);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 812:
+    case 830:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(638);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(789);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 813:
+    case 831:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(773);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(684);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 814:
+    case 832:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(668);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(796);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 815:
+    case 833:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(778);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'r') ADVANCE(797);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 816:
+    case 834:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'r') ADVANCE(780);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(719);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 817:
+    case 835:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(702);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(485);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 818:
+    case 836:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(473);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(436);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 819:
+    case 837:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(427);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(445);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 820:
+    case 838:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(442);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
+      END_STATE();
+    case 839:
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead == 's') ADVANCE(433);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 821:
+    case 840:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(424);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(483);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 822:
+    case 841:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(471);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(447);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
-    case 823:
+    case 842:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(435);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 824:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(558);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 825:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(557);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 826:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(647);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 827:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(843);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 828:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(565);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 829:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(560);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 830:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(823);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 831:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(834);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 832:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(837);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 833:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(825);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 834:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(586);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 835:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(718);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 836:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(846);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 837:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead == 's') ADVANCE(570);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 838:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 's') ADVANCE(855);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 839:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(868);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 840:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(576);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 841:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(710);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
-      END_STATE();
-    case 842:
-      ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(581);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 843:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(819);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(569);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 844:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(559);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(662);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 845:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(676);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(864);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 846:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(824);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(577);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 847:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(636);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(837);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 848:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(639);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(572);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 849:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(641);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(841);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 850:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(642);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(854);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 851:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(643);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(857);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 852:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(869);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(842);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 853:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(585);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(843);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 854:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(712);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(598);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 855:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(592);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(735);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 856:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(677);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(866);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 857:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(678);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(582);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 858:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(680);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 's') ADVANCE(875);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 859:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 't') ADVANCE(575);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(888);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 860:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'u') ADVANCE(707);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(588);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 861:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'u') ADVANCE(725);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(727);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 862:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'u') ADVANCE(782);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(593);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 863:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'u') ADVANCE(784);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(571);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 864:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'u') ADVANCE(619);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(836);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 865:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'u') ADVANCE(620);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(693);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 866:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'u') ADVANCE(623);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(842);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 867:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'v') ADVANCE(667);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(651);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 868:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'w') ADVANCE(769);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(654);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 869:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'w') ADVANCE(771);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(656);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 870:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'x') ADVANCE(493);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(657);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 871:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'x') ADVANCE(491);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(658);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 872:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
-      if (lookahead == 'y') ADVANCE(469);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(889);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 873:
       ACCEPT_TOKEN(sym__key_text);
-      if (lookahead == '%') ADVANCE(404);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(597);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != ':') ADVANCE(873);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 874:
-      ACCEPT_TOKEN(sym__word_key);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(729);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 875:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == '_') ADVANCE(912);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(604);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 876:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == '_') ADVANCE(895);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(694);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 877:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == '_') ADVANCE(922);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(695);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 878:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'a') ADVANCE(920);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(697);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 879:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'a') ADVANCE(904);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 't') ADVANCE(587);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 880:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'a') ADVANCE(905);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'u') ADVANCE(724);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 881:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'b') ADVANCE(878);
-      if (lookahead == 'd') ADVANCE(898);
-      if (lookahead == 'e') ADVANCE(906);
-      if (lookahead == 'g') ADVANCE(885);
-      if (lookahead == 'i') ADVANCE(892);
-      if (lookahead == 's') ADVANCE(897);
-      if (lookahead == 0xfeff) ADVANCE(881);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'u') ADVANCE(742);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 882:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'b') ADVANCE(919);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'u') ADVANCE(799);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 883:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'd') ADVANCE(889);
-      if (lookahead == 'e') ADVANCE(913);
-      if (lookahead == 'n') ADVANCE(884);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'u') ADVANCE(801);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 884:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'd') ADVANCE(890);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'u') ADVANCE(634);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 885:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'e') ADVANCE(923);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'u') ADVANCE(635);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 886:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'e') ADVANCE(902);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'u') ADVANCE(638);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 887:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'e') ADVANCE(515);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'v') ADVANCE(682);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 888:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'e') ADVANCE(517);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'w') ADVANCE(785);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 889:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'e') ADVANCE(893);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'w') ADVANCE(787);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 890:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'e') ADVANCE(894);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'x') ADVANCE(505);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 891:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'e') ADVANCE(909);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'x') ADVANCE(503);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 892:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'f') ADVANCE(883);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
+      if (lookahead == 'y') ADVANCE(481);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 893:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'f') ADVANCE(504);
+      ACCEPT_TOKEN(sym__key_text);
+      if (lookahead == '%') ADVANCE(413);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
           lookahead != '"' &&
           lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ':') ADVANCE(893);
       END_STATE();
     case 894:
-      ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'f') ADVANCE(507);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead) &&
-          lookahead != ' ' &&
-          lookahead != '"' &&
-          lookahead != '#' &&
-          lookahead != '%' &&
-          lookahead != '(' &&
-          lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+      ACCEPT_TOKEN(sym__word_key);
       END_STATE();
     case 895:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'f') ADVANCE(915);
+      if (lookahead == '_') ADVANCE(932);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -7991,11 +7880,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 896:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'g') ADVANCE(521);
+      if (lookahead == '_') ADVANCE(915);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8004,12 +7893,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 897:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'h') ADVANCE(886);
-      if (lookahead == 'u') ADVANCE(882);
+      if (lookahead == '_') ADVANCE(942);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8018,11 +7906,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 898:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'i') ADVANCE(914);
+      if (lookahead == 'a') ADVANCE(940);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8031,11 +7919,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 899:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'i') ADVANCE(907);
+      if (lookahead == 'a') ADVANCE(924);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8044,11 +7932,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 900:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'i') ADVANCE(921);
+      if (lookahead == 'a') ADVANCE(925);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8057,11 +7945,17 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 901:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'l') ADVANCE(523);
+      if (lookahead == 'b') ADVANCE(898);
+      if (lookahead == 'd') ADVANCE(918);
+      if (lookahead == 'e') ADVANCE(926);
+      if (lookahead == 'g') ADVANCE(905);
+      if (lookahead == 'i') ADVANCE(912);
+      if (lookahead == 's') ADVANCE(917);
+      if (lookahead == 0xfeff) ADVANCE(901);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8070,11 +7964,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 902:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'l') ADVANCE(901);
+      if (lookahead == 'b') ADVANCE(939);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8083,11 +7977,13 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 903:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'm') ADVANCE(877);
+      if (lookahead == 'd') ADVANCE(909);
+      if (lookahead == 'e') ADVANCE(933);
+      if (lookahead == 'n') ADVANCE(904);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8096,11 +7992,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 904:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'm') ADVANCE(887);
+      if (lookahead == 'd') ADVANCE(910);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8109,11 +8005,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 905:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'm') ADVANCE(888);
+      if (lookahead == 'e') ADVANCE(943);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8122,11 +8018,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 906:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'n') ADVANCE(928);
+      if (lookahead == 'e') ADVANCE(922);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8135,11 +8031,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 907:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'n') ADVANCE(896);
+      if (lookahead == 'e') ADVANCE(527);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8148,11 +8044,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 908:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'n') ADVANCE(879);
+      if (lookahead == 'e') ADVANCE(529);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8161,11 +8057,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 909:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'n') ADVANCE(880);
+      if (lookahead == 'e') ADVANCE(913);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8174,11 +8070,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 910:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'o') ADVANCE(917);
+      if (lookahead == 'e') ADVANCE(914);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8187,11 +8083,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 911:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'o') ADVANCE(903);
+      if (lookahead == 'e') ADVANCE(929);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8200,11 +8096,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 912:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'p') ADVANCE(910);
+      if (lookahead == 'f') ADVANCE(903);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8213,12 +8109,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 913:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'q') ADVANCE(525);
-      if (lookahead == 'x') ADVANCE(900);
+      if (lookahead == 'f') ADVANCE(516);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8227,11 +8122,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 914:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'r') ADVANCE(908);
+      if (lookahead == 'f') ADVANCE(519);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8240,11 +8135,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 915:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'r') ADVANCE(911);
+      if (lookahead == 'f') ADVANCE(935);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8253,11 +8148,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 916:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'r') ADVANCE(899);
+      if (lookahead == 'g') ADVANCE(533);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8266,11 +8161,12 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 917:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'r') ADVANCE(925);
+      if (lookahead == 'h') ADVANCE(906);
+      if (lookahead == 'u') ADVANCE(902);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8279,11 +8175,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 918:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 's') ADVANCE(527);
+      if (lookahead == 'i') ADVANCE(934);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8292,11 +8188,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 919:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 's') ADVANCE(924);
+      if (lookahead == 'i') ADVANCE(927);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8305,11 +8201,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 920:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 's') ADVANCE(891);
+      if (lookahead == 'i') ADVANCE(941);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8318,11 +8214,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 921:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 's') ADVANCE(926);
+      if (lookahead == 'l') ADVANCE(535);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8331,11 +8227,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 922:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 's') ADVANCE(927);
+      if (lookahead == 'l') ADVANCE(921);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8344,11 +8240,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 923:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 't') ADVANCE(875);
+      if (lookahead == 'm') ADVANCE(897);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8357,11 +8253,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 924:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 't') ADVANCE(519);
+      if (lookahead == 'm') ADVANCE(907);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8370,11 +8266,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 925:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 't') ADVANCE(876);
+      if (lookahead == 'm') ADVANCE(908);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8383,11 +8279,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 926:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 't') ADVANCE(918);
+      if (lookahead == 'n') ADVANCE(948);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8396,11 +8292,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 927:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 't') ADVANCE(916);
+      if (lookahead == 'n') ADVANCE(916);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8409,11 +8305,11 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 928:
       ACCEPT_TOKEN(sym__name_text);
-      if (lookahead == 'v') ADVANCE(513);
+      if (lookahead == 'n') ADVANCE(899);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
           lookahead != ' ' &&
@@ -8422,9 +8318,270 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
     case 929:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'n') ADVANCE(900);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 930:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'o') ADVANCE(937);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 931:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'o') ADVANCE(923);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 932:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'p') ADVANCE(930);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 933:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'q') ADVANCE(537);
+      if (lookahead == 'x') ADVANCE(920);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 934:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'r') ADVANCE(928);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 935:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'r') ADVANCE(931);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 936:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'r') ADVANCE(919);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 937:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'r') ADVANCE(945);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 938:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 's') ADVANCE(539);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 939:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 's') ADVANCE(944);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 940:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 's') ADVANCE(911);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 941:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 's') ADVANCE(946);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 942:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 's') ADVANCE(947);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 943:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 't') ADVANCE(895);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 944:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 't') ADVANCE(531);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 945:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 't') ADVANCE(896);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 946:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 't') ADVANCE(938);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 947:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 't') ADVANCE(936);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 948:
+      ACCEPT_TOKEN(sym__name_text);
+      if (lookahead == 'v') ADVANCE(525);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead) &&
+          lookahead != ' ' &&
+          lookahead != '"' &&
+          lookahead != '#' &&
+          lookahead != '%' &&
+          lookahead != '(' &&
+          lookahead != ')' &&
+          lookahead != ',') ADVANCE(949);
+      END_STATE();
+    case 949:
       ACCEPT_TOKEN(sym__name_text);
       if (lookahead != 0 &&
           (lookahead < '\t' || '\r' < lookahead) &&
@@ -8434,128 +8591,128 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
           lookahead != '%' &&
           lookahead != '(' &&
           lookahead != ')' &&
-          lookahead != ',') ADVANCE(929);
+          lookahead != ',') ADVANCE(949);
       END_STATE();
-    case 930:
+    case 950:
       ACCEPT_TOKEN(sym__block_text);
-      if (lookahead == '#') ADVANCE(931);
-      if (lookahead == '%') ADVANCE(540);
-      if (lookahead == ']') ADVANCE(478);
-      if (lookahead == 0xfeff) ADVANCE(930);
+      if (lookahead == '#') ADVANCE(951);
+      if (lookahead == '%') ADVANCE(552);
+      if (lookahead == ']') ADVANCE(490);
+      if (lookahead == 0xfeff) ADVANCE(950);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(16);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(932);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(952);
       END_STATE();
-    case 931:
+    case 951:
       ACCEPT_TOKEN(sym__block_text);
-      if (lookahead == '%') ADVANCE(942);
+      if (lookahead == '%') ADVANCE(962);
       if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(940);
-      if ((0x0b <= lookahead && lookahead <= '\r')) ADVANCE(943);
+          lookahead == ' ') ADVANCE(960);
+      if ((0x0b <= lookahead && lookahead <= '\r')) ADVANCE(963);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(931);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(951);
       END_STATE();
-    case 932:
+    case 952:
       ACCEPT_TOKEN(sym__block_text);
-      if (lookahead == '%') ADVANCE(407);
-      if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(31);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(932);
-      END_STATE();
-    case 933:
-      ACCEPT_TOKEN(sym__block_text);
-      if (lookahead == '%') ADVANCE(933);
+      if (lookahead == '%') ADVANCE(416);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(31);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(932);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(952);
       END_STATE();
-    case 934:
+    case 953:
+      ACCEPT_TOKEN(sym__block_text);
+      if (lookahead == '%') ADVANCE(953);
+      if (lookahead == '\t' ||
+          lookahead == ' ') ADVANCE(31);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(952);
+      END_STATE();
+    case 954:
       ACCEPT_TOKEN(sym__block_more_text);
-      if (lookahead == '#') ADVANCE(935);
-      if (lookahead == '%') ADVANCE(541);
-      if (lookahead == ']') ADVANCE(936);
-      if (lookahead == 0xfeff) ADVANCE(934);
+      if (lookahead == '#') ADVANCE(955);
+      if (lookahead == '%') ADVANCE(553);
+      if (lookahead == ']') ADVANCE(956);
+      if (lookahead == 0xfeff) ADVANCE(954);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(14);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(936);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(956);
       END_STATE();
-    case 935:
+    case 955:
       ACCEPT_TOKEN(sym__block_more_text);
-      if (lookahead == '%') ADVANCE(941);
+      if (lookahead == '%') ADVANCE(961);
       if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(939);
+          lookahead == ' ') ADVANCE(959);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(935);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(955);
       END_STATE();
-    case 936:
+    case 956:
       ACCEPT_TOKEN(sym__block_more_text);
-      if (lookahead == '%') ADVANCE(408);
+      if (lookahead == '%') ADVANCE(417);
       if (lookahead == '\t' ||
           lookahead == ' ') ADVANCE(29);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(936);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(956);
       END_STATE();
-    case 937:
+    case 957:
       ACCEPT_TOKEN(sym_template_name);
-      if (lookahead == '/') ADVANCE(401);
+      if (lookahead == '/') ADVANCE(410);
       if (('-' <= lookahead && lookahead <= '9') ||
           ('A' <= lookahead && lookahead <= 'Z') ||
           lookahead == '_' ||
-          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(937);
+          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(957);
       END_STATE();
-    case 938:
+    case 958:
       ACCEPT_TOKEN(sym_identifier);
       if (('0' <= lookahead && lookahead <= '9') ||
           ('A' <= lookahead && lookahead <= 'Z') ||
           lookahead == '_' ||
-          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(938);
+          ('a' <= lookahead && lookahead <= 'z')) ADVANCE(958);
       END_STATE();
-    case 939:
+    case 959:
       ACCEPT_TOKEN(sym_comment);
-      if (lookahead == '%') ADVANCE(941);
+      if (lookahead == '%') ADVANCE(961);
       if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(939);
-      if ((0x0b <= lookahead && lookahead <= '\r')) ADVANCE(943);
+          lookahead == ' ') ADVANCE(959);
+      if ((0x0b <= lookahead && lookahead <= '\r')) ADVANCE(963);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(935);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(955);
       END_STATE();
-    case 940:
+    case 960:
       ACCEPT_TOKEN(sym_comment);
-      if (lookahead == '%') ADVANCE(942);
+      if (lookahead == '%') ADVANCE(962);
       if (lookahead == '\t' ||
-          lookahead == ' ') ADVANCE(940);
-      if ((0x0b <= lookahead && lookahead <= '\r')) ADVANCE(943);
+          lookahead == ' ') ADVANCE(960);
+      if ((0x0b <= lookahead && lookahead <= '\r')) ADVANCE(963);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(931);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(951);
       END_STATE();
-    case 941:
-      ACCEPT_TOKEN(sym_comment);
-      if (lookahead == '\t' ||
-          (0x0b <= lookahead && lookahead <= '\r') ||
-          lookahead == ' ' ||
-          lookahead == '(') ADVANCE(943);
-      if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(935);
-      END_STATE();
-    case 942:
+    case 961:
       ACCEPT_TOKEN(sym_comment);
       if (lookahead == '\t' ||
           (0x0b <= lookahead && lookahead <= '\r') ||
           lookahead == ' ' ||
-          lookahead == '(') ADVANCE(943);
+          lookahead == '(') ADVANCE(963);
       if (lookahead != 0 &&
-          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(931);
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(955);
       END_STATE();
-    case 943:
+    case 962:
+      ACCEPT_TOKEN(sym_comment);
+      if (lookahead == '\t' ||
+          (0x0b <= lookahead && lookahead <= '\r') ||
+          lookahead == ' ' ||
+          lookahead == '(') ADVANCE(963);
+      if (lookahead != 0 &&
+          (lookahead < '\t' || '\r' < lookahead)) ADVANCE(951);
+      END_STATE();
+    case 963:
       ACCEPT_TOKEN(sym_comment);
       if (lookahead != 0 &&
-          lookahead != '\n') ADVANCE(943);
+          lookahead != '\n') ADVANCE(963);
       END_STATE();
-    case 944:
+    case 964:
       ACCEPT_TOKEN(sym__newline);
       END_STATE();
     default:
@@ -8565,15 +8722,15 @@ static bool ts_lex(TSLexer *lexer, TSStateId state) {
 
 static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [0] = {.lex_state = 0},
-  [1] = {.lex_state = 411},
-  [2] = {.lex_state = 411},
-  [3] = {.lex_state = 412},
-  [4] = {.lex_state = 412},
+  [1] = {.lex_state = 420},
+  [2] = {.lex_state = 420},
+  [3] = {.lex_state = 421},
+  [4] = {.lex_state = 421},
   [5] = {.lex_state = 25},
-  [6] = {.lex_state = 413},
-  [7] = {.lex_state = 413},
-  [8] = {.lex_state = 413},
-  [9] = {.lex_state = 413},
+  [6] = {.lex_state = 422},
+  [7] = {.lex_state = 422},
+  [8] = {.lex_state = 422},
+  [9] = {.lex_state = 422},
   [10] = {.lex_state = 21},
   [11] = {.lex_state = 21},
   [12] = {.lex_state = 21},
@@ -8589,12 +8746,12 @@ static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [22] = {.lex_state = 21},
   [23] = {.lex_state = 21},
   [24] = {.lex_state = 21},
-  [25] = {.lex_state = 415},
-  [26] = {.lex_state = 415},
+  [25] = {.lex_state = 424},
+  [26] = {.lex_state = 424},
   [27] = {.lex_state = 23},
-  [28] = {.lex_state = 23},
-  [29] = {.lex_state = 415},
-  [30] = {.lex_state = 415},
+  [28] = {.lex_state = 424},
+  [29] = {.lex_state = 424},
+  [30] = {.lex_state = 23},
   [31] = {.lex_state = 23},
   [32] = {.lex_state = 23},
   [33] = {.lex_state = 23},
@@ -8602,105 +8759,105 @@ static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [35] = {.lex_state = 23},
   [36] = {.lex_state = 19},
   [37] = {.lex_state = 21},
-  [38] = {.lex_state = 21},
+  [38] = {.lex_state = 425},
   [39] = {.lex_state = 21},
-  [40] = {.lex_state = 414},
-  [41] = {.lex_state = 416},
-  [42] = {.lex_state = 414},
+  [40] = {.lex_state = 423},
+  [41] = {.lex_state = 21},
+  [42] = {.lex_state = 21},
   [43] = {.lex_state = 21},
-  [44] = {.lex_state = 21},
-  [45] = {.lex_state = 416},
+  [44] = {.lex_state = 423},
+  [45] = {.lex_state = 425},
   [46] = {.lex_state = 21},
-  [47] = {.lex_state = 416},
-  [48] = {.lex_state = 416},
-  [49] = {.lex_state = 416},
-  [50] = {.lex_state = 416},
-  [51] = {.lex_state = 417},
-  [52] = {.lex_state = 416},
-  [53] = {.lex_state = 416},
-  [54] = {.lex_state = 414},
-  [55] = {.lex_state = 416},
-  [56] = {.lex_state = 21},
-  [57] = {.lex_state = 416},
-  [58] = {.lex_state = 414},
-  [59] = {.lex_state = 418},
-  [60] = {.lex_state = 418},
+  [47] = {.lex_state = 426},
+  [48] = {.lex_state = 425},
+  [49] = {.lex_state = 425},
+  [50] = {.lex_state = 423},
+  [51] = {.lex_state = 425},
+  [52] = {.lex_state = 21},
+  [53] = {.lex_state = 425},
+  [54] = {.lex_state = 425},
+  [55] = {.lex_state = 423},
+  [56] = {.lex_state = 425},
+  [57] = {.lex_state = 425},
+  [58] = {.lex_state = 425},
+  [59] = {.lex_state = 427},
+  [60] = {.lex_state = 427},
   [61] = {.lex_state = 15},
-  [62] = {.lex_state = 15},
-  [63] = {.lex_state = 418},
-  [64] = {.lex_state = 418},
+  [62] = {.lex_state = 427},
+  [63] = {.lex_state = 427},
+  [64] = {.lex_state = 15},
   [65] = {.lex_state = 13},
-  [66] = {.lex_state = 418},
+  [66] = {.lex_state = 427},
   [67] = {.lex_state = 15},
-  [68] = {.lex_state = 418},
-  [69] = {.lex_state = 17},
+  [68] = {.lex_state = 427},
+  [69] = {.lex_state = 21},
   [70] = {.lex_state = 21},
-  [71] = {.lex_state = 18},
-  [72] = {.lex_state = 18},
-  [73] = {.lex_state = 17},
+  [71] = {.lex_state = 21},
+  [72] = {.lex_state = 21},
+  [73] = {.lex_state = 21},
   [74] = {.lex_state = 21},
   [75] = {.lex_state = 21},
-  [76] = {.lex_state = 17},
-  [77] = {.lex_state = 414},
-  [78] = {.lex_state = 414},
-  [79] = {.lex_state = 21},
-  [80] = {.lex_state = 21},
-  [81] = {.lex_state = 21},
-  [82] = {.lex_state = 21},
-  [83] = {.lex_state = 21},
-  [84] = {.lex_state = 21},
-  [85] = {.lex_state = 414},
-  [86] = {.lex_state = 414},
-  [87] = {.lex_state = 414},
-  [88] = {.lex_state = 414},
-  [89] = {.lex_state = 17},
-  [90] = {.lex_state = 17},
-  [91] = {.lex_state = 17},
-  [92] = {.lex_state = 17},
+  [76] = {.lex_state = 423},
+  [77] = {.lex_state = 423},
+  [78] = {.lex_state = 423},
+  [79] = {.lex_state = 423},
+  [80] = {.lex_state = 17},
+  [81] = {.lex_state = 423},
+  [82] = {.lex_state = 17},
+  [83] = {.lex_state = 17},
+  [84] = {.lex_state = 17},
+  [85] = {.lex_state = 17},
+  [86] = {.lex_state = 17},
+  [87] = {.lex_state = 17},
+  [88] = {.lex_state = 17},
+  [89] = {.lex_state = 18},
+  [90] = {.lex_state = 21},
+  [91] = {.lex_state = 21},
+  [92] = {.lex_state = 423},
   [93] = {.lex_state = 17},
-  [94] = {.lex_state = 17},
-  [95] = {.lex_state = 416},
-  [96] = {.lex_state = 416},
-  [97] = {.lex_state = 416},
-  [98] = {.lex_state = 416},
-  [99] = {.lex_state = 416},
-  [100] = {.lex_state = 416},
-  [101] = {.lex_state = 17},
-  [102] = {.lex_state = 17},
-  [103] = {.lex_state = 17},
-  [104] = {.lex_state = 17},
-  [105] = {.lex_state = 18},
-  [106] = {.lex_state = 15},
-  [107] = {.lex_state = 15},
-  [108] = {.lex_state = 15},
-  [109] = {.lex_state = 15},
-  [110] = {.lex_state = 0},
-  [111] = {.lex_state = 18},
+  [94] = {.lex_state = 18},
+  [95] = {.lex_state = 425},
+  [96] = {.lex_state = 425},
+  [97] = {.lex_state = 425},
+  [98] = {.lex_state = 425},
+  [99] = {.lex_state = 425},
+  [100] = {.lex_state = 425},
+  [101] = {.lex_state = 15},
+  [102] = {.lex_state = 0},
+  [103] = {.lex_state = 15},
+  [104] = {.lex_state = 15},
+  [105] = {.lex_state = 17},
+  [106] = {.lex_state = 18},
+  [107] = {.lex_state = 17},
+  [108] = {.lex_state = 17},
+  [109] = {.lex_state = 18},
+  [110] = {.lex_state = 17},
+  [111] = {.lex_state = 15},
   [112] = {.lex_state = 18},
-  [113] = {.lex_state = 0},
-  [114] = {.lex_state = 0},
+  [113] = {.lex_state = 18},
+  [114] = {.lex_state = 18},
   [115] = {.lex_state = 18},
-  [116] = {.lex_state = 18},
+  [116] = {.lex_state = 22},
   [117] = {.lex_state = 0},
   [118] = {.lex_state = 0},
   [119] = {.lex_state = 0},
-  [120] = {.lex_state = 18},
-  [121] = {.lex_state = 0},
-  [122] = {.lex_state = 0},
+  [120] = {.lex_state = 0},
+  [121] = {.lex_state = 18},
+  [122] = {.lex_state = 18},
   [123] = {.lex_state = 0},
-  [124] = {.lex_state = 0},
+  [124] = {.lex_state = 18},
   [125] = {.lex_state = 0},
   [126] = {.lex_state = 0},
-  [127] = {.lex_state = 18},
-  [128] = {.lex_state = 18},
+  [127] = {.lex_state = 0},
+  [128] = {.lex_state = 0},
   [129] = {.lex_state = 0},
   [130] = {.lex_state = 0},
-  [131] = {.lex_state = 22},
-  [132] = {.lex_state = 18},
+  [131] = {.lex_state = 0},
+  [132] = {.lex_state = 0},
   [133] = {.lex_state = 0},
   [134] = {.lex_state = 0},
   [135] = {.lex_state = 0},
-  [136] = {.lex_state = 0},
+  [136] = {.lex_state = 22},
   [137] = {.lex_state = 0},
   [138] = {.lex_state = 0},
   [139] = {.lex_state = 0},
@@ -8737,7 +8894,7 @@ static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [170] = {.lex_state = 0},
   [171] = {.lex_state = 0},
   [172] = {.lex_state = 0},
-  [173] = {.lex_state = 22},
+  [173] = {.lex_state = 0},
   [174] = {.lex_state = 0},
   [175] = {.lex_state = 0},
   [176] = {.lex_state = 0},
@@ -8747,7 +8904,7 @@ static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [180] = {.lex_state = 0},
   [181] = {.lex_state = 0},
   [182] = {.lex_state = 0},
-  [183] = {.lex_state = 24},
+  [183] = {.lex_state = 0},
   [184] = {.lex_state = 0},
   [185] = {.lex_state = 0},
   [186] = {.lex_state = 0},
@@ -8757,12 +8914,12 @@ static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [190] = {.lex_state = 0},
   [191] = {.lex_state = 0},
   [192] = {.lex_state = 0},
-  [193] = {.lex_state = 0},
+  [193] = {.lex_state = 24},
   [194] = {.lex_state = 0},
   [195] = {.lex_state = 0},
   [196] = {.lex_state = 0},
   [197] = {.lex_state = 0},
-  [198] = {.lex_state = 0},
+  [198] = {.lex_state = 24},
   [199] = {.lex_state = 0},
   [200] = {.lex_state = 0},
   [201] = {.lex_state = 0},
@@ -8770,7 +8927,7 @@ static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [203] = {.lex_state = 0},
   [204] = {.lex_state = 0},
   [205] = {.lex_state = 0},
-  [206] = {.lex_state = 24},
+  [206] = {.lex_state = 0},
   [207] = {.lex_state = 0},
   [208] = {.lex_state = 0},
   [209] = {.lex_state = 0},
@@ -8782,12 +8939,12 @@ static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [215] = {.lex_state = 0},
   [216] = {.lex_state = 0},
   [217] = {.lex_state = 0},
-  [218] = {.lex_state = 0},
-  [219] = {.lex_state = 25},
+  [218] = {.lex_state = 22},
+  [219] = {.lex_state = 0},
   [220] = {.lex_state = 0},
   [221] = {.lex_state = 0},
   [222] = {.lex_state = 0},
-  [223] = {.lex_state = 24},
+  [223] = {.lex_state = 0},
   [224] = {.lex_state = 0},
   [225] = {.lex_state = 0},
   [226] = {.lex_state = 0},
@@ -8801,9 +8958,11 @@ static const TSLexMode ts_lex_modes[STATE_COUNT] = {
   [234] = {.lex_state = 0},
   [235] = {.lex_state = 0},
   [236] = {.lex_state = 0},
-  [237] = {.lex_state = 22},
+  [237] = {.lex_state = 24},
   [238] = {.lex_state = 0},
   [239] = {.lex_state = 0},
+  [240] = {.lex_state = 25},
+  [241] = {.lex_state = 0},
 };
 
 static const uint16_t ts_parse_table[LARGE_STATE_COUNT][SYMBOL_COUNT] = {
@@ -8814,6 +8973,7 @@ static const uint16_t ts_parse_table[LARGE_STATE_COUNT][SYMBOL_COUNT] = {
     [anon_sym_hosts] = ACTIONS(1),
     [anon_sym_node_map] = ACTIONS(1),
     [anon_sym_topics] = ACTIONS(1),
+    [anon_sym_access] = ACTIONS(1),
     [anon_sym_process] = ACTIONS(1),
     [anon_sym_state] = ACTIONS(1),
     [anon_sym_group] = ACTIONS(1),
@@ -8867,208 +9027,183 @@ static const uint16_t ts_parse_table[LARGE_STATE_COUNT][SYMBOL_COUNT] = {
     [sym__newline] = ACTIONS(1),
   },
   [STATE(1)] = {
-    [sym_source_file] = STATE(227),
-    [sym__section] = STATE(140),
-    [sym_instance_section] = STATE(201),
-    [sym_defines_section] = STATE(201),
-    [sym_hosts_section] = STATE(201),
-    [sym_node_map_section] = STATE(201),
-    [sym_topics_section] = STATE(201),
-    [sym_process_section] = STATE(201),
-    [sym_state_section] = STATE(201),
-    [sym_group_section] = STATE(201),
-    [sym_network_section] = STATE(201),
-    [sym_logger_section] = STATE(201),
-    [sym_template_section] = STATE(201),
-    [sym__line] = STATE(121),
-    [sym_key_line] = STATE(121),
-    [sym_key] = STATE(234),
-    [sym_list_line] = STATE(121),
-    [sym_flags_line] = STATE(121),
-    [sym_directive] = STATE(121),
-    [sym_template_use] = STATE(121),
-    [sym_conditional] = STATE(121),
-    [sym_append_environment] = STATE(121),
-    [sym_expansion] = STATE(72),
-    [sym_string] = STATE(72),
-    [aux_sym_source_file_repeat1] = STATE(117),
-    [aux_sym_source_file_repeat2] = STATE(138),
-    [aux_sym_key_repeat1] = STATE(72),
+    [sym_source_file] = STATE(221),
+    [sym__section] = STATE(141),
+    [sym_instance_section] = STATE(208),
+    [sym_defines_section] = STATE(208),
+    [sym_hosts_section] = STATE(208),
+    [sym_node_map_section] = STATE(208),
+    [sym_topics_section] = STATE(208),
+    [sym_access_section] = STATE(208),
+    [sym_process_section] = STATE(208),
+    [sym_state_section] = STATE(208),
+    [sym_group_section] = STATE(208),
+    [sym_network_section] = STATE(208),
+    [sym_logger_section] = STATE(208),
+    [sym_template_section] = STATE(208),
+    [sym__line] = STATE(125),
+    [sym_key_line] = STATE(125),
+    [sym_key] = STATE(239),
+    [sym_list_line] = STATE(125),
+    [sym_flags_line] = STATE(125),
+    [sym_directive] = STATE(125),
+    [sym_template_use] = STATE(125),
+    [sym_conditional] = STATE(125),
+    [sym_append_environment] = STATE(125),
+    [sym_expansion] = STATE(89),
+    [sym_string] = STATE(89),
+    [aux_sym_source_file_repeat1] = STATE(126),
+    [aux_sym_source_file_repeat2] = STATE(133),
+    [aux_sym_key_repeat1] = STATE(89),
     [ts_builtin_sym_end] = ACTIONS(5),
     [anon_sym_instance] = ACTIONS(7),
     [anon_sym_defines] = ACTIONS(9),
     [anon_sym_hosts] = ACTIONS(11),
     [anon_sym_node_map] = ACTIONS(13),
     [anon_sym_topics] = ACTIONS(15),
-    [anon_sym_process] = ACTIONS(17),
-    [anon_sym_state] = ACTIONS(19),
-    [anon_sym_group] = ACTIONS(21),
-    [anon_sym_network] = ACTIONS(23),
-    [anon_sym_logger] = ACTIONS(25),
-    [anon_sym_template] = ACTIONS(27),
-    [anon_sym_process_template] = ACTIONS(27),
-    [anon_sym_add] = ACTIONS(29),
-    [anon_sym_depends_on] = ACTIONS(31),
-    [anon_sym_start_before] = ACTIONS(31),
-    [anon_sym_start_on_ready] = ACTIONS(31),
-    [anon_sym_members] = ACTIONS(31),
-    [anon_sym_flags] = ACTIONS(33),
-    [anon_sym_include] = ACTIONS(35),
-    [anon_sym_optional_include] = ACTIONS(35),
-    [anon_sym_include_glob] = ACTIONS(35),
-    [anon_sym_optional_include_glob] = ACTIONS(35),
-    [anon_sym_pipe_include] = ACTIONS(35),
-    [anon_sym_push_name_prefix] = ACTIONS(35),
-    [anon_sym_pop_name_prefix] = ACTIONS(35),
-    [anon_sym_add_message_definition_dir] = ACTIONS(35),
-    [anon_sym_requires_version] = ACTIONS(35),
-    [anon_sym_add_process_default_template] = ACTIONS(35),
-    [anon_sym_use_template] = ACTIONS(37),
-    [anon_sym_ifdef] = ACTIONS(39),
-    [anon_sym_ifndef] = ACTIONS(39),
-    [anon_sym_append] = ACTIONS(41),
-    [anon_sym_PERCENT_LPAREN] = ACTIONS(43),
-    [anon_sym_DQUOTE] = ACTIONS(45),
-    [sym__key_text] = ACTIONS(47),
-    [sym__word_key] = ACTIONS(49),
-    [sym_comment] = ACTIONS(51),
-    [sym__newline] = ACTIONS(53),
+    [anon_sym_access] = ACTIONS(17),
+    [anon_sym_process] = ACTIONS(19),
+    [anon_sym_state] = ACTIONS(21),
+    [anon_sym_group] = ACTIONS(23),
+    [anon_sym_network] = ACTIONS(25),
+    [anon_sym_logger] = ACTIONS(27),
+    [anon_sym_template] = ACTIONS(29),
+    [anon_sym_process_template] = ACTIONS(29),
+    [anon_sym_add] = ACTIONS(31),
+    [anon_sym_depends_on] = ACTIONS(33),
+    [anon_sym_start_before] = ACTIONS(33),
+    [anon_sym_start_on_ready] = ACTIONS(33),
+    [anon_sym_members] = ACTIONS(33),
+    [anon_sym_flags] = ACTIONS(35),
+    [anon_sym_include] = ACTIONS(37),
+    [anon_sym_optional_include] = ACTIONS(37),
+    [anon_sym_include_glob] = ACTIONS(37),
+    [anon_sym_optional_include_glob] = ACTIONS(37),
+    [anon_sym_pipe_include] = ACTIONS(37),
+    [anon_sym_push_name_prefix] = ACTIONS(37),
+    [anon_sym_pop_name_prefix] = ACTIONS(37),
+    [anon_sym_add_message_definition_dir] = ACTIONS(37),
+    [anon_sym_requires_version] = ACTIONS(37),
+    [anon_sym_add_process_default_template] = ACTIONS(37),
+    [anon_sym_use_template] = ACTIONS(39),
+    [anon_sym_ifdef] = ACTIONS(41),
+    [anon_sym_ifndef] = ACTIONS(41),
+    [anon_sym_append] = ACTIONS(43),
+    [anon_sym_PERCENT_LPAREN] = ACTIONS(45),
+    [anon_sym_DQUOTE] = ACTIONS(47),
+    [sym__key_text] = ACTIONS(49),
+    [sym__word_key] = ACTIONS(51),
+    [sym_comment] = ACTIONS(53),
+    [sym__newline] = ACTIONS(55),
+  },
+  [STATE(2)] = {
+    [sym__section] = STATE(214),
+    [sym_instance_section] = STATE(208),
+    [sym_defines_section] = STATE(208),
+    [sym_hosts_section] = STATE(208),
+    [sym_node_map_section] = STATE(208),
+    [sym_topics_section] = STATE(208),
+    [sym_access_section] = STATE(208),
+    [sym_process_section] = STATE(208),
+    [sym_state_section] = STATE(208),
+    [sym_group_section] = STATE(208),
+    [sym_network_section] = STATE(208),
+    [sym_logger_section] = STATE(208),
+    [sym_template_section] = STATE(208),
+    [sym__line] = STATE(184),
+    [sym_key_line] = STATE(184),
+    [sym_key] = STATE(239),
+    [sym_list_line] = STATE(184),
+    [sym_flags_line] = STATE(184),
+    [sym_directive] = STATE(184),
+    [sym_template_use] = STATE(184),
+    [sym_conditional] = STATE(184),
+    [sym_append_environment] = STATE(184),
+    [sym_expansion] = STATE(89),
+    [sym_string] = STATE(89),
+    [aux_sym_key_repeat1] = STATE(89),
+    [ts_builtin_sym_end] = ACTIONS(57),
+    [anon_sym_instance] = ACTIONS(7),
+    [anon_sym_defines] = ACTIONS(9),
+    [anon_sym_hosts] = ACTIONS(11),
+    [anon_sym_node_map] = ACTIONS(13),
+    [anon_sym_topics] = ACTIONS(15),
+    [anon_sym_access] = ACTIONS(17),
+    [anon_sym_process] = ACTIONS(19),
+    [anon_sym_state] = ACTIONS(21),
+    [anon_sym_group] = ACTIONS(23),
+    [anon_sym_network] = ACTIONS(25),
+    [anon_sym_logger] = ACTIONS(27),
+    [anon_sym_template] = ACTIONS(29),
+    [anon_sym_process_template] = ACTIONS(29),
+    [anon_sym_add] = ACTIONS(31),
+    [anon_sym_depends_on] = ACTIONS(33),
+    [anon_sym_start_before] = ACTIONS(33),
+    [anon_sym_start_on_ready] = ACTIONS(33),
+    [anon_sym_members] = ACTIONS(33),
+    [anon_sym_flags] = ACTIONS(35),
+    [anon_sym_include] = ACTIONS(37),
+    [anon_sym_optional_include] = ACTIONS(37),
+    [anon_sym_include_glob] = ACTIONS(37),
+    [anon_sym_optional_include_glob] = ACTIONS(37),
+    [anon_sym_pipe_include] = ACTIONS(37),
+    [anon_sym_push_name_prefix] = ACTIONS(37),
+    [anon_sym_pop_name_prefix] = ACTIONS(37),
+    [anon_sym_add_message_definition_dir] = ACTIONS(37),
+    [anon_sym_requires_version] = ACTIONS(37),
+    [anon_sym_add_process_default_template] = ACTIONS(37),
+    [anon_sym_use_template] = ACTIONS(39),
+    [anon_sym_ifdef] = ACTIONS(41),
+    [anon_sym_ifndef] = ACTIONS(41),
+    [anon_sym_append] = ACTIONS(43),
+    [anon_sym_PERCENT_LPAREN] = ACTIONS(45),
+    [anon_sym_DQUOTE] = ACTIONS(47),
+    [sym__key_text] = ACTIONS(49),
+    [sym__word_key] = ACTIONS(51),
+    [sym_comment] = ACTIONS(53),
+    [sym__newline] = ACTIONS(59),
   },
 };
 
 static const uint16_t ts_small_parse_table[] = {
-  [0] = 30,
-    ACTIONS(7), 1,
-      anon_sym_instance,
-    ACTIONS(9), 1,
-      anon_sym_defines,
-    ACTIONS(11), 1,
-      anon_sym_hosts,
-    ACTIONS(13), 1,
-      anon_sym_node_map,
-    ACTIONS(15), 1,
-      anon_sym_topics,
-    ACTIONS(17), 1,
-      anon_sym_process,
-    ACTIONS(19), 1,
-      anon_sym_state,
-    ACTIONS(21), 1,
-      anon_sym_group,
-    ACTIONS(23), 1,
-      anon_sym_network,
-    ACTIONS(25), 1,
-      anon_sym_logger,
-    ACTIONS(29), 1,
+  [0] = 17,
+    ACTIONS(31), 1,
       anon_sym_add,
-    ACTIONS(33), 1,
+    ACTIONS(35), 1,
       anon_sym_flags,
-    ACTIONS(37), 1,
+    ACTIONS(39), 1,
       anon_sym_use_template,
-    ACTIONS(41), 1,
-      anon_sym_append,
     ACTIONS(43), 1,
-      anon_sym_PERCENT_LPAREN,
+      anon_sym_append,
     ACTIONS(45), 1,
-      anon_sym_DQUOTE,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(47), 1,
-      sym__key_text,
+      anon_sym_DQUOTE,
     ACTIONS(49), 1,
-      sym__word_key,
+      sym__key_text,
     ACTIONS(51), 1,
+      sym__word_key,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(55), 1,
-      ts_builtin_sym_end,
     ACTIONS(57), 1,
-      sym__newline,
-    STATE(212), 1,
-      sym__section,
-    STATE(234), 1,
-      sym_key,
-    ACTIONS(27), 2,
-      anon_sym_template,
-      anon_sym_process_template,
-    ACTIONS(39), 2,
-      anon_sym_ifdef,
-      anon_sym_ifndef,
-    STATE(72), 3,
-      sym_expansion,
-      sym_string,
-      aux_sym_key_repeat1,
-    ACTIONS(31), 4,
-      anon_sym_depends_on,
-      anon_sym_start_before,
-      anon_sym_start_on_ready,
-      anon_sym_members,
-    STATE(213), 8,
-      sym__line,
-      sym_key_line,
-      sym_list_line,
-      sym_flags_line,
-      sym_directive,
-      sym_template_use,
-      sym_conditional,
-      sym_append_environment,
-    ACTIONS(35), 10,
-      anon_sym_include,
-      anon_sym_optional_include,
-      anon_sym_include_glob,
-      anon_sym_optional_include_glob,
-      anon_sym_pipe_include,
-      anon_sym_push_name_prefix,
-      anon_sym_pop_name_prefix,
-      anon_sym_add_message_definition_dir,
-      anon_sym_requires_version,
-      anon_sym_add_process_default_template,
-    STATE(201), 11,
-      sym_instance_section,
-      sym_defines_section,
-      sym_hosts_section,
-      sym_node_map_section,
-      sym_topics_section,
-      sym_process_section,
-      sym_state_section,
-      sym_group_section,
-      sym_network_section,
-      sym_logger_section,
-      sym_template_section,
-  [124] = 17,
-    ACTIONS(29), 1,
-      anon_sym_add,
-    ACTIONS(33), 1,
-      anon_sym_flags,
-    ACTIONS(37), 1,
-      anon_sym_use_template,
-    ACTIONS(41), 1,
-      anon_sym_append,
-    ACTIONS(43), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(45), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(47), 1,
-      sym__key_text,
-    ACTIONS(49), 1,
-      sym__word_key,
-    ACTIONS(51), 1,
-      sym_comment,
+      ts_builtin_sym_end,
     ACTIONS(59), 1,
-      ts_builtin_sym_end,
-    ACTIONS(61), 1,
       sym__newline,
-    STATE(234), 1,
+    STATE(239), 1,
       sym_key,
-    ACTIONS(39), 2,
+    ACTIONS(41), 2,
       anon_sym_ifdef,
       anon_sym_ifndef,
-    STATE(72), 3,
+    STATE(89), 3,
       sym_expansion,
       sym_string,
       aux_sym_key_repeat1,
-    ACTIONS(31), 4,
+    ACTIONS(33), 4,
       anon_sym_depends_on,
       anon_sym_start_before,
       anon_sym_start_on_ready,
       anon_sym_members,
-    STATE(203), 8,
+    STATE(184), 8,
       sym__line,
       sym_key_line,
       sym_list_line,
@@ -9077,7 +9212,7 @@ static const uint16_t ts_small_parse_table[] = {
       sym_template_use,
       sym_conditional,
       sym_append_environment,
-    ACTIONS(35), 10,
+    ACTIONS(37), 10,
       anon_sym_include,
       anon_sym_optional_include,
       anon_sym_include_glob,
@@ -9088,44 +9223,44 @@ static const uint16_t ts_small_parse_table[] = {
       anon_sym_add_message_definition_dir,
       anon_sym_requires_version,
       anon_sym_add_process_default_template,
-  [198] = 17,
-    ACTIONS(29), 1,
+  [74] = 17,
+    ACTIONS(31), 1,
       anon_sym_add,
-    ACTIONS(33), 1,
+    ACTIONS(35), 1,
       anon_sym_flags,
-    ACTIONS(37), 1,
+    ACTIONS(39), 1,
       anon_sym_use_template,
-    ACTIONS(41), 1,
-      anon_sym_append,
     ACTIONS(43), 1,
-      anon_sym_PERCENT_LPAREN,
+      anon_sym_append,
     ACTIONS(45), 1,
-      anon_sym_DQUOTE,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(47), 1,
-      sym__key_text,
+      anon_sym_DQUOTE,
     ACTIONS(49), 1,
-      sym__word_key,
+      sym__key_text,
     ACTIONS(51), 1,
+      sym__word_key,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(55), 1,
+    ACTIONS(61), 1,
       ts_builtin_sym_end,
-    ACTIONS(57), 1,
+    ACTIONS(63), 1,
       sym__newline,
-    STATE(234), 1,
+    STATE(239), 1,
       sym_key,
-    ACTIONS(39), 2,
+    ACTIONS(41), 2,
       anon_sym_ifdef,
       anon_sym_ifndef,
-    STATE(72), 3,
+    STATE(89), 3,
       sym_expansion,
       sym_string,
       aux_sym_key_repeat1,
-    ACTIONS(31), 4,
+    ACTIONS(33), 4,
       anon_sym_depends_on,
       anon_sym_start_before,
       anon_sym_start_on_ready,
       anon_sym_members,
-    STATE(213), 8,
+    STATE(209), 8,
       sym__line,
       sym_key_line,
       sym_list_line,
@@ -9134,7 +9269,7 @@ static const uint16_t ts_small_parse_table[] = {
       sym_template_use,
       sym_conditional,
       sym_append_environment,
-    ACTIONS(35), 10,
+    ACTIONS(37), 10,
       anon_sym_include,
       anon_sym_optional_include,
       anon_sym_include_glob,
@@ -9145,757 +9280,666 @@ static const uint16_t ts_small_parse_table[] = {
       anon_sym_add_message_definition_dir,
       anon_sym_requires_version,
       anon_sym_add_process_default_template,
-  [272] = 14,
+  [148] = 15,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(17), 1,
+    ACTIONS(19), 1,
       anon_sym_process,
-    ACTIONS(63), 1,
-      anon_sym_instance,
     ACTIONS(65), 1,
-      anon_sym_defines,
+      anon_sym_instance,
     ACTIONS(67), 1,
-      anon_sym_hosts,
+      anon_sym_defines,
     ACTIONS(69), 1,
-      anon_sym_node_map,
+      anon_sym_hosts,
     ACTIONS(71), 1,
-      anon_sym_topics,
+      anon_sym_node_map,
     ACTIONS(73), 1,
-      anon_sym_state,
+      anon_sym_topics,
     ACTIONS(75), 1,
-      anon_sym_group,
+      anon_sym_access,
     ACTIONS(77), 1,
-      anon_sym_network,
+      anon_sym_state,
     ACTIONS(79), 1,
+      anon_sym_group,
+    ACTIONS(81), 1,
+      anon_sym_network,
+    ACTIONS(83), 1,
       anon_sym_logger,
-    STATE(212), 1,
+    STATE(214), 1,
       sym__section,
-    ACTIONS(81), 2,
+    ACTIONS(85), 2,
       anon_sym_template,
       anon_sym_process_template,
-    STATE(201), 11,
+    STATE(208), 12,
       sym_instance_section,
       sym_defines_section,
       sym_hosts_section,
       sym_node_map_section,
       sym_topics_section,
+      sym_access_section,
       sym_process_section,
       sym_state_section,
       sym_group_section,
       sym_network_section,
       sym_logger_section,
       sym_template_section,
-  [326] = 12,
-    ACTIONS(51), 1,
+  [206] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(83), 1,
-      ts_builtin_sym_end,
-    ACTIONS(85), 1,
-      anon_sym_COMMA,
     ACTIONS(87), 1,
-      anon_sym_LBRACK,
+      ts_builtin_sym_end,
     ACTIONS(89), 1,
-      anon_sym_PERCENT_LPAREN,
+      anon_sym_COMMA,
     ACTIONS(91), 1,
-      anon_sym_DQUOTE,
+      anon_sym_LBRACK,
+    ACTIONS(93), 1,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(95), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(99), 1,
       sym__newline,
-    STATE(125), 1,
+    STATE(128), 1,
       sym_list_item,
     STATE(129), 1,
       aux_sym_list_repeat1,
-    ACTIONS(93), 2,
+    ACTIONS(97), 2,
       anon_sym_PERCENT2,
       sym__item_text,
-    STATE(189), 2,
+    STATE(199), 2,
       sym_list,
       sym_block,
-    STATE(58), 4,
+    STATE(55), 4,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_list_item_repeat1,
-  [368] = 12,
-    ACTIONS(51), 1,
+  [248] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(87), 1,
-      anon_sym_LBRACK,
-    ACTIONS(89), 1,
-      anon_sym_PERCENT_LPAREN,
     ACTIONS(91), 1,
+      anon_sym_LBRACK,
+    ACTIONS(93), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(95), 1,
       anon_sym_DQUOTE,
-    ACTIONS(97), 1,
-      ts_builtin_sym_end,
-    ACTIONS(99), 1,
-      anon_sym_COMMA,
     ACTIONS(101), 1,
-      sym__newline,
-    STATE(114), 1,
-      sym_list_item,
-    STATE(118), 1,
-      aux_sym_flags_repeat1,
-    ACTIONS(93), 2,
-      anon_sym_PERCENT2,
-      sym__item_text,
-    STATE(191), 2,
-      sym_flags,
-      sym_block,
-    STATE(58), 4,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-      aux_sym_list_item_repeat1,
-  [410] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(85), 1,
-      anon_sym_COMMA,
-    ACTIONS(87), 1,
-      anon_sym_LBRACK,
-    ACTIONS(89), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(91), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(103), 1,
       ts_builtin_sym_end,
+    ACTIONS(103), 1,
+      anon_sym_COMMA,
     ACTIONS(105), 1,
       sym__newline,
-    STATE(125), 1,
+    STATE(130), 1,
       sym_list_item,
-    STATE(129), 1,
-      aux_sym_list_repeat1,
-    ACTIONS(93), 2,
+    STATE(131), 1,
+      aux_sym_flags_repeat1,
+    ACTIONS(97), 2,
       anon_sym_PERCENT2,
       sym__item_text,
     STATE(204), 2,
-      sym_list,
+      sym_flags,
       sym_block,
-    STATE(58), 4,
+    STATE(55), 4,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_list_item_repeat1,
-  [452] = 12,
-    ACTIONS(51), 1,
+  [290] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(87), 1,
-      anon_sym_LBRACK,
     ACTIONS(89), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(91), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(99), 1,
       anon_sym_COMMA,
+    ACTIONS(91), 1,
+      anon_sym_LBRACK,
+    ACTIONS(93), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(95), 1,
+      anon_sym_DQUOTE,
     ACTIONS(107), 1,
       ts_builtin_sym_end,
     ACTIONS(109), 1,
       sym__newline,
-    STATE(114), 1,
+    STATE(128), 1,
       sym_list_item,
-    STATE(118), 1,
-      aux_sym_flags_repeat1,
-    ACTIONS(93), 2,
+    STATE(129), 1,
+      aux_sym_list_repeat1,
+    ACTIONS(97), 2,
       anon_sym_PERCENT2,
       sym__item_text,
-    STATE(205), 2,
-      sym_flags,
+    STATE(200), 2,
+      sym_list,
       sym_block,
-    STATE(58), 4,
+    STATE(55), 4,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_list_item_repeat1,
-  [494] = 12,
-    ACTIONS(51), 1,
+  [332] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
+    ACTIONS(91), 1,
+      anon_sym_LBRACK,
+    ACTIONS(93), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(95), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(103), 1,
       anon_sym_COMMA,
+    ACTIONS(111), 1,
+      ts_builtin_sym_end,
+    ACTIONS(113), 1,
+      sym__newline,
+    STATE(130), 1,
+      sym_list_item,
+    STATE(131), 1,
+      aux_sym_flags_repeat1,
+    ACTIONS(97), 2,
+      anon_sym_PERCENT2,
+      sym__item_text,
+    STATE(187), 2,
+      sym_flags,
+      sym_block,
+    STATE(55), 4,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+      aux_sym_list_item_repeat1,
+  [374] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
     ACTIONS(115), 1,
-      anon_sym_RPAREN,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(236), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [535] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
       anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
     ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
+      anon_sym_COMMA,
     ACTIONS(119), 1,
-      anon_sym_DQUOTE,
+      anon_sym_RPAREN,
     ACTIONS(121), 1,
-      anon_sym_PERCENT2,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(123), 1,
-      sym__argument_text,
+      anon_sym_DQUOTE,
     ACTIONS(125), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(216), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [576] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
       anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
     ACTIONS(127), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
+      sym__argument_text,
+    STATE(152), 1,
       sym_argument,
-    STATE(163), 1,
+    STATE(157), 1,
       aux_sym_arguments_repeat1,
-    STATE(238), 1,
+    STATE(223), 1,
       sym_arguments,
-    STATE(44), 5,
+    STATE(43), 5,
       sym_expansion,
       sym_parenthesized,
       sym_string,
       sym__percent,
       aux_sym_argument_repeat1,
-  [617] = 12,
-    ACTIONS(51), 1,
+  [415] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(111), 1,
+    ACTIONS(115), 1,
       anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
     ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
+      anon_sym_COMMA,
     ACTIONS(121), 1,
-      anon_sym_PERCENT2,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
       sym__argument_text,
     ACTIONS(129), 1,
       anon_sym_RPAREN,
-    STATE(162), 1,
+    STATE(152), 1,
       sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(226), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [658] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    ACTIONS(131), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(230), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [699] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    ACTIONS(133), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(239), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [740] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    ACTIONS(135), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(215), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [781] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    ACTIONS(137), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(220), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [822] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    ACTIONS(139), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(221), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [863] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    ACTIONS(141), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(224), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [904] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    ACTIONS(143), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
-      aux_sym_arguments_repeat1,
-    STATE(225), 1,
-      sym_arguments,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [945] = 12,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    ACTIONS(145), 1,
-      anon_sym_RPAREN,
-    STATE(162), 1,
-      sym_argument,
-    STATE(163), 1,
+    STATE(157), 1,
       aux_sym_arguments_repeat1,
     STATE(228), 1,
       sym_arguments,
-    STATE(44), 5,
+    STATE(43), 5,
       sym_expansion,
       sym_parenthesized,
       sym_string,
       sym__percent,
       aux_sym_argument_repeat1,
-  [986] = 12,
-    ACTIONS(51), 1,
+  [456] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(111), 1,
+    ACTIONS(115), 1,
       anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
     ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
+      anon_sym_COMMA,
     ACTIONS(121), 1,
-      anon_sym_PERCENT2,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
       sym__argument_text,
-    ACTIONS(147), 1,
+    ACTIONS(131), 1,
       anon_sym_RPAREN,
-    STATE(162), 1,
+    STATE(152), 1,
       sym_argument,
-    STATE(163), 1,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(241), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [497] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(133), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
       aux_sym_arguments_repeat1,
     STATE(229), 1,
       sym_arguments,
-    STATE(44), 5,
+    STATE(43), 5,
       sym_expansion,
       sym_parenthesized,
       sym_string,
       sym__percent,
       aux_sym_argument_repeat1,
-  [1027] = 12,
-    ACTIONS(51), 1,
+  [538] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(111), 1,
+    ACTIONS(115), 1,
       anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
     ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
+      anon_sym_COMMA,
     ACTIONS(121), 1,
-      anon_sym_PERCENT2,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
       sym__argument_text,
-    ACTIONS(149), 1,
+    ACTIONS(135), 1,
       anon_sym_RPAREN,
-    STATE(162), 1,
+    STATE(152), 1,
       sym_argument,
-    STATE(163), 1,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(219), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [579] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(137), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
       aux_sym_arguments_repeat1,
     STATE(232), 1,
       sym_arguments,
-    STATE(44), 5,
+    STATE(43), 5,
       sym_expansion,
       sym_parenthesized,
       sym_string,
       sym__percent,
       aux_sym_argument_repeat1,
-  [1068] = 12,
-    ACTIONS(51), 1,
+  [620] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(111), 1,
+    ACTIONS(115), 1,
       anon_sym_LPAREN,
-    ACTIONS(113), 1,
-      anon_sym_COMMA,
     ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
+      anon_sym_COMMA,
     ACTIONS(121), 1,
-      anon_sym_PERCENT2,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(139), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(216), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [661] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(141), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(217), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [702] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(143), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(222), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [743] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(145), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(234), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [784] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(147), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(226), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [825] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(149), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(227), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [866] = 12,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
       sym__argument_text,
     ACTIONS(151), 1,
       anon_sym_RPAREN,
-    STATE(162), 1,
+    STATE(152), 1,
       sym_argument,
-    STATE(163), 1,
+    STATE(157), 1,
       aux_sym_arguments_repeat1,
-    STATE(233), 1,
+    STATE(230), 1,
       sym_arguments,
-    STATE(44), 5,
+    STATE(43), 5,
       sym_expansion,
       sym_parenthesized,
       sym_string,
       sym__percent,
       aux_sym_argument_repeat1,
-  [1109] = 9,
-    ACTIONS(51), 1,
+  [907] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(87), 1,
-      anon_sym_LBRACK,
-    ACTIONS(153), 1,
-      ts_builtin_sym_end,
-    ACTIONS(155), 1,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(123), 1,
       anon_sym_DQUOTE,
-    ACTIONS(161), 1,
-      sym__newline,
-    ACTIONS(159), 2,
+    ACTIONS(125), 1,
       anon_sym_PERCENT2,
-      sym_text,
-    STATE(211), 2,
-      sym_value,
-      sym_block,
-    STATE(49), 5,
-      sym__value_piece,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(153), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(231), 1,
+      sym_arguments,
+    STATE(43), 5,
       sym_expansion,
+      sym_parenthesized,
       sym_string,
       sym__percent,
-      aux_sym_section_name_repeat1,
-  [1143] = 9,
-    ACTIONS(51), 1,
+      aux_sym_argument_repeat1,
+  [948] = 12,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(87), 1,
-      anon_sym_LBRACK,
-    ACTIONS(155), 1,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(117), 1,
+      anon_sym_COMMA,
+    ACTIONS(121), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(123), 1,
       anon_sym_DQUOTE,
-    ACTIONS(163), 1,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    ACTIONS(155), 1,
+      anon_sym_RPAREN,
+    STATE(152), 1,
+      sym_argument,
+    STATE(157), 1,
+      aux_sym_arguments_repeat1,
+    STATE(235), 1,
+      sym_arguments,
+    STATE(43), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_argument_repeat1,
+  [989] = 9,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(91), 1,
+      anon_sym_LBRACK,
+    ACTIONS(157), 1,
       ts_builtin_sym_end,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
     ACTIONS(165), 1,
       sym__newline,
-    ACTIONS(159), 2,
+    ACTIONS(163), 2,
       anon_sym_PERCENT2,
       sym_text,
-    STATE(208), 2,
+    STATE(197), 2,
       sym_value,
       sym_block,
-    STATE(49), 5,
+    STATE(51), 5,
       sym__value_piece,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_section_name_repeat1,
-  [1177] = 6,
-    ACTIONS(51), 1,
+  [1023] = 9,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(117), 1,
+    ACTIONS(91), 1,
+      anon_sym_LBRACK,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(167), 1,
+      ts_builtin_sym_end,
     ACTIONS(169), 1,
-      sym__name_text,
-    STATE(11), 1,
+      sym__newline,
+    ACTIONS(163), 2,
+      anon_sym_PERCENT2,
+      sym_text,
+    STATE(212), 2,
+      sym_value,
+      sym_block,
+    STATE(51), 5,
+      sym__value_piece,
       sym_expansion,
+      sym_string,
+      sym__percent,
+      aux_sym_section_name_repeat1,
+  [1057] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(173), 1,
+      sym__name_text,
     STATE(12), 1,
       sym_function_name,
-    ACTIONS(167), 10,
-      anon_sym_ifdef,
-      anon_sym_ifndef,
-      anon_sym_env,
-      anon_sym_dirname,
-      anon_sym_basename,
-      anon_sym_subst,
-      anon_sym_get_port_from_string,
-      anon_sym_shell,
-      anon_sym_ifeq,
-      anon_sym_ifexists,
-  [1205] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(171), 1,
-      sym__name_text,
-    STATE(23), 1,
-      sym_expansion,
-    STATE(24), 1,
-      sym_function_name,
-    ACTIONS(167), 10,
-      anon_sym_ifdef,
-      anon_sym_ifndef,
-      anon_sym_env,
-      anon_sym_dirname,
-      anon_sym_basename,
-      anon_sym_subst,
-      anon_sym_get_port_from_string,
-      anon_sym_shell,
-      anon_sym_ifeq,
-      anon_sym_ifexists,
-  [1233] = 9,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(87), 1,
-      anon_sym_LBRACK,
-    ACTIONS(155), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(173), 1,
-      ts_builtin_sym_end,
-    ACTIONS(175), 1,
-      sym__newline,
-    ACTIONS(159), 2,
-      anon_sym_PERCENT2,
-      sym_text,
-    STATE(199), 2,
-      sym_value,
-      sym_block,
-    STATE(49), 5,
-      sym__value_piece,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-      aux_sym_section_name_repeat1,
-  [1267] = 9,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(87), 1,
-      anon_sym_LBRACK,
-    ACTIONS(155), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(177), 1,
-      ts_builtin_sym_end,
-    ACTIONS(179), 1,
-      sym__newline,
-    ACTIONS(159), 2,
-      anon_sym_PERCENT2,
-      sym_text,
-    STATE(207), 2,
-      sym_value,
-      sym_block,
-    STATE(49), 5,
-      sym__value_piece,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-      aux_sym_section_name_repeat1,
-  [1301] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(181), 1,
-      sym__name_text,
-    STATE(13), 1,
-      sym_expansion,
     STATE(14), 1,
-      sym_function_name,
-    ACTIONS(167), 10,
+      sym_expansion,
+    ACTIONS(171), 10,
       anon_sym_ifdef,
       anon_sym_ifndef,
       anon_sym_env,
@@ -9906,18 +9950,68 @@ static const uint16_t ts_small_parse_table[] = {
       anon_sym_shell,
       anon_sym_ifeq,
       anon_sym_ifexists,
-  [1329] = 6,
-    ACTIONS(51), 1,
+  [1085] = 9,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(117), 1,
+    ACTIONS(91), 1,
+      anon_sym_LBRACK,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(175), 1,
+      ts_builtin_sym_end,
+    ACTIONS(177), 1,
+      sym__newline,
+    ACTIONS(163), 2,
+      anon_sym_PERCENT2,
+      sym_text,
+    STATE(189), 2,
+      sym_value,
+      sym_block,
+    STATE(51), 5,
+      sym__value_piece,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+      aux_sym_section_name_repeat1,
+  [1119] = 9,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(91), 1,
+      anon_sym_LBRACK,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(179), 1,
+      ts_builtin_sym_end,
+    ACTIONS(181), 1,
+      sym__newline,
+    ACTIONS(163), 2,
+      anon_sym_PERCENT2,
+      sym_text,
+    STATE(188), 2,
+      sym_value,
+      sym_block,
+    STATE(51), 5,
+      sym__value_piece,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+      aux_sym_section_name_repeat1,
+  [1153] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(121), 1,
       anon_sym_PERCENT_LPAREN,
     ACTIONS(183), 1,
       sym__name_text,
-    STATE(15), 1,
+    STATE(19), 1,
       sym_expansion,
-    STATE(16), 1,
+    STATE(24), 1,
       sym_function_name,
-    ACTIONS(167), 10,
+    ACTIONS(171), 10,
       anon_sym_ifdef,
       anon_sym_ifndef,
       anon_sym_env,
@@ -9928,18 +10022,18 @@ static const uint16_t ts_small_parse_table[] = {
       anon_sym_shell,
       anon_sym_ifeq,
       anon_sym_ifexists,
-  [1357] = 6,
-    ACTIONS(51), 1,
+  [1181] = 6,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(117), 1,
+    ACTIONS(121), 1,
       anon_sym_PERCENT_LPAREN,
     ACTIONS(185), 1,
       sym__name_text,
-    STATE(17), 1,
+    STATE(13), 1,
       sym_expansion,
-    STATE(18), 1,
+    STATE(15), 1,
       sym_function_name,
-    ACTIONS(167), 10,
+    ACTIONS(171), 10,
       anon_sym_ifdef,
       anon_sym_ifndef,
       anon_sym_env,
@@ -9950,18 +10044,18 @@ static const uint16_t ts_small_parse_table[] = {
       anon_sym_shell,
       anon_sym_ifeq,
       anon_sym_ifexists,
-  [1385] = 6,
-    ACTIONS(51), 1,
+  [1209] = 6,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(117), 1,
+    ACTIONS(121), 1,
       anon_sym_PERCENT_LPAREN,
     ACTIONS(187), 1,
       sym__name_text,
-    STATE(19), 1,
+    STATE(16), 1,
       sym_expansion,
-    STATE(20), 1,
+    STATE(17), 1,
       sym_function_name,
-    ACTIONS(167), 10,
+    ACTIONS(171), 10,
       anon_sym_ifdef,
       anon_sym_ifndef,
       anon_sym_env,
@@ -9972,18 +10066,18 @@ static const uint16_t ts_small_parse_table[] = {
       anon_sym_shell,
       anon_sym_ifeq,
       anon_sym_ifexists,
-  [1413] = 6,
-    ACTIONS(51), 1,
+  [1237] = 6,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(117), 1,
+    ACTIONS(121), 1,
       anon_sym_PERCENT_LPAREN,
     ACTIONS(189), 1,
       sym__name_text,
-    STATE(21), 1,
-      sym_expansion,
-    STATE(22), 1,
+    STATE(10), 1,
       sym_function_name,
-    ACTIONS(167), 10,
+    STATE(18), 1,
+      sym_expansion,
+    ACTIONS(171), 10,
       anon_sym_ifdef,
       anon_sym_ifndef,
       anon_sym_env,
@@ -9994,181 +10088,180 @@ static const uint16_t ts_small_parse_table[] = {
       anon_sym_shell,
       anon_sym_ifeq,
       anon_sym_ifexists,
-  [1441] = 9,
-    ACTIONS(43), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(45), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(47), 1,
-      sym__key_text,
-    ACTIONS(51), 1,
+  [1265] = 6,
+    ACTIONS(53), 1,
       sym_comment,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(191), 1,
+      sym__name_text,
+    STATE(20), 1,
+      sym_expansion,
+    STATE(21), 1,
+      sym_function_name,
+    ACTIONS(171), 10,
+      anon_sym_ifdef,
+      anon_sym_ifndef,
+      anon_sym_env,
+      anon_sym_dirname,
+      anon_sym_basename,
+      anon_sym_subst,
+      anon_sym_get_port_from_string,
+      anon_sym_shell,
+      anon_sym_ifeq,
+      anon_sym_ifexists,
+  [1293] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(193), 1,
+      sym__name_text,
+    STATE(22), 1,
+      sym_expansion,
+    STATE(23), 1,
+      sym_function_name,
+    ACTIONS(171), 10,
+      anon_sym_ifdef,
+      anon_sym_ifndef,
+      anon_sym_env,
+      anon_sym_dirname,
+      anon_sym_basename,
+      anon_sym_subst,
+      anon_sym_get_port_from_string,
+      anon_sym_shell,
+      anon_sym_ifeq,
+      anon_sym_ifexists,
+  [1321] = 9,
+    ACTIONS(45), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(47), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(49), 1,
+      sym__key_text,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(197), 1,
       anon_sym_flags,
-    ACTIONS(195), 1,
+    ACTIONS(199), 1,
       sym__word_key,
-    STATE(222), 1,
+    STATE(233), 1,
       sym_key,
-    STATE(72), 3,
+    STATE(89), 3,
       sym_expansion,
       sym_string,
       aux_sym_key_repeat1,
-    ACTIONS(191), 4,
+    ACTIONS(195), 4,
       anon_sym_depends_on,
       anon_sym_start_before,
       anon_sym_start_on_ready,
       anon_sym_members,
-  [1474] = 9,
-    ACTIONS(51), 1,
+  [1354] = 9,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(111), 1,
+    ACTIONS(115), 1,
       anon_sym_LPAREN,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
     ACTIONS(121), 1,
-      anon_sym_PERCENT2,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(125), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(127), 1,
       sym__argument_text,
-    STATE(196), 1,
+    STATE(186), 1,
       sym_argument,
-    ACTIONS(197), 2,
+    ACTIONS(201), 2,
       anon_sym_COMMA,
       anon_sym_RPAREN,
-    STATE(44), 5,
+    STATE(43), 5,
       sym_expansion,
       sym_parenthesized,
       sym_string,
       sym__percent,
       aux_sym_argument_repeat1,
-  [1507] = 8,
-    ACTIONS(51), 1,
+  [1387] = 9,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(199), 1,
-      anon_sym_LPAREN,
-    ACTIONS(204), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(163), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(203), 1,
+      ts_builtin_sym_end,
+    ACTIONS(205), 1,
+      sym_text,
     ACTIONS(207), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(210), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(213), 1,
-      sym__argument_text,
-    ACTIONS(202), 2,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-    STATE(38), 5,
+      sym__newline,
+    STATE(205), 1,
+      sym_value,
+    STATE(51), 5,
+      sym__value_piece,
       sym_expansion,
-      sym_parenthesized,
       sym_string,
       sym__percent,
-      aux_sym_argument_repeat1,
-  [1537] = 8,
-    ACTIONS(51), 1,
+      aux_sym_section_name_repeat1,
+  [1419] = 8,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(216), 1,
+    ACTIONS(209), 1,
       anon_sym_LPAREN,
-    ACTIONS(222), 1,
-      anon_sym_RPAREN,
-    ACTIONS(224), 1,
+    ACTIONS(214), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(227), 1,
+    ACTIONS(217), 1,
       anon_sym_DQUOTE,
-    ACTIONS(230), 1,
-      sym__argument_text,
-    ACTIONS(219), 2,
-      anon_sym_COMMA,
+    ACTIONS(220), 1,
       anon_sym_PERCENT2,
+    ACTIONS(223), 1,
+      sym__argument_text,
+    ACTIONS(212), 2,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
     STATE(39), 5,
       sym_expansion,
       sym_parenthesized,
       sym_string,
       sym__percent,
-      aux_sym_parenthesized_repeat1,
-  [1567] = 9,
-    ACTIONS(51), 1,
+      aux_sym_argument_repeat1,
+  [1449] = 9,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(89), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(91), 1,
-      anon_sym_DQUOTE,
     ACTIONS(93), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(95), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(97), 1,
       anon_sym_PERCENT2,
-    ACTIONS(233), 1,
+    ACTIONS(226), 1,
       ts_builtin_sym_end,
-    ACTIONS(237), 1,
+    ACTIONS(230), 1,
       sym__item_text,
-    STATE(136), 1,
+    STATE(149), 1,
       sym_list_item,
-    ACTIONS(235), 2,
+    ACTIONS(228), 2,
       anon_sym_COMMA,
       sym__newline,
-    STATE(58), 4,
+    STATE(55), 4,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_list_item_repeat1,
-  [1599] = 9,
-    ACTIONS(51), 1,
+  [1481] = 8,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(159), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(239), 1,
-      ts_builtin_sym_end,
-    ACTIONS(241), 1,
-      sym_text,
-    ACTIONS(243), 1,
-      sym__newline,
-    STATE(181), 1,
-      sym_value,
-    STATE(49), 5,
-      sym__value_piece,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-      aux_sym_section_name_repeat1,
-  [1631] = 9,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(89), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(91), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(93), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(237), 1,
-      sym__item_text,
-    ACTIONS(245), 1,
-      ts_builtin_sym_end,
-    STATE(179), 1,
-      sym_list_item,
-    ACTIONS(247), 2,
-      anon_sym_COMMA,
-      sym__newline,
-    STATE(58), 4,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-      aux_sym_list_item_repeat1,
-  [1663] = 8,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
+    ACTIONS(115), 1,
       anon_sym_LPAREN,
-    ACTIONS(117), 1,
+    ACTIONS(121), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
+    ACTIONS(123), 1,
       anon_sym_DQUOTE,
-    ACTIONS(251), 1,
+    ACTIONS(234), 1,
       anon_sym_RPAREN,
-    ACTIONS(253), 1,
+    ACTIONS(236), 1,
       sym__argument_text,
-    ACTIONS(249), 2,
+    ACTIONS(232), 2,
       anon_sym_COMMA,
       anon_sym_PERCENT2,
     STATE(46), 5,
@@ -10177,14 +10270,36 @@ static const uint16_t ts_small_parse_table[] = {
       sym_string,
       sym__percent,
       aux_sym_parenthesized_repeat1,
-  [1693] = 8,
-    ACTIONS(51), 1,
+  [1511] = 8,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(111), 1,
+    ACTIONS(238), 1,
       anon_sym_LPAREN,
-    ACTIONS(117), 1,
+    ACTIONS(244), 1,
+      anon_sym_RPAREN,
+    ACTIONS(246), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
+    ACTIONS(249), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(252), 1,
+      sym__argument_text,
+    ACTIONS(241), 2,
+      anon_sym_COMMA,
+      anon_sym_PERCENT2,
+    STATE(42), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_parenthesized_repeat1,
+  [1541] = 8,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
       anon_sym_DQUOTE,
     ACTIONS(257), 1,
       anon_sym_PERCENT2,
@@ -10193,178 +10308,243 @@ static const uint16_t ts_small_parse_table[] = {
     ACTIONS(255), 2,
       anon_sym_COMMA,
       anon_sym_RPAREN,
-    STATE(38), 5,
+    STATE(39), 5,
       sym_expansion,
       sym_parenthesized,
       sym_string,
       sym__percent,
       aux_sym_argument_repeat1,
-  [1723] = 9,
-    ACTIONS(51), 1,
+  [1571] = 9,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(93), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(95), 1,
       anon_sym_DQUOTE,
-    ACTIONS(159), 1,
+    ACTIONS(97), 1,
       anon_sym_PERCENT2,
-    ACTIONS(241), 1,
-      sym_text,
+    ACTIONS(230), 1,
+      sym__item_text,
     ACTIONS(261), 1,
       ts_builtin_sym_end,
-    ACTIONS(263), 1,
+    STATE(138), 1,
+      sym_list_item,
+    ACTIONS(263), 2,
+      anon_sym_COMMA,
       sym__newline,
-    STATE(188), 1,
+    STATE(55), 4,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+      aux_sym_list_item_repeat1,
+  [1603] = 9,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(163), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(205), 1,
+      sym_text,
+    ACTIONS(265), 1,
+      ts_builtin_sym_end,
+    ACTIONS(267), 1,
+      sym__newline,
+    STATE(196), 1,
       sym_value,
+    STATE(51), 5,
+      sym__value_piece,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+      aux_sym_section_name_repeat1,
+  [1635] = 8,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(121), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(123), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(271), 1,
+      anon_sym_RPAREN,
+    ACTIONS(273), 1,
+      sym__argument_text,
+    ACTIONS(269), 2,
+      anon_sym_COMMA,
+      anon_sym_PERCENT2,
+    STATE(42), 5,
+      sym_expansion,
+      sym_parenthesized,
+      sym_string,
+      sym__percent,
+      aux_sym_parenthesized_repeat1,
+  [1665] = 10,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(275), 1,
+      ts_builtin_sym_end,
+    ACTIONS(277), 1,
+      anon_sym_COLON,
+    ACTIONS(279), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(281), 1,
+      sym__first_text,
+    ACTIONS(283), 1,
+      sym__newline,
+    STATE(185), 1,
+      sym__argument_value,
+    STATE(48), 3,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+  [1698] = 8,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(285), 1,
+      ts_builtin_sym_end,
+    ACTIONS(287), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(289), 1,
+      sym_text,
+    ACTIONS(291), 1,
+      sym__newline,
+    STATE(57), 5,
+      sym__value_piece,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+      aux_sym_section_name_repeat1,
+  [1727] = 8,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(293), 1,
+      ts_builtin_sym_end,
+    ACTIONS(295), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(298), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(301), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(304), 1,
+      sym_text,
+    ACTIONS(307), 1,
+      sym__newline,
     STATE(49), 5,
       sym__value_piece,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_section_name_repeat1,
-  [1755] = 8,
-    ACTIONS(51), 1,
+  [1756] = 8,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(117), 1,
+    ACTIONS(309), 1,
+      ts_builtin_sym_end,
+    ACTIONS(313), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
+    ACTIONS(316), 1,
       anon_sym_DQUOTE,
-    ACTIONS(267), 1,
-      anon_sym_RPAREN,
-    ACTIONS(269), 1,
-      sym__argument_text,
-    ACTIONS(265), 2,
-      anon_sym_COMMA,
+    ACTIONS(319), 1,
       anon_sym_PERCENT2,
-    STATE(39), 5,
+    ACTIONS(322), 1,
+      sym__item_text,
+    ACTIONS(311), 2,
+      anon_sym_COMMA,
+      sym__newline,
+    STATE(50), 4,
       sym_expansion,
-      sym_parenthesized,
       sym_string,
       sym__percent,
-      aux_sym_parenthesized_repeat1,
+      aux_sym_list_item_repeat1,
   [1785] = 8,
-    ACTIONS(51), 1,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(161), 1,
       anon_sym_DQUOTE,
-    ACTIONS(271), 1,
+    ACTIONS(325), 1,
       ts_builtin_sym_end,
-    ACTIONS(273), 1,
+    ACTIONS(327), 1,
       anon_sym_PERCENT2,
-    ACTIONS(275), 1,
+    ACTIONS(329), 1,
       sym_text,
-    ACTIONS(277), 1,
+    ACTIONS(331), 1,
       sym__newline,
-    STATE(55), 5,
+    STATE(49), 5,
       sym__value_piece,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_section_name_repeat1,
   [1814] = 8,
-    ACTIONS(51), 1,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(115), 1,
+      anon_sym_LPAREN,
+    ACTIONS(121), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(123), 1,
       anon_sym_DQUOTE,
-    ACTIONS(279), 1,
-      ts_builtin_sym_end,
-    ACTIONS(281), 1,
+    ACTIONS(125), 1,
       anon_sym_PERCENT2,
-    ACTIONS(283), 1,
-      sym_text,
-    ACTIONS(285), 1,
-      sym__newline,
-    STATE(50), 5,
-      sym__value_piece,
+    ACTIONS(127), 1,
+      sym__argument_text,
+    STATE(215), 1,
+      sym_argument,
+    STATE(43), 5,
       sym_expansion,
+      sym_parenthesized,
       sym_string,
       sym__percent,
-      aux_sym_section_name_repeat1,
+      aux_sym_argument_repeat1,
   [1843] = 8,
-    ACTIONS(51), 1,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(161), 1,
       anon_sym_DQUOTE,
-    ACTIONS(273), 1,
+    ACTIONS(327), 1,
       anon_sym_PERCENT2,
-    ACTIONS(275), 1,
+    ACTIONS(329), 1,
       sym_text,
-    ACTIONS(287), 1,
+    ACTIONS(333), 1,
       ts_builtin_sym_end,
-    ACTIONS(289), 1,
+    ACTIONS(335), 1,
       sym__newline,
-    STATE(55), 5,
+    STATE(49), 5,
       sym__value_piece,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_section_name_repeat1,
   [1872] = 8,
-    ACTIONS(51), 1,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(161), 1,
       anon_sym_DQUOTE,
-    ACTIONS(273), 1,
+    ACTIONS(337), 1,
+      ts_builtin_sym_end,
+    ACTIONS(339), 1,
       anon_sym_PERCENT2,
-    ACTIONS(275), 1,
+    ACTIONS(341), 1,
       sym_text,
-    ACTIONS(291), 1,
-      ts_builtin_sym_end,
-    ACTIONS(293), 1,
-      sym__newline,
-    STATE(55), 5,
-      sym__value_piece,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-      aux_sym_section_name_repeat1,
-  [1901] = 10,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(155), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(295), 1,
-      ts_builtin_sym_end,
-    ACTIONS(297), 1,
-      anon_sym_COLON,
-    ACTIONS(299), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(301), 1,
-      sym__first_text,
-    ACTIONS(303), 1,
-      sym__newline,
-    STATE(198), 1,
-      sym__argument_value,
-    STATE(48), 3,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-  [1934] = 8,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(155), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(305), 1,
-      ts_builtin_sym_end,
-    ACTIONS(307), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(309), 1,
-      sym_text,
-    ACTIONS(311), 1,
+    ACTIONS(343), 1,
       sym__newline,
     STATE(53), 5,
       sym__value_piece,
@@ -10372,319 +10552,274 @@ static const uint16_t ts_small_parse_table[] = {
       sym_string,
       sym__percent,
       aux_sym_section_name_repeat1,
-  [1963] = 8,
-    ACTIONS(51), 1,
+  [1901] = 8,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(93), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(95), 1,
       anon_sym_DQUOTE,
-    ACTIONS(273), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(275), 1,
-      sym_text,
-    ACTIONS(313), 1,
+    ACTIONS(345), 1,
       ts_builtin_sym_end,
-    ACTIONS(315), 1,
+    ACTIONS(349), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(351), 1,
+      sym__item_text,
+    ACTIONS(347), 2,
+      anon_sym_COMMA,
       sym__newline,
-    STATE(55), 5,
-      sym__value_piece,
+    STATE(50), 4,
       sym_expansion,
       sym_string,
       sym__percent,
-      aux_sym_section_name_repeat1,
-  [1992] = 8,
-    ACTIONS(51), 1,
+      aux_sym_list_item_repeat1,
+  [1930] = 8,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(317), 1,
-      ts_builtin_sym_end,
-    ACTIONS(321), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(324), 1,
+    ACTIONS(161), 1,
       anon_sym_DQUOTE,
     ACTIONS(327), 1,
       anon_sym_PERCENT2,
-    ACTIONS(330), 1,
-      sym__item_text,
-    ACTIONS(319), 2,
-      anon_sym_COMMA,
-      sym__newline,
-    STATE(54), 4,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-      aux_sym_list_item_repeat1,
-  [2021] = 8,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(333), 1,
-      ts_builtin_sym_end,
-    ACTIONS(335), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(338), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(341), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(344), 1,
+    ACTIONS(329), 1,
       sym_text,
-    ACTIONS(347), 1,
-      sym__newline,
-    STATE(55), 5,
-      sym__value_piece,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-      aux_sym_section_name_repeat1,
-  [2050] = 8,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(111), 1,
-      anon_sym_LPAREN,
-    ACTIONS(117), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(119), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(121), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(123), 1,
-      sym__argument_text,
-    STATE(192), 1,
-      sym_argument,
-    STATE(44), 5,
-      sym_expansion,
-      sym_parenthesized,
-      sym_string,
-      sym__percent,
-      aux_sym_argument_repeat1,
-  [2079] = 8,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(155), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(349), 1,
-      ts_builtin_sym_end,
-    ACTIONS(351), 1,
-      anon_sym_PERCENT2,
     ACTIONS(353), 1,
-      sym_text,
+      ts_builtin_sym_end,
     ACTIONS(355), 1,
       sym__newline,
-    STATE(47), 5,
+    STATE(49), 5,
       sym__value_piece,
       sym_expansion,
       sym_string,
       sym__percent,
       aux_sym_section_name_repeat1,
-  [2108] = 8,
-    ACTIONS(51), 1,
+  [1959] = 8,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(89), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(91), 1,
+    ACTIONS(161), 1,
       anon_sym_DQUOTE,
+    ACTIONS(327), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(329), 1,
+      sym_text,
     ACTIONS(357), 1,
       ts_builtin_sym_end,
-    ACTIONS(361), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(363), 1,
-      sym__item_text,
-    ACTIONS(359), 2,
-      anon_sym_COMMA,
+    ACTIONS(359), 1,
       sym__newline,
-    STATE(54), 4,
+    STATE(49), 5,
+      sym__value_piece,
       sym_expansion,
       sym_string,
       sym__percent,
-      aux_sym_list_item_repeat1,
-  [2137] = 9,
-    ACTIONS(51), 1,
+      aux_sym_section_name_repeat1,
+  [1988] = 8,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(161), 1,
       anon_sym_DQUOTE,
-    ACTIONS(299), 1,
+    ACTIONS(361), 1,
+      ts_builtin_sym_end,
+    ACTIONS(363), 1,
       anon_sym_PERCENT2,
     ACTIONS(365), 1,
-      ts_builtin_sym_end,
+      sym_text,
     ACTIONS(367), 1,
-      sym__first_text,
-    ACTIONS(369), 1,
       sym__newline,
-    STATE(202), 1,
+    STATE(56), 5,
+      sym__value_piece,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+      aux_sym_section_name_repeat1,
+  [2017] = 9,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(279), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(369), 1,
+      ts_builtin_sym_end,
+    ACTIONS(371), 1,
+      sym__first_text,
+    ACTIONS(373), 1,
+      sym__newline,
+    STATE(207), 1,
       sym__argument_value,
     STATE(48), 3,
       sym_expansion,
       sym_string,
       sym__percent,
-  [2167] = 7,
-    ACTIONS(51), 1,
+  [2047] = 7,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(161), 1,
       anon_sym_DQUOTE,
-    ACTIONS(371), 1,
+    ACTIONS(375), 1,
       anon_sym_PERCENT2,
-    ACTIONS(373), 1,
-      sym__first_text,
-    STATE(164), 1,
-      sym_section_name,
-    STATE(52), 3,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-  [2191] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
     ACTIONS(377), 1,
+      sym__first_text,
+    STATE(176), 1,
+      sym_section_name,
+    STATE(54), 3,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+  [2071] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(381), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(380), 1,
+    ACTIONS(384), 1,
       anon_sym_PERCENT2,
-    ACTIONS(383), 1,
+    ACTIONS(387), 1,
       sym__block_more_text,
-    ACTIONS(375), 2,
+    ACTIONS(379), 2,
       anon_sym_RBRACK,
       sym__newline,
     STATE(61), 3,
       sym_expansion,
       sym__percent,
       aux_sym_block_line_repeat1,
-  [2213] = 6,
-    ACTIONS(51), 1,
+  [2093] = 7,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(388), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(390), 1,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(375), 1,
       anon_sym_PERCENT2,
+    ACTIONS(377), 1,
+      sym__first_text,
+    STATE(174), 1,
+      sym_section_name,
+    STATE(54), 3,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+  [2117] = 7,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(375), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(377), 1,
+      sym__first_text,
+    STATE(178), 1,
+      sym_section_name,
+    STATE(54), 3,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+  [2141] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
     ACTIONS(392), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(394), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(396), 1,
       sym__block_more_text,
-    ACTIONS(386), 2,
+    ACTIONS(390), 2,
       anon_sym_RBRACK,
       sym__newline,
-    STATE(61), 3,
+    STATE(67), 3,
       sym_expansion,
       sym__percent,
       aux_sym_block_line_repeat1,
-  [2235] = 7,
-    ACTIONS(51), 1,
+  [2163] = 6,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(392), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(371), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(373), 1,
-      sym__first_text,
-    STATE(168), 1,
-      sym_section_name,
-    STATE(52), 3,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-  [2259] = 7,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(155), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(371), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(373), 1,
-      sym__first_text,
-    STATE(170), 1,
-      sym_section_name,
-    STATE(52), 3,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-  [2283] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(388), 1,
-      anon_sym_PERCENT_LPAREN,
-    STATE(210), 1,
+    STATE(190), 1,
       sym_block_line,
-    ACTIONS(394), 2,
-      anon_sym_RBRACK,
-      sym__newline,
-    ACTIONS(396), 2,
-      anon_sym_PERCENT2,
-      sym__block_text,
-    STATE(67), 2,
-      sym_expansion,
-      sym__percent,
-  [2305] = 7,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(155), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
-      anon_sym_DQUOTE,
-    ACTIONS(371), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(373), 1,
-      sym__first_text,
-    STATE(139), 1,
-      sym_section_name,
-    STATE(52), 3,
-      sym_expansion,
-      sym_string,
-      sym__percent,
-  [2329] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(388), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(400), 1,
-      anon_sym_PERCENT2,
-    ACTIONS(402), 1,
-      sym__block_more_text,
     ACTIONS(398), 2,
       anon_sym_RBRACK,
       sym__newline,
-    STATE(62), 3,
+    ACTIONS(400), 2,
+      anon_sym_PERCENT2,
+      sym__block_text,
+    STATE(64), 2,
       sym_expansion,
       sym__percent,
-      aux_sym_block_line_repeat1,
-  [2351] = 7,
-    ACTIONS(51), 1,
+  [2185] = 7,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(155), 1,
+    ACTIONS(159), 1,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(157), 1,
+    ACTIONS(161), 1,
       anon_sym_DQUOTE,
-    ACTIONS(371), 1,
+    ACTIONS(375), 1,
       anon_sym_PERCENT2,
-    ACTIONS(373), 1,
+    ACTIONS(377), 1,
       sym__first_text,
-    STATE(135), 1,
+    STATE(177), 1,
       sym_section_name,
-    STATE(52), 3,
+    STATE(54), 3,
       sym_expansion,
       sym_string,
       sym__percent,
-  [2375] = 6,
-    ACTIONS(51), 1,
+  [2209] = 6,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(404), 1,
+    ACTIONS(392), 1,
       anon_sym_PERCENT_LPAREN,
+    ACTIONS(404), 1,
+      anon_sym_PERCENT2,
     ACTIONS(406), 1,
-      anon_sym_PERCENT,
-    ACTIONS(408), 1,
-      anon_sym_DQUOTE2,
-    ACTIONS(410), 2,
-      sym_string_content,
-      sym_escape_sequence,
-    STATE(76), 2,
+      sym__block_more_text,
+    ACTIONS(402), 2,
+      anon_sym_RBRACK,
+      sym__newline,
+    STATE(61), 3,
       sym_expansion,
-      aux_sym_string_repeat1,
-  [2396] = 3,
-    ACTIONS(51), 1,
+      sym__percent,
+      aux_sym_block_line_repeat1,
+  [2231] = 7,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(159), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(161), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(375), 1,
+      anon_sym_PERCENT2,
+    ACTIONS(377), 1,
+      sym__first_text,
+    STATE(179), 1,
+      sym_section_name,
+    STATE(54), 3,
+      sym_expansion,
+      sym_string,
+      sym__percent,
+  [2255] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(410), 1,
+      sym__argument_text,
+    ACTIONS(408), 6,
+      anon_sym_LPAREN,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+  [2270] = 3,
+    ACTIONS(53), 1,
       sym_comment,
     ACTIONS(414), 1,
       sym__argument_text,
@@ -10695,1707 +10830,1729 @@ static const uint16_t ts_small_parse_table[] = {
       anon_sym_PERCENT_LPAREN,
       anon_sym_DQUOTE,
       anon_sym_PERCENT2,
-  [2411] = 6,
-    ACTIONS(51), 1,
+  [2285] = 3,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(416), 1,
-      anon_sym_COLON,
     ACTIONS(418), 1,
+      sym__argument_text,
+    ACTIONS(416), 6,
+      anon_sym_LPAREN,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(421), 1,
       anon_sym_DQUOTE,
-    ACTIONS(424), 1,
-      sym__key_text,
-    STATE(71), 3,
-      sym_expansion,
-      sym_string,
-      aux_sym_key_repeat1,
-  [2432] = 6,
-    ACTIONS(43), 1,
+      anon_sym_PERCENT2,
+  [2300] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(422), 1,
+      sym__argument_text,
+    ACTIONS(420), 6,
+      anon_sym_LPAREN,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(45), 1,
       anon_sym_DQUOTE,
-    ACTIONS(51), 1,
+      anon_sym_PERCENT2,
+  [2315] = 3,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(427), 1,
-      anon_sym_COLON,
-    ACTIONS(429), 1,
-      sym__key_text,
-    STATE(71), 3,
-      sym_expansion,
-      sym_string,
-      aux_sym_key_repeat1,
-  [2453] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(431), 1,
+    ACTIONS(426), 1,
+      sym__argument_text,
+    ACTIONS(424), 6,
+      anon_sym_LPAREN,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
       anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+  [2330] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(430), 1,
+      sym__argument_text,
+    ACTIONS(428), 6,
+      anon_sym_LPAREN,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+  [2345] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
     ACTIONS(434), 1,
+      sym__argument_text,
+    ACTIONS(432), 6,
+      anon_sym_LPAREN,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+  [2360] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(418), 2,
+      ts_builtin_sym_end,
+      sym__item_text,
+    ACTIONS(416), 5,
+      anon_sym_COMMA,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2375] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(422), 2,
+      ts_builtin_sym_end,
+      sym__item_text,
+    ACTIONS(420), 5,
+      anon_sym_COMMA,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2390] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(430), 2,
+      ts_builtin_sym_end,
+      sym__item_text,
+    ACTIONS(428), 5,
+      anon_sym_COMMA,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2405] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(434), 2,
+      ts_builtin_sym_end,
+      sym__item_text,
+    ACTIONS(432), 5,
+      anon_sym_COMMA,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2420] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(436), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(438), 1,
       anon_sym_PERCENT,
-    ACTIONS(437), 1,
+    ACTIONS(440), 1,
       anon_sym_DQUOTE2,
-    ACTIONS(439), 2,
+    ACTIONS(442), 2,
       sym_string_content,
       sym_escape_sequence,
-    STATE(73), 2,
+    STATE(83), 2,
       sym_expansion,
       aux_sym_string_repeat1,
-  [2474] = 3,
-    ACTIONS(51), 1,
+  [2441] = 3,
+    ACTIONS(53), 1,
       sym_comment,
+    ACTIONS(426), 2,
+      ts_builtin_sym_end,
+      sym__item_text,
+    ACTIONS(424), 5,
+      anon_sym_COMMA,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2456] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(436), 1,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(444), 1,
-      sym__argument_text,
-    ACTIONS(442), 6,
-      anon_sym_LPAREN,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-  [2489] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(448), 1,
-      sym__argument_text,
-    ACTIONS(446), 6,
-      anon_sym_LPAREN,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-  [2504] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(404), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(450), 1,
       anon_sym_PERCENT,
+    ACTIONS(446), 1,
+      anon_sym_DQUOTE2,
+    ACTIONS(448), 2,
+      sym_string_content,
+      sym_escape_sequence,
+    STATE(93), 2,
+      sym_expansion,
+      aux_sym_string_repeat1,
+  [2477] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(436), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(444), 1,
+      anon_sym_PERCENT,
+    ACTIONS(450), 1,
+      anon_sym_DQUOTE2,
+    ACTIONS(448), 2,
+      sym_string_content,
+      sym_escape_sequence,
+    STATE(93), 2,
+      sym_expansion,
+      aux_sym_string_repeat1,
+  [2498] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(436), 1,
+      anon_sym_PERCENT_LPAREN,
     ACTIONS(452), 1,
+      anon_sym_PERCENT,
+    ACTIONS(454), 1,
       anon_sym_DQUOTE2,
-    ACTIONS(454), 2,
+    ACTIONS(456), 2,
       sym_string_content,
       sym_escape_sequence,
-    STATE(73), 2,
+    STATE(85), 2,
       sym_expansion,
       aux_sym_string_repeat1,
-  [2525] = 3,
-    ACTIONS(51), 1,
+  [2519] = 6,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(456), 2,
-      ts_builtin_sym_end,
-      sym__item_text,
-    ACTIONS(458), 5,
-      anon_sym_COMMA,
+    ACTIONS(436), 1,
       anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2540] = 3,
-    ACTIONS(51), 1,
+    ACTIONS(444), 1,
+      anon_sym_PERCENT,
+    ACTIONS(458), 1,
+      anon_sym_DQUOTE2,
+    ACTIONS(448), 2,
+      sym_string_content,
+      sym_escape_sequence,
+    STATE(93), 2,
+      sym_expansion,
+      aux_sym_string_repeat1,
+  [2540] = 6,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(460), 2,
-      ts_builtin_sym_end,
-      sym__item_text,
-    ACTIONS(462), 5,
-      anon_sym_COMMA,
+    ACTIONS(436), 1,
       anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2555] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(456), 1,
-      sym__argument_text,
-    ACTIONS(458), 6,
-      anon_sym_LPAREN,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-  [2570] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(466), 1,
-      sym__argument_text,
-    ACTIONS(464), 6,
-      anon_sym_LPAREN,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-  [2585] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(470), 1,
-      sym__argument_text,
-    ACTIONS(468), 6,
-      anon_sym_LPAREN,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-  [2600] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
     ACTIONS(460), 1,
-      sym__argument_text,
-    ACTIONS(462), 6,
-      anon_sym_LPAREN,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-  [2615] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(474), 1,
-      sym__argument_text,
-    ACTIONS(472), 6,
-      anon_sym_LPAREN,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-  [2630] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(478), 1,
-      sym__argument_text,
-    ACTIONS(476), 6,
-      anon_sym_LPAREN,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-  [2645] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(466), 2,
-      ts_builtin_sym_end,
-      sym__item_text,
-    ACTIONS(464), 5,
-      anon_sym_COMMA,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2660] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(470), 2,
-      ts_builtin_sym_end,
-      sym__item_text,
-    ACTIONS(468), 5,
-      anon_sym_COMMA,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2675] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(474), 2,
-      ts_builtin_sym_end,
-      sym__item_text,
-    ACTIONS(472), 5,
-      anon_sym_COMMA,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2690] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(478), 2,
-      ts_builtin_sym_end,
-      sym__item_text,
-    ACTIONS(476), 5,
-      anon_sym_COMMA,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2705] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(404), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(480), 1,
       anon_sym_PERCENT,
-    ACTIONS(482), 1,
+    ACTIONS(462), 1,
       anon_sym_DQUOTE2,
-    ACTIONS(484), 2,
-      sym_string_content,
-      sym_escape_sequence,
-    STATE(90), 2,
-      sym_expansion,
-      aux_sym_string_repeat1,
-  [2726] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(404), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(450), 1,
-      anon_sym_PERCENT,
-    ACTIONS(486), 1,
-      anon_sym_DQUOTE2,
-    ACTIONS(454), 2,
-      sym_string_content,
-      sym_escape_sequence,
-    STATE(73), 2,
-      sym_expansion,
-      aux_sym_string_repeat1,
-  [2747] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(404), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(488), 1,
-      anon_sym_PERCENT,
-    ACTIONS(490), 1,
-      anon_sym_DQUOTE2,
-    ACTIONS(492), 2,
-      sym_string_content,
-      sym_escape_sequence,
-    STATE(92), 2,
-      sym_expansion,
-      aux_sym_string_repeat1,
-  [2768] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(404), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(450), 1,
-      anon_sym_PERCENT,
-    ACTIONS(494), 1,
-      anon_sym_DQUOTE2,
-    ACTIONS(454), 2,
-      sym_string_content,
-      sym_escape_sequence,
-    STATE(73), 2,
-      sym_expansion,
-      aux_sym_string_repeat1,
-  [2789] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(404), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(496), 1,
-      anon_sym_PERCENT,
-    ACTIONS(498), 1,
-      anon_sym_DQUOTE2,
-    ACTIONS(500), 2,
-      sym_string_content,
-      sym_escape_sequence,
-    STATE(94), 2,
-      sym_expansion,
-      aux_sym_string_repeat1,
-  [2810] = 6,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(404), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(450), 1,
-      anon_sym_PERCENT,
-    ACTIONS(502), 1,
-      anon_sym_DQUOTE2,
-    ACTIONS(454), 2,
-      sym_string_content,
-      sym_escape_sequence,
-    STATE(73), 2,
-      sym_expansion,
-      aux_sym_string_repeat1,
-  [2831] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(466), 2,
-      ts_builtin_sym_end,
-      sym_text,
-    ACTIONS(464), 4,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2845] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(456), 2,
-      ts_builtin_sym_end,
-      sym_text,
-    ACTIONS(458), 4,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2859] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(470), 2,
-      ts_builtin_sym_end,
-      sym_text,
-    ACTIONS(468), 4,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2873] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(460), 2,
-      ts_builtin_sym_end,
-      sym_text,
-    ACTIONS(462), 4,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2887] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(474), 2,
-      ts_builtin_sym_end,
-      sym_text,
-    ACTIONS(472), 4,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2901] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(478), 2,
-      ts_builtin_sym_end,
-      sym_text,
-    ACTIONS(476), 4,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2915] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(468), 2,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_PERCENT,
-    ACTIONS(470), 3,
-      anon_sym_DQUOTE2,
-      sym_string_content,
-      sym_escape_sequence,
-  [2928] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(476), 2,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_PERCENT,
-    ACTIONS(478), 3,
-      anon_sym_DQUOTE2,
-      sym_string_content,
-      sym_escape_sequence,
-  [2941] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
     ACTIONS(464), 2,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_PERCENT,
-    ACTIONS(466), 3,
-      anon_sym_DQUOTE2,
       sym_string_content,
       sym_escape_sequence,
-  [2954] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(472), 2,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_PERCENT,
-    ACTIONS(474), 3,
-      anon_sym_DQUOTE2,
-      sym_string_content,
-      sym_escape_sequence,
-  [2967] = 5,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(504), 1,
-      anon_sym_COLON,
-    ACTIONS(506), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(509), 1,
-      sym__key_text,
-    STATE(105), 2,
+    STATE(87), 2,
       sym_expansion,
-      aux_sym_define_name_repeat1,
-  [2984] = 3,
-    ACTIONS(51), 1,
+      aux_sym_string_repeat1,
+  [2561] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(436), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(444), 1,
+      anon_sym_PERCENT,
+    ACTIONS(466), 1,
+      anon_sym_DQUOTE2,
+    ACTIONS(448), 2,
+      sym_string_content,
+      sym_escape_sequence,
+    STATE(93), 2,
+      sym_expansion,
+      aux_sym_string_repeat1,
+  [2582] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(436), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(468), 1,
+      anon_sym_PERCENT,
+    ACTIONS(470), 1,
+      anon_sym_DQUOTE2,
+    ACTIONS(472), 2,
+      sym_string_content,
+      sym_escape_sequence,
+    STATE(82), 2,
+      sym_expansion,
+      aux_sym_string_repeat1,
+  [2603] = 6,
+    ACTIONS(45), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(47), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(53), 1,
       sym_comment,
     ACTIONS(474), 1,
-      sym__block_more_text,
-    ACTIONS(472), 4,
-      anon_sym_RBRACK,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_PERCENT2,
-      sym__newline,
-  [2997] = 3,
-    ACTIONS(51), 1,
+      anon_sym_COLON,
+    ACTIONS(476), 1,
+      sym__key_text,
+    STATE(94), 3,
+      sym_expansion,
+      sym_string,
+      aux_sym_key_repeat1,
+  [2624] = 3,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(466), 1,
-      sym__block_more_text,
-    ACTIONS(464), 4,
-      anon_sym_RBRACK,
+    ACTIONS(480), 1,
+      sym__argument_text,
+    ACTIONS(478), 6,
+      anon_sym_LPAREN,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
       anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
       anon_sym_PERCENT2,
-      sym__newline,
-  [3010] = 3,
-    ACTIONS(51), 1,
+  [2639] = 3,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(478), 1,
-      sym__block_more_text,
-    ACTIONS(476), 4,
-      anon_sym_RBRACK,
+    ACTIONS(484), 1,
+      sym__argument_text,
+    ACTIONS(482), 6,
+      anon_sym_LPAREN,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
       anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
       anon_sym_PERCENT2,
-      sym__newline,
-  [3023] = 3,
-    ACTIONS(51), 1,
+  [2654] = 3,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(470), 1,
+    ACTIONS(414), 2,
+      ts_builtin_sym_end,
+      sym__item_text,
+    ACTIONS(412), 5,
+      anon_sym_COMMA,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2669] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(486), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(489), 1,
+      anon_sym_PERCENT,
+    ACTIONS(492), 1,
+      anon_sym_DQUOTE2,
+    ACTIONS(494), 2,
+      sym_string_content,
+      sym_escape_sequence,
+    STATE(93), 2,
+      sym_expansion,
+      aux_sym_string_repeat1,
+  [2690] = 6,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(497), 1,
+      anon_sym_COLON,
+    ACTIONS(499), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(502), 1,
+      anon_sym_DQUOTE,
+    ACTIONS(505), 1,
+      sym__key_text,
+    STATE(94), 3,
+      sym_expansion,
+      sym_string,
+      aux_sym_key_repeat1,
+  [2711] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(418), 2,
+      ts_builtin_sym_end,
+      sym_text,
+    ACTIONS(416), 4,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2725] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(426), 2,
+      ts_builtin_sym_end,
+      sym_text,
+    ACTIONS(424), 4,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2739] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(422), 2,
+      ts_builtin_sym_end,
+      sym_text,
+    ACTIONS(420), 4,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2753] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(430), 2,
+      ts_builtin_sym_end,
+      sym_text,
+    ACTIONS(428), 4,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2767] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(414), 2,
+      ts_builtin_sym_end,
+      sym_text,
+    ACTIONS(412), 4,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2781] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(434), 2,
+      ts_builtin_sym_end,
+      sym_text,
+    ACTIONS(432), 4,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2795] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(422), 1,
       sym__block_more_text,
-    ACTIONS(468), 4,
+    ACTIONS(420), 4,
       anon_sym_RBRACK,
       anon_sym_PERCENT_LPAREN,
       anon_sym_PERCENT2,
       sym__newline,
-  [3036] = 6,
+  [2808] = 6,
     ACTIONS(3), 1,
       sym_comment,
+    ACTIONS(508), 1,
+      ts_builtin_sym_end,
+    ACTIONS(510), 1,
+      anon_sym_LPAREN,
     ACTIONS(512), 1,
-      ts_builtin_sym_end,
-    ACTIONS(514), 1,
-      anon_sym_LPAREN,
-    ACTIONS(516), 1,
       sym__newline,
-    STATE(165), 1,
+    STATE(162), 1,
       sym_template_parameters,
-    STATE(166), 1,
+    STATE(163), 1,
       aux_sym_source_file_repeat1,
-  [3055] = 5,
-    ACTIONS(43), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(51), 1,
+  [2827] = 3,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(519), 1,
-      anon_sym_COLON,
-    ACTIONS(521), 1,
-      sym__key_text,
-    STATE(105), 2,
-      sym_expansion,
-      aux_sym_define_name_repeat1,
-  [3072] = 5,
-    ACTIONS(43), 1,
+    ACTIONS(430), 1,
+      sym__block_more_text,
+    ACTIONS(428), 4,
+      anon_sym_RBRACK,
       anon_sym_PERCENT_LPAREN,
-    ACTIONS(51), 1,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2840] = 3,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(523), 1,
+    ACTIONS(434), 1,
+      sym__block_more_text,
+    ACTIONS(432), 4,
+      anon_sym_RBRACK,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2853] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(416), 2,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_PERCENT,
+    ACTIONS(418), 3,
+      anon_sym_DQUOTE2,
+      sym_string_content,
+      sym_escape_sequence,
+  [2866] = 5,
+    ACTIONS(45), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(515), 1,
       sym__key_text,
-    STATE(218), 1,
+    STATE(238), 1,
       sym_define_name,
-    STATE(111), 2,
+    STATE(109), 2,
       sym_expansion,
       aux_sym_define_name_repeat1,
-  [3089] = 4,
+  [2883] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(428), 2,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_PERCENT,
+    ACTIONS(430), 3,
+      anon_sym_DQUOTE2,
+      sym_string_content,
+      sym_escape_sequence,
+  [2896] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(420), 2,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_PERCENT,
+    ACTIONS(422), 3,
+      anon_sym_DQUOTE2,
+      sym_string_content,
+      sym_escape_sequence,
+  [2909] = 5,
+    ACTIONS(45), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(517), 1,
+      anon_sym_COLON,
+    ACTIONS(519), 1,
+      sym__key_text,
+    STATE(112), 2,
+      sym_expansion,
+      aux_sym_define_name_repeat1,
+  [2926] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(432), 2,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_PERCENT,
+    ACTIONS(434), 3,
+      anon_sym_DQUOTE2,
+      sym_string_content,
+      sym_escape_sequence,
+  [2939] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(418), 1,
+      sym__block_more_text,
+    ACTIONS(416), 4,
+      anon_sym_RBRACK,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_PERCENT2,
+      sym__newline,
+  [2952] = 5,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(521), 1,
+      anon_sym_COLON,
+    ACTIONS(523), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(526), 1,
+      sym__key_text,
+    STATE(112), 2,
+      sym_expansion,
+      aux_sym_define_name_repeat1,
+  [2969] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(426), 1,
+      sym__key_text,
+    ACTIONS(424), 3,
+      anon_sym_COLON,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+  [2981] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(418), 1,
+      sym__key_text,
+    ACTIONS(416), 3,
+      anon_sym_COLON,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+  [2993] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(422), 1,
+      sym__key_text,
+    ACTIONS(420), 3,
+      anon_sym_COLON,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+  [3005] = 5,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(527), 1,
+    ACTIONS(529), 1,
+      anon_sym_COLON,
+    ACTIONS(531), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(533), 1,
+      sym_template_name,
+    STATE(123), 1,
+      sym_expansion,
+  [3021] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(537), 1,
+      anon_sym_COMMA,
+    STATE(118), 1,
+      aux_sym_list_repeat1,
+    ACTIONS(535), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3035] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(541), 1,
+      anon_sym_COMMA,
+    STATE(118), 1,
+      aux_sym_list_repeat1,
+    ACTIONS(539), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3049] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(546), 1,
+      anon_sym_COMMA,
+    STATE(120), 1,
+      aux_sym_flags_repeat1,
+    ACTIONS(544), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3063] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(550), 1,
+      anon_sym_COMMA,
+    STATE(120), 1,
+      aux_sym_flags_repeat1,
+    ACTIONS(548), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3077] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(430), 1,
+      sym__key_text,
+    ACTIONS(428), 3,
+      anon_sym_COLON,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+  [3089] = 3,
+    ACTIONS(53), 1,
+      sym_comment,
+    ACTIONS(434), 1,
+      sym__key_text,
+    ACTIONS(432), 3,
+      anon_sym_COLON,
+      anon_sym_PERCENT_LPAREN,
+      anon_sym_DQUOTE,
+  [3101] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(555), 1,
       anon_sym_LPAREN,
-    STATE(186), 1,
+    STATE(210), 1,
       sym_template_arguments,
-    ACTIONS(525), 2,
+    ACTIONS(553), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [3103] = 4,
-    ACTIONS(3), 1,
+  [3115] = 3,
+    ACTIONS(53), 1,
       sym_comment,
-    ACTIONS(531), 1,
-      anon_sym_COMMA,
-    STATE(126), 1,
-      aux_sym_flags_repeat1,
-    ACTIONS(529), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [3117] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(470), 1,
+    ACTIONS(414), 1,
       sym__key_text,
-    ACTIONS(468), 3,
+    ACTIONS(412), 3,
       anon_sym_COLON,
       anon_sym_PERCENT_LPAREN,
       anon_sym_DQUOTE,
-  [3129] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(460), 1,
-      sym__key_text,
-    ACTIONS(462), 3,
-      anon_sym_COLON,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-  [3141] = 5,
+  [3127] = 5,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(533), 1,
+    ACTIONS(557), 1,
       ts_builtin_sym_end,
-    ACTIONS(535), 1,
+    ACTIONS(559), 1,
       sym__newline,
-    STATE(167), 1,
+    STATE(127), 1,
       aux_sym_source_file_repeat1,
-    STATE(180), 1,
+    STATE(150), 1,
       aux_sym_source_file_repeat2,
-  [3157] = 4,
+  [3143] = 5,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(531), 1,
-      anon_sym_COMMA,
-    STATE(124), 1,
-      aux_sym_flags_repeat1,
-    ACTIONS(537), 2,
+    ACTIONS(557), 1,
       ts_builtin_sym_end,
+    ACTIONS(559), 1,
       sym__newline,
-  [3171] = 5,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(535), 1,
-      sym__newline,
-    ACTIONS(539), 1,
-      ts_builtin_sym_end,
-    STATE(167), 1,
+    STATE(150), 1,
+      aux_sym_source_file_repeat2,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-    STATE(171), 1,
-      aux_sym_source_file_repeat2,
-  [3187] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(466), 1,
-      sym__key_text,
-    ACTIONS(464), 3,
-      anon_sym_COLON,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-  [3199] = 5,
+  [3159] = 5,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(533), 1,
-      ts_builtin_sym_end,
-    ACTIONS(535), 1,
+    ACTIONS(559), 1,
       sym__newline,
+    ACTIONS(561), 1,
+      ts_builtin_sym_end,
+    STATE(151), 1,
+      aux_sym_source_file_repeat2,
+    STATE(153), 1,
+      aux_sym_source_file_repeat1,
+  [3175] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(537), 1,
+      anon_sym_COMMA,
+    STATE(117), 1,
+      aux_sym_list_repeat1,
+    ACTIONS(563), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3189] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(537), 1,
+      anon_sym_COMMA,
+    STATE(118), 1,
+      aux_sym_list_repeat1,
+    ACTIONS(563), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3203] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(546), 1,
+      anon_sym_COMMA,
     STATE(119), 1,
-      aux_sym_source_file_repeat1,
-    STATE(180), 1,
-      aux_sym_source_file_repeat2,
-  [3215] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(543), 1,
-      anon_sym_COMMA,
-    STATE(123), 1,
-      aux_sym_list_repeat1,
-    ACTIONS(541), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [3229] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(547), 1,
-      anon_sym_COMMA,
-    STATE(123), 1,
-      aux_sym_list_repeat1,
-    ACTIONS(545), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [3243] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(552), 1,
-      anon_sym_COMMA,
-    STATE(124), 1,
       aux_sym_flags_repeat1,
-    ACTIONS(550), 2,
+    ACTIONS(565), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [3257] = 4,
+  [3217] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(543), 1,
+    ACTIONS(546), 1,
       anon_sym_COMMA,
-    STATE(122), 1,
-      aux_sym_list_repeat1,
-    ACTIONS(555), 2,
+    STATE(120), 1,
+      aux_sym_flags_repeat1,
+    ACTIONS(567), 2,
       ts_builtin_sym_end,
       sym__newline,
+  [3231] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(555), 1,
+      anon_sym_LPAREN,
+    STATE(203), 1,
+      sym_template_arguments,
+    ACTIONS(569), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3245] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(557), 1,
+      ts_builtin_sym_end,
+    ACTIONS(571), 1,
+      sym__newline,
+    STATE(154), 1,
+      aux_sym_source_file_repeat2,
+  [3258] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(573), 1,
+      ts_builtin_sym_end,
+    ACTIONS(575), 1,
+      sym__newline,
+    STATE(170), 1,
+      aux_sym_source_file_repeat1,
   [3271] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(531), 1,
-      anon_sym_COMMA,
-    STATE(124), 1,
-      aux_sym_flags_repeat1,
-    ACTIONS(557), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [3285] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(474), 1,
-      sym__key_text,
-    ACTIONS(472), 3,
-      anon_sym_COLON,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-  [3297] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(478), 1,
-      sym__key_text,
-    ACTIONS(476), 3,
-      anon_sym_COLON,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-  [3309] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(543), 1,
-      anon_sym_COMMA,
-    STATE(123), 1,
-      aux_sym_list_repeat1,
-    ACTIONS(555), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [3323] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(527), 1,
-      anon_sym_LPAREN,
-    STATE(209), 1,
-      sym_template_arguments,
-    ACTIONS(559), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [3337] = 5,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(561), 1,
-      anon_sym_COLON,
-    ACTIONS(563), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(565), 1,
-      sym_template_name,
-    STATE(130), 1,
-      sym_expansion,
-  [3353] = 3,
-    ACTIONS(51), 1,
-      sym_comment,
-    ACTIONS(456), 1,
-      sym__key_text,
-    ACTIONS(458), 3,
-      anon_sym_COLON,
-      anon_sym_PERCENT_LPAREN,
-      anon_sym_DQUOTE,
-  [3365] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(567), 1,
-      ts_builtin_sym_end,
-    ACTIONS(569), 1,
-      sym__newline,
-    STATE(167), 1,
-      aux_sym_source_file_repeat1,
-  [3378] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(572), 1,
-      anon_sym_RBRACK,
-    ACTIONS(574), 1,
-      sym__newline,
-    STATE(169), 1,
-      aux_sym_block_repeat1,
-  [3391] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(576), 1,
-      ts_builtin_sym_end,
     ACTIONS(578), 1,
+      ts_builtin_sym_end,
+    ACTIONS(580), 1,
       sym__newline,
-    STATE(152), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3404] = 2,
+  [3284] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(581), 3,
+    ACTIONS(531), 1,
+      anon_sym_PERCENT_LPAREN,
+    ACTIONS(583), 1,
+      sym_template_name,
+    STATE(132), 1,
+      sym_expansion,
+  [3297] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(585), 1,
+      anon_sym_RBRACK,
+    ACTIONS(587), 1,
+      sym__newline,
+    STATE(137), 1,
+      aux_sym_block_repeat1,
+  [3310] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(539), 3,
       ts_builtin_sym_end,
       anon_sym_COMMA,
       sym__newline,
-  [3413] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(583), 1,
-      ts_builtin_sym_end,
-    ACTIONS(585), 1,
-      sym__newline,
-    STATE(137), 1,
-      aux_sym_source_file_repeat2,
-  [3426] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(533), 1,
-      ts_builtin_sym_end,
-    ACTIONS(588), 1,
-      sym__newline,
-    STATE(137), 1,
-      aux_sym_source_file_repeat2,
-  [3439] = 4,
+  [3319] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(590), 1,
-      ts_builtin_sym_end,
+      anon_sym_COMMA,
     ACTIONS(592), 1,
-      sym__newline,
-    STATE(159), 1,
-      aux_sym_source_file_repeat1,
-  [3452] = 4,
+      anon_sym_RPAREN,
+    STATE(140), 1,
+      aux_sym_template_parameters_repeat1,
+  [3332] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(533), 1,
-      ts_builtin_sym_end,
-    ACTIONS(588), 1,
-      sym__newline,
-    STATE(180), 1,
-      aux_sym_source_file_repeat2,
-  [3465] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(595), 1,
+    ACTIONS(594), 1,
       anon_sym_COMMA,
     ACTIONS(597), 1,
       anon_sym_RPAREN,
-    STATE(142), 1,
-      aux_sym_arguments_repeat1,
-  [3478] = 4,
+    STATE(140), 1,
+      aux_sym_template_parameters_repeat1,
+  [3345] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(557), 1,
+      ts_builtin_sym_end,
+    ACTIONS(571), 1,
+      sym__newline,
+    STATE(150), 1,
+      aux_sym_source_file_repeat2,
+  [3358] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(599), 1,
-      anon_sym_COMMA,
-    ACTIONS(602), 1,
-      anon_sym_RPAREN,
-    STATE(142), 1,
-      aux_sym_arguments_repeat1,
-  [3491] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(604), 1,
       anon_sym_RBRACK,
-    ACTIONS(606), 1,
+    ACTIONS(601), 1,
       sym__newline,
-    STATE(143), 1,
+    STATE(137), 1,
       aux_sym_block_repeat1,
-  [3504] = 4,
+  [3371] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(609), 1,
-      anon_sym_COMMA,
-    ACTIONS(611), 1,
-      anon_sym_RPAREN,
-    STATE(147), 1,
-      aux_sym_template_parameters_repeat1,
-  [3517] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(613), 1,
+    ACTIONS(603), 1,
       ts_builtin_sym_end,
-    ACTIONS(615), 1,
+    ACTIONS(605), 1,
       sym__newline,
-    STATE(150), 1,
+    STATE(165), 1,
       aux_sym_source_file_repeat1,
-  [3530] = 4,
+  [3384] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(601), 1,
+      sym__newline,
+    ACTIONS(608), 1,
+      anon_sym_RBRACK,
+    STATE(142), 1,
+      aux_sym_block_repeat1,
+  [3397] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(418), 3,
+      ts_builtin_sym_end,
+      anon_sym_LPAREN,
+      sym__newline,
+  [3406] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(422), 3,
+      ts_builtin_sym_end,
+      anon_sym_LPAREN,
+      sym__newline,
+  [3415] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(430), 3,
+      ts_builtin_sym_end,
+      anon_sym_LPAREN,
+      sym__newline,
+  [3424] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(434), 3,
+      ts_builtin_sym_end,
+      anon_sym_LPAREN,
+      sym__newline,
+  [3433] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(610), 3,
+      ts_builtin_sym_end,
+      anon_sym_COMMA,
+      sym__newline,
+  [3442] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(561), 1,
+      ts_builtin_sym_end,
+    ACTIONS(571), 1,
+      sym__newline,
+    STATE(154), 1,
+      aux_sym_source_file_repeat2,
+  [3455] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(571), 1,
+      sym__newline,
+    ACTIONS(612), 1,
+      ts_builtin_sym_end,
+    STATE(154), 1,
+      aux_sym_source_file_repeat2,
+  [3468] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(614), 1,
+      anon_sym_COMMA,
+    ACTIONS(616), 1,
+      anon_sym_RPAREN,
+    STATE(175), 1,
+      aux_sym_arguments_repeat1,
+  [3481] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(618), 1,
       ts_builtin_sym_end,
     ACTIONS(620), 1,
       sym__newline,
-    STATE(151), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3543] = 4,
+  [3494] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(623), 1,
-      anon_sym_COMMA,
-    ACTIONS(626), 1,
-      anon_sym_RPAREN,
-    STATE(147), 1,
-      aux_sym_template_parameters_repeat1,
-  [3556] = 4,
+      ts_builtin_sym_end,
+    ACTIONS(625), 1,
+      sym__newline,
+    STATE(154), 1,
+      aux_sym_source_file_repeat2,
+  [3507] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(628), 1,
       ts_builtin_sym_end,
     ACTIONS(630), 1,
       sym__newline,
-    STATE(167), 1,
+    STATE(171), 1,
       aux_sym_source_file_repeat1,
-  [3569] = 4,
+  [3520] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(633), 1,
       ts_builtin_sym_end,
     ACTIONS(635), 1,
       sym__newline,
-    STATE(167), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3582] = 4,
+  [3533] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(614), 1,
+      anon_sym_COMMA,
+    ACTIONS(616), 1,
+      anon_sym_RPAREN,
+    STATE(181), 1,
+      aux_sym_arguments_repeat1,
+  [3546] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(638), 1,
       ts_builtin_sym_end,
     ACTIONS(640), 1,
       sym__newline,
-    STATE(167), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3595] = 4,
+  [3559] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(643), 1,
       ts_builtin_sym_end,
     ACTIONS(645), 1,
       sym__newline,
-    STATE(167), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3608] = 4,
+  [3572] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(648), 1,
       ts_builtin_sym_end,
     ACTIONS(650), 1,
       sym__newline,
-    STATE(167), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3621] = 4,
+  [3585] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(653), 1,
-      ts_builtin_sym_end,
+      anon_sym_RPAREN,
     ACTIONS(655), 1,
-      sym__newline,
-    STATE(167), 1,
-      aux_sym_source_file_repeat1,
-  [3634] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(466), 3,
-      ts_builtin_sym_end,
-      anon_sym_LPAREN,
-      sym__newline,
-  [3643] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(470), 3,
-      ts_builtin_sym_end,
-      anon_sym_LPAREN,
-      sym__newline,
-  [3652] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(658), 1,
-      ts_builtin_sym_end,
-    ACTIONS(660), 1,
-      sym__newline,
-    STATE(167), 1,
-      aux_sym_source_file_repeat1,
-  [3665] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(474), 3,
-      ts_builtin_sym_end,
-      anon_sym_LPAREN,
-      sym__newline,
-  [3674] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(478), 3,
-      ts_builtin_sym_end,
-      anon_sym_LPAREN,
-      sym__newline,
-  [3683] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(663), 1,
-      ts_builtin_sym_end,
-    ACTIONS(665), 1,
-      sym__newline,
-    STATE(167), 1,
-      aux_sym_source_file_repeat1,
-  [3696] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(668), 1,
-      ts_builtin_sym_end,
-    ACTIONS(670), 1,
-      sym__newline,
-    STATE(167), 1,
-      aux_sym_source_file_repeat1,
-  [3709] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(673), 1,
-      anon_sym_RPAREN,
-    ACTIONS(675), 1,
       sym_identifier,
-    STATE(175), 1,
+    STATE(173), 1,
       sym_template_parameter,
-  [3722] = 4,
+  [3598] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(595), 1,
-      anon_sym_COMMA,
+    ACTIONS(657), 1,
+      ts_builtin_sym_end,
+    ACTIONS(659), 1,
+      sym__newline,
+    STATE(135), 1,
+      aux_sym_source_file_repeat1,
+  [3611] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(662), 1,
+      ts_builtin_sym_end,
+    ACTIONS(664), 1,
+      sym__newline,
+    STATE(153), 1,
+      aux_sym_source_file_repeat1,
+  [3624] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(667), 1,
+      ts_builtin_sym_end,
+    ACTIONS(669), 1,
+      sym__newline,
+    STATE(153), 1,
+      aux_sym_source_file_repeat1,
+  [3637] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(672), 1,
+      ts_builtin_sym_end,
+    ACTIONS(674), 1,
+      sym__newline,
+    STATE(153), 1,
+      aux_sym_source_file_repeat1,
+  [3650] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
     ACTIONS(677), 1,
-      anon_sym_RPAREN,
-    STATE(141), 1,
-      aux_sym_arguments_repeat1,
-  [3735] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(595), 1,
-      anon_sym_COMMA,
-    ACTIONS(677), 1,
-      anon_sym_RPAREN,
-    STATE(142), 1,
-      aux_sym_arguments_repeat1,
-  [3748] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
+      ts_builtin_sym_end,
     ACTIONS(679), 1,
-      ts_builtin_sym_end,
-    ACTIONS(681), 1,
       sym__newline,
-    STATE(133), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3761] = 4,
+  [3663] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(684), 1,
+    ACTIONS(682), 1,
       ts_builtin_sym_end,
-    ACTIONS(686), 1,
+    ACTIONS(684), 1,
       sym__newline,
-    STATE(176), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3774] = 4,
+  [3676] = 3,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(689), 1,
-      ts_builtin_sym_end,
+      anon_sym_EQ,
+    ACTIONS(687), 2,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
+  [3687] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
     ACTIONS(691), 1,
+      ts_builtin_sym_end,
+    ACTIONS(693), 1,
       sym__newline,
-    STATE(167), 1,
+    STATE(166), 1,
       aux_sym_source_file_repeat1,
-  [3787] = 4,
+  [3700] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(694), 1,
-      ts_builtin_sym_end,
     ACTIONS(696), 1,
-      sym__newline,
-    STATE(167), 1,
-      aux_sym_source_file_repeat1,
-  [3800] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(699), 1,
       ts_builtin_sym_end,
-    ACTIONS(701), 1,
+    ACTIONS(698), 1,
       sym__newline,
-    STATE(148), 1,
+    STATE(153), 1,
       aux_sym_source_file_repeat1,
-  [3813] = 4,
+  [3713] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(574), 1,
+    ACTIONS(701), 1,
+      ts_builtin_sym_end,
+    ACTIONS(703), 1,
       sym__newline,
-    ACTIONS(704), 1,
-      anon_sym_RBRACK,
-    STATE(143), 1,
-      aux_sym_block_repeat1,
-  [3826] = 4,
+    STATE(153), 1,
+      aux_sym_source_file_repeat1,
+  [3726] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(706), 1,
       ts_builtin_sym_end,
     ACTIONS(708), 1,
       sym__newline,
-    STATE(149), 1,
+    STATE(167), 1,
       aux_sym_source_file_repeat1,
-  [3839] = 4,
+  [3739] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(588), 1,
-      sym__newline,
+    ACTIONS(590), 1,
+      anon_sym_COMMA,
     ACTIONS(711), 1,
-      ts_builtin_sym_end,
-    STATE(137), 1,
-      aux_sym_source_file_repeat2,
-  [3852] = 4,
+      anon_sym_RPAREN,
+    STATE(139), 1,
+      aux_sym_template_parameters_repeat1,
+  [3752] = 4,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(713), 1,
       ts_builtin_sym_end,
     ACTIONS(715), 1,
       sym__newline,
-    STATE(153), 1,
-      aux_sym_source_file_repeat1,
-  [3865] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(563), 1,
-      anon_sym_PERCENT_LPAREN,
-    ACTIONS(718), 1,
-      sym_template_name,
-    STATE(113), 1,
-      sym_expansion,
-  [3878] = 3,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(722), 1,
-      anon_sym_EQ,
-    ACTIONS(720), 2,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-  [3889] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(609), 1,
-      anon_sym_COMMA,
-    ACTIONS(724), 1,
-      anon_sym_RPAREN,
-    STATE(144), 1,
-      aux_sym_template_parameters_repeat1,
-  [3902] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(726), 1,
-      ts_builtin_sym_end,
-    ACTIONS(728), 1,
-      sym__newline,
-    STATE(167), 1,
-      aux_sym_source_file_repeat1,
-  [3915] = 4,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(731), 1,
-      ts_builtin_sym_end,
-    ACTIONS(733), 1,
-      sym__newline,
     STATE(156), 1,
       aux_sym_source_file_repeat1,
-  [3928] = 4,
+  [3765] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(736), 1,
+    ACTIONS(614), 1,
+      anon_sym_COMMA,
+    ACTIONS(718), 1,
+      anon_sym_RPAREN,
+    STATE(181), 1,
+      aux_sym_arguments_repeat1,
+  [3778] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(720), 1,
       ts_builtin_sym_end,
-    ACTIONS(738), 1,
+    ACTIONS(722), 1,
+      sym__newline,
+    STATE(182), 1,
+      aux_sym_source_file_repeat1,
+  [3791] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(725), 1,
+      ts_builtin_sym_end,
+    ACTIONS(727), 1,
+      sym__newline,
+    STATE(158), 1,
+      aux_sym_source_file_repeat1,
+  [3804] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(730), 1,
+      ts_builtin_sym_end,
+    ACTIONS(732), 1,
+      sym__newline,
+    STATE(159), 1,
+      aux_sym_source_file_repeat1,
+  [3817] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(735), 1,
+      ts_builtin_sym_end,
+    ACTIONS(737), 1,
       sym__newline,
     STATE(160), 1,
       aux_sym_source_file_repeat1,
-  [3941] = 2,
+  [3830] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(545), 3,
+    ACTIONS(740), 1,
       ts_builtin_sym_end,
+    ACTIONS(742), 1,
+      sym__newline,
+    STATE(164), 1,
+      aux_sym_source_file_repeat1,
+  [3843] = 4,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(745), 1,
       anon_sym_COMMA,
-      sym__newline,
-  [3950] = 4,
+    ACTIONS(748), 1,
+      anon_sym_RPAREN,
+    STATE(181), 1,
+      aux_sym_arguments_repeat1,
+  [3856] = 4,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(539), 1,
+    ACTIONS(750), 1,
       ts_builtin_sym_end,
-    ACTIONS(588), 1,
+    ACTIONS(752), 1,
       sym__newline,
-    STATE(137), 1,
-      aux_sym_source_file_repeat2,
-  [3963] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(741), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [3971] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(743), 2,
-      anon_sym_EQ,
-      anon_sym_COLON,
-  [3979] = 3,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(675), 1,
-      sym_identifier,
-    STATE(194), 1,
-      sym_template_parameter,
-  [3989] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(745), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [3997] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(747), 2,
-      anon_sym_EQ,
-      anon_sym_COLON,
-  [4005] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(749), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [4013] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(751), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [4021] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(753), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [4029] = 2,
+    STATE(153), 1,
+      aux_sym_source_file_repeat1,
+  [3869] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(755), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4037] = 2,
+  [3877] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(618), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3885] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(757), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4045] = 2,
+  [3893] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(748), 2,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
+  [3901] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(759), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4053] = 2,
+  [3909] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(761), 2,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-  [4061] = 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [3917] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(763), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4069] = 2,
+  [3925] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(626), 2,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-  [4077] = 2,
+    ACTIONS(585), 2,
+      anon_sym_RBRACK,
+      sym__newline,
+  [3933] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(765), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4085] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(602), 2,
-      anon_sym_COMMA,
-      anon_sym_RPAREN,
-  [4093] = 2,
+  [3941] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(767), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4101] = 2,
+  [3949] = 3,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(655), 1,
+      sym_identifier,
+    STATE(201), 1,
+      sym_template_parameter,
+  [3959] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(769), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4109] = 2,
+  [3967] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(771), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4117] = 2,
+  [3975] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(773), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4125] = 2,
+  [3983] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(775), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4133] = 2,
+  [3991] = 3,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(777), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [4141] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(779), 2,
-      ts_builtin_sym_end,
-      sym__newline,
-  [4149] = 2,
+    ACTIONS(777), 1,
+      anon_sym_COLON,
+    ACTIONS(779), 1,
+      sym_identifier,
+  [4001] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(781), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4157] = 2,
+  [4009] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(783), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4165] = 3,
+  [4017] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(785), 1,
-      anon_sym_COLON,
-    ACTIONS(787), 1,
-      sym_identifier,
-  [4175] = 2,
+    ACTIONS(597), 2,
+      anon_sym_COMMA,
+      anon_sym_RPAREN,
+  [4025] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(785), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [4033] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(787), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [4041] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(789), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4183] = 2,
+  [4049] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(791), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4191] = 2,
+  [4057] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(793), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4199] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(604), 2,
-      anon_sym_RBRACK,
-      sym__newline,
-  [4207] = 2,
+  [4065] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(795), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4215] = 2,
+  [4073] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(583), 2,
+    ACTIONS(797), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4223] = 2,
+  [4081] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(694), 2,
+    ACTIONS(799), 2,
       ts_builtin_sym_end,
       sym__newline,
-  [4231] = 2,
+  [4089] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(797), 1,
+    ACTIONS(801), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [4097] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(803), 2,
+      anon_sym_EQ,
       anon_sym_COLON,
-  [4238] = 2,
+  [4105] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(799), 1,
-      anon_sym_RPAREN,
-  [4245] = 2,
+    ACTIONS(805), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [4113] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(801), 1,
-      anon_sym_RPAREN,
-  [4252] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(803), 1,
+    ACTIONS(807), 2,
+      anon_sym_EQ,
       anon_sym_COLON,
-  [4259] = 2,
+  [4121] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(805), 1,
-      anon_sym_COLON,
-  [4266] = 2,
+    ACTIONS(623), 2,
+      ts_builtin_sym_end,
+      sym__newline,
+  [4129] = 2,
     ACTIONS(3), 1,
       sym_comment,
-    ACTIONS(807), 1,
-      anon_sym_environment,
-  [4273] = 2,
-    ACTIONS(3), 1,
-      sym_comment,
-    ACTIONS(809), 1,
+    ACTIONS(809), 2,
+      anon_sym_COMMA,
       anon_sym_RPAREN,
-  [4280] = 2,
+  [4137] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(811), 1,
       anon_sym_RPAREN,
-  [4287] = 2,
+  [4144] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(813), 1,
-      anon_sym_COLON,
-  [4294] = 2,
+      anon_sym_RPAREN,
+  [4151] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(815), 1,
-      sym_identifier,
-  [4301] = 2,
+      sym_template_name,
+  [4158] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(817), 1,
       anon_sym_RPAREN,
-  [4308] = 2,
+  [4165] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(819), 1,
-      anon_sym_RPAREN,
-  [4315] = 2,
+      anon_sym_COLON,
+  [4172] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(821), 1,
-      anon_sym_RPAREN,
-  [4322] = 2,
+      ts_builtin_sym_end,
+  [4179] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(823), 1,
-      ts_builtin_sym_end,
-  [4329] = 2,
+      anon_sym_RPAREN,
+  [4186] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(825), 1,
       anon_sym_RPAREN,
-  [4336] = 2,
+  [4193] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(827), 1,
-      anon_sym_RPAREN,
-  [4343] = 2,
+      anon_sym_COLON,
+  [4200] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(829), 1,
-      anon_sym_RPAREN,
-  [4350] = 2,
+      anon_sym_COLON,
+  [4207] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(831), 1,
-      anon_sym_COLON,
-  [4357] = 2,
+      anon_sym_RPAREN,
+  [4214] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(833), 1,
       anon_sym_RPAREN,
-  [4364] = 2,
+  [4221] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(835), 1,
       anon_sym_RPAREN,
-  [4371] = 2,
+  [4228] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(837), 1,
-      anon_sym_COLON,
-  [4378] = 2,
+      anon_sym_RPAREN,
+  [4235] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(839), 1,
-      anon_sym_COLON,
-  [4385] = 2,
+      anon_sym_RPAREN,
+  [4242] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(841), 1,
       anon_sym_RPAREN,
-  [4392] = 2,
+  [4249] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(843), 1,
-      sym_template_name,
-  [4399] = 2,
+      anon_sym_RPAREN,
+  [4256] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(845), 1,
-      anon_sym_RPAREN,
-  [4406] = 2,
+      anon_sym_COLON,
+  [4263] = 2,
     ACTIONS(3), 1,
       sym_comment,
     ACTIONS(847), 1,
       anon_sym_RPAREN,
+  [4270] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(849), 1,
+      anon_sym_RPAREN,
+  [4277] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(851), 1,
+      anon_sym_COLON,
+  [4284] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(853), 1,
+      sym_identifier,
+  [4291] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(855), 1,
+      anon_sym_COLON,
+  [4298] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(857), 1,
+      anon_sym_COLON,
+  [4305] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(859), 1,
+      anon_sym_environment,
+  [4312] = 2,
+    ACTIONS(3), 1,
+      sym_comment,
+    ACTIONS(861), 1,
+      anon_sym_RPAREN,
 };
 
 static const uint32_t ts_small_parse_table_map[] = {
-  [SMALL_STATE(2)] = 0,
-  [SMALL_STATE(3)] = 124,
-  [SMALL_STATE(4)] = 198,
-  [SMALL_STATE(5)] = 272,
-  [SMALL_STATE(6)] = 326,
-  [SMALL_STATE(7)] = 368,
-  [SMALL_STATE(8)] = 410,
-  [SMALL_STATE(9)] = 452,
-  [SMALL_STATE(10)] = 494,
-  [SMALL_STATE(11)] = 535,
-  [SMALL_STATE(12)] = 576,
-  [SMALL_STATE(13)] = 617,
-  [SMALL_STATE(14)] = 658,
-  [SMALL_STATE(15)] = 699,
-  [SMALL_STATE(16)] = 740,
-  [SMALL_STATE(17)] = 781,
-  [SMALL_STATE(18)] = 822,
-  [SMALL_STATE(19)] = 863,
-  [SMALL_STATE(20)] = 904,
-  [SMALL_STATE(21)] = 945,
-  [SMALL_STATE(22)] = 986,
-  [SMALL_STATE(23)] = 1027,
-  [SMALL_STATE(24)] = 1068,
-  [SMALL_STATE(25)] = 1109,
-  [SMALL_STATE(26)] = 1143,
-  [SMALL_STATE(27)] = 1177,
-  [SMALL_STATE(28)] = 1205,
-  [SMALL_STATE(29)] = 1233,
-  [SMALL_STATE(30)] = 1267,
-  [SMALL_STATE(31)] = 1301,
-  [SMALL_STATE(32)] = 1329,
-  [SMALL_STATE(33)] = 1357,
-  [SMALL_STATE(34)] = 1385,
-  [SMALL_STATE(35)] = 1413,
-  [SMALL_STATE(36)] = 1441,
-  [SMALL_STATE(37)] = 1474,
-  [SMALL_STATE(38)] = 1507,
-  [SMALL_STATE(39)] = 1537,
-  [SMALL_STATE(40)] = 1567,
-  [SMALL_STATE(41)] = 1599,
-  [SMALL_STATE(42)] = 1631,
-  [SMALL_STATE(43)] = 1663,
-  [SMALL_STATE(44)] = 1693,
-  [SMALL_STATE(45)] = 1723,
-  [SMALL_STATE(46)] = 1755,
-  [SMALL_STATE(47)] = 1785,
-  [SMALL_STATE(48)] = 1814,
-  [SMALL_STATE(49)] = 1843,
-  [SMALL_STATE(50)] = 1872,
-  [SMALL_STATE(51)] = 1901,
-  [SMALL_STATE(52)] = 1934,
-  [SMALL_STATE(53)] = 1963,
-  [SMALL_STATE(54)] = 1992,
-  [SMALL_STATE(55)] = 2021,
-  [SMALL_STATE(56)] = 2050,
-  [SMALL_STATE(57)] = 2079,
-  [SMALL_STATE(58)] = 2108,
-  [SMALL_STATE(59)] = 2137,
-  [SMALL_STATE(60)] = 2167,
-  [SMALL_STATE(61)] = 2191,
-  [SMALL_STATE(62)] = 2213,
-  [SMALL_STATE(63)] = 2235,
-  [SMALL_STATE(64)] = 2259,
-  [SMALL_STATE(65)] = 2283,
-  [SMALL_STATE(66)] = 2305,
-  [SMALL_STATE(67)] = 2329,
-  [SMALL_STATE(68)] = 2351,
-  [SMALL_STATE(69)] = 2375,
-  [SMALL_STATE(70)] = 2396,
-  [SMALL_STATE(71)] = 2411,
-  [SMALL_STATE(72)] = 2432,
-  [SMALL_STATE(73)] = 2453,
-  [SMALL_STATE(74)] = 2474,
-  [SMALL_STATE(75)] = 2489,
-  [SMALL_STATE(76)] = 2504,
-  [SMALL_STATE(77)] = 2525,
-  [SMALL_STATE(78)] = 2540,
-  [SMALL_STATE(79)] = 2555,
-  [SMALL_STATE(80)] = 2570,
-  [SMALL_STATE(81)] = 2585,
-  [SMALL_STATE(82)] = 2600,
-  [SMALL_STATE(83)] = 2615,
-  [SMALL_STATE(84)] = 2630,
-  [SMALL_STATE(85)] = 2645,
-  [SMALL_STATE(86)] = 2660,
-  [SMALL_STATE(87)] = 2675,
-  [SMALL_STATE(88)] = 2690,
-  [SMALL_STATE(89)] = 2705,
-  [SMALL_STATE(90)] = 2726,
-  [SMALL_STATE(91)] = 2747,
-  [SMALL_STATE(92)] = 2768,
-  [SMALL_STATE(93)] = 2789,
-  [SMALL_STATE(94)] = 2810,
-  [SMALL_STATE(95)] = 2831,
-  [SMALL_STATE(96)] = 2845,
-  [SMALL_STATE(97)] = 2859,
-  [SMALL_STATE(98)] = 2873,
-  [SMALL_STATE(99)] = 2887,
-  [SMALL_STATE(100)] = 2901,
-  [SMALL_STATE(101)] = 2915,
-  [SMALL_STATE(102)] = 2928,
-  [SMALL_STATE(103)] = 2941,
-  [SMALL_STATE(104)] = 2954,
-  [SMALL_STATE(105)] = 2967,
-  [SMALL_STATE(106)] = 2984,
-  [SMALL_STATE(107)] = 2997,
-  [SMALL_STATE(108)] = 3010,
-  [SMALL_STATE(109)] = 3023,
-  [SMALL_STATE(110)] = 3036,
-  [SMALL_STATE(111)] = 3055,
-  [SMALL_STATE(112)] = 3072,
-  [SMALL_STATE(113)] = 3089,
-  [SMALL_STATE(114)] = 3103,
-  [SMALL_STATE(115)] = 3117,
-  [SMALL_STATE(116)] = 3129,
-  [SMALL_STATE(117)] = 3141,
-  [SMALL_STATE(118)] = 3157,
-  [SMALL_STATE(119)] = 3171,
-  [SMALL_STATE(120)] = 3187,
-  [SMALL_STATE(121)] = 3199,
-  [SMALL_STATE(122)] = 3215,
-  [SMALL_STATE(123)] = 3229,
-  [SMALL_STATE(124)] = 3243,
-  [SMALL_STATE(125)] = 3257,
-  [SMALL_STATE(126)] = 3271,
-  [SMALL_STATE(127)] = 3285,
-  [SMALL_STATE(128)] = 3297,
-  [SMALL_STATE(129)] = 3309,
-  [SMALL_STATE(130)] = 3323,
-  [SMALL_STATE(131)] = 3337,
-  [SMALL_STATE(132)] = 3353,
-  [SMALL_STATE(133)] = 3365,
-  [SMALL_STATE(134)] = 3378,
-  [SMALL_STATE(135)] = 3391,
-  [SMALL_STATE(136)] = 3404,
-  [SMALL_STATE(137)] = 3413,
-  [SMALL_STATE(138)] = 3426,
-  [SMALL_STATE(139)] = 3439,
-  [SMALL_STATE(140)] = 3452,
-  [SMALL_STATE(141)] = 3465,
-  [SMALL_STATE(142)] = 3478,
-  [SMALL_STATE(143)] = 3491,
-  [SMALL_STATE(144)] = 3504,
-  [SMALL_STATE(145)] = 3517,
-  [SMALL_STATE(146)] = 3530,
-  [SMALL_STATE(147)] = 3543,
-  [SMALL_STATE(148)] = 3556,
-  [SMALL_STATE(149)] = 3569,
-  [SMALL_STATE(150)] = 3582,
-  [SMALL_STATE(151)] = 3595,
-  [SMALL_STATE(152)] = 3608,
-  [SMALL_STATE(153)] = 3621,
-  [SMALL_STATE(154)] = 3634,
-  [SMALL_STATE(155)] = 3643,
-  [SMALL_STATE(156)] = 3652,
-  [SMALL_STATE(157)] = 3665,
-  [SMALL_STATE(158)] = 3674,
-  [SMALL_STATE(159)] = 3683,
-  [SMALL_STATE(160)] = 3696,
-  [SMALL_STATE(161)] = 3709,
-  [SMALL_STATE(162)] = 3722,
-  [SMALL_STATE(163)] = 3735,
-  [SMALL_STATE(164)] = 3748,
-  [SMALL_STATE(165)] = 3761,
-  [SMALL_STATE(166)] = 3774,
-  [SMALL_STATE(167)] = 3787,
-  [SMALL_STATE(168)] = 3800,
-  [SMALL_STATE(169)] = 3813,
-  [SMALL_STATE(170)] = 3826,
-  [SMALL_STATE(171)] = 3839,
-  [SMALL_STATE(172)] = 3852,
-  [SMALL_STATE(173)] = 3865,
-  [SMALL_STATE(174)] = 3878,
-  [SMALL_STATE(175)] = 3889,
-  [SMALL_STATE(176)] = 3902,
-  [SMALL_STATE(177)] = 3915,
-  [SMALL_STATE(178)] = 3928,
-  [SMALL_STATE(179)] = 3941,
-  [SMALL_STATE(180)] = 3950,
-  [SMALL_STATE(181)] = 3963,
-  [SMALL_STATE(182)] = 3971,
-  [SMALL_STATE(183)] = 3979,
-  [SMALL_STATE(184)] = 3989,
-  [SMALL_STATE(185)] = 3997,
-  [SMALL_STATE(186)] = 4005,
-  [SMALL_STATE(187)] = 4013,
-  [SMALL_STATE(188)] = 4021,
-  [SMALL_STATE(189)] = 4029,
-  [SMALL_STATE(190)] = 4037,
-  [SMALL_STATE(191)] = 4045,
-  [SMALL_STATE(192)] = 4053,
-  [SMALL_STATE(193)] = 4061,
-  [SMALL_STATE(194)] = 4069,
-  [SMALL_STATE(195)] = 4077,
-  [SMALL_STATE(196)] = 4085,
-  [SMALL_STATE(197)] = 4093,
-  [SMALL_STATE(198)] = 4101,
-  [SMALL_STATE(199)] = 4109,
-  [SMALL_STATE(200)] = 4117,
-  [SMALL_STATE(201)] = 4125,
-  [SMALL_STATE(202)] = 4133,
-  [SMALL_STATE(203)] = 4141,
-  [SMALL_STATE(204)] = 4149,
-  [SMALL_STATE(205)] = 4157,
-  [SMALL_STATE(206)] = 4165,
-  [SMALL_STATE(207)] = 4175,
-  [SMALL_STATE(208)] = 4183,
-  [SMALL_STATE(209)] = 4191,
-  [SMALL_STATE(210)] = 4199,
-  [SMALL_STATE(211)] = 4207,
-  [SMALL_STATE(212)] = 4215,
-  [SMALL_STATE(213)] = 4223,
-  [SMALL_STATE(214)] = 4231,
-  [SMALL_STATE(215)] = 4238,
-  [SMALL_STATE(216)] = 4245,
-  [SMALL_STATE(217)] = 4252,
-  [SMALL_STATE(218)] = 4259,
-  [SMALL_STATE(219)] = 4266,
-  [SMALL_STATE(220)] = 4273,
-  [SMALL_STATE(221)] = 4280,
-  [SMALL_STATE(222)] = 4287,
-  [SMALL_STATE(223)] = 4294,
-  [SMALL_STATE(224)] = 4301,
-  [SMALL_STATE(225)] = 4308,
-  [SMALL_STATE(226)] = 4315,
-  [SMALL_STATE(227)] = 4322,
-  [SMALL_STATE(228)] = 4329,
-  [SMALL_STATE(229)] = 4336,
-  [SMALL_STATE(230)] = 4343,
-  [SMALL_STATE(231)] = 4350,
-  [SMALL_STATE(232)] = 4357,
-  [SMALL_STATE(233)] = 4364,
-  [SMALL_STATE(234)] = 4371,
-  [SMALL_STATE(235)] = 4378,
-  [SMALL_STATE(236)] = 4385,
-  [SMALL_STATE(237)] = 4392,
-  [SMALL_STATE(238)] = 4399,
-  [SMALL_STATE(239)] = 4406,
+  [SMALL_STATE(3)] = 0,
+  [SMALL_STATE(4)] = 74,
+  [SMALL_STATE(5)] = 148,
+  [SMALL_STATE(6)] = 206,
+  [SMALL_STATE(7)] = 248,
+  [SMALL_STATE(8)] = 290,
+  [SMALL_STATE(9)] = 332,
+  [SMALL_STATE(10)] = 374,
+  [SMALL_STATE(11)] = 415,
+  [SMALL_STATE(12)] = 456,
+  [SMALL_STATE(13)] = 497,
+  [SMALL_STATE(14)] = 538,
+  [SMALL_STATE(15)] = 579,
+  [SMALL_STATE(16)] = 620,
+  [SMALL_STATE(17)] = 661,
+  [SMALL_STATE(18)] = 702,
+  [SMALL_STATE(19)] = 743,
+  [SMALL_STATE(20)] = 784,
+  [SMALL_STATE(21)] = 825,
+  [SMALL_STATE(22)] = 866,
+  [SMALL_STATE(23)] = 907,
+  [SMALL_STATE(24)] = 948,
+  [SMALL_STATE(25)] = 989,
+  [SMALL_STATE(26)] = 1023,
+  [SMALL_STATE(27)] = 1057,
+  [SMALL_STATE(28)] = 1085,
+  [SMALL_STATE(29)] = 1119,
+  [SMALL_STATE(30)] = 1153,
+  [SMALL_STATE(31)] = 1181,
+  [SMALL_STATE(32)] = 1209,
+  [SMALL_STATE(33)] = 1237,
+  [SMALL_STATE(34)] = 1265,
+  [SMALL_STATE(35)] = 1293,
+  [SMALL_STATE(36)] = 1321,
+  [SMALL_STATE(37)] = 1354,
+  [SMALL_STATE(38)] = 1387,
+  [SMALL_STATE(39)] = 1419,
+  [SMALL_STATE(40)] = 1449,
+  [SMALL_STATE(41)] = 1481,
+  [SMALL_STATE(42)] = 1511,
+  [SMALL_STATE(43)] = 1541,
+  [SMALL_STATE(44)] = 1571,
+  [SMALL_STATE(45)] = 1603,
+  [SMALL_STATE(46)] = 1635,
+  [SMALL_STATE(47)] = 1665,
+  [SMALL_STATE(48)] = 1698,
+  [SMALL_STATE(49)] = 1727,
+  [SMALL_STATE(50)] = 1756,
+  [SMALL_STATE(51)] = 1785,
+  [SMALL_STATE(52)] = 1814,
+  [SMALL_STATE(53)] = 1843,
+  [SMALL_STATE(54)] = 1872,
+  [SMALL_STATE(55)] = 1901,
+  [SMALL_STATE(56)] = 1930,
+  [SMALL_STATE(57)] = 1959,
+  [SMALL_STATE(58)] = 1988,
+  [SMALL_STATE(59)] = 2017,
+  [SMALL_STATE(60)] = 2047,
+  [SMALL_STATE(61)] = 2071,
+  [SMALL_STATE(62)] = 2093,
+  [SMALL_STATE(63)] = 2117,
+  [SMALL_STATE(64)] = 2141,
+  [SMALL_STATE(65)] = 2163,
+  [SMALL_STATE(66)] = 2185,
+  [SMALL_STATE(67)] = 2209,
+  [SMALL_STATE(68)] = 2231,
+  [SMALL_STATE(69)] = 2255,
+  [SMALL_STATE(70)] = 2270,
+  [SMALL_STATE(71)] = 2285,
+  [SMALL_STATE(72)] = 2300,
+  [SMALL_STATE(73)] = 2315,
+  [SMALL_STATE(74)] = 2330,
+  [SMALL_STATE(75)] = 2345,
+  [SMALL_STATE(76)] = 2360,
+  [SMALL_STATE(77)] = 2375,
+  [SMALL_STATE(78)] = 2390,
+  [SMALL_STATE(79)] = 2405,
+  [SMALL_STATE(80)] = 2420,
+  [SMALL_STATE(81)] = 2441,
+  [SMALL_STATE(82)] = 2456,
+  [SMALL_STATE(83)] = 2477,
+  [SMALL_STATE(84)] = 2498,
+  [SMALL_STATE(85)] = 2519,
+  [SMALL_STATE(86)] = 2540,
+  [SMALL_STATE(87)] = 2561,
+  [SMALL_STATE(88)] = 2582,
+  [SMALL_STATE(89)] = 2603,
+  [SMALL_STATE(90)] = 2624,
+  [SMALL_STATE(91)] = 2639,
+  [SMALL_STATE(92)] = 2654,
+  [SMALL_STATE(93)] = 2669,
+  [SMALL_STATE(94)] = 2690,
+  [SMALL_STATE(95)] = 2711,
+  [SMALL_STATE(96)] = 2725,
+  [SMALL_STATE(97)] = 2739,
+  [SMALL_STATE(98)] = 2753,
+  [SMALL_STATE(99)] = 2767,
+  [SMALL_STATE(100)] = 2781,
+  [SMALL_STATE(101)] = 2795,
+  [SMALL_STATE(102)] = 2808,
+  [SMALL_STATE(103)] = 2827,
+  [SMALL_STATE(104)] = 2840,
+  [SMALL_STATE(105)] = 2853,
+  [SMALL_STATE(106)] = 2866,
+  [SMALL_STATE(107)] = 2883,
+  [SMALL_STATE(108)] = 2896,
+  [SMALL_STATE(109)] = 2909,
+  [SMALL_STATE(110)] = 2926,
+  [SMALL_STATE(111)] = 2939,
+  [SMALL_STATE(112)] = 2952,
+  [SMALL_STATE(113)] = 2969,
+  [SMALL_STATE(114)] = 2981,
+  [SMALL_STATE(115)] = 2993,
+  [SMALL_STATE(116)] = 3005,
+  [SMALL_STATE(117)] = 3021,
+  [SMALL_STATE(118)] = 3035,
+  [SMALL_STATE(119)] = 3049,
+  [SMALL_STATE(120)] = 3063,
+  [SMALL_STATE(121)] = 3077,
+  [SMALL_STATE(122)] = 3089,
+  [SMALL_STATE(123)] = 3101,
+  [SMALL_STATE(124)] = 3115,
+  [SMALL_STATE(125)] = 3127,
+  [SMALL_STATE(126)] = 3143,
+  [SMALL_STATE(127)] = 3159,
+  [SMALL_STATE(128)] = 3175,
+  [SMALL_STATE(129)] = 3189,
+  [SMALL_STATE(130)] = 3203,
+  [SMALL_STATE(131)] = 3217,
+  [SMALL_STATE(132)] = 3231,
+  [SMALL_STATE(133)] = 3245,
+  [SMALL_STATE(134)] = 3258,
+  [SMALL_STATE(135)] = 3271,
+  [SMALL_STATE(136)] = 3284,
+  [SMALL_STATE(137)] = 3297,
+  [SMALL_STATE(138)] = 3310,
+  [SMALL_STATE(139)] = 3319,
+  [SMALL_STATE(140)] = 3332,
+  [SMALL_STATE(141)] = 3345,
+  [SMALL_STATE(142)] = 3358,
+  [SMALL_STATE(143)] = 3371,
+  [SMALL_STATE(144)] = 3384,
+  [SMALL_STATE(145)] = 3397,
+  [SMALL_STATE(146)] = 3406,
+  [SMALL_STATE(147)] = 3415,
+  [SMALL_STATE(148)] = 3424,
+  [SMALL_STATE(149)] = 3433,
+  [SMALL_STATE(150)] = 3442,
+  [SMALL_STATE(151)] = 3455,
+  [SMALL_STATE(152)] = 3468,
+  [SMALL_STATE(153)] = 3481,
+  [SMALL_STATE(154)] = 3494,
+  [SMALL_STATE(155)] = 3507,
+  [SMALL_STATE(156)] = 3520,
+  [SMALL_STATE(157)] = 3533,
+  [SMALL_STATE(158)] = 3546,
+  [SMALL_STATE(159)] = 3559,
+  [SMALL_STATE(160)] = 3572,
+  [SMALL_STATE(161)] = 3585,
+  [SMALL_STATE(162)] = 3598,
+  [SMALL_STATE(163)] = 3611,
+  [SMALL_STATE(164)] = 3624,
+  [SMALL_STATE(165)] = 3637,
+  [SMALL_STATE(166)] = 3650,
+  [SMALL_STATE(167)] = 3663,
+  [SMALL_STATE(168)] = 3676,
+  [SMALL_STATE(169)] = 3687,
+  [SMALL_STATE(170)] = 3700,
+  [SMALL_STATE(171)] = 3713,
+  [SMALL_STATE(172)] = 3726,
+  [SMALL_STATE(173)] = 3739,
+  [SMALL_STATE(174)] = 3752,
+  [SMALL_STATE(175)] = 3765,
+  [SMALL_STATE(176)] = 3778,
+  [SMALL_STATE(177)] = 3791,
+  [SMALL_STATE(178)] = 3804,
+  [SMALL_STATE(179)] = 3817,
+  [SMALL_STATE(180)] = 3830,
+  [SMALL_STATE(181)] = 3843,
+  [SMALL_STATE(182)] = 3856,
+  [SMALL_STATE(183)] = 3869,
+  [SMALL_STATE(184)] = 3877,
+  [SMALL_STATE(185)] = 3885,
+  [SMALL_STATE(186)] = 3893,
+  [SMALL_STATE(187)] = 3901,
+  [SMALL_STATE(188)] = 3909,
+  [SMALL_STATE(189)] = 3917,
+  [SMALL_STATE(190)] = 3925,
+  [SMALL_STATE(191)] = 3933,
+  [SMALL_STATE(192)] = 3941,
+  [SMALL_STATE(193)] = 3949,
+  [SMALL_STATE(194)] = 3959,
+  [SMALL_STATE(195)] = 3967,
+  [SMALL_STATE(196)] = 3975,
+  [SMALL_STATE(197)] = 3983,
+  [SMALL_STATE(198)] = 3991,
+  [SMALL_STATE(199)] = 4001,
+  [SMALL_STATE(200)] = 4009,
+  [SMALL_STATE(201)] = 4017,
+  [SMALL_STATE(202)] = 4025,
+  [SMALL_STATE(203)] = 4033,
+  [SMALL_STATE(204)] = 4041,
+  [SMALL_STATE(205)] = 4049,
+  [SMALL_STATE(206)] = 4057,
+  [SMALL_STATE(207)] = 4065,
+  [SMALL_STATE(208)] = 4073,
+  [SMALL_STATE(209)] = 4081,
+  [SMALL_STATE(210)] = 4089,
+  [SMALL_STATE(211)] = 4097,
+  [SMALL_STATE(212)] = 4105,
+  [SMALL_STATE(213)] = 4113,
+  [SMALL_STATE(214)] = 4121,
+  [SMALL_STATE(215)] = 4129,
+  [SMALL_STATE(216)] = 4137,
+  [SMALL_STATE(217)] = 4144,
+  [SMALL_STATE(218)] = 4151,
+  [SMALL_STATE(219)] = 4158,
+  [SMALL_STATE(220)] = 4165,
+  [SMALL_STATE(221)] = 4172,
+  [SMALL_STATE(222)] = 4179,
+  [SMALL_STATE(223)] = 4186,
+  [SMALL_STATE(224)] = 4193,
+  [SMALL_STATE(225)] = 4200,
+  [SMALL_STATE(226)] = 4207,
+  [SMALL_STATE(227)] = 4214,
+  [SMALL_STATE(228)] = 4221,
+  [SMALL_STATE(229)] = 4228,
+  [SMALL_STATE(230)] = 4235,
+  [SMALL_STATE(231)] = 4242,
+  [SMALL_STATE(232)] = 4249,
+  [SMALL_STATE(233)] = 4256,
+  [SMALL_STATE(234)] = 4263,
+  [SMALL_STATE(235)] = 4270,
+  [SMALL_STATE(236)] = 4277,
+  [SMALL_STATE(237)] = 4284,
+  [SMALL_STATE(238)] = 4291,
+  [SMALL_STATE(239)] = 4298,
+  [SMALL_STATE(240)] = 4305,
+  [SMALL_STATE(241)] = 4312,
 };
 
 static const TSParseActionEntry ts_parse_actions[] = {
@@ -12403,397 +12560,403 @@ static const TSParseActionEntry ts_parse_actions[] = {
   [1] = {.entry = {.count = 1, .reusable = false}}, RECOVER(),
   [3] = {.entry = {.count = 1, .reusable = true}}, SHIFT_EXTRA(),
   [5] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_source_file, 0, 0, 0),
-  [7] = {.entry = {.count = 1, .reusable = false}}, SHIFT(145),
-  [9] = {.entry = {.count = 1, .reusable = false}}, SHIFT(146),
-  [11] = {.entry = {.count = 1, .reusable = false}}, SHIFT(172),
-  [13] = {.entry = {.count = 1, .reusable = false}}, SHIFT(177),
-  [15] = {.entry = {.count = 1, .reusable = false}}, SHIFT(178),
-  [17] = {.entry = {.count = 1, .reusable = false}}, SHIFT(60),
-  [19] = {.entry = {.count = 1, .reusable = false}}, SHIFT(63),
-  [21] = {.entry = {.count = 1, .reusable = false}}, SHIFT(64),
-  [23] = {.entry = {.count = 1, .reusable = false}}, SHIFT(68),
-  [25] = {.entry = {.count = 1, .reusable = false}}, SHIFT(66),
-  [27] = {.entry = {.count = 1, .reusable = false}}, SHIFT(237),
-  [29] = {.entry = {.count = 1, .reusable = false}}, SHIFT(36),
-  [31] = {.entry = {.count = 1, .reusable = false}}, SHIFT(231),
-  [33] = {.entry = {.count = 1, .reusable = false}}, SHIFT(235),
-  [35] = {.entry = {.count = 1, .reusable = false}}, SHIFT(51),
-  [37] = {.entry = {.count = 1, .reusable = false}}, SHIFT(131),
-  [39] = {.entry = {.count = 1, .reusable = false}}, SHIFT(112),
-  [41] = {.entry = {.count = 1, .reusable = false}}, SHIFT(219),
-  [43] = {.entry = {.count = 1, .reusable = false}}, SHIFT(27),
-  [45] = {.entry = {.count = 1, .reusable = false}}, SHIFT(69),
-  [47] = {.entry = {.count = 1, .reusable = false}}, SHIFT(72),
-  [49] = {.entry = {.count = 1, .reusable = false}}, SHIFT(25),
-  [51] = {.entry = {.count = 1, .reusable = false}}, SHIFT_EXTRA(),
-  [53] = {.entry = {.count = 1, .reusable = false}}, SHIFT(2),
-  [55] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_source_file_repeat1, 1, 0, 0),
-  [57] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_source_file_repeat1, 1, 0, 0),
-  [59] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_conditional, 3, 0, 3),
-  [61] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_conditional, 3, 0, 3),
-  [63] = {.entry = {.count = 1, .reusable = true}}, SHIFT(145),
-  [65] = {.entry = {.count = 1, .reusable = true}}, SHIFT(146),
-  [67] = {.entry = {.count = 1, .reusable = true}}, SHIFT(172),
-  [69] = {.entry = {.count = 1, .reusable = true}}, SHIFT(177),
-  [71] = {.entry = {.count = 1, .reusable = true}}, SHIFT(178),
-  [73] = {.entry = {.count = 1, .reusable = true}}, SHIFT(63),
-  [75] = {.entry = {.count = 1, .reusable = true}}, SHIFT(64),
-  [77] = {.entry = {.count = 1, .reusable = true}}, SHIFT(68),
+  [7] = {.entry = {.count = 1, .reusable = false}}, SHIFT(180),
+  [9] = {.entry = {.count = 1, .reusable = false}}, SHIFT(143),
+  [11] = {.entry = {.count = 1, .reusable = false}}, SHIFT(169),
+  [13] = {.entry = {.count = 1, .reusable = false}}, SHIFT(172),
+  [15] = {.entry = {.count = 1, .reusable = false}}, SHIFT(134),
+  [17] = {.entry = {.count = 1, .reusable = false}}, SHIFT(155),
+  [19] = {.entry = {.count = 1, .reusable = false}}, SHIFT(62),
+  [21] = {.entry = {.count = 1, .reusable = false}}, SHIFT(60),
+  [23] = {.entry = {.count = 1, .reusable = false}}, SHIFT(66),
+  [25] = {.entry = {.count = 1, .reusable = false}}, SHIFT(63),
+  [27] = {.entry = {.count = 1, .reusable = false}}, SHIFT(68),
+  [29] = {.entry = {.count = 1, .reusable = false}}, SHIFT(218),
+  [31] = {.entry = {.count = 1, .reusable = false}}, SHIFT(36),
+  [33] = {.entry = {.count = 1, .reusable = false}}, SHIFT(225),
+  [35] = {.entry = {.count = 1, .reusable = false}}, SHIFT(224),
+  [37] = {.entry = {.count = 1, .reusable = false}}, SHIFT(47),
+  [39] = {.entry = {.count = 1, .reusable = false}}, SHIFT(116),
+  [41] = {.entry = {.count = 1, .reusable = false}}, SHIFT(106),
+  [43] = {.entry = {.count = 1, .reusable = false}}, SHIFT(240),
+  [45] = {.entry = {.count = 1, .reusable = false}}, SHIFT(27),
+  [47] = {.entry = {.count = 1, .reusable = false}}, SHIFT(88),
+  [49] = {.entry = {.count = 1, .reusable = false}}, SHIFT(89),
+  [51] = {.entry = {.count = 1, .reusable = false}}, SHIFT(26),
+  [53] = {.entry = {.count = 1, .reusable = false}}, SHIFT_EXTRA(),
+  [55] = {.entry = {.count = 1, .reusable = false}}, SHIFT(2),
+  [57] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_source_file_repeat1, 1, 0, 0),
+  [59] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_source_file_repeat1, 1, 0, 0),
+  [61] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_conditional, 3, 0, 3),
+  [63] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_conditional, 3, 0, 3),
+  [65] = {.entry = {.count = 1, .reusable = true}}, SHIFT(180),
+  [67] = {.entry = {.count = 1, .reusable = true}}, SHIFT(143),
+  [69] = {.entry = {.count = 1, .reusable = true}}, SHIFT(169),
+  [71] = {.entry = {.count = 1, .reusable = true}}, SHIFT(172),
+  [73] = {.entry = {.count = 1, .reusable = true}}, SHIFT(134),
+  [75] = {.entry = {.count = 1, .reusable = true}}, SHIFT(155),
+  [77] = {.entry = {.count = 1, .reusable = true}}, SHIFT(60),
   [79] = {.entry = {.count = 1, .reusable = true}}, SHIFT(66),
-  [81] = {.entry = {.count = 1, .reusable = true}}, SHIFT(237),
-  [83] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_line, 2, 0, 2),
-  [85] = {.entry = {.count = 1, .reusable = false}}, SHIFT(42),
-  [87] = {.entry = {.count = 1, .reusable = false}}, SHIFT(134),
-  [89] = {.entry = {.count = 1, .reusable = false}}, SHIFT(35),
-  [91] = {.entry = {.count = 1, .reusable = false}}, SHIFT(91),
-  [93] = {.entry = {.count = 1, .reusable = false}}, SHIFT(58),
-  [95] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_list_line, 2, 0, 2),
-  [97] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags_line, 2, 0, 2),
-  [99] = {.entry = {.count = 1, .reusable = false}}, SHIFT(40),
-  [101] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_flags_line, 2, 0, 2),
-  [103] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_line, 3, 0, 4),
-  [105] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_list_line, 3, 0, 4),
-  [107] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags_line, 3, 0, 4),
-  [109] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_flags_line, 3, 0, 4),
-  [111] = {.entry = {.count = 1, .reusable = false}}, SHIFT(43),
-  [113] = {.entry = {.count = 1, .reusable = false}}, SHIFT(37),
-  [115] = {.entry = {.count = 1, .reusable = false}}, SHIFT(190),
-  [117] = {.entry = {.count = 1, .reusable = false}}, SHIFT(33),
-  [119] = {.entry = {.count = 1, .reusable = false}}, SHIFT(93),
-  [121] = {.entry = {.count = 1, .reusable = false}}, SHIFT(44),
-  [123] = {.entry = {.count = 1, .reusable = true}}, SHIFT(44),
-  [125] = {.entry = {.count = 1, .reusable = false}}, SHIFT(120),
-  [127] = {.entry = {.count = 1, .reusable = false}}, SHIFT(115),
-  [129] = {.entry = {.count = 1, .reusable = false}}, SHIFT(95),
-  [131] = {.entry = {.count = 1, .reusable = false}}, SHIFT(97),
-  [133] = {.entry = {.count = 1, .reusable = false}}, SHIFT(154),
-  [135] = {.entry = {.count = 1, .reusable = false}}, SHIFT(155),
-  [137] = {.entry = {.count = 1, .reusable = false}}, SHIFT(80),
-  [139] = {.entry = {.count = 1, .reusable = false}}, SHIFT(81),
-  [141] = {.entry = {.count = 1, .reusable = false}}, SHIFT(103),
-  [143] = {.entry = {.count = 1, .reusable = false}}, SHIFT(101),
-  [145] = {.entry = {.count = 1, .reusable = false}}, SHIFT(85),
-  [147] = {.entry = {.count = 1, .reusable = false}}, SHIFT(86),
-  [149] = {.entry = {.count = 1, .reusable = false}}, SHIFT(107),
-  [151] = {.entry = {.count = 1, .reusable = false}}, SHIFT(109),
-  [153] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 1, 0, 2),
-  [155] = {.entry = {.count = 1, .reusable = false}}, SHIFT(31),
-  [157] = {.entry = {.count = 1, .reusable = false}}, SHIFT(89),
-  [159] = {.entry = {.count = 1, .reusable = false}}, SHIFT(49),
-  [161] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key_line, 1, 0, 2),
-  [163] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 2, 0, 4),
+  [81] = {.entry = {.count = 1, .reusable = true}}, SHIFT(63),
+  [83] = {.entry = {.count = 1, .reusable = true}}, SHIFT(68),
+  [85] = {.entry = {.count = 1, .reusable = true}}, SHIFT(218),
+  [87] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_line, 2, 0, 2),
+  [89] = {.entry = {.count = 1, .reusable = false}}, SHIFT(44),
+  [91] = {.entry = {.count = 1, .reusable = false}}, SHIFT(144),
+  [93] = {.entry = {.count = 1, .reusable = false}}, SHIFT(35),
+  [95] = {.entry = {.count = 1, .reusable = false}}, SHIFT(84),
+  [97] = {.entry = {.count = 1, .reusable = false}}, SHIFT(55),
+  [99] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_list_line, 2, 0, 2),
+  [101] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags_line, 2, 0, 2),
+  [103] = {.entry = {.count = 1, .reusable = false}}, SHIFT(40),
+  [105] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_flags_line, 2, 0, 2),
+  [107] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_line, 3, 0, 4),
+  [109] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_list_line, 3, 0, 4),
+  [111] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags_line, 3, 0, 4),
+  [113] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_flags_line, 3, 0, 4),
+  [115] = {.entry = {.count = 1, .reusable = false}}, SHIFT(41),
+  [117] = {.entry = {.count = 1, .reusable = false}}, SHIFT(37),
+  [119] = {.entry = {.count = 1, .reusable = false}}, SHIFT(72),
+  [121] = {.entry = {.count = 1, .reusable = false}}, SHIFT(33),
+  [123] = {.entry = {.count = 1, .reusable = false}}, SHIFT(86),
+  [125] = {.entry = {.count = 1, .reusable = false}}, SHIFT(43),
+  [127] = {.entry = {.count = 1, .reusable = true}}, SHIFT(43),
+  [129] = {.entry = {.count = 1, .reusable = false}}, SHIFT(206),
+  [131] = {.entry = {.count = 1, .reusable = false}}, SHIFT(115),
+  [133] = {.entry = {.count = 1, .reusable = false}}, SHIFT(95),
+  [135] = {.entry = {.count = 1, .reusable = false}}, SHIFT(114),
+  [137] = {.entry = {.count = 1, .reusable = false}}, SHIFT(97),
+  [139] = {.entry = {.count = 1, .reusable = false}}, SHIFT(145),
+  [141] = {.entry = {.count = 1, .reusable = false}}, SHIFT(146),
+  [143] = {.entry = {.count = 1, .reusable = false}}, SHIFT(71),
+  [145] = {.entry = {.count = 1, .reusable = false}}, SHIFT(111),
+  [147] = {.entry = {.count = 1, .reusable = false}}, SHIFT(105),
+  [149] = {.entry = {.count = 1, .reusable = false}}, SHIFT(108),
+  [151] = {.entry = {.count = 1, .reusable = false}}, SHIFT(76),
+  [153] = {.entry = {.count = 1, .reusable = false}}, SHIFT(77),
+  [155] = {.entry = {.count = 1, .reusable = false}}, SHIFT(101),
+  [157] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 2, 0, 4),
+  [159] = {.entry = {.count = 1, .reusable = false}}, SHIFT(31),
+  [161] = {.entry = {.count = 1, .reusable = false}}, SHIFT(80),
+  [163] = {.entry = {.count = 1, .reusable = false}}, SHIFT(51),
   [165] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key_line, 2, 0, 4),
-  [167] = {.entry = {.count = 1, .reusable = false}}, SHIFT(70),
-  [169] = {.entry = {.count = 1, .reusable = false}}, SHIFT(11),
-  [171] = {.entry = {.count = 1, .reusable = false}}, SHIFT(23),
-  [173] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 2, 0, 2),
-  [175] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key_line, 2, 0, 2),
-  [177] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 3, 0, 4),
-  [179] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key_line, 3, 0, 4),
-  [181] = {.entry = {.count = 1, .reusable = false}}, SHIFT(13),
-  [183] = {.entry = {.count = 1, .reusable = false}}, SHIFT(15),
-  [185] = {.entry = {.count = 1, .reusable = false}}, SHIFT(17),
-  [187] = {.entry = {.count = 1, .reusable = false}}, SHIFT(19),
-  [189] = {.entry = {.count = 1, .reusable = false}}, SHIFT(21),
-  [191] = {.entry = {.count = 1, .reusable = false}}, SHIFT(217),
-  [193] = {.entry = {.count = 1, .reusable = false}}, SHIFT(214),
-  [195] = {.entry = {.count = 1, .reusable = false}}, SHIFT(26),
-  [197] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_arguments_repeat1, 1, 0, 0),
-  [199] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(43),
-  [202] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0),
-  [204] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(33),
-  [207] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(93),
-  [210] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(38),
-  [213] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(38),
-  [216] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(43),
-  [219] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(39),
-  [222] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0),
-  [224] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(33),
-  [227] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(93),
-  [230] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(39),
-  [233] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_flags_repeat1, 1, 0, 0),
-  [235] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_flags_repeat1, 1, 0, 0),
-  [237] = {.entry = {.count = 1, .reusable = true}}, SHIFT(58),
-  [239] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_append_environment, 5, 0, 24),
-  [241] = {.entry = {.count = 1, .reusable = true}}, SHIFT(49),
-  [243] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_append_environment, 5, 0, 24),
-  [245] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_list_repeat1, 1, 0, 0),
-  [247] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_list_repeat1, 1, 0, 0),
-  [249] = {.entry = {.count = 1, .reusable = false}}, SHIFT(46),
-  [251] = {.entry = {.count = 1, .reusable = false}}, SHIFT(74),
-  [253] = {.entry = {.count = 1, .reusable = true}}, SHIFT(46),
+  [167] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 1, 0, 2),
+  [169] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key_line, 1, 0, 2),
+  [171] = {.entry = {.count = 1, .reusable = false}}, SHIFT(91),
+  [173] = {.entry = {.count = 1, .reusable = false}}, SHIFT(14),
+  [175] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 2, 0, 2),
+  [177] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key_line, 2, 0, 2),
+  [179] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 3, 0, 4),
+  [181] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key_line, 3, 0, 4),
+  [183] = {.entry = {.count = 1, .reusable = false}}, SHIFT(19),
+  [185] = {.entry = {.count = 1, .reusable = false}}, SHIFT(13),
+  [187] = {.entry = {.count = 1, .reusable = false}}, SHIFT(16),
+  [189] = {.entry = {.count = 1, .reusable = false}}, SHIFT(18),
+  [191] = {.entry = {.count = 1, .reusable = false}}, SHIFT(20),
+  [193] = {.entry = {.count = 1, .reusable = false}}, SHIFT(22),
+  [195] = {.entry = {.count = 1, .reusable = false}}, SHIFT(220),
+  [197] = {.entry = {.count = 1, .reusable = false}}, SHIFT(236),
+  [199] = {.entry = {.count = 1, .reusable = false}}, SHIFT(25),
+  [201] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_arguments_repeat1, 1, 0, 0),
+  [203] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_append_environment, 5, 0, 24),
+  [205] = {.entry = {.count = 1, .reusable = true}}, SHIFT(51),
+  [207] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_append_environment, 5, 0, 24),
+  [209] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(41),
+  [212] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0),
+  [214] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(33),
+  [217] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(86),
+  [220] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(39),
+  [223] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_argument_repeat1, 2, 0, 0), SHIFT_REPEAT(39),
+  [226] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_flags_repeat1, 1, 0, 0),
+  [228] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_flags_repeat1, 1, 0, 0),
+  [230] = {.entry = {.count = 1, .reusable = true}}, SHIFT(55),
+  [232] = {.entry = {.count = 1, .reusable = false}}, SHIFT(46),
+  [234] = {.entry = {.count = 1, .reusable = false}}, SHIFT(69),
+  [236] = {.entry = {.count = 1, .reusable = true}}, SHIFT(46),
+  [238] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(41),
+  [241] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(42),
+  [244] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0),
+  [246] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(33),
+  [249] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(86),
+  [252] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_parenthesized_repeat1, 2, 0, 0), SHIFT_REPEAT(42),
   [255] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_argument, 1, 0, 0),
-  [257] = {.entry = {.count = 1, .reusable = false}}, SHIFT(38),
-  [259] = {.entry = {.count = 1, .reusable = true}}, SHIFT(38),
-  [261] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_append_environment, 4, 0, 21),
-  [263] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_append_environment, 4, 0, 21),
-  [265] = {.entry = {.count = 1, .reusable = false}}, SHIFT(39),
-  [267] = {.entry = {.count = 1, .reusable = false}}, SHIFT(75),
-  [269] = {.entry = {.count = 1, .reusable = true}}, SHIFT(39),
-  [271] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__argument_value, 2, 0, 5),
-  [273] = {.entry = {.count = 1, .reusable = false}}, SHIFT(55),
-  [275] = {.entry = {.count = 1, .reusable = true}}, SHIFT(55),
-  [277] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym__argument_value, 2, 0, 5),
-  [279] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__argument_value, 1, 0, 0),
-  [281] = {.entry = {.count = 1, .reusable = false}}, SHIFT(50),
-  [283] = {.entry = {.count = 1, .reusable = true}}, SHIFT(50),
-  [285] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym__argument_value, 1, 0, 0),
-  [287] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_value, 1, 0, 0),
-  [289] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_value, 1, 0, 0),
-  [291] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__argument_value, 2, 0, 0),
-  [293] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym__argument_value, 2, 0, 0),
-  [295] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_directive, 1, 0, 1),
-  [297] = {.entry = {.count = 1, .reusable = false}}, SHIFT(59),
-  [299] = {.entry = {.count = 1, .reusable = false}}, SHIFT(48),
-  [301] = {.entry = {.count = 1, .reusable = false}}, SHIFT(57),
-  [303] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_directive, 1, 0, 1),
-  [305] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_section_name, 1, 0, 0),
-  [307] = {.entry = {.count = 1, .reusable = false}}, SHIFT(53),
-  [309] = {.entry = {.count = 1, .reusable = true}}, SHIFT(53),
-  [311] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_section_name, 1, 0, 0),
-  [313] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_section_name, 2, 0, 0),
-  [315] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_section_name, 2, 0, 0),
-  [317] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0),
-  [319] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0),
-  [321] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0), SHIFT_REPEAT(35),
-  [324] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0), SHIFT_REPEAT(91),
-  [327] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0), SHIFT_REPEAT(54),
-  [330] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0), SHIFT_REPEAT(54),
-  [333] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0),
-  [335] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0), SHIFT_REPEAT(31),
-  [338] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0), SHIFT_REPEAT(89),
-  [341] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0), SHIFT_REPEAT(55),
-  [344] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0), SHIFT_REPEAT(55),
-  [347] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0),
-  [349] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__argument_value, 1, 0, 5),
-  [351] = {.entry = {.count = 1, .reusable = false}}, SHIFT(47),
-  [353] = {.entry = {.count = 1, .reusable = true}}, SHIFT(47),
-  [355] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym__argument_value, 1, 0, 5),
-  [357] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_item, 1, 0, 0),
-  [359] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_list_item, 1, 0, 0),
-  [361] = {.entry = {.count = 1, .reusable = false}}, SHIFT(54),
-  [363] = {.entry = {.count = 1, .reusable = true}}, SHIFT(54),
-  [365] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_directive, 2, 0, 1),
-  [367] = {.entry = {.count = 1, .reusable = true}}, SHIFT(57),
-  [369] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_directive, 2, 0, 1),
-  [371] = {.entry = {.count = 1, .reusable = false}}, SHIFT(52),
-  [373] = {.entry = {.count = 1, .reusable = true}}, SHIFT(52),
-  [375] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_block_line_repeat1, 2, 0, 0),
-  [377] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_block_line_repeat1, 2, 0, 0), SHIFT_REPEAT(28),
-  [380] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_block_line_repeat1, 2, 0, 0), SHIFT_REPEAT(61),
-  [383] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_block_line_repeat1, 2, 0, 0), SHIFT_REPEAT(61),
-  [386] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_block_line, 2, 0, 0),
-  [388] = {.entry = {.count = 1, .reusable = false}}, SHIFT(28),
-  [390] = {.entry = {.count = 1, .reusable = false}}, SHIFT(61),
-  [392] = {.entry = {.count = 1, .reusable = true}}, SHIFT(61),
-  [394] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_block_repeat1, 1, 0, 0),
-  [396] = {.entry = {.count = 1, .reusable = false}}, SHIFT(67),
-  [398] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_block_line, 1, 0, 0),
-  [400] = {.entry = {.count = 1, .reusable = false}}, SHIFT(62),
-  [402] = {.entry = {.count = 1, .reusable = true}}, SHIFT(62),
-  [404] = {.entry = {.count = 1, .reusable = false}}, SHIFT(34),
-  [406] = {.entry = {.count = 1, .reusable = false}}, SHIFT(76),
-  [408] = {.entry = {.count = 1, .reusable = true}}, SHIFT(132),
-  [410] = {.entry = {.count = 1, .reusable = true}}, SHIFT(76),
-  [412] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_function_name, 1, 0, 0),
-  [414] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_function_name, 1, 0, 0),
-  [416] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_key_repeat1, 2, 0, 0),
-  [418] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_key_repeat1, 2, 0, 0), SHIFT_REPEAT(27),
-  [421] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_key_repeat1, 2, 0, 0), SHIFT_REPEAT(69),
-  [424] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_key_repeat1, 2, 0, 0), SHIFT_REPEAT(71),
-  [427] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key, 1, 0, 0),
-  [429] = {.entry = {.count = 1, .reusable = true}}, SHIFT(71),
-  [431] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_string_repeat1, 2, 0, 0), SHIFT_REPEAT(34),
-  [434] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_string_repeat1, 2, 0, 0), SHIFT_REPEAT(73),
-  [437] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_string_repeat1, 2, 0, 0),
-  [439] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_string_repeat1, 2, 0, 0), SHIFT_REPEAT(73),
-  [442] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_parenthesized, 2, 0, 0),
-  [444] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_parenthesized, 2, 0, 0),
-  [446] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_parenthesized, 3, 0, 0),
-  [448] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_parenthesized, 3, 0, 0),
-  [450] = {.entry = {.count = 1, .reusable = false}}, SHIFT(73),
-  [452] = {.entry = {.count = 1, .reusable = true}}, SHIFT(116),
-  [454] = {.entry = {.count = 1, .reusable = true}}, SHIFT(73),
-  [456] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_string, 2, 0, 0),
-  [458] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_string, 2, 0, 0),
-  [460] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_string, 3, 0, 0),
-  [462] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_string, 3, 0, 0),
-  [464] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_expansion, 3, 0, 3),
-  [466] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_expansion, 3, 0, 3),
-  [468] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_expansion, 3, 0, 16),
-  [470] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_expansion, 3, 0, 16),
-  [472] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_expansion, 4, 0, 22),
-  [474] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_expansion, 4, 0, 22),
-  [476] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_expansion, 4, 0, 23),
-  [478] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_expansion, 4, 0, 23),
-  [480] = {.entry = {.count = 1, .reusable = false}}, SHIFT(90),
-  [482] = {.entry = {.count = 1, .reusable = true}}, SHIFT(96),
-  [484] = {.entry = {.count = 1, .reusable = true}}, SHIFT(90),
-  [486] = {.entry = {.count = 1, .reusable = true}}, SHIFT(98),
-  [488] = {.entry = {.count = 1, .reusable = false}}, SHIFT(92),
-  [490] = {.entry = {.count = 1, .reusable = true}}, SHIFT(77),
-  [492] = {.entry = {.count = 1, .reusable = true}}, SHIFT(92),
-  [494] = {.entry = {.count = 1, .reusable = true}}, SHIFT(78),
-  [496] = {.entry = {.count = 1, .reusable = false}}, SHIFT(94),
-  [498] = {.entry = {.count = 1, .reusable = true}}, SHIFT(79),
-  [500] = {.entry = {.count = 1, .reusable = true}}, SHIFT(94),
-  [502] = {.entry = {.count = 1, .reusable = true}}, SHIFT(82),
-  [504] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_define_name_repeat1, 2, 0, 0),
-  [506] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_define_name_repeat1, 2, 0, 0), SHIFT_REPEAT(27),
-  [509] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_define_name_repeat1, 2, 0, 0), SHIFT_REPEAT(105),
-  [512] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_section, 2, 0, 3),
-  [514] = {.entry = {.count = 1, .reusable = true}}, SHIFT(161),
-  [516] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_template_section, 2, 0, 3), SHIFT(4),
-  [519] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_define_name, 1, 0, 0),
-  [521] = {.entry = {.count = 1, .reusable = true}}, SHIFT(105),
-  [523] = {.entry = {.count = 1, .reusable = true}}, SHIFT(111),
-  [525] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_use, 3, 0, 14),
-  [527] = {.entry = {.count = 1, .reusable = true}}, SHIFT(10),
-  [529] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags, 1, 0, 12),
-  [531] = {.entry = {.count = 1, .reusable = true}}, SHIFT(40),
-  [533] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_source_file, 1, 0, 0),
-  [535] = {.entry = {.count = 1, .reusable = true}}, SHIFT(2),
-  [537] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags, 1, 0, 0),
-  [539] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_source_file, 2, 0, 0),
-  [541] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list, 2, 0, 0),
-  [543] = {.entry = {.count = 1, .reusable = true}}, SHIFT(42),
-  [545] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_list_repeat1, 2, 0, 0),
-  [547] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_list_repeat1, 2, 0, 0), SHIFT_REPEAT(42),
-  [550] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_flags_repeat1, 2, 0, 0),
-  [552] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_flags_repeat1, 2, 0, 0), SHIFT_REPEAT(40),
-  [555] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list, 1, 0, 0),
-  [557] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags, 2, 0, 12),
-  [559] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_use, 2, 0, 7),
-  [561] = {.entry = {.count = 1, .reusable = true}}, SHIFT(173),
-  [563] = {.entry = {.count = 1, .reusable = true}}, SHIFT(32),
-  [565] = {.entry = {.count = 1, .reusable = true}}, SHIFT(130),
-  [567] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_process_section, 3, 0, 3),
-  [569] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_process_section, 3, 0, 3), SHIFT(4),
-  [572] = {.entry = {.count = 1, .reusable = true}}, SHIFT(193),
-  [574] = {.entry = {.count = 1, .reusable = true}}, SHIFT(65),
-  [576] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_network_section, 2, 0, 3),
-  [578] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_network_section, 2, 0, 3), SHIFT(4),
-  [581] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_flags_repeat1, 2, 0, 18),
-  [583] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_source_file_repeat2, 2, 0, 0),
-  [585] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_source_file_repeat2, 2, 0, 0), SHIFT_REPEAT(5),
-  [588] = {.entry = {.count = 1, .reusable = true}}, SHIFT(5),
-  [590] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_logger_section, 2, 0, 3),
-  [592] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_logger_section, 2, 0, 3), SHIFT(4),
-  [595] = {.entry = {.count = 1, .reusable = true}}, SHIFT(37),
-  [597] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_arguments, 2, 0, 0),
-  [599] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_arguments_repeat1, 2, 0, 0), SHIFT_REPEAT(37),
-  [602] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_arguments_repeat1, 2, 0, 0),
-  [604] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_block_repeat1, 2, 0, 0),
-  [606] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_block_repeat1, 2, 0, 0), SHIFT_REPEAT(65),
-  [609] = {.entry = {.count = 1, .reusable = true}}, SHIFT(183),
-  [611] = {.entry = {.count = 1, .reusable = true}}, SHIFT(195),
-  [613] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_instance_section, 1, 0, 0),
-  [615] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_instance_section, 1, 0, 0), SHIFT(4),
-  [618] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_defines_section, 1, 0, 0),
-  [620] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_defines_section, 1, 0, 0), SHIFT(4),
-  [623] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_template_parameters_repeat1, 2, 0, 0), SHIFT_REPEAT(183),
-  [626] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_template_parameters_repeat1, 2, 0, 0),
-  [628] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_state_section, 3, 0, 3),
-  [630] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_state_section, 3, 0, 3), SHIFT(4),
-  [633] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_group_section, 3, 0, 3),
-  [635] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_group_section, 3, 0, 3), SHIFT(4),
-  [638] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_instance_section, 2, 0, 0),
-  [640] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_instance_section, 2, 0, 0), SHIFT(4),
-  [643] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_defines_section, 2, 0, 0),
-  [645] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_defines_section, 2, 0, 0), SHIFT(4),
-  [648] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_network_section, 3, 0, 3),
-  [650] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_network_section, 3, 0, 3), SHIFT(4),
-  [653] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_hosts_section, 2, 0, 0),
-  [655] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_hosts_section, 2, 0, 0), SHIFT(4),
-  [658] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_node_map_section, 2, 0, 0),
-  [660] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_node_map_section, 2, 0, 0), SHIFT(4),
-  [663] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_logger_section, 3, 0, 3),
-  [665] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_logger_section, 3, 0, 3), SHIFT(4),
-  [668] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_topics_section, 2, 0, 0),
-  [670] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_topics_section, 2, 0, 0), SHIFT(4),
-  [673] = {.entry = {.count = 1, .reusable = true}}, SHIFT(200),
-  [675] = {.entry = {.count = 1, .reusable = true}}, SHIFT(174),
-  [677] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_arguments, 1, 0, 0),
-  [679] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_process_section, 2, 0, 3),
-  [681] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_process_section, 2, 0, 3), SHIFT(4),
-  [684] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_section, 3, 0, 9),
-  [686] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_template_section, 3, 0, 9), SHIFT(4),
-  [689] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_section, 3, 0, 3),
-  [691] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_template_section, 3, 0, 3), SHIFT(4),
-  [694] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_source_file_repeat1, 2, 0, 0),
-  [696] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_source_file_repeat1, 2, 0, 0), SHIFT_REPEAT(4),
-  [699] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_state_section, 2, 0, 3),
-  [701] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_state_section, 2, 0, 3), SHIFT(4),
-  [704] = {.entry = {.count = 1, .reusable = true}}, SHIFT(197),
-  [706] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_group_section, 2, 0, 3),
-  [708] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_group_section, 2, 0, 3), SHIFT(4),
-  [711] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_source_file, 3, 0, 0),
-  [713] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_hosts_section, 1, 0, 0),
-  [715] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_hosts_section, 1, 0, 0), SHIFT(4),
-  [718] = {.entry = {.count = 1, .reusable = true}}, SHIFT(113),
-  [720] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameter, 1, 0, 1),
-  [722] = {.entry = {.count = 1, .reusable = true}}, SHIFT(56),
-  [724] = {.entry = {.count = 1, .reusable = true}}, SHIFT(184),
-  [726] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_section, 4, 0, 9),
-  [728] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_template_section, 4, 0, 9), SHIFT(4),
-  [731] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_node_map_section, 1, 0, 0),
-  [733] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_node_map_section, 1, 0, 0), SHIFT(4),
-  [736] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_topics_section, 1, 0, 0),
-  [738] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_topics_section, 1, 0, 0), SHIFT(4),
-  [741] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_append_environment, 6, 0, 27),
-  [743] = {.entry = {.count = 1, .reusable = true}}, SHIFT(41),
-  [745] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameters, 3, 0, 0),
-  [747] = {.entry = {.count = 1, .reusable = true}}, SHIFT(45),
-  [749] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_use, 4, 0, 19),
-  [751] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_arguments, 3, 0, 0),
-  [753] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_append_environment, 5, 0, 25),
-  [755] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_line, 3, 0, 11),
-  [757] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_arguments, 2, 0, 0),
-  [759] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags_line, 3, 0, 11),
-  [761] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameter, 3, 0, 26),
-  [763] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_block, 2, 0, 0),
-  [765] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameters, 4, 0, 0),
-  [767] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_block, 3, 0, 0),
-  [769] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_directive, 2, 0, 6),
-  [771] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 3, 0, 11),
-  [773] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameters, 2, 0, 0),
-  [775] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__section, 1, 0, 0),
-  [777] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_directive, 3, 0, 13),
-  [779] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_conditional, 4, 0, 20),
-  [781] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_line, 4, 0, 17),
-  [783] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags_line, 4, 0, 17),
-  [785] = {.entry = {.count = 1, .reusable = true}}, SHIFT(223),
-  [787] = {.entry = {.count = 1, .reusable = true}}, SHIFT(185),
-  [789] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 4, 0, 17),
-  [791] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 3, 0, 10),
-  [793] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_use, 3, 0, 15),
-  [795] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 2, 0, 8),
-  [797] = {.entry = {.count = 1, .reusable = true}}, SHIFT(9),
-  [799] = {.entry = {.count = 1, .reusable = true}}, SHIFT(158),
-  [801] = {.entry = {.count = 1, .reusable = true}}, SHIFT(127),
-  [803] = {.entry = {.count = 1, .reusable = true}}, SHIFT(8),
-  [805] = {.entry = {.count = 1, .reusable = true}}, SHIFT(3),
-  [807] = {.entry = {.count = 1, .reusable = true}}, SHIFT(206),
-  [809] = {.entry = {.count = 1, .reusable = true}}, SHIFT(83),
-  [811] = {.entry = {.count = 1, .reusable = true}}, SHIFT(84),
-  [813] = {.entry = {.count = 1, .reusable = true}}, SHIFT(30),
-  [815] = {.entry = {.count = 1, .reusable = true}}, SHIFT(182),
-  [817] = {.entry = {.count = 1, .reusable = true}}, SHIFT(104),
-  [819] = {.entry = {.count = 1, .reusable = true}}, SHIFT(102),
-  [821] = {.entry = {.count = 1, .reusable = true}}, SHIFT(99),
-  [823] = {.entry = {.count = 1, .reusable = true}},  ACCEPT_INPUT(),
-  [825] = {.entry = {.count = 1, .reusable = true}}, SHIFT(87),
-  [827] = {.entry = {.count = 1, .reusable = true}}, SHIFT(88),
-  [829] = {.entry = {.count = 1, .reusable = true}}, SHIFT(100),
-  [831] = {.entry = {.count = 1, .reusable = true}}, SHIFT(6),
-  [833] = {.entry = {.count = 1, .reusable = true}}, SHIFT(106),
-  [835] = {.entry = {.count = 1, .reusable = true}}, SHIFT(108),
-  [837] = {.entry = {.count = 1, .reusable = true}}, SHIFT(29),
-  [839] = {.entry = {.count = 1, .reusable = true}}, SHIFT(7),
-  [841] = {.entry = {.count = 1, .reusable = true}}, SHIFT(187),
-  [843] = {.entry = {.count = 1, .reusable = true}}, SHIFT(110),
-  [845] = {.entry = {.count = 1, .reusable = true}}, SHIFT(128),
-  [847] = {.entry = {.count = 1, .reusable = true}}, SHIFT(157),
+  [257] = {.entry = {.count = 1, .reusable = false}}, SHIFT(39),
+  [259] = {.entry = {.count = 1, .reusable = true}}, SHIFT(39),
+  [261] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_list_repeat1, 1, 0, 0),
+  [263] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_list_repeat1, 1, 0, 0),
+  [265] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_append_environment, 4, 0, 21),
+  [267] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_append_environment, 4, 0, 21),
+  [269] = {.entry = {.count = 1, .reusable = false}}, SHIFT(42),
+  [271] = {.entry = {.count = 1, .reusable = false}}, SHIFT(90),
+  [273] = {.entry = {.count = 1, .reusable = true}}, SHIFT(42),
+  [275] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_directive, 1, 0, 1),
+  [277] = {.entry = {.count = 1, .reusable = false}}, SHIFT(59),
+  [279] = {.entry = {.count = 1, .reusable = false}}, SHIFT(48),
+  [281] = {.entry = {.count = 1, .reusable = false}}, SHIFT(58),
+  [283] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_directive, 1, 0, 1),
+  [285] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__argument_value, 1, 0, 0),
+  [287] = {.entry = {.count = 1, .reusable = false}}, SHIFT(57),
+  [289] = {.entry = {.count = 1, .reusable = true}}, SHIFT(57),
+  [291] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym__argument_value, 1, 0, 0),
+  [293] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0),
+  [295] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0), SHIFT_REPEAT(31),
+  [298] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0), SHIFT_REPEAT(80),
+  [301] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0), SHIFT_REPEAT(49),
+  [304] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0), SHIFT_REPEAT(49),
+  [307] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_section_name_repeat1, 2, 0, 0),
+  [309] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0),
+  [311] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0),
+  [313] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0), SHIFT_REPEAT(35),
+  [316] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0), SHIFT_REPEAT(84),
+  [319] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0), SHIFT_REPEAT(50),
+  [322] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_list_item_repeat1, 2, 0, 0), SHIFT_REPEAT(50),
+  [325] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_value, 1, 0, 0),
+  [327] = {.entry = {.count = 1, .reusable = false}}, SHIFT(49),
+  [329] = {.entry = {.count = 1, .reusable = true}}, SHIFT(49),
+  [331] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_value, 1, 0, 0),
+  [333] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_section_name, 2, 0, 0),
+  [335] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_section_name, 2, 0, 0),
+  [337] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_section_name, 1, 0, 0),
+  [339] = {.entry = {.count = 1, .reusable = false}}, SHIFT(53),
+  [341] = {.entry = {.count = 1, .reusable = true}}, SHIFT(53),
+  [343] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_section_name, 1, 0, 0),
+  [345] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_item, 1, 0, 0),
+  [347] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_list_item, 1, 0, 0),
+  [349] = {.entry = {.count = 1, .reusable = false}}, SHIFT(50),
+  [351] = {.entry = {.count = 1, .reusable = true}}, SHIFT(50),
+  [353] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__argument_value, 2, 0, 5),
+  [355] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym__argument_value, 2, 0, 5),
+  [357] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__argument_value, 2, 0, 0),
+  [359] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym__argument_value, 2, 0, 0),
+  [361] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__argument_value, 1, 0, 5),
+  [363] = {.entry = {.count = 1, .reusable = false}}, SHIFT(56),
+  [365] = {.entry = {.count = 1, .reusable = true}}, SHIFT(56),
+  [367] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym__argument_value, 1, 0, 5),
+  [369] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_directive, 2, 0, 1),
+  [371] = {.entry = {.count = 1, .reusable = true}}, SHIFT(58),
+  [373] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_directive, 2, 0, 1),
+  [375] = {.entry = {.count = 1, .reusable = false}}, SHIFT(54),
+  [377] = {.entry = {.count = 1, .reusable = true}}, SHIFT(54),
+  [379] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_block_line_repeat1, 2, 0, 0),
+  [381] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_block_line_repeat1, 2, 0, 0), SHIFT_REPEAT(30),
+  [384] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_block_line_repeat1, 2, 0, 0), SHIFT_REPEAT(61),
+  [387] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_block_line_repeat1, 2, 0, 0), SHIFT_REPEAT(61),
+  [390] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_block_line, 1, 0, 0),
+  [392] = {.entry = {.count = 1, .reusable = false}}, SHIFT(30),
+  [394] = {.entry = {.count = 1, .reusable = false}}, SHIFT(67),
+  [396] = {.entry = {.count = 1, .reusable = true}}, SHIFT(67),
+  [398] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_block_repeat1, 1, 0, 0),
+  [400] = {.entry = {.count = 1, .reusable = false}}, SHIFT(64),
+  [402] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_block_line, 2, 0, 0),
+  [404] = {.entry = {.count = 1, .reusable = false}}, SHIFT(61),
+  [406] = {.entry = {.count = 1, .reusable = true}}, SHIFT(61),
+  [408] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_parenthesized, 2, 0, 0),
+  [410] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_parenthesized, 2, 0, 0),
+  [412] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_string, 2, 0, 0),
+  [414] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_string, 2, 0, 0),
+  [416] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_expansion, 3, 0, 3),
+  [418] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_expansion, 3, 0, 3),
+  [420] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_expansion, 3, 0, 16),
+  [422] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_expansion, 3, 0, 16),
+  [424] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_string, 3, 0, 0),
+  [426] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_string, 3, 0, 0),
+  [428] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_expansion, 4, 0, 22),
+  [430] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_expansion, 4, 0, 22),
+  [432] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_expansion, 4, 0, 23),
+  [434] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_expansion, 4, 0, 23),
+  [436] = {.entry = {.count = 1, .reusable = false}}, SHIFT(34),
+  [438] = {.entry = {.count = 1, .reusable = false}}, SHIFT(83),
+  [440] = {.entry = {.count = 1, .reusable = true}}, SHIFT(99),
+  [442] = {.entry = {.count = 1, .reusable = true}}, SHIFT(83),
+  [444] = {.entry = {.count = 1, .reusable = false}}, SHIFT(93),
+  [446] = {.entry = {.count = 1, .reusable = true}}, SHIFT(113),
+  [448] = {.entry = {.count = 1, .reusable = true}}, SHIFT(93),
+  [450] = {.entry = {.count = 1, .reusable = true}}, SHIFT(96),
+  [452] = {.entry = {.count = 1, .reusable = false}}, SHIFT(85),
+  [454] = {.entry = {.count = 1, .reusable = true}}, SHIFT(92),
+  [456] = {.entry = {.count = 1, .reusable = true}}, SHIFT(85),
+  [458] = {.entry = {.count = 1, .reusable = true}}, SHIFT(81),
+  [460] = {.entry = {.count = 1, .reusable = false}}, SHIFT(87),
+  [462] = {.entry = {.count = 1, .reusable = true}}, SHIFT(70),
+  [464] = {.entry = {.count = 1, .reusable = true}}, SHIFT(87),
+  [466] = {.entry = {.count = 1, .reusable = true}}, SHIFT(73),
+  [468] = {.entry = {.count = 1, .reusable = false}}, SHIFT(82),
+  [470] = {.entry = {.count = 1, .reusable = true}}, SHIFT(124),
+  [472] = {.entry = {.count = 1, .reusable = true}}, SHIFT(82),
+  [474] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_key, 1, 0, 0),
+  [476] = {.entry = {.count = 1, .reusable = true}}, SHIFT(94),
+  [478] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_parenthesized, 3, 0, 0),
+  [480] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_parenthesized, 3, 0, 0),
+  [482] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_function_name, 1, 0, 0),
+  [484] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_function_name, 1, 0, 0),
+  [486] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_string_repeat1, 2, 0, 0), SHIFT_REPEAT(34),
+  [489] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_string_repeat1, 2, 0, 0), SHIFT_REPEAT(93),
+  [492] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_string_repeat1, 2, 0, 0),
+  [494] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_string_repeat1, 2, 0, 0), SHIFT_REPEAT(93),
+  [497] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_key_repeat1, 2, 0, 0),
+  [499] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_key_repeat1, 2, 0, 0), SHIFT_REPEAT(27),
+  [502] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_key_repeat1, 2, 0, 0), SHIFT_REPEAT(88),
+  [505] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_key_repeat1, 2, 0, 0), SHIFT_REPEAT(94),
+  [508] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_section, 2, 0, 3),
+  [510] = {.entry = {.count = 1, .reusable = true}}, SHIFT(161),
+  [512] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_template_section, 2, 0, 3), SHIFT(3),
+  [515] = {.entry = {.count = 1, .reusable = true}}, SHIFT(109),
+  [517] = {.entry = {.count = 1, .reusable = false}}, REDUCE(sym_define_name, 1, 0, 0),
+  [519] = {.entry = {.count = 1, .reusable = true}}, SHIFT(112),
+  [521] = {.entry = {.count = 1, .reusable = false}}, REDUCE(aux_sym_define_name_repeat1, 2, 0, 0),
+  [523] = {.entry = {.count = 2, .reusable = false}}, REDUCE(aux_sym_define_name_repeat1, 2, 0, 0), SHIFT_REPEAT(27),
+  [526] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_define_name_repeat1, 2, 0, 0), SHIFT_REPEAT(112),
+  [529] = {.entry = {.count = 1, .reusable = true}}, SHIFT(136),
+  [531] = {.entry = {.count = 1, .reusable = true}}, SHIFT(32),
+  [533] = {.entry = {.count = 1, .reusable = true}}, SHIFT(123),
+  [535] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list, 2, 0, 0),
+  [537] = {.entry = {.count = 1, .reusable = true}}, SHIFT(44),
+  [539] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_list_repeat1, 2, 0, 0),
+  [541] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_list_repeat1, 2, 0, 0), SHIFT_REPEAT(44),
+  [544] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags, 2, 0, 12),
+  [546] = {.entry = {.count = 1, .reusable = true}}, SHIFT(40),
+  [548] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_flags_repeat1, 2, 0, 0),
+  [550] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_flags_repeat1, 2, 0, 0), SHIFT_REPEAT(40),
+  [553] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_use, 2, 0, 7),
+  [555] = {.entry = {.count = 1, .reusable = true}}, SHIFT(11),
+  [557] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_source_file, 1, 0, 0),
+  [559] = {.entry = {.count = 1, .reusable = true}}, SHIFT(2),
+  [561] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_source_file, 2, 0, 0),
+  [563] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list, 1, 0, 0),
+  [565] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags, 1, 0, 12),
+  [567] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags, 1, 0, 0),
+  [569] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_use, 3, 0, 14),
+  [571] = {.entry = {.count = 1, .reusable = true}}, SHIFT(5),
+  [573] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_topics_section, 1, 0, 0),
+  [575] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_topics_section, 1, 0, 0), SHIFT(3),
+  [578] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_section, 4, 0, 9),
+  [580] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_template_section, 4, 0, 9), SHIFT(3),
+  [583] = {.entry = {.count = 1, .reusable = true}}, SHIFT(132),
+  [585] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_block_repeat1, 2, 0, 0),
+  [587] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_block_repeat1, 2, 0, 0), SHIFT_REPEAT(65),
+  [590] = {.entry = {.count = 1, .reusable = true}}, SHIFT(193),
+  [592] = {.entry = {.count = 1, .reusable = true}}, SHIFT(202),
+  [594] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_template_parameters_repeat1, 2, 0, 0), SHIFT_REPEAT(193),
+  [597] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_template_parameters_repeat1, 2, 0, 0),
+  [599] = {.entry = {.count = 1, .reusable = true}}, SHIFT(191),
+  [601] = {.entry = {.count = 1, .reusable = true}}, SHIFT(65),
+  [603] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_defines_section, 1, 0, 0),
+  [605] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_defines_section, 1, 0, 0), SHIFT(3),
+  [608] = {.entry = {.count = 1, .reusable = true}}, SHIFT(183),
+  [610] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_flags_repeat1, 2, 0, 18),
+  [612] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_source_file, 3, 0, 0),
+  [614] = {.entry = {.count = 1, .reusable = true}}, SHIFT(37),
+  [616] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_arguments, 1, 0, 0),
+  [618] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_source_file_repeat1, 2, 0, 0),
+  [620] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_source_file_repeat1, 2, 0, 0), SHIFT_REPEAT(3),
+  [623] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_source_file_repeat2, 2, 0, 0),
+  [625] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_source_file_repeat2, 2, 0, 0), SHIFT_REPEAT(5),
+  [628] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_access_section, 1, 0, 0),
+  [630] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_access_section, 1, 0, 0), SHIFT(3),
+  [633] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_process_section, 3, 0, 3),
+  [635] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_process_section, 3, 0, 3), SHIFT(3),
+  [638] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_group_section, 3, 0, 3),
+  [640] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_group_section, 3, 0, 3), SHIFT(3),
+  [643] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_network_section, 3, 0, 3),
+  [645] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_network_section, 3, 0, 3), SHIFT(3),
+  [648] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_logger_section, 3, 0, 3),
+  [650] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_logger_section, 3, 0, 3), SHIFT(3),
+  [653] = {.entry = {.count = 1, .reusable = true}}, SHIFT(192),
+  [655] = {.entry = {.count = 1, .reusable = true}}, SHIFT(168),
+  [657] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_section, 3, 0, 9),
+  [659] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_template_section, 3, 0, 9), SHIFT(3),
+  [662] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_section, 3, 0, 3),
+  [664] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_template_section, 3, 0, 3), SHIFT(3),
+  [667] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_instance_section, 2, 0, 0),
+  [669] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_instance_section, 2, 0, 0), SHIFT(3),
+  [672] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_defines_section, 2, 0, 0),
+  [674] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_defines_section, 2, 0, 0), SHIFT(3),
+  [677] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_hosts_section, 2, 0, 0),
+  [679] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_hosts_section, 2, 0, 0), SHIFT(3),
+  [682] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_node_map_section, 2, 0, 0),
+  [684] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_node_map_section, 2, 0, 0), SHIFT(3),
+  [687] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameter, 1, 0, 1),
+  [689] = {.entry = {.count = 1, .reusable = true}}, SHIFT(52),
+  [691] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_hosts_section, 1, 0, 0),
+  [693] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_hosts_section, 1, 0, 0), SHIFT(3),
+  [696] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_topics_section, 2, 0, 0),
+  [698] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_topics_section, 2, 0, 0), SHIFT(3),
+  [701] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_access_section, 2, 0, 0),
+  [703] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_access_section, 2, 0, 0), SHIFT(3),
+  [706] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_node_map_section, 1, 0, 0),
+  [708] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_node_map_section, 1, 0, 0), SHIFT(3),
+  [711] = {.entry = {.count = 1, .reusable = true}}, SHIFT(194),
+  [713] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_process_section, 2, 0, 3),
+  [715] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_process_section, 2, 0, 3), SHIFT(3),
+  [718] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_arguments, 2, 0, 0),
+  [720] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_state_section, 2, 0, 3),
+  [722] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_state_section, 2, 0, 3), SHIFT(3),
+  [725] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_group_section, 2, 0, 3),
+  [727] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_group_section, 2, 0, 3), SHIFT(3),
+  [730] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_network_section, 2, 0, 3),
+  [732] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_network_section, 2, 0, 3), SHIFT(3),
+  [735] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_logger_section, 2, 0, 3),
+  [737] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_logger_section, 2, 0, 3), SHIFT(3),
+  [740] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_instance_section, 1, 0, 0),
+  [742] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_instance_section, 1, 0, 0), SHIFT(3),
+  [745] = {.entry = {.count = 2, .reusable = true}}, REDUCE(aux_sym_arguments_repeat1, 2, 0, 0), SHIFT_REPEAT(37),
+  [748] = {.entry = {.count = 1, .reusable = true}}, REDUCE(aux_sym_arguments_repeat1, 2, 0, 0),
+  [750] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_state_section, 3, 0, 3),
+  [752] = {.entry = {.count = 2, .reusable = true}}, REDUCE(sym_state_section, 3, 0, 3), SHIFT(3),
+  [755] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_block, 2, 0, 0),
+  [757] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_directive, 2, 0, 6),
+  [759] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags_line, 4, 0, 17),
+  [761] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 4, 0, 17),
+  [763] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 3, 0, 11),
+  [765] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_block, 3, 0, 0),
+  [767] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameters, 2, 0, 0),
+  [769] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameters, 3, 0, 0),
+  [771] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_arguments, 3, 0, 0),
+  [773] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_append_environment, 5, 0, 25),
+  [775] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 3, 0, 10),
+  [777] = {.entry = {.count = 1, .reusable = true}}, SHIFT(237),
+  [779] = {.entry = {.count = 1, .reusable = true}}, SHIFT(213),
+  [781] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_line, 3, 0, 11),
+  [783] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_list_line, 4, 0, 17),
+  [785] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameters, 4, 0, 0),
+  [787] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_use, 4, 0, 19),
+  [789] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_flags_line, 3, 0, 11),
+  [791] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_append_environment, 6, 0, 27),
+  [793] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_arguments, 2, 0, 0),
+  [795] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_directive, 3, 0, 13),
+  [797] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym__section, 1, 0, 0),
+  [799] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_conditional, 4, 0, 20),
+  [801] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_use, 3, 0, 15),
+  [803] = {.entry = {.count = 1, .reusable = true}}, SHIFT(38),
+  [805] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_key_line, 2, 0, 8),
+  [807] = {.entry = {.count = 1, .reusable = true}}, SHIFT(45),
+  [809] = {.entry = {.count = 1, .reusable = true}}, REDUCE(sym_template_parameter, 3, 0, 26),
+  [811] = {.entry = {.count = 1, .reusable = true}}, SHIFT(147),
+  [813] = {.entry = {.count = 1, .reusable = true}}, SHIFT(148),
+  [815] = {.entry = {.count = 1, .reusable = true}}, SHIFT(102),
+  [817] = {.entry = {.count = 1, .reusable = true}}, SHIFT(121),
+  [819] = {.entry = {.count = 1, .reusable = true}}, SHIFT(8),
+  [821] = {.entry = {.count = 1, .reusable = true}},  ACCEPT_INPUT(),
+  [823] = {.entry = {.count = 1, .reusable = true}}, SHIFT(74),
+  [825] = {.entry = {.count = 1, .reusable = true}}, SHIFT(75),
+  [827] = {.entry = {.count = 1, .reusable = true}}, SHIFT(7),
+  [829] = {.entry = {.count = 1, .reusable = true}}, SHIFT(6),
+  [831] = {.entry = {.count = 1, .reusable = true}}, SHIFT(107),
+  [833] = {.entry = {.count = 1, .reusable = true}}, SHIFT(110),
+  [835] = {.entry = {.count = 1, .reusable = true}}, SHIFT(195),
+  [837] = {.entry = {.count = 1, .reusable = true}}, SHIFT(98),
+  [839] = {.entry = {.count = 1, .reusable = true}}, SHIFT(78),
+  [841] = {.entry = {.count = 1, .reusable = true}}, SHIFT(79),
+  [843] = {.entry = {.count = 1, .reusable = true}}, SHIFT(100),
+  [845] = {.entry = {.count = 1, .reusable = true}}, SHIFT(29),
+  [847] = {.entry = {.count = 1, .reusable = true}}, SHIFT(103),
+  [849] = {.entry = {.count = 1, .reusable = true}}, SHIFT(104),
+  [851] = {.entry = {.count = 1, .reusable = true}}, SHIFT(9),
+  [853] = {.entry = {.count = 1, .reusable = true}}, SHIFT(211),
+  [855] = {.entry = {.count = 1, .reusable = true}}, SHIFT(4),
+  [857] = {.entry = {.count = 1, .reusable = true}}, SHIFT(28),
+  [859] = {.entry = {.count = 1, .reusable = true}}, SHIFT(198),
+  [861] = {.entry = {.count = 1, .reusable = true}}, SHIFT(122),
 };
 
 #ifdef __cplusplus

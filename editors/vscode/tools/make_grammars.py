@@ -27,7 +27,8 @@ Rule = dict[str, Any]
 SCHEMA = "https://raw.githubusercontent.com/martinring/tmlanguage/master/tmlanguage.json"
 LINE = r"(?:^|\G)\s*"  # a line's start, or where `ifdef NAME:` hands the rest of the line on
 COLON = r"\s*(:)"
-SIMPLE_SECTIONS = ("instance", "defines", "hosts", "node_map", "topics")  # no name after them
+SIMPLE_SECTIONS = ("instance", "defines", "hosts", "node_map", "topics",
+                   "access")  # no name after them
 INCLUDES = ("include", "optional_include", "include_glob", "optional_include_glob",
             "pipe_include")
 CONSTANTS = ("true", "false", "on", "off", "never", "on-failure", "always", "udp", "tcp",

@@ -27,13 +27,17 @@ from .loggers.loggers import Loggers
 from .network import routes
 from .network.hosts import Network
 from .network.pull import PullTopics
+from .processes.daemon_keys import KeyFileError, read_key_file
 from .processes.daemons import DaemonPool
 from .processes.scheduler import Scheduler
+from .registry.access import Access
+from .registry.admission import Admission
 from .registry.core import Core, HostRings
 from .registry.model import Limits, Registry, RequestError
 from .registry.runtime import purge_service_sockets, service_sockets
 from .registry.segments import AdoptedRing, Segments, ring_segment_size
 from .registry.server import Server, listen_socket
+from .registry.service_security import ServiceSecurity
 from .registry.services import Services
 from .runner import ManagerAddresses, Reload, Runner
 
@@ -116,7 +120,7 @@ def _webui(args: argparse.Namespace, control: Control) -> WebUI | None:
         return None
     from .frontends.webui import WebUI
 
-    return WebUI(control, args.webui_users)
+    return WebUI(control, args.webui_users, tls=getattr(args, "webui_tls", None))
 
 
 async def _open_webui(args: argparse.Namespace, webui: WebUI, port: int) -> bool:
@@ -135,15 +139,31 @@ async def _open_webui(args: argparse.Namespace, webui: WebUI, port: int) -> bool
             return False
         await webui.listen(sock)
         host, ui_port = plan.host, sock.getsockname()[1]
-    print(f"ln_manager: web UI on http://{format_address((_connect_host(host), ui_port))}/",
-          flush=True)
+    print(f"ln_manager: web UI on {plan.scheme}://"
+          f"{format_address((_connect_host(host), ui_port))}/", flush=True)
     return True
+
+
+def _admission(instance: str, config: model.Config | None) -> Admission | None:
+    """Who may be a client, from the configuration's instance section (docs/security.md);
+    None without a configuration (everyone).  KeyFileError or ValueError if its client key
+    file or users and groups are unusable."""
+    if config is None:
+        return None
+    inst = config.instance
+    key = read_key_file(inst.client_key_file) if inst.client_key_file else None
+    return Admission(instance, key, inst.client_uids, inst.client_gids)
 
 
 async def serve(args: argparse.Namespace, directory: Path,
                 config: model.Config | None = None) -> int:
     """Run the manager of args.instance in `directory` (locked by the caller), with the
     processes of `config` if given; its exit status."""
+    try:
+        admission = _admission(args.instance, config)
+    except (KeyFileError, ValueError) as exc:
+        print(f"ln_manager: error: {exc}", file=sys.stderr)
+        return 1
     segments = Segments(args.instance)
     leftovers = _leftovers(args, segments, directory)
     if leftovers is None:
@@ -174,8 +194,13 @@ async def serve(args: argparse.Namespace, directory: Path,
         def hosts(core: Core) -> HostRings:
             return Network(config, core, pool, args.instance)
     limits = Limits(topics=args.topic_limit, ring_memory=args.ring_memory_limit)
+    level = getattr(args, "service_security", None) or (
+        config.instance.security if config is not None else None)
     core = Core(args.instance, Registry(ring_segment_size, limits), segments,
-                Services(args.service_limit), hosts=hosts)
+                Services(args.service_limit), hosts=hosts,
+                service_security=ServiceSecurity.for_instance(level))
+    if config is not None:
+        core.access = Access(config.access_rules)
     if adopted or held_sockets:
         core.adopt(adopted, directory, held_sockets)
         log.info("adopting %d topic%s and %d service socket%s for %g s", len(adopted),
@@ -195,7 +220,7 @@ async def serve(args: argparse.Namespace, directory: Path,
     webui = _webui(args, control)
     server = Server(core, control=control.handle_json,
                     webui=webui if webui is not None and args.webui_plan.port is None
-                    else None)
+                    else None, admission=admission)
     loop = asyncio.get_running_loop()
     for signum in (signal.SIGTERM, signal.SIGINT):
         loop.add_signal_handler(signum, shutdown, True)

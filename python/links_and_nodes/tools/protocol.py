@@ -36,6 +36,11 @@ RECLAIM_SUBSCRIBER: int = _CONSTS["RECLAIM_SUBSCRIBER"]
 PUBLISH_WAIT_FOR_SUBSCRIBERS: int = _CONSTS["PUBLISH_WAIT_FOR_SUBSCRIBERS"]
 SUBSCRIBE_UDP: int = _CONSTS["SUBSCRIBE_UDP"]
 SUBSCRIBE_TCP: int = _CONSTS["SUBSCRIBE_TCP"]
+# SERVICE_KEY_INFO `security` (docs/security.md, "Remote service calls").
+SECURITY_NONE: int = _CONSTS["SECURITY_NONE"]
+SECURITY_AUTHENTICATE: int = _CONSTS["SECURITY_AUTHENTICATE"]
+SECURITY_ENCRYPT: int = _CONSTS["SECURITY_ENCRYPT"]
+SERVICE_KEY_BYTES: int = _CONSTS["SERVICE_KEY_BYTES"]
 
 
 class ProtocolError(Exception):
@@ -148,6 +153,7 @@ if TYPE_CHECKING:
     MESSAGES: dict[int, type[Message]]
     ServiceEntry: type[Record]
     ServiceList: type[Message]
+    ServiceKeyInfo: type[Message]
 
 
 def __getattr__(name: str) -> Any:

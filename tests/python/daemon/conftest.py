@@ -13,12 +13,13 @@ from daemonproc import Daemon, start_daemon, stop_daemon
 
 @pytest.fixture
 def start(tmp_path: Path) -> Iterator[Callable[..., Daemon]]:
-    """start(*extra_args, env=None) -> Daemon; every daemon started is stopped and
-    checked."""
+    """start(*extra_args, env=None, key_file=None) -> Daemon; every daemon started is
+    stopped and checked."""
     started: list[Daemon] = []
 
-    def run(*args: str, env: dict[str, str] | None = None) -> Daemon:
-        daemon = start_daemon(tmp_path, *args, env=env)
+    def run(*args: str, env: dict[str, str] | None = None,
+            key_file: Path | None = None) -> Daemon:
+        daemon = start_daemon(tmp_path, *args, env=env, key_file=key_file)
         started.append(daemon)
         return daemon
 

@@ -105,14 +105,18 @@ class Daemon:
 
 
 def start_daemon(tmp: Path, *args: str, user: int | None = None, group: int | None = None,
-                 env: dict[str, str] | None = None) -> Daemon:
-    """ln_daemon --port 0 --foreground with a fresh key file in `tmp`; returns once it
-    listens (its ready line says on which ports).  With `user`, the daemon runs as that
-    user (and `group`), who then owns the key file.  `env` is added to the daemon's
-    environment."""
-    key_file = tmp / f"daemon-{uuid.uuid4().hex[:6]}.key"
-    key = dk.create_key_file(key_file)
-    log = tmp / f"{key_file.stem}.log"
+                 env: dict[str, str] | None = None, key_file: Path | None = None) -> Daemon:
+    """ln_daemon --port 0 --foreground with a fresh key file in `tmp` (or `key_file`, to
+    share one key between daemons as an installation does); returns once it listens (its
+    ready line says on which ports).  With `user`, the daemon runs as that user (and
+    `group`), who then owns the key file.  `env` is added to the daemon's environment."""
+    name = f"daemon-{uuid.uuid4().hex[:6]}"
+    if key_file is None:
+        key_file = tmp / f"{name}.key"
+        key = dk.create_key_file(key_file)
+    else:
+        key = dk.read_key_file(key_file)
+    log = tmp / f"{name}.log"
     as_user: dict[str, object] = {}
     if user is not None:
         os.chown(key_file, user, group if group is not None else -1)

@@ -33,8 +33,10 @@ def new_token() -> int:
 
 @pytest.fixture
 def pair(start: Callable[..., Daemon]) -> Iterator[tuple[Daemon, Daemon]]:
-    """Daemons A (sender) and B (receiver); connections to both use A's instance."""
-    a, b = start(), start()
+    """Daemons A (sender) and B (receiver) with one key, as the daemons of an installation
+    have (forwarded data is authenticated with it); connections to both use A's instance."""
+    a = start()
+    b = start(key_file=a.key_file)
     yield a, b
     purge(a.instance)
 
@@ -235,3 +237,54 @@ def test_stream_requests_are_checked(daemon: Daemon) -> None:
     finally:
         purge(daemon.instance)
         purge(other)
+
+
+@pytest.mark.parametrize("transport", ["udp", "tcp"])
+def test_a_sender_with_another_key_is_rejected(start: Callable[..., Daemon],
+                                               transport: str) -> None:
+    """Daemons with different key files: the receiver rejects what the sender sends
+    (counted as `rejected`, nothing reaches the ring); with `security: none` at both ends the
+    same daemons forward."""
+    a, b = start(), start()  # each its own key
+    instance = a.instance
+    src, dst, plain = (prefix(instance) + n for n in ("1.1", "2.1", "3.1"))
+    token, open_token = new_token(), new_token()
+
+    async def setup() -> None:
+        async with await a.connect(instance) as sender, \
+                await b.connect(instance) as receiver:
+            await sender.ring_create(src, TOPIC, MD, LAYOUT, SIZE, SLOTS)
+            for name in (dst, plain):
+                await receiver.ring_create(name, TOPIC, MD, LAYOUT, SIZE, SLOTS)
+            port = (await receiver.net_info()).data_port
+            await receiver.stream_recv(token, dst, LAYOUT, SIZE, transport, "encrypt")
+            await sender.stream_send(token, src, LAYOUT, SIZE, transport, "127.0.0.1", port,
+                                     "encrypt")
+            await receiver.stream_recv(open_token, plain, LAYOUT, SIZE, transport, "none")
+            await sender.stream_send(open_token, src, LAYOUT, SIZE, transport, "127.0.0.1",
+                                     port, "none")
+
+    async def rejected() -> dw.StreamStat | None:
+        async with await b.connect(instance) as receiver:
+            streams, _ = await receiver.stream_stats()
+            mine = {s.token: s for s in streams}
+            return mine[token] if mine[token].rejected >= 2 else None
+
+    asyncio.run(setup())
+    try:
+        with Tap(src, LAYOUT, SIZE) as writer, Tap(plain, LAYOUT, SIZE) as reader:
+            got = deliver_udp(writer, reader, 1, 3)  # the unprotected stream delivers
+            for seq in range(got[-1] + 1, got[-1] + 20):
+                writer.inject(sample(seq), seq)
+            stat = asyncio.run(until(rejected, "the receiver to reject the other key"))
+        assert isinstance(stat, dw.StreamStat)
+        assert stat.samples == 0 and stat.invalid == 0
+        assert "rejected" in stat.last_error or "not authentic" in stat.last_error, stat
+
+        async def no_samples() -> int:
+            async with await b.connect(instance) as receiver:
+                return await receiver.ring_write_seq(dst)
+
+        assert asyncio.run(no_samples()) == 0
+    finally:
+        purge(instance)

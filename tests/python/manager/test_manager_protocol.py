@@ -317,10 +317,10 @@ def test_hello_version_reads_only_magic_and_version() -> None:
 
 def test_direction_is_recorded() -> None:
     from_client = {cls.TYPE.name for cls in p.MESSAGES.values() if cls.FROM_CLIENT}
-    assert from_client == {"HELLO", "PUBLISH", "SUBSCRIBE", "RECLAIM_PORT", "CLOSE_PORT",
+    assert from_client == {"HELLO", "AUTH", "PUBLISH", "SUBSCRIBE", "RECLAIM_PORT", "CLOSE_PORT",
                            "TOPIC_INFO",
                            "REGISTER_SERVICE", "UNREGISTER_SERVICE", "FIND_SERVICE",
-                           "SERVICE_CALLED", "LIST_SERVICES", "CONTROL", "LOG"}
+                           "SERVICE_CALLED", "LIST_SERVICES", "SERVICE_KEY", "CONTROL", "LOG"}
 
 
 def test_control_text_field_round_trip() -> None:

@@ -69,6 +69,7 @@ class FakeDaemon:
         self.shm: dict[str, Seg] = {}
         self.held: dict[str, Seg] = {}
         self.streams: dict[int, FakeStream] = {}
+        self.security: dict[int, str] = {}  # token -> the level the manager asked for
         self.reachable = True
         self.links: list[FakeLink] = []
         self._gates: dict[str, asyncio.Event] = {}
@@ -180,14 +181,17 @@ class FakeDaemon:
         return seg
 
     async def stream_send(self, token: int, ring: str, layout_hash: int, message_size: int,
-                          transport: str, host: str, port: int) -> None:
+                          transport: str, host: str, port: int,
+                          security: str = dw.DEFAULT_SECURITY) -> None:
         self.streams[token] = FakeStream(token, True, ring, self._tap(ring), transport,
                                          f"{host}:{port}")
+        self.security[token] = security
         await self._reply("stream_send")
 
     async def stream_recv(self, token: int, ring: str, layout_hash: int, message_size: int,
-                          transport: str) -> None:
+                          transport: str, security: str = dw.DEFAULT_SECURITY) -> None:
         self.streams[token] = FakeStream(token, False, ring, self._tap(ring), transport)
+        self.security[token] = security
         await self._reply("stream_recv")
 
     async def stream_remove(self, token: int) -> None:
@@ -197,7 +201,7 @@ class FakeDaemon:
 
     async def stream_stats(self) -> tuple[list[dw.StreamStat], dw.StreamTotals]:
         stats = [dw.StreamStat(s.token, s.sending, s.transport, s.ring, s.peer, 0, 0, 0, 0, 0,
-                               True, "") for s in self.streams.values()]
+                               0, True, "") for s in self.streams.values()]
         await self._reply("stream_stats")
         return stats, dw.StreamTotals(0, 0)
 

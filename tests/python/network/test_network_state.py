@@ -295,3 +295,22 @@ async def test_a_stream_refused_by_a_daemon_is_tried_again(
         await asyncio.wait_for(installed(), 60)  # an upper bound, not a measurement
     finally:
         await w.net.close()
+
+
+async def test_both_ends_of_a_stream_get_the_instance_security_level() -> None:
+    """The instance's `security` goes to the sending and the receiving daemon of every
+    stream (authenticate when unset); a changed level installs the streams again."""
+    w = World()
+    await w.up()
+    await w.publish(w.client("a"), "t")
+    await w.subscribe(w.client("b"), "t")
+    await w.net.reconcile()
+    (send,), (recv,) = _send(w, "a"), _recv(w, "b")
+    assert send.token == recv.token
+    assert w.daemons["a"].security[send.token] == "authenticate"
+    assert w.daemons["b"].security[recv.token] == "authenticate"
+    w.config.instance.security = "encrypt"  # what a reload with `security: encrypt` leaves
+    await w.net.reconcile()
+    (send,), (recv,) = _send(w, "a"), _recv(w, "b")
+    assert w.daemons["a"].security[send.token] == "encrypt"
+    assert w.daemons["b"].security[recv.token] == "encrypt"

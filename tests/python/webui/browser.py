@@ -17,8 +17,9 @@ ARTIFACTS = REPO / "build" / "test-artifacts" / "webui"
 LIMIT = 60.0  # seconds for anything to happen, never a measurement
 
 
-def chromium(width: int = 1400, height: int = 900) -> Any:
-    """A headless Chromium WebDriver (quit() it); a missing tool fails under CI."""
+def chromium(width: int = 1400, height: int = 900, args: tuple[str, ...] = ()) -> Any:
+    """A headless Chromium WebDriver (quit() it), with more command line `args`; a missing
+    tool fails under CI."""
     try:
         from selenium import webdriver
         from selenium.webdriver.chrome.service import Service
@@ -30,7 +31,7 @@ def chromium(width: int = 1400, height: int = 900) -> Any:
     options.binary_location = str(CHROMIUM)
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                 f"--window-size={width},{height}", "--disable-extensions",
-                "--no-first-run", "--password-store=basic"):
+                "--no-first-run", "--password-store=basic", *args):
         options.add_argument(arg)
     return webdriver.Chrome(service=Service(str(DRIVER)), options=options)
 

@@ -58,7 +58,8 @@ def test_plan(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     p = plan(_args("--webui-port", "0"), None)
     assert p is not None and (p.port, p.host) == (0, "127.0.0.1")
     config = load(_lnc(tmp_path, "webui_port: 8080\nwebui_auth_file: users"))
-    p = plan(_args("--host", "0.0.0.0"), config)
+    # off loopback without TLS only with --webui-insecure (test_tls.py)
+    p = plan(_args("--host", "0.0.0.0", "--webui-insecure"), config)
     assert p is not None and (p.port, p.host, p.auth_file) == (8080, "0.0.0.0",
                                                                 str(tmp_path / "users"))
     monkeypatch.setenv("LNM_WEBUI_AUTH_FILE", "/elsewhere/users")  # the environment wins

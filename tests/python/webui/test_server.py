@@ -11,6 +11,7 @@ import base64
 import json
 import logging
 import re
+import ssl
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from typing import Any
@@ -41,8 +42,10 @@ class Answer:
 
 async def request(port: int, method: str, path: str, headers: dict[str, str] | None = None,
                   body: bytes = b"", host: str | None = None,
-                  length: int | None = None) -> Answer:
-    reader, writer = await asyncio.open_connection("127.0.0.1", port)
+                  length: int | None = None, tls: ssl.SSLContext | None = None) -> Answer:
+    """One request and its answer; over TLS with the client context `tls`."""
+    reader, writer = await asyncio.open_connection(
+        "127.0.0.1", port, ssl=tls, server_hostname="127.0.0.1" if tls else None)
     lines = [f"{method} {path} HTTP/1.1", f"Host: {host or f'127.0.0.1:{port}'}",
              f"Content-Length: {len(body) if length is None else length}",
              "Connection: close"]

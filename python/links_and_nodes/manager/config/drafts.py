@@ -8,6 +8,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from .model import (
+    AccessRule,
     Group,
     Host,
     Location,
@@ -156,4 +157,5 @@ class Drafts:
     groups: dict[str, GroupDraft] = field(default_factory=dict)
     message_definition_dirs: list[str] = field(default_factory=list)
     loggers: dict[str, Logger] = field(default_factory=dict)
+    access_rules: list[AccessRule] = field(default_factory=list)  # `access` lines, in order
     order: list[str] = field(default_factory=list)  # process and state names, as defined

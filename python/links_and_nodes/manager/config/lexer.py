@@ -15,7 +15,7 @@ from .model import Location
 from .text import closing_quote
 
 SECTION_WORDS = ("instance", "defines", "hosts", "node_map", "network", "topics", "process",
-                 "state", "group", "template", "process_template", "logger")
+                 "state", "group", "template", "process_template", "logger", "access")
 _HEADER_RE = re.compile(r"\s*(" + "|".join(SECTION_WORDS) + r")(\s|$)(?!\s*:)")
 _OPEN_RE = re.compile(r":\s*\[\Z")
 _CLOSE_RE = re.compile(r"\s*\]\s*(#.*)?\Z")

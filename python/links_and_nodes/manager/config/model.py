@@ -84,11 +84,33 @@ class Instance:
     # docs/security.md: "none" | "authenticate" | "encrypt"; None: the default
     # (authenticate, since every daemon has a key)
     security: str | None = None
-    client_key_file: str | None = None  # absolute path; LN_CLIENT_KEY_FILE overrides it
+    # absolute path; clients hold a copy ($LN_CLIENT_KEY_FILE or ~/.config/...client.key)
+    client_key_file: str | None = None
     client_uids: list[str] | None = None  # users (names or numbers) admitted locally
     client_gids: list[str] | None = None  # groups (names or numbers) admitted locally
     webui_tls_cert: str | None = None  # absolute path of a PEM certificate (chain)
     webui_tls_key: str | None = None  # absolute path of its PEM private key
+
+
+# What an `access` line governs (docs/security.md): a topic's publishers and subscribers, a
+# service's callers and providers, a parameter block's readers and setters.
+ACCESS_VERBS = ("publish", "subscribe", "call", "provide", "set")
+
+
+@dataclass(frozen=True)
+class AccessRule:
+    """One `access` line: allow or deny `verbs` on the topics, services or parameter blocks
+    `pattern` matches (fnmatch) to the clients one of `clients` matches."""
+
+    allow: bool
+    verbs: frozenset[str]
+    pattern: str
+    clients: tuple[str, ...]
+    location: Location
+
+    def matches(self, verb: str, name: str, client: str) -> bool:
+        return (verb in self.verbs and fnmatch.fnmatchcase(name, self.pattern)
+                and any(fnmatch.fnmatchcase(client, c) for c in self.clients))
 
 
 @dataclass
@@ -302,6 +324,7 @@ class Config:
     groups: dict[str, Group] = field(default_factory=dict)
     message_definition_dirs: list[str] = field(default_factory=list)
     loggers: dict[str, Logger] = field(default_factory=dict)  # in file order
+    access_rules: list[AccessRule] = field(default_factory=list)  # in file order
     # Problems that did not stop the load (config.errors.Problem; `--strict` makes them
     # errors)
     warnings: list = field(default_factory=list)

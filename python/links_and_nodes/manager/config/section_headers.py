@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import re
 
+from .access_rules import AccessSection
 from .drafts import Ctx, Drafts, GroupDraft, InstanceDraft, NetworkDraft, ProcessDraft, StateDraft
 from .errors import LineError, describe, shift
 from .expand import Evaluator
@@ -31,7 +32,8 @@ from .templates import Template, parse_header
 from .text import Piece
 
 BAD_NAME_RE = re.compile(r"[,*?\[\]!\"%#\x00-\x1f\x7f]|^/|/$|//")
-_SIMPLE_SECTIONS = frozenset({"instance", "defines", "hosts", "node_map", "topics"})  # no name
+_SIMPLE_SECTIONS = frozenset({"instance", "defines", "hosts", "node_map", "topics",
+                              "access"})  # no name
 
 
 class SectionHeaders:
@@ -131,4 +133,6 @@ class SectionHeaders:
             return DefinesSection(self.evaluator)
         if word == "topics":
             return TopicsSection()
+        if word == "access":
+            return AccessSection()
         return HostsSection() if word == "hosts" else NodeMapSection()

@@ -78,6 +78,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help=f"most bytes of one topic's ring (default {RING_MEMORY_LIMIT})")
     parser.add_argument("--service-limit", type=int, default=SERVICE_LIMIT, metavar="N",
                         help=f"most services at a time (default {SERVICE_LIMIT})")
+    parser.add_argument("--service-security", choices=("none", "authenticate", "encrypt"),
+                        default=None,
+                        help="how service calls between hosts are protected (default: the "
+                             "instance's `security:`, else authenticate; docs/security.md)")
     parser.add_argument("--adopt-window", type=float, default=ADOPT_WINDOW, metavar="SECONDS",
                         help="after a restart, how long the rings and service sockets a "
                              "killed predecessor left are kept for the clients that reconnect "
@@ -109,7 +113,8 @@ def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
 
 
 def _webui_plan(args: argparse.Namespace, config: Any) -> None:
-    """args.webui_plan and args.webui_users from the options; exit 2 if they are wrong."""
+    """args.webui_plan, args.webui_users and args.webui_tls (its SSLContext) from the
+    options; exit 2 if they are wrong, 1 if the TLS certificate or key cannot be used."""
     from .webui import WebUIError, plan
     from .webui.auth import AuthFileError, load_auth_file
 
@@ -121,6 +126,17 @@ def _webui_plan(args: argparse.Namespace, config: Any) -> None:
     except (WebUIError, AuthFileError) as exc:
         print(f"ln_manager: error: {exc}", file=sys.stderr)
         sys.exit(2)
+    args.webui_tls = None
+    if args.webui_plan is not None and args.webui_plan.tls_cert is not None:
+        from .webui.tls import TLSError, server_context
+
+        try:
+            args.webui_tls = server_context(args.webui_plan.tls_cert, args.webui_plan.tls_key)
+        except TLSError as exc:
+            print(f"ln_manager: error: {exc}", file=sys.stderr)
+            sys.exit(1)
+    if args.webui_plan is not None and args.webui_plan.warning:
+        print(f"ln_manager: warning: {args.webui_plan.warning}", file=sys.stderr)
 
 
 def _load_config(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:

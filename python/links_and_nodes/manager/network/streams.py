@@ -73,7 +73,8 @@ class Stream:
                 "bytes_per_s": round(self.recv.bytes_per_s if r else self.send.bytes_per_s),
                 "send_drops": s.drops if s else 0, "recv_drops": r.drops if r else 0,
                 "drops": (s.drops if s else 0) + (r.drops if r else 0),
-                "stale": r.stale if r else 0, "invalid": r.invalid if r else 0}
+                "stale": r.stale if r else 0, "invalid": r.invalid if r else 0,
+                "rejected": r.rejected if r else 0}
 
 
 class Forwarding:
@@ -89,6 +90,11 @@ class Forwarding:
         self.totals: dict[str, tuple[int, int]] = {}  # host -> unknown, malformed
         self.dirty = asyncio.Event()
         self.closing = False
+
+    def security(self) -> str:
+        """The instance's protection of forwarded data (docs/security.md), the same for both
+        ends of every stream; a reloaded configuration that changes it installs them again."""
+        return self.plan.config.instance.security or dw.DEFAULT_SECURITY
 
     # ---- what the host monitor tells ------------------------------------------------------
     def tokens(self) -> set[int]:
@@ -217,20 +223,21 @@ class Forwarding:
                 except RequestError as exc:
                     stream.error = exc.text
                     return
+        security = self.security()
         try:
-            want_dst = (dst_rings.current(topic.id), stream.transport)
+            want_dst = (dst_rings.current(topic.id), stream.transport, security)
             if stream.installed_dst != want_dst:
                 await dst_client.stream_recv(stream.token, want_dst[0], topic.layout_hash,
-                                             topic.message_size, stream.transport)
+                                             topic.message_size, stream.transport, security)
                 stream.installed_dst = want_dst
             if not src_rings.has(topic.id):
                 return  # gone while the daemon answered; that change runs us again
             want_src = (src_rings.current(topic.id), stream.transport, stream.address,
-                        dst.data_port)
+                        dst.data_port, security)
             if stream.installed_src != want_src:
                 await src_client.stream_send(stream.token, want_src[0], topic.layout_hash,
                                              topic.message_size, stream.transport,
-                                             stream.address, dst.data_port)
+                                             stream.address, dst.data_port, security)
                 stream.installed_src = want_src
             stream.error = ""
         except (dw.DaemonError, OSError) as exc:

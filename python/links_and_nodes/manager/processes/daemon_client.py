@@ -16,6 +16,7 @@ from ...wire.codec import WireError
 from ..network import daemon_pull
 from .daemon_resources import ResourceSample, decode_resources
 from .daemon_wire import (
+    DEFAULT_SECURITY,
     EXIT_CODE,
     EXIT_SIGNAL,
     KEY_BYTES,
@@ -51,6 +52,7 @@ from .daemon_wire import (
     frame_tag,
     process_info,
     proofs,
+    security_code,
     transport_code,
 )
 
@@ -347,19 +349,23 @@ class DaemonClient:
         return await self._value(Msg.RING_SEQ, {"name": name})
 
     async def stream_send(self, token: int, ring: str, layout_hash: int, message_size: int,
-                          transport: str, host: str, port: int) -> None:
+                          transport: str, host: str, port: int,
+                          security: str = DEFAULT_SECURITY) -> None:
         """Send every sample of local `ring` to the daemon at host:port (its data port),
         which writes them into the ring it has for `token`.  Replaces a stream of the same
-        token.  DaemonError STREAM_FAILED with the forwarder's reason."""
+        token.  `security` (none, authenticate, encrypt) must be the receiver's as well.
+        DaemonError STREAM_FAILED with the forwarder's reason."""
         await self._ok(Msg.STREAM_SEND, token=token, ring=ring, layout_hash=layout_hash,
                        message_size=message_size, transport=transport_code(transport),
-                       host=host, port=port)
+                       host=host, port=port, security=security_code(security))
 
     async def stream_recv(self, token: int, ring: str, layout_hash: int, message_size: int,
-                          transport: str) -> None:
-        """Write the samples arriving for `token` into local `ring`."""
+                          transport: str, security: str = DEFAULT_SECURITY) -> None:
+        """Write the samples arriving for `token` into local `ring`; datagrams and frames
+        not protected as `security` says are rejected."""
         await self._ok(Msg.STREAM_RECV, token=token, ring=ring, layout_hash=layout_hash,
-                       message_size=message_size, transport=transport_code(transport))
+                       message_size=message_size, transport=transport_code(transport),
+                       security=security_code(security))
 
     async def stream_remove(self, token: int) -> None:
         """Stop a stream of this instance; DaemonError UNKNOWN_STREAM if there is none."""

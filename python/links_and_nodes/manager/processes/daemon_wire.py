@@ -37,6 +37,11 @@ EXIT_CODE = _WIRE.enums["ExitKind"].CODE
 EXIT_SIGNAL = _WIRE.enums["ExitKind"].SIGNAL
 TRANSPORTS = {name: int(_WIRE.enums["Transport"][name.upper()])
               for name in (transports.UDP, transports.TCP)}
+# A stream's protection on the wire between daemons (docs/security.md); the instance's
+# `security` key names one, authenticate by default.
+SECURITY_LEVELS = {name: int(_WIRE.enums["Security"][name.upper()])
+                   for name in ("none", "authenticate", "encrypt")}
+DEFAULT_SECURITY = "authenticate"
 
 
 # ---- public data ------------------------------------------------------------------------
@@ -144,7 +149,9 @@ class StreamStat:
     """One forwarding stream of this instance on a daemon.  sending: this host sends (else
     it receives); peer: where it sends to, or the last source seen; drops: samples not sent
     (sender) or incomplete samples given up (receiver); stale: received samples not newer
-    than the ring's newest; invalid: malformed datagrams or frames of this stream."""
+    than the ring's newest; invalid: malformed datagrams or frames of this stream; rejected:
+    datagrams, frames or connections that failed authentication (forged, replayed, too old,
+    another key or security level)."""
 
     token: int
     sending: bool
@@ -156,6 +163,7 @@ class StreamStat:
     drops: int
     stale: int
     invalid: int
+    rejected: int
     connected: bool
     last_error: str
 
@@ -325,6 +333,14 @@ def transport_code(transport: str) -> int:
         return TRANSPORTS[transport]
     except KeyError:
         raise DaemonError(f"unknown transport {transport!r} (known: udp, tcp)") from None
+
+
+def security_code(level: str) -> int:
+    try:
+        return SECURITY_LEVELS[level]
+    except KeyError:
+        raise DaemonError(f"unknown security level {level!r} "
+                          "(known: none, authenticate, encrypt)") from None
 
 
 def decode_stream_list(payload: bytes) -> tuple[list[StreamStat], StreamTotals]:

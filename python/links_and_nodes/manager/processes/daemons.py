@@ -77,7 +77,16 @@ class DaemonPool:
                 log_file = (self.log_dir / f"ln_daemon-{port}.log") if self.log_dir else None
                 await dl.ensure_local_daemon(port, self.key_file, log_file)
             try:
-                client = await dc.DaemonClient.connect(host, port, key, self.instance)
+                try:
+                    client = await dc.DaemonClient.connect(host, port, key, self.instance)
+                except dw.DaemonAuthError:
+                    # The key files may have been replaced (docs/security.md, "Rotating the
+                    # daemon key"): read ours again once before giving up.
+                    self._key = None
+                    fresh = self._read_key(create=False)
+                    if fresh == key:
+                        raise
+                    client = await dc.DaemonClient.connect(host, port, fresh, self.instance)
             except OSError as exc:
                 raise dw.DaemonError(f"cannot reach ln_daemon of node {node!r} at "
                                      f"{host}:{port}: {exc.strerror or exc}") from None

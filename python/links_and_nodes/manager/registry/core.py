@@ -17,11 +17,13 @@ from typing import Any, Protocol
 
 from ... import _libln
 from ...tools import protocol as p
+from .access import Access
 from .logs import LogBatchError, LogStore
 from .model import Client, Port, PortKind, PortPlan, PortRequest, Registry, RequestError, Topic
 from .rings import LocalRings, Rings
 from .runtime import purge_service_sockets, remove_service_socket
 from .segments import AdoptedRing, Segments
+from .service_security import ServiceSecurity
 from .services import Service, ServiceOffer, Services
 
 log = logging.getLogger("ln_manager")
@@ -57,6 +59,10 @@ class Session:
 
     address: str
     client: Client | None = None
+    # How the client was admitted (admission.py), for the log: "user 1000 (ada)", "key" ...
+    admitted: str = ""
+    # Derived by admission by key (docs/security.md); None after admission by credentials.
+    session_key: bytes | None = None
 
     @property
     def label(self) -> str:
@@ -101,7 +107,8 @@ class Core:
     def __init__(self, instance: str, registry: Registry, segments: Segments,
                  services: Services | None = None,
                  hosts: Callable[[Core], HostRings] | None = None,
-                 logs: LogStore | None = None) -> None:
+                 logs: LogStore | None = None,
+                 service_security: ServiceSecurity | None = None) -> None:
         """`hosts` builds the view of the other hosts (network.Network) for a manager that
         has some, given this core (their rings and the local ones are kept consistent
         under the core's lock); None: every client is on the manager's own host."""
@@ -120,6 +127,10 @@ class Core:
         self._held_sockets: tuple[Path, list[str]] | None = None
         # The log lines of every client (LOG) and of process output (registry/logs.py).
         self.logs = logs if logs is not None else LogStore()
+        # The `access` rules of the configuration (access.py); none: everything allowed.
+        self.access = Access()
+        # The key and level of service calls between hosts (SERVICE_KEY).
+        self.service_security = service_security or ServiceSecurity()
 
     def _changed(self) -> None:
         for listener in list(self.listeners):
@@ -186,6 +197,7 @@ class Core:
         assert session.client is not None
         request_id = msg.request_id  # type: ignore[attr-defined]
         try:
+            self.access.check(session.client.name, msg)
             if isinstance(msg, p.Publish | p.Subscribe):
                 return await self._open_port(session, msg)
             if isinstance(msg, p.ReclaimPort):
@@ -203,6 +215,9 @@ class Core:
             if isinstance(msg, p.RegisterService | p.UnregisterService | p.FindService
                           | p.ServiceCalled):
                 return self._service_request(session, msg)
+            if isinstance(msg, p.ServiceKey):
+                return self.service_security.info(request_id,
+                                                  getattr(session, "session_key", None))
             if isinstance(msg, p.ListServices):
                 return p.service_list(request_id, map(_service_entry,
                                                       self.service_registry.sorted()))
@@ -210,7 +225,8 @@ class Core:
             # an unknown topic or service asked for is an answer, not an event worth a line
             level = (logging.DEBUG if isinstance(msg, p.TopicInfo | p.FindService)
                      and exc.code == "ENOTFOUND" else
-                     logging.WARNING if isinstance(msg, p.ReclaimPort) else logging.INFO)
+                     logging.WARNING if isinstance(msg, p.ReclaimPort) or exc.code == "EPERM"
+                     else logging.INFO)
             log.log(level, "%s: %s refused: %s: %s", session.label, msg.TYPE.name, exc.code,
                     exc.text)
             return p.Error(request_id, error_code(exc.code), exc.text)

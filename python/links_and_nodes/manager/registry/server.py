@@ -13,14 +13,16 @@ from typing import Any, Protocol
 
 from ...addresses import format_address
 from ...tools import protocol as p
-from .core import Core, HandshakeRefused, Session
+from .admission import Admission, Refused
+from .core import Core, HandshakeRefused, Session, error_code
 
 log = logging.getLogger("ln_manager")
 
 _REQUESTS = (p.MsgType.PUBLISH, p.MsgType.SUBSCRIBE, p.MsgType.RECLAIM_PORT,
              p.MsgType.CLOSE_PORT,
              p.MsgType.TOPIC_INFO, p.MsgType.REGISTER_SERVICE, p.MsgType.UNREGISTER_SERVICE,
-             p.MsgType.FIND_SERVICE, p.MsgType.SERVICE_CALLED, p.MsgType.LIST_SERVICES)
+             p.MsgType.FIND_SERVICE, p.MsgType.SERVICE_CALLED, p.MsgType.LIST_SERVICES,
+             p.MsgType.SERVICE_KEY)
 
 
 # A client's host that dies or is cut off sends nothing, not even a reset: probe an idle
@@ -89,8 +91,10 @@ class HttpSide(Protocol):
 
 class Server:
     def __init__(self, core: Core, control: Callable[[str], Awaitable[str]] | None = None,
-                 webui: HttpSide | None = None) -> None:
+                 webui: HttpSide | None = None, admission: Admission | None = None) -> None:
         self.core = core
+        # Who may be a client (docs/security.md); None: everyone, as without a configuration.
+        self.admission = admission
         # Answers CONTROL requests (control.Control.handle_json); None: refused.
         self.control = control
         # The web UI sharing this port, given every connection that starts with an HTTP
@@ -165,16 +169,21 @@ class Server:
             self.core.check_version(self._hello_version(body))
             hello = self._decode(type_, body)
             assert isinstance(hello, p.Hello)
+            proof = await self._admit(session, hello, reader, writer)
             welcome = self.core.hello(session, hello)
         except HandshakeRefused as exc:
             await self._send(writer, exc.reply)
             raise Closing(f"handshake refused: {exc.reply.text}") from None
+        if proof is not None:
+            await self._send(writer, p.AuthOk(proof.hex()))
         await self._send(writer, welcome)
         client = session.client
         assert client is not None
-        log.info("%s: %s (pid %d, library %s, host %s)", session.label,
+        admitted = session.admitted if session.admitted not in ("", "open") else ""
+        log.info("%s: %s (pid %d, library %s, host %s)%s", session.label,
                  "reconnected" if hello.flags & p.HELLO_RECONNECT else "connected", client.pid,
-                 client.libln_version, client.host_id or "?")
+                 client.libln_version, client.host_id or "?",
+                 f", admitted by {admitted}" if admitted else "")
         while True:
             frame = await self._read(reader)
             if frame is None:
@@ -192,6 +201,32 @@ class Server:
             if msg.TYPE not in _REQUESTS:
                 raise Closing(f"unexpected {msg.TYPE.name} frame from a client")
             await self._send(writer, await self.core.request(session, msg))
+
+    async def _admit(self, session: Session, hello: p.Hello, reader: asyncio.StreamReader,
+                     writer: asyncio.StreamWriter) -> bytes | None:
+        """Admission (admission.py): by the peer's credentials, else by the CHALLENGE/AUTH
+        exchange; the manager's proof to send before WELCOME after the latter.
+        HandshakeRefused (LN_EPERM) for a client that is not admitted."""
+        if self.admission is None:
+            return None
+        try:
+            verdict = self.admission.judge(writer.get_extra_info("socket"))
+            session.admitted = verdict.how
+            if verdict.admitted:
+                return None
+            nonce = self.admission.challenge()
+            await self._send(writer, p.Challenge(self.admission.instance, nonce.hex()))
+            frame = await self._read(reader)
+            if frame is None:
+                raise Closing("left during admission by key")
+            auth = self._decode(*frame)
+            if not isinstance(auth, p.Auth):
+                raise Closing(f"{auth.TYPE.name} frame instead of AUTH")
+            proof, session.session_key = self.admission.verify(hello.client_name, nonce,
+                                                               auth.nonce, auth.proof)
+            return proof
+        except Refused as exc:
+            raise HandshakeRefused(p.Error(0, error_code("EPERM"), str(exc))) from None
 
     async def _control(self, msg: p.Control) -> p.Message:
         if self.control is None:

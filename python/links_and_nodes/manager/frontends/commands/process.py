@@ -152,7 +152,8 @@ register(
         script_result=lambda result: result,
         script_doc='Forwarding between hosts: {"streams": [per topic and hop: topic, src, '
                    'dst, transport, active, connected, sent, received, msgs_per_s, '
-                   'bytes_per_s, drops, send_drops, recv_drops, stale, invalid, error], '
+                   'bytes_per_s, drops, send_drops, recv_drops, stale, invalid, rejected, '
+                   'error], '
                    '"pairs": [per host pair: src, dst, topics, msgs_per_s, bytes_per_s, '
                    'drops], "problems": [topic, src, dst, error], "pull": [per host]}.'),
     Command(

@@ -40,13 +40,14 @@ def format_network(result: dict[str, Any], args: dict[str, Any] | None = None) -
     from .pull_view import format_network as pull_tables
 
     rows = [["topic", "from", "to", "via", "msgs/s", "bytes/s", "sent", "received",
-             "drops", "stale", "error"]]
+             "drops", "stale", "rejected", "error"]]
     for s in result["streams"]:
         rows.append([s["topic"], s["src"], s["dst"], s["transport"],
                      f"{s['msgs_per_s']:.1f}", bytes_text(s["bytes_per_s"]), str(s["sent"]),
-                     str(s["received"]), str(s["drops"]), str(s["stale"]), s["error"]])
+                     str(s["received"]), str(s["drops"]), str(s["stale"]),
+                     str(s.get("rejected", 0)), s["error"]])
     for p in result["problems"]:
-        rows.append([p["topic"], p["src"], p["dst"], "-", "-", "-", "-", "-", "-", "-",
+        rows.append([p["topic"], p["src"], p["dst"], "-", "-", "-", "-", "-", "-", "-", "-",
                      p["error"]])
     lines = table(rows)
     if result["pairs"]:

@@ -1,7 +1,8 @@
 """Who may use the web UI (docs/webui.md, "Security"): the auth file of `user
 password-hash` lines (scrypt hashes, refused if group or other may read the file), the
 sessions a successful HTTP Basic login opens (random token in an HttpOnly SameSite=Strict
-cookie, an expiry, a CSRF token per session) and `ln_manager webui-passwd USER`."""
+cookie, Secure over TLS, an expiry, a CSRF token per session) and `ln_manager webui-passwd
+USER`."""
 
 from __future__ import annotations
 
@@ -117,11 +118,13 @@ class Session:
 
 class Sessions:
     """The open sessions; with `users` None (no auth file) anyone reaching the loopback
-    address gets one without a password."""
+    address gets one without a password.  `secure`: the cookie is sent over HTTPS only."""
 
-    def __init__(self, users: dict[str, str] | None, lifetime: float = SESSION_SECONDS) -> None:
+    def __init__(self, users: dict[str, str] | None, lifetime: float = SESSION_SECONDS,
+                 *, secure: bool = False) -> None:
         self.users = users
         self.lifetime = lifetime
+        self.secure = secure
         self._open: dict[str, Session] = {}
         if users is not None:
             _dummy()  # here, not at the first login: that one must cost what the others do
@@ -169,7 +172,12 @@ class Sessions:
 
     def cookie(self, session: Session) -> str:
         return (f"{COOKIE}={session.token}; Path=/; HttpOnly; SameSite=Strict; "
-                f"Max-Age={int(self.lifetime)}")
+                f"{'Secure; ' if self.secure else ''}Max-Age={int(self.lifetime)}")
+
+    def cleared_cookie(self) -> str:
+        """The Set-Cookie value that removes the session cookie (at logout)."""
+        return f"{COOKIE}=; Path=/; Max-Age=0; HttpOnly; SameSite=Strict" + \
+            ("; Secure" if self.secure else "")
 
 
 @functools.cache

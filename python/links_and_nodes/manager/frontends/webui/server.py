@@ -3,7 +3,8 @@
 the CSRF token, and runs the WebSocket API: JSON commands to the manager's command table
 (Control.handle) and the live subscriptions of streams.py.  It runs on its own port or on
 the manager's, where server.Server hands it every connection that starts with an HTTP
-request line."""
+request line.  With an SSLContext it serves HTTPS (its own port only): Secure cookies,
+HSTS, and https:// as the only Origin."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import asyncio
 import contextlib
 import json
 import logging
+import ssl
 from typing import TYPE_CHECKING, Any
 
 from ....addresses import host_of, is_loopback
@@ -20,6 +22,7 @@ from . import websocket as ws
 from .auth import COOKIE, Session, Sessions, basic_credentials, csrf_ok
 from .ops import register_ops
 from .streams import LogBuffer, Subscriptions, register_streams
+from .tls import HSTS
 
 if TYPE_CHECKING:
     from ..control import Control
@@ -30,9 +33,11 @@ IDLE_TIMEOUT = 60.0  # seconds a kept-alive HTTP connection may wait for its nex
 MAX_WS_CLIENTS = 32
 QUEUE_LIMIT = 2000  # events queued for one WebSocket client; droppable ones go beyond 200
 REQUEST_LINE_STARTS = (b"GET ", b"POST", b"HEAD")
-def same_origin(origin: str, host: str) -> bool:
-    """Whether a request's Origin is the page of this very Host (https: behind a TLS
-    proxy that passes the Host on)."""
+def same_origin(origin: str, host: str, tls: bool = False) -> bool:
+    """Whether a request's Origin is the page of this very Host (without TLS also https:,
+    behind a TLS proxy that passes the Host on; with TLS only https:)."""
+    if tls:
+        return bool(host) and origin == f"https://{host}"
     return bool(host) and origin in (f"http://{host}", f"https://{host}")
 
 
@@ -42,9 +47,11 @@ def _host_name(host_header: str) -> str:
 
 
 class WebUI:
-    def __init__(self, control: Control, users: dict[str, str] | None) -> None:
+    def __init__(self, control: Control, users: dict[str, str] | None,
+                 tls: ssl.SSLContext | None = None) -> None:
         self.control = control
-        self.sessions = Sessions(users)
+        self.tls = tls
+        self.sessions = Sessions(users, secure=tls is not None)
         self.log = LogBuffer(asyncio.get_running_loop())
         logging.getLogger("ln_manager").addHandler(self.log)
         register_ops()
@@ -57,8 +64,11 @@ class WebUI:
 
     # ---- listening --------------------------------------------------------------------
     async def listen(self, sock: Any) -> None:
+        extra: dict[str, Any] = {}
+        if self.tls is not None:  # a handshake gets as long as a request's head
+            extra = {"ssl": self.tls, "ssl_handshake_timeout": h.HEADER_TIMEOUT}
         self._server = await asyncio.start_server(
-            lambda r, w: self.serve(r, w, b""), sock=sock)
+            lambda r, w: self.serve(r, w, b""), sock=sock, **extra)
 
     async def close(self) -> None:
         logging.getLogger("ln_manager").removeHandler(self.log)
@@ -100,7 +110,7 @@ class WebUI:
                 first = b""
                 if not await self._request(request, reader, writer):
                     return
-        except (ConnectionError, asyncio.CancelledError):
+        except (ConnectionError, ssl.SSLError, asyncio.CancelledError):
             pass
         except Exception:  # a bug of ours must not take the manager down
             log.exception("web UI: internal error")
@@ -128,6 +138,10 @@ class WebUI:
             if exc.status == 401 and req.path == "/login" and req.method != "POST":
                 # the browser's own prompt; the page's form (POST) shows its own error
                 headers = {"WWW-Authenticate": 'Basic realm="ln_manager", charset="UTF-8"'}
+        if self.tls is not None and not is_loopback(_host_name(req.header("host"))):
+            # not for loopback names: a browser would hold every port of `localhost` to
+            # HTTPS for a year (and ignores it for IP addresses anyway)
+            headers = {**headers, "Strict-Transport-Security": HSTS}
         keep = req.keep_alive and status < 400
         writer.write(h.response(status, body, ctype, headers, head=req.method == "HEAD",
                                 keep_alive=keep))
@@ -142,7 +156,7 @@ class WebUI:
             raise h.HttpError(403, f"host {host!r} refused: without an auth file the web UI "
                                    "answers loopback names only")
         origin = req.header("origin")
-        if origin and not same_origin(origin, host):
+        if origin and not same_origin(origin, host, self.tls is not None):
             raise h.HttpError(403, f"origin {origin!r} refused")
 
     def _session(self, req: h.Request) -> Session | None:
@@ -172,8 +186,7 @@ class WebUI:
             if not csrf_ok(session, req.header("x-csrf-token")):
                 raise h.HttpError(403, "CSRF token missing or wrong")
             self.sessions.close(session.token)
-            return 204, b"", "", {"Set-Cookie": f"{COOKIE}=; Path=/; Max-Age=0; HttpOnly; "
-                                                f"SameSite=Strict"}
+            return 204, b"", "", {"Set-Cookie": self.sessions.cleared_cookie()}
         raise h.HttpError(404, "not found")
 
     def _login(self, req: h.Request) -> tuple[int, bytes, str, dict[str, str]]:
@@ -243,8 +256,9 @@ class WebUI:
         if session is None:
             raise h.HttpError(401, "no session: log in at /")
         origin, host = req.header("origin"), req.header("host")
-        if not same_origin(origin, host):
-            raise h.HttpError(403, f"origin {origin!r} refused (expected http://{host})")
+        if not same_origin(origin, host, self.tls is not None):
+            scheme = "https" if self.tls is not None else "http"
+            raise h.HttpError(403, f"origin {origin!r} refused (expected {scheme}://{host})")
         key = req.header("sec-websocket-key")
         if req.header("sec-websocket-version") != "13" or not ws.valid_key(key):
             raise h.HttpError(400, "not a WebSocket version 13 handshake")
