@@ -38,7 +38,7 @@ static uint8_t* wbuf_grow(ln_wbuf* b, size_t n)
         b->failed = LN_ENOMEM;
         return NULL;
     }
-    if (b->len + n > b->cap) {
+    if (b->len + n > b->cap || b->data == NULL) { /* never NULL + 0, even for n == 0 */
         size_t cap = b->cap ? b->cap : 64;
         while (cap < b->len + n)
             cap *= 2;

@@ -74,8 +74,7 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
             continue;
         }
         ln_wbuf_reset(&b);
-        if (n > 0) /* proto.c's wbuf_grow computes NULL + 0 for nothing on a new wbuf */
-            ln_wbuf_bytes(&b, chunk, n);
+        ln_wbuf_bytes(&b, chunk, n);
         assert(ln_svc_seal(&tx, &b, 0) == LN_OK);
         assert(b.len == n + LN_SVC_SEAL_OVERHEAD);
         if ((op & 3) == DROP) /* lost on the way: the receiver's counter falls behind */

@@ -22,8 +22,8 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from .. import __version__
 from ..addresses import parse_manager_address
+from ..tools import client_key
 from ..tools import protocol as p
 from ..tools.framing import receive
 
@@ -234,10 +234,11 @@ class ServiceDirectory:
     def _hello(self) -> socket.socket:
         sock = socket.create_connection(self.manager, timeout=CONNECT_TIMEOUT)
         try:
-            sock.sendall(p.encode(p.Hello(p.MAGIC, p.VERSION, os.getpid(), self.client_name,
-                                          __version__, "")))
-            if not isinstance(receive(sock, ConnectionError), p.Welcome):
-                raise ConnectionError("the manager refused the connection")
+            welcome = client_key.greet(sock, self.client_name, ConnectionError)
+            if not isinstance(welcome, p.Welcome):
+                raise ConnectionError("the manager refused the connection"
+                                      + (f": {welcome.text}" if isinstance(welcome, p.Error)
+                                         else ""))
         except BaseException:
             sock.close()
             raise

@@ -9,11 +9,14 @@ import hashlib
 import hmac
 import os
 import secrets
+import socket
 import stat
 from collections.abc import Callable
 from pathlib import Path
 
+from .. import __version__
 from . import protocol as p
+from .framing import receive
 
 KEY_BYTES = 32
 CLIENT_LABEL = "ln client proof v1"
@@ -100,3 +103,24 @@ def prove(challenge: p.Message, name: str) -> tuple[p.Message, Callable[[p.Messa
                                  "differs")
 
     return p.Auth(mine.hex(), proof), check
+
+
+def greet(sock: socket.socket, name: str, error: type[Exception]) -> p.Message:
+    """HELLO as client `name` on a connected blocking socket, a CHALLENGE answered with the
+    client key and the manager's AUTH_OK checked; the manager's last answer (WELCOME, or the
+    ERROR that refused the client).  `error` (with the reason) for a key problem or a broken
+    frame; socket errors and timeouts pass."""
+    sock.sendall(p.encode(p.Hello(p.MAGIC, p.VERSION, os.getpid(), name, __version__, "")))
+    reply = receive(sock, error)
+    if not isinstance(reply, p.Challenge):
+        return reply
+    try:
+        auth, check = prove(reply, name)
+        sock.sendall(p.encode(auth))
+        reply = receive(sock, error)
+        if isinstance(reply, p.AuthOk):
+            check(reply)
+            reply = receive(sock, error)
+    except ClientKeyError as exc:
+        raise error(str(exc)) from None
+    return reply

@@ -16,7 +16,6 @@ import os
 import socket
 from typing import Any
 
-from .. import __version__
 from ..addresses import parse_manager_address
 from . import client_key
 from . import protocol as p
@@ -46,10 +45,18 @@ class Manager:
             raise ManagerError(f"cannot reach the manager at {address}: "
                                f"{exc.strerror or exc}") from None
         self._next_id = 0
-        self._send(p.Hello(p.MAGIC, p.VERSION, os.getpid(), name, __version__, ""))
-        welcome = self._receive(timeout)
-        if isinstance(welcome, p.Challenge):  # admission by key (docs/security.md)
-            welcome = self._prove(welcome, name, timeout)
+        self._sock.settimeout(timeout)
+        try:
+            welcome = client_key.greet(self._sock, name, ManagerError)
+        except ManagerError as exc:
+            self.close()
+            raise ManagerError(f"manager {address}: {exc}") from None
+        except TimeoutError:
+            self.close()
+            raise ManagerError("no answer from the manager in time") from None
+        except OSError as exc:
+            self.close()
+            raise ManagerError(f"connection to the manager lost: {exc}") from None
         if isinstance(welcome, p.Error):
             self.close()
             raise ManagerError(f"the manager refused the connection: {welcome.text}")
@@ -57,20 +64,6 @@ class Manager:
             self.close()
             raise ManagerError(f"the manager answered HELLO with {welcome.TYPE.name}")
         self.instance = welcome.instance_name
-
-    def _prove(self, challenge: p.Message, name: str, timeout: float) -> p.Message:
-        """AUTH with the client key, the manager's AUTH_OK checked; the frame after it."""
-        try:
-            auth, check = client_key.prove(challenge, name)
-            self._send(auth)
-            reply = self._receive(timeout)
-            if isinstance(reply, p.AuthOk):
-                check(reply)
-                reply = self._receive(timeout)
-        except client_key.ClientKeyError as exc:
-            self.close()
-            raise ManagerError(f"manager {self.address}: {exc}") from None
-        return reply
 
     # ---- plumbing --------------------------------------------------------------------------
     def close(self) -> None:

@@ -16,6 +16,7 @@ import pytest
 from admission.clients import Client
 from admission.conftest import Admission, write_key
 from links_and_nodes._libln import ERRORS_BY_CODE
+from links_and_nodes.manager.frontends.listing import ListingError, fetch
 from links_and_nodes.tools import protocol as p
 from links_and_nodes.tools.commands import ManagerError
 from links_and_nodes.tools.scripting import Manager as ScriptManager
@@ -133,3 +134,14 @@ def test_python_tools_prove_the_key_too(admission: Admission, tmp_path: Path, re
     with ScriptManager(f"{remote_host}:{port}") as manager:
         assert manager.instance == admission.instance
     admission.managers[0].wait_log(r"client ln_script \(\S+\): connected .*\), admitted by key$")
+
+
+def test_ln_services_proves_the_key_too(admission: Admission, tmp_path: Path, remote_host: str,
+                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    port, key = _keyed(admission, tmp_path)
+    with pytest.raises(ListingError, match="only with its client key"):
+        fetch(remote_host, int(port))
+    monkeypatch.setenv("LN_CLIENT_KEY_FILE", str(key))
+    assert fetch(remote_host, int(port)).request_id == 1
+    admission.managers[0].wait_log(r"client ln_services \(\S+\): connected .*\), admitted by "
+                                   r"key$")

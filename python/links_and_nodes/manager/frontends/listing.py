@@ -1,6 +1,6 @@
 """`ln_services`: the services a running ln_manager knows, as a table or as JSON
 (docs/manager.md, "ln_services").  Speaks to the manager with protocol.py's codec, as
-client `ln_services`: HELLO, then LIST_SERVICES.  Needs no libln."""
+client `ln_services`: HELLO (with the client key when asked), then LIST_SERVICES.  Needs no libln."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import socket
 import sys
 from typing import Any
 
-from ... import __version__
 from ...addresses import format_address, parse_manager_address
+from ...tools import client_key
 from ...tools import protocol as p
 from ...tools.framing import receive
 
@@ -35,16 +35,19 @@ def _error_name(code: int) -> str:
         return f"error {code}"
 
 
-def _answer(sock: socket.socket, request: p.Message, expected: type[p.Message]) -> Any:
-    sock.sendall(p.encode(request))
-    reply = receive(sock, ListingError)
+def _expect(reply: p.Message, request: str, expected: type[p.Message]) -> Any:
     if isinstance(reply, p.Error):
-        raise ListingError(f"the manager refused {request.TYPE.name}: "
+        raise ListingError(f"the manager refused {request}: "
                            f"{_error_name(reply.code)}: {reply.text}")
     if not isinstance(reply, expected):
-        raise ListingError(f"the manager answered {request.TYPE.name} with "
+        raise ListingError(f"the manager answered {request} with "
                            f"{reply.TYPE.name}, expected {expected.TYPE.name}")
     return reply
+
+
+def _answer(sock: socket.socket, request: p.Message, expected: type[p.Message]) -> Any:
+    sock.sendall(p.encode(request))
+    return _expect(receive(sock, ListingError), request.TYPE.name, expected)
 
 
 def fetch(host: str, port: int, timeout: float = TIMEOUT) -> p.ServiceList:
@@ -52,8 +55,7 @@ def fetch(host: str, port: int, timeout: float = TIMEOUT) -> p.ServiceList:
     where = format_address((host, port))
     try:
         with socket.create_connection((host, port), timeout=timeout) as sock:
-            _answer(sock, p.Hello(p.MAGIC, p.VERSION, os.getpid(), CLIENT_NAME, __version__, ""),
-                    p.Welcome)
+            _expect(client_key.greet(sock, CLIENT_NAME, ListingError), "HELLO", p.Welcome)
             listing: p.ServiceList = _answer(sock, p.ListServices(1), p.ServiceList)
     except TimeoutError:
         raise ListingError(f"no answer from the manager at {where} within {timeout:g} s") \
