@@ -76,10 +76,12 @@ TcpSession::Frame TcpSession::frame(const uint8_t head[wire::kFrameHeaderSize], 
                                     const uint8_t *tag) noexcept
 {
     ++counter_;
-    if (box_ && !box_->open(counter_, head, wire::kFrameHeaderSize, payload, message_size_, payload,
-                            tag, tail, wire::kFrameTrailerSize))
+    const wire::Trailer trailer = wire::decode_frame_trailer(tail);
+    const size_t covered = tagged_payload(trailer != wire::Trailer::torn, message_size_);
+    if (box_ && !box_->open(counter_, head, wire::kFrameHeaderSize, payload, covered, payload, tag,
+                            tail, wire::kFrameTrailerSize))
         return Frame::rejected;
-    switch (wire::decode_frame_trailer(tail)) {
+    switch (trailer) {
     case wire::Trailer::intact:
         return Frame::intact;
     case wire::Trailer::torn:

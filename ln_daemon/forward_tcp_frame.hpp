@@ -14,6 +14,14 @@
 
 namespace lnd::fwd {
 
+// Payload bytes a frame's tag covers: all of them, but none of a torn frame (its payload
+// may have changed while it was sent from the ring slot; the tag covers header and
+// trailer, so the torn verdict is authentic too).
+constexpr size_t tagged_payload(bool intact, size_t message_size) noexcept
+{
+    return intact ? message_size : 0;
+}
+
 // What the receiver knows of the stream a hello names.
 struct HelloRules {
     uint64_t message_size = 0;

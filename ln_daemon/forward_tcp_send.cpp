@@ -117,8 +117,9 @@ const uint8_t *TcpSender::seal(const Sample &s, const uint8_t *header, const uin
     if (!box_)
         return plain;
     if (s.sent == 0) // the frame's counter: counter_ counts the frames written whole
-        box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, plain, spec_.message_size,
-                   cipher_.get(), tag_, trailer, wire::kFrameTrailerSize);
+        box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, plain,
+                   tagged_payload(s.intact, spec_.message_size), cipher_.get(), tag_, trailer,
+                   wire::kFrameTrailerSize);
     return cipher_ ? cipher_.get() : plain;
 }
 
@@ -177,7 +178,8 @@ void TcpSender::give_buffer(Buffer b) { free_.push_back(std::move(b)); }
 void TcpSender::read_loop()
 {
     Buffer buf = take_buffer();
-    const bool borrow = spec_.message_size >= kBorrowBytes && suite_ == sec::Suite::none;
+    // Sent from the slot unless the payload must be enciphered first.
+    const bool borrow = spec_.message_size >= kBorrowBytes && !cipher_;
     while (!stop_.raised()) {
         ln_sample_info info;
         const void *payload = nullptr;
@@ -260,7 +262,7 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
     uint8_t trailer[wire::kFrameTrailerSize];
     wire::encode_frame_header(header, {s.seq, s.timestamp_ns, spec_.message_size});
     wire::encode_frame_trailer(trailer, true);
-    if (!borrowed) // with a key never borrowed: the copy is sealed once, before any byte goes
+    if (!borrowed) // a copy is sealed once, before any byte goes
         payload = seal(s, header, trailer, payload);
     auto send_part = [&](size_t end) {
         while (s.sent < end) {
@@ -268,8 +270,8 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
             msghdr msg = {};
             msg.msg_iov = iov;
             msg.msg_iovlen = frame_iov(header, trailer, payload, s, iov);
-            if (end < frame_size())
-                --msg.msg_iovlen; // header and payload only (borrowed: no key, no tag)
+            if (end < frame_size()) // header and payload only: not the trailer nor the tag
+                msg.msg_iovlen -= box_ ? 2 : 1;
             ssize_t n = ::sendmsg(fd, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
             if (n > 0)
                 s.sent += static_cast<size_t>(n);
@@ -281,13 +283,21 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
     };
     if (borrowed) {
         // Header and payload straight from the slot, then whether it stayed intact meanwhile,
-        // then the trailer that says so.
+        // then the trailer that says so.  authenticate: the tag is taken over the slot while
+        // it is still borrowed, so if it stayed intact the bytes sent are the bytes tagged;
+        // a torn frame's tag covers header and trailer only.
         const size_t body = wire::kFrameHeaderSize + spec_.message_size;
         send_part(body);
         if (s.sent < body) // the writer finishes it from a copy: the slot is given back now
             std::memcpy(buf.get(), borrowed, spec_.message_size);
+        if (box_)
+            box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, payload, spec_.message_size,
+                       nullptr, tag_, trailer, wire::kFrameTrailerSize);
         s.intact = ln_ring_tap_release(tap_.get()) == LN_OK;
         wire::encode_frame_trailer(trailer, s.intact);
+        if (box_ && !s.intact)
+            box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, nullptr, 0, nullptr, tag_,
+                       trailer, wire::kFrameTrailerSize);
         if (s.sent == body)
             send_part(frame_size());
     } else {
