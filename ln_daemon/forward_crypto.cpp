@@ -24,6 +24,22 @@ void nonce_of(uint64_t counter, uint8_t nonce[12]) noexcept
 
 constexpr size_t kMaxAd = 128; // header and trailer, copied together for the AEAD suites
 
+// The AEAD suites take header and trailer as one piece of additional data: joined in `all`
+// (kMaxAd bytes) when there is a trailer, `ad` then points there; false if too long.
+bool join_ad(const uint8_t *&ad, size_t &ad_size, const uint8_t *trailer, size_t trailer_size,
+             uint8_t *all) noexcept
+{
+    if (trailer_size == 0)
+        return true;
+    if (ad_size + trailer_size > kMaxAd)
+        return false;
+    std::memcpy(all, ad, ad_size);
+    std::memcpy(all + ad_size, trailer, trailer_size);
+    ad = all;
+    ad_size += trailer_size;
+    return true;
+}
+
 } // namespace
 
 const char *level_name(Level level) noexcept
@@ -168,11 +184,9 @@ void Box::seal(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_
         return;
     }
     uint8_t all[kMaxAd];
-    if (trailer_size) { // header and trailer as one piece of additional data
-        std::memcpy(all, ad, ad_size);
-        std::memcpy(all + ad_size, trailer, trailer_size);
-        ad = all;
-        ad_size += trailer_size;
+    if (!join_ad(ad, ad_size, trailer, trailer_size, all)) {
+        std::memset(tag, 0, kTagBytes); // cannot happen with the wire's sizes: opens nowhere
+        return;
     }
     uint8_t nonce[12];
     nonce_of(counter, nonce);
@@ -198,15 +212,9 @@ bool Box::open(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_
         mac(counter, ad, ad_size, in, size, trailer, trailer_size, want);
         return crypto_verify_16(want, tag) == 0;
     }
-    if (ad_size + trailer_size > kMaxAd)
-        return false;
     uint8_t all[kMaxAd];
-    if (trailer_size) {
-        std::memcpy(all, ad, ad_size);
-        std::memcpy(all + ad_size, trailer, trailer_size);
-        ad = all;
-        ad_size += trailer_size;
-    }
+    if (!join_ad(ad, ad_size, trailer, trailer_size, all))
+        return false;
     uint8_t nonce[12];
     nonce_of(counter, nonce);
     if (suite_ == Suite::aes256gcm)

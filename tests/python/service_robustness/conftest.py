@@ -59,11 +59,12 @@ class Setup:
         return sorted(self.runtime.glob("svc.*.sock"))
 
 
-@pytest.fixture
-def setup(tmp_path: Path) -> Iterator[Setup]:
+def private_manager(tmp_path: Path, *args: str) -> Iterator[Setup]:
+    """A Setup around a private manager started with `args`; its tools and it are stopped
+    when the generator is closed."""
     instance = f"svc-{uuid.uuid4().hex[:12]}"
     runtime = tmp_path / "run"
-    manager = launch.start_manager(instance, runtime, tmp_path / "manager.log")
+    manager = launch.start_manager(instance, runtime, tmp_path / "manager.log", *args)
     s = Setup(manager, runtime)
     try:
         yield s
@@ -76,6 +77,11 @@ def setup(tmp_path: Path) -> Iterator[Setup]:
                 if stream is not None:
                     stream.close()
         manager.stop()
+
+
+@pytest.fixture
+def setup(tmp_path: Path) -> Iterator[Setup]:
+    yield from private_manager(tmp_path)
 
 
 def stop(proc: subprocess.Popen[str]) -> int:

@@ -14,15 +14,12 @@ import subprocess
 import sys
 import threading
 import time
-import uuid
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 
-from links_and_nodes.manager.frontends import launch
-
-from .conftest import LIMIT, REPO, Setup, stop
+from .conftest import LIMIT, REPO, Setup, private_manager, stop
 from .test_service_wire import MAGIC, error_of, frame, hello, read_exact, read_frame, text
 
 ELSEWHERE = {"LN_HOST_ID": "another-host"}  # another host id than the provider's: TCP
@@ -37,22 +34,7 @@ Tamper = Callable[[str, list[bytes], bytes], bytes]
 @pytest.fixture
 def secured(tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Setup]:
     """A private manager with --service-security given by the test's parameter."""
-    level = request.param
-    runtime = tmp_path / "run"
-    manager = launch.start_manager(f"sec-{uuid.uuid4().hex[:12]}", runtime,
-                                   tmp_path / "manager.log", "--service-security", level)
-    s = Setup(manager, runtime)
-    try:
-        yield s
-    finally:
-        for proc in s.tools:
-            if proc.poll() is None:
-                proc.kill()
-            proc.wait()
-            for stream in (proc.stdin, proc.stdout, proc.stderr):
-                if stream is not None:
-                    stream.close()
-        manager.stop()
+    yield from private_manager(tmp_path, "--service-security", request.param)
 
 
 class Relay:
