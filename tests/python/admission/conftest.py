@@ -20,8 +20,6 @@ sys.path.insert(0, str(REPO / "tests" / "python" / "manager"))
 
 from mgrproc import WAIT, Manager, require_manager_library, unique_instance  # noqa: E402
 
-require_manager_library()
-
 
 def write_key(path: Path, key: bytes | None = None, mode: int = 0o600) -> Path:
     path.write_text((key or secrets.token_bytes(32)).hex() + "\n")
@@ -57,6 +55,7 @@ def admission(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Admis
     # No key of the user running the tests may leak in: each test names its own.
     monkeypatch.delenv("LN_CLIENT_KEY_FILE", raising=False)
     monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    require_manager_library()  # here, not at import: the parsing tests load no native code
     lab = Admission(tmp_path)
     yield lab
     problems = []

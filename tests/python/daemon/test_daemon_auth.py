@@ -117,7 +117,7 @@ def test_old_hello_cannot_be_replayed(daemon: Daemon) -> None:
 def test_daemon_must_prove_the_key() -> None:
     # A fake daemon without the key: it cannot produce the proof, the client refuses it.
     async def fake(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        hello = dw.MAGIC + struct.pack("<H", 1) + os.urandom(32)
+        hello = dw.MAGIC + struct.pack("<H", dw.PROTOCOL_VERSION) + os.urandom(32)
         writer.write(struct.pack("<IBI", 5 + len(hello), dw.Msg.DAEMON_HELLO, 0) + hello)
         (length,) = struct.unpack("<I", await reader.readexactly(4))
         await reader.readexactly(length)
@@ -189,6 +189,7 @@ def test_version_mismatch_is_refused(daemon: Daemon) -> None:
         conn.send(bytes(hello))
         code, text = conn.expect_error_and_close()
         assert code == dw.ErrorCode.VERSION
-        assert text == "unsupported protocol version 99; this daemon speaks version 1"
+        assert text == ("unsupported protocol version 99; this daemon speaks version "
+                        f"{dw.PROTOCOL_VERSION}")
     finally:
         conn.close()
