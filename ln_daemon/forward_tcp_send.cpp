@@ -26,7 +26,8 @@ namespace lnd::fwd {
 
 namespace {
 
-// Samples this large are sent straight from their ring slot (borrowed); smaller ones are
+// Samples this large are sent straight from their ring slot (borrowed; encrypt: enciphered
+// from it); smaller ones are
 // copied out first, which costs less than a separate send of their trailer.
 constexpr uint64_t kBorrowBytes = 64 * 1024;
 
@@ -178,8 +179,7 @@ void TcpSender::give_buffer(Buffer b) { free_.push_back(std::move(b)); }
 void TcpSender::read_loop()
 {
     Buffer buf = take_buffer();
-    // Sent from the slot unless the payload must be enciphered first.
-    const bool borrow = spec_.message_size >= kBorrowBytes && !cipher_;
+    const bool borrow = spec_.message_size >= kBorrowBytes;
     while (!stop_.raised()) {
         ln_sample_info info;
         const void *payload = nullptr;
@@ -257,12 +257,13 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
         fd = sock_.get();
     }
     Sample s{info.seq, info.timestamp_ns, nullptr};
-    const auto *payload = static_cast<const uint8_t *>(borrowed ? borrowed : buf.get());
+    const auto *slot = static_cast<const uint8_t *>(borrowed);
+    const uint8_t *payload = slot ? slot : buf.get();
     uint8_t header[wire::kFrameHeaderSize];
     uint8_t trailer[wire::kFrameTrailerSize];
     wire::encode_frame_header(header, {s.seq, s.timestamp_ns, spec_.message_size});
     wire::encode_frame_trailer(trailer, true);
-    if (!borrowed) // a copy is sealed once, before any byte goes
+    if (!slot || cipher_) // sealed once, before any byte goes (encrypt: from the slot itself)
         payload = seal(s, header, trailer, payload);
     auto send_part = [&](size_t end) {
         while (s.sent < end) {
@@ -281,17 +282,18 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
                 break; // full, or an error the writer will meet and handle
         }
     };
-    if (borrowed) {
-        // Header and payload straight from the slot, then whether it stayed intact meanwhile,
-        // then the trailer that says so.  authenticate: the tag is taken over the slot while
-        // it is still borrowed, so if it stayed intact the bytes sent are the bytes tagged;
-        // a torn frame's tag covers header and trailer only.
+    if (slot) {
+        // Header and payload straight from the slot (encrypt: enciphered from it), then whether
+        // it stayed intact meanwhile, then the trailer that says so.  authenticate: the tag
+        // is taken over the slot while it is still borrowed, so if it stayed intact the bytes
+        // sent are the bytes tagged (encrypt: the bytes enciphered); a torn frame's tag
+        // covers header and trailer only.
         const size_t body = wire::kFrameHeaderSize + spec_.message_size;
         send_part(body);
-        if (s.sent < body) // the writer finishes it from a copy: the slot is given back now
-            std::memcpy(buf.get(), borrowed, spec_.message_size);
-        if (box_)
-            box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, payload, spec_.message_size,
+        if (s.sent < body) // the writer finishes it (or sends it again) from a plain copy
+            std::memcpy(buf.get(), slot, spec_.message_size);
+        if (box_ && !cipher_)
+            box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, slot, spec_.message_size,
                        nullptr, tag_, trailer, wire::kFrameTrailerSize);
         s.intact = ln_ring_tap_release(tap_.get()) == LN_OK;
         wire::encode_frame_trailer(trailer, s.intact);

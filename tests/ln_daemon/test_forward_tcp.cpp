@@ -403,10 +403,11 @@ void test_frame_trailers()
 }
 
 // The publisher floods a ring of two slots far faster than the stream sends: the sender,
-// sending straight from the slots (level none, and authenticate, which tags the slot while
-// it is borrowed), has samples overwritten under it.  Every sample that arrives is intact
-// and in order; the rest is counted as dropped on the sending side; a torn frame's tag is
-// authentic (covering header and trailer), so nothing is rejected.
+// sending straight from the slots (level none; authenticate, which tags the slot while it
+// is borrowed; encrypt, which enciphers from it), has samples overwritten under it.  Every
+// sample that arrives is intact and in order; the rest is counted as dropped on the sending
+// side; a torn frame's tag is authentic (covering header and trailer), so nothing is
+// rejected.
 void overwritten_while_sent(Level level)
 {
     constexpr uint64_t kSize = 64 * 1024, kPublished = 400;
@@ -448,6 +449,7 @@ void overwritten_while_sent(Level level)
 
 void test_overwritten_while_sent() { overwritten_while_sent(Level::none); }
 void test_overwritten_while_sent_with_a_key() { overwritten_while_sent(Level::authenticate); }
+void test_overwritten_while_sent_encrypted() { overwritten_while_sent(Level::encrypt); }
 
 } // namespace
 
@@ -464,5 +466,6 @@ int main()
     LN_TEST_RUN(test_frame_trailers);
     LN_TEST_RUN(test_overwritten_while_sent);
     LN_TEST_RUN(test_overwritten_while_sent_with_a_key);
+    LN_TEST_RUN(test_overwritten_while_sent_encrypted);
     LN_TEST_EXIT();
 }
