@@ -1,6 +1,6 @@
 /* fuzz_proto.c — fuzz target: the client <-> manager frame codec (libln/src/proto.c) on a
  * stream a hostile manager could send: header, frame and field checks of every frame, then the
- * client's field readers for what passes (client_conn.c, port.c, service.c). */
+ * client's field readers for what passes (client_conn.c, port.c, service.c, svc_key.c). */
 #include <assert.h>
 #include <string.h>
 
@@ -51,6 +51,22 @@ static void read_fields(uint16_t type, ln_rbuf r)
         ln_rbuf_u32(&r);
         const char* json = ln_rbuf_text(&r, &n);
         assert(r.failed || (json != NULL && memchr(json, '\0', n) == NULL));
+        break;
+    }
+    case LN_MSG_CHALLENGE: { /* client_conn.c answer_challenge() */
+        ln_msg_challenge ch;
+        ln_msg_challenge_read(&r, &ch);
+        break;
+    }
+    case LN_MSG_AUTH_OK: {
+        ln_msg_auth_ok ok;
+        ln_msg_auth_ok_read(&r, &ok);
+        break;
+    }
+    case LN_MSG_SERVICE_KEY_INFO: { /* svc_key.c take_info(), after the request id */
+        ln_msg_service_key_info info;
+        ln_rbuf_u32(&r);
+        ln_msg_service_key_info_read_after_id(&r, &info);
         break;
     }
     default: /* OK */
