@@ -119,6 +119,7 @@ void handshake_tag(const Key &stream, const uint8_t *msg, size_t size,
     crypto_generichash_update(&st, reinterpret_cast<const uint8_t *>(kLabel), sizeof kLabel);
     crypto_generichash_update(&st, msg, size);
     crypto_generichash_final(&st, tag, kTagBytes);
+    sodium_memzero(&st, sizeof st); // keyed with the stream key
 }
 
 bool handshake_ok(const Key &stream, const uint8_t *msg, size_t size,
@@ -171,6 +172,7 @@ void Box::mac(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t
     crypto_onetimeauth_update(&st, lengths, sizeof lengths);
     crypto_onetimeauth_final(&st, tag);
     sodium_memzero(one_time, sizeof one_time);
+    sodium_memzero(&st, sizeof st);
 }
 
 void Box::seal(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t *in, size_t size,

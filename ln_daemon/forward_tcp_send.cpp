@@ -290,7 +290,8 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
         // covers header and trailer only.
         const size_t body = wire::kFrameHeaderSize + spec_.message_size;
         send_part(body);
-        if (s.sent < body) // the writer finishes it (or sends it again) from a plain copy
+        s.whole = s.sent < body; // the writer finishes it (or sends it again) from a copy
+        if (s.whole)
             std::memcpy(buf.get(), slot, spec_.message_size);
         if (box_ && !cipher_)
             box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, slot, spec_.message_size,
@@ -520,8 +521,9 @@ void TcpSender::write_loop()
             return;
         default:
             lost(io == Io::closed ? "closed by the receiver" : error);
-            current.sent = 0;      // the receiver drops a partial frame: send it whole again
-            if (!current.intact) { // unless it was torn: then it is gone
+            current.sent = 0; // the receiver drops a partial frame: send it whole again
+            // unless it was torn, or was sent from the slot and is not here: then it is gone
+            if (!current.intact || !current.whole) {
                 StreamCounters::add(counters_.drops);
                 std::lock_guard<std::mutex> lock(mutex_);
                 give_buffer(std::move(current.data));

@@ -3,13 +3,14 @@
 // thread keeps a connection to the receiving daemon and sends the queue in order,
 // reconnecting with back-off.  When the writer is idle on a healthy connection and nothing
 // is queued, the reader sends the sample itself without blocking (no thread wake-up), large
-// samples straight from the ring slot (no copy), and queues a copy of only what the socket
-// did not take at once.  The frame's trailer says whether the slot stayed intact while it was sent (the
-// publisher overwrites it only when the stream falls a whole ring behind); a torn frame is
-// dropped by the receiver and counted as a drop here.  With a security level other than
-// none, samples are always copied out of the ring first and every frame ends in a tag under
-// a key of the connection (forward_tcp_frame.hpp).  The publisher is never held up: the
-// tap holds no reader slot and the reader never waits for the writer or the network.
+// samples straight from the ring slot (no copy; encrypt: enciphered from it), and queues
+// a copy of only what the socket did not take at once.  The frame's trailer says whether
+// the slot stayed intact while it was sent (the publisher overwrites it only when the
+// stream falls a whole ring behind); a torn frame is dropped by the receiver and counted as
+// a drop here.  With a security level other than none every frame ends in a tag under a
+// key of the connection (forward_tcp_frame.hpp), taken while the slot is borrowed.  The
+// publisher is never held up: the tap holds no reader slot and the reader never waits for
+// the writer or the network.
 #pragma once
 
 #include <atomic>
@@ -51,6 +52,8 @@ private:
         Buffer data;
         size_t sent = 0;    // bytes of its frame already written on the current connection
         bool intact = true; // false: the payload was overwritten while sent (trailer: torn)
+        bool whole = true;  // `data` holds the sample (false: sent from the slot up to its
+                            // trailer, so it cannot be sent again on a new connection)
     };
 
     void read_loop();

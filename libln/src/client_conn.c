@@ -180,6 +180,20 @@ static int answer_challenge(ln_client* c, struct ln_conn* k, const char* name,
         rc = send_tx(c, k, "AUTH", deadline);
     if (rc == LN_OK)
         rc = read_frame(c, k, "AUTH", deadline, type, r);
+    /* With a proof sent, only AUTH_OK (the manager's proof) or ERROR (its refusal) may follow:
+     * a manager that answers anything else has not shown that it holds the key.  Without a
+     * key there is nothing to check an AUTH_OK against. */
+    if (rc == LN_OK && *type != LN_MSG_ERROR && (*type == LN_MSG_AUTH_OK) != (keyed == LN_OK)) {
+        if (keyed != LN_OK) {
+            rc = malformed(c, k, "AUTH", "AUTH_OK to a client that sent no proof");
+        } else {
+            disconnect(c, k);
+            rc = ln_set_error(c, LN_EPERM,
+                              "manager %s did not prove the client key of instance \"%s\" "
+                              "(it answered AUTH with message %u); connection closed",
+                              c->address, instance, (unsigned)*type);
+        }
+    }
     if (rc == LN_OK && *type == LN_MSG_AUTH_OK) {
         ln_msg_auth_ok ok = {0};
         ln_msg_auth_ok_read(r, &ok);

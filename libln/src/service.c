@@ -348,14 +348,24 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
 /* On a new TCP connection: SECURE with our nonce, SECURED with the provider's, then the keys
  * (svc_secure.h).  Level none sends nothing: the provider refuses HELLO unless it has none
  * too.  LN_OK or an error (recorded). */
+static int secure_with(ln_service* s, const ln_svc_key* k, const struct timespec* deadline);
+
 static int secure_connection(ln_service* s, const struct timespec* deadline)
 {
     ln_svc_key key;
     int rc = ln_svc_key_get(s->clnt, &key);
     if (rc != LN_OK)
         return ln_set_error(s->clnt, rc, "service \"%s\": %s", s->name, ln_last_error());
-    if (key.level == LN_SVC_SEC_NONE)
-        return LN_OK;
+    if (key.level != LN_SVC_SEC_NONE)
+        rc = secure_with(s, &key, deadline);
+    sodium_memzero(key.key, sizeof key.key); /* on every way out */
+    return rc;
+}
+
+/* The handshake of secure_connection() under `k` (a protected level). */
+static int secure_with(ln_service* s, const ln_svc_key* k, const struct timespec* deadline)
+{
+    int rc;
     if (sodium_init() < 0)
         return ln_set_error(s->clnt, LN_ESYS, "service \"%s\": libsodium is unusable", s->name);
     uint8_t mine[LN_SVC_NONCE_BYTES];
@@ -366,7 +376,7 @@ static int secure_connection(ln_service* s, const struct timespec* deadline)
     size_t start = ln_proto_frame_begin(&b, LN_SVC_SECURE);
     ln_wbuf_u32(&b, LN_SVC_MAGIC);
     ln_wbuf_u16(&b, LN_SVC_VERSION);
-    ln_wbuf_u16(&b, (uint16_t)key.level);
+    ln_wbuf_u16(&b, (uint16_t)k->level);
     ln_wbuf_u16(&b, (uint16_t)offer);
     ln_wbuf_str(&b, s->name);
     ln_wbuf_bytes(&b, mine, sizeof mine);
@@ -390,14 +400,13 @@ static int secure_connection(ln_service* s, const struct timespec* deadline)
         return ln_set_error(s->clnt, LN_EPROTOCOL,
                             "service \"%s\": provider \"%s\" (%s) did not answer SECURE", s->name,
                             s->provider, s->via);
-    if (level != key.level || ln_svc_aead_pick(offer, (unsigned)aead) != aead)
+    if (level != k->level || ln_svc_aead_pick(offer, (unsigned)aead) != aead)
         return ln_set_error(s->clnt, LN_EPERM,
                             "service \"%s\": provider \"%s\" (%s) answered with security "
                             "%s and AEAD %d, this caller uses %s (AEADs 0x%x)",
                             s->name, s->provider, s->via, ln_svc_level_name(level), aead,
-                            ln_svc_level_name(key.level), offer);
-    rc = ln_svc_channel_init(&s->ch, &key, aead, mine, theirs, s->name, 1);
-    sodium_memzero(key.key, sizeof key.key);
+                            ln_svc_level_name(k->level), offer);
+    rc = ln_svc_channel_init(&s->ch, k, aead, mine, theirs, s->name, 1);
     if (rc != LN_OK)
         return ln_set_error(s->clnt, rc, "service \"%s\": cannot derive the channel keys", s->name);
     return LN_OK;

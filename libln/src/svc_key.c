@@ -13,7 +13,7 @@
 #define SEAL_TAG 32
 #define SEALED_BYTES (SEAL_NONCE + LN_SVC_KEY_BYTES + SEAL_TAG)
 static const char pad_label[] = "ln service key pad v1";
-static const char tag_label[] = "ln service key tag v1";
+static const char tag_label[] = "ln service key tag v2";
 
 /* The key is kept in the client under its state lock (a leaf lock: nothing is called while
  * it is held). */
@@ -36,8 +36,8 @@ static int recall(ln_client* clnt, ln_svc_key* key)
     return known;
 }
 
-int ln_svc_key_unseal(const uint8_t session_key[32], const uint8_t* sealed, size_t len,
-                      uint8_t key[LN_SVC_KEY_BYTES])
+int ln_svc_key_unseal(const uint8_t session_key[32], uint8_t level, const uint8_t* sealed,
+                      size_t len, uint8_t key[LN_SVC_KEY_BYTES])
 {
     if (len != SEALED_BYTES || sodium_init() < 0)
         return LN_EPERM;
@@ -47,11 +47,14 @@ int ln_svc_key_unseal(const uint8_t session_key[32], const uint8_t* sealed, size
     crypto_auth_hmacsha256_state st;
     crypto_auth_hmacsha256_init(&st, session_key, 32);
     crypto_auth_hmacsha256_update(&st, (const uint8_t*)tag_label, sizeof tag_label - 1);
+    crypto_auth_hmacsha256_update(&st, &level, 1);
     crypto_auth_hmacsha256_update(&st, nonce, SEAL_NONCE);
     crypto_auth_hmacsha256_update(&st, box, LN_SVC_KEY_BYTES);
     crypto_auth_hmacsha256_final(&st, mac);
-    if (sodium_memcmp(mac, box + LN_SVC_KEY_BYTES, SEAL_TAG) != 0)
+    if (sodium_memcmp(mac, box + LN_SVC_KEY_BYTES, SEAL_TAG) != 0) {
+        sodium_memzero(&st, sizeof st);
         return LN_EPERM;
+    }
     crypto_auth_hmacsha256_init(&st, session_key, 32);
     crypto_auth_hmacsha256_update(&st, (const uint8_t*)pad_label, sizeof pad_label - 1);
     crypto_auth_hmacsha256_update(&st, nonce, SEAL_NONCE);
@@ -76,13 +79,22 @@ static int take_info(ln_client* clnt, ln_rbuf* reply, ln_svc_key* out)
         return ln_set_error(clnt, LN_EPROTOCOL, "malformed SERVICE_KEY_INFO from manager %s",
                             clnt->address);
     out->level = info.security;
-    if (out->level == LN_SVC_SEC_NONE)
+    uint8_t session[32];
+    const int has_session = ln_client_session_key(clnt, session) == LN_OK;
+    if (has_session && !info.sealed) { /* the manager seals for key-admitted clients, always */
+        sodium_memzero(session, sizeof session);
+        sodium_memzero(raw, sizeof raw);
+        return ln_set_error(clnt, LN_EPERM,
+                            "the service key from manager %s is not sealed although this "
+                            "connection has a session key (altered on the way?)",
+                            clnt->address);
+    }
+    if (!info.sealed && out->level == LN_SVC_SEC_NONE)
         return LN_OK;
     if (info.sealed) {
-        uint8_t session[32];
-        int rc = ln_client_session_key(clnt, session);
+        int rc = has_session ? LN_OK : LN_ENOTFOUND;
         if (rc == LN_OK)
-            rc = ln_svc_key_unseal(session, raw, len, out->key);
+            rc = ln_svc_key_unseal(session, info.security, raw, len, out->key);
         sodium_memzero(session, sizeof session);
         sodium_memzero(raw, sizeof raw);
         if (rc != LN_OK)

@@ -45,9 +45,10 @@ typedef struct ln_svc_channel {
  * cannot be asked, the last key it gave.  LN_OK, or an error (recorded). */
 int ln_svc_key_get(ln_client* clnt, ln_svc_key* out);
 /* Opens a key the manager sealed under a session key (sealed = 1 of SERVICE_KEY_INFO):
- * `sealed` is nonce (16) || key xor pad (32) || tag (32).  LN_OK or LN_EPERM. */
-int ln_svc_key_unseal(const uint8_t session_key[32], const uint8_t* sealed, size_t len,
-                      uint8_t key[LN_SVC_KEY_BYTES]);
+ * `sealed` is nonce (16) || key xor pad (32) || tag (32), the tag also over `level`, the
+ * level code that came with it.  LN_OK or LN_EPERM. */
+int ln_svc_key_unseal(const uint8_t session_key[32], uint8_t level, const uint8_t* sealed,
+                      size_t len, uint8_t key[LN_SVC_KEY_BYTES]);
 
 /* The level's name ("none", "authenticate", "encrypt"), for texts. */
 const char* ln_svc_level_name(int level);

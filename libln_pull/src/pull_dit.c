@@ -635,8 +635,8 @@ LN_NDN_EXPORT int ln_pull_receive(ln_pull_sub* s, const uint8_t* packet, size_t 
     if (q.kind == REPLY_LP_NACK) {
         ln_pull_slot* slot = q.sync_name ? NULL : find(s, q.seq);
         uint32_t n = q.sync_name ? s->sync_nonce : slot ? slot->nonce : 0;
-        if ((q.sync_name && !s->syncing) || (!q.sync_name && !slot) ||
-            (q.has_nonce && q.nonce != n)) {
+        if ((q.sync_name && !s->syncing) || (!q.sync_name && !slot) || !q.has_nonce ||
+            q.nonce != n) { /* a Nack names the Interest it answers */
             s->stats.late++;
             return 1;
         }

@@ -183,18 +183,22 @@ static void test_unseal(void)
     for (int i = 0; i < 32; i++)
         sealed[16 + i] = key[i] ^ pad[i];
     crypto_auth_hmacsha256_init(&st, session, 32);
-    crypto_auth_hmacsha256_update(&st, (const uint8_t*)"ln service key tag v1", 21);
+    const uint8_t level = LN_SVC_SEC_ENCRYPT;
+    crypto_auth_hmacsha256_update(&st, (const uint8_t*)"ln service key tag v2", 21);
+    crypto_auth_hmacsha256_update(&st, &level, 1);
     crypto_auth_hmacsha256_update(&st, sealed, 48);
     crypto_auth_hmacsha256_final(&st, tag);
     memcpy(sealed + 48, tag, 32);
-    LN_CHECK_EQ(ln_svc_key_unseal(session, sealed, sizeof sealed, out), LN_OK);
+    LN_CHECK_EQ(ln_svc_key_unseal(session, level, sealed, sizeof sealed, out), LN_OK);
     LN_CHECK(memcmp(out, key, 32) == 0);
+    /* a level lowered on the way does not open */
+    LN_CHECK_EQ(ln_svc_key_unseal(session, LN_SVC_SEC_NONE, sealed, sizeof sealed, out), LN_EPERM);
     sealed[20] ^= 1;
-    LN_CHECK_EQ(ln_svc_key_unseal(session, sealed, sizeof sealed, out), LN_EPERM);
+    LN_CHECK_EQ(ln_svc_key_unseal(session, level, sealed, sizeof sealed, out), LN_EPERM);
     sealed[20] ^= 1;
     session[0] ^= 1;
-    LN_CHECK_EQ(ln_svc_key_unseal(session, sealed, sizeof sealed, out), LN_EPERM);
-    LN_CHECK_EQ(ln_svc_key_unseal(session, sealed, 79, out), LN_EPERM);
+    LN_CHECK_EQ(ln_svc_key_unseal(session, level, sealed, sizeof sealed, out), LN_EPERM);
+    LN_CHECK_EQ(ln_svc_key_unseal(session, level, sealed, 79, out), LN_EPERM);
 }
 
 int main(void)

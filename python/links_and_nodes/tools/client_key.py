@@ -118,6 +118,12 @@ def greet(sock: socket.socket, name: str, error: type[Exception]) -> p.Message:
         auth, check = prove(reply, name)
         sock.sendall(p.encode(auth))
         reply = receive(sock, error)
+        # With a proof sent only AUTH_OK or the refusal may follow (as libln's handshake).
+        proved = bool(auth.proof)  # type: ignore[attr-defined]
+        if not isinstance(reply, p.Error) and isinstance(reply, p.AuthOk) != proved:
+            raise ClientKeyError(
+                f"the manager did not prove the client key (it answered AUTH with "
+                f"{reply.TYPE.name})" if proved else "AUTH_OK to a client that sent no proof")
         if isinstance(reply, p.AuthOk):
             check(reply)
             reply = receive(sock, error)

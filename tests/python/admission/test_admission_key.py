@@ -99,30 +99,51 @@ def test_loopback_client_of_the_same_user_needs_no_key(admission: Admission,
                                    r"admitted by user \d+")
 
 
-def _fake_manager(server: socket.socket, instance: str) -> None:
-    """Challenges one client, then answers AUTH with a proof made without the key."""
+def _fake_manager(server: socket.socket, instance: str, proves: bool) -> None:
+    """Challenges one client, then answers AUTH with a proof made without the key (`proves`)
+    or with no proof at all, and welcomes it."""
     conn, _ = server.accept()
     with conn:
         conn.recv(4096)  # HELLO
         conn.sendall(p.encode(p.Challenge(instance, "11" * 32)))
         conn.recv(4096)  # AUTH
-        conn.sendall(p.encode(p.AuthOk("22" * 32)))
+        if proves:
+            conn.sendall(p.encode(p.AuthOk("22" * 32)))
         conn.sendall(p.encode(p.Welcome(p.VERSION, 1, "victim", instance)))
         conn.recv(4096)  # until the client closes
 
 
+@pytest.mark.parametrize(("proves", "text"), [
+    (True, "failed to prove the client key of instance \"impostor\""),
+    (False, "did not prove the client key of instance \"impostor\""),
+])
 def test_client_refuses_a_manager_that_cannot_prove_the_key(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, proves: bool, text: str) -> None:
+    monkeypatch.setenv("LN_CLIENT_KEY_FILE", str(write_key(tmp_path / "client.key")))
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(1)
+        fake = threading.Thread(target=_fake_manager, args=(server, "impostor", proves),
+                                daemon=True)
+        fake.start()
+        with pytest.raises(LnPermError) as info:
+            Client(f"127.0.0.1:{server.getsockname()[1]}", "victim")
+        fake.join(30)
+    assert text in str(info.value)
+
+
+def test_python_tools_refuse_a_manager_that_skips_its_proof(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("LN_CLIENT_KEY_FILE", str(write_key(tmp_path / "client.key")))
     with socket.socket() as server:
         server.bind(("127.0.0.1", 0))
         server.listen(1)
-        fake = threading.Thread(target=_fake_manager, args=(server, "impostor"), daemon=True)
+        fake = threading.Thread(target=_fake_manager, args=(server, "impostor", False),
+                                daemon=True)
         fake.start()
-        with pytest.raises(LnPermError) as info:
-            Client(f"127.0.0.1:{server.getsockname()[1]}", "victim")
+        with pytest.raises(ListingError, match="did not prove the client key"):
+            fetch("127.0.0.1", server.getsockname()[1])
         fake.join(30)
-    assert "failed to prove the client key of instance \"impostor\"" in str(info.value)
 
 
 def test_python_tools_prove_the_key_too(admission: Admission, tmp_path: Path, remote_host: str,

@@ -41,9 +41,18 @@ def test_info_sealed_under_the_session_key() -> None:
     raw = bytes.fromhex(info.key)
     assert len(raw) == 80 and key.hex() not in info.key
     nonce, box, tag = raw[:16], raw[16:48], raw[48:]
+    level = bytes([p.SECURITY_ENCRYPT])
     assert hmac.compare_digest(
-        tag, hmac.digest(session, b"ln service key tag v1" + nonce + box, hashlib.sha256))
+        tag, hmac.digest(session, b"ln service key tag v2" + level + nonce + box,
+                         hashlib.sha256))
     pad = hmac.digest(session, b"ln service key pad v1" + nonce, hashlib.sha256)
     assert bytes(a ^ b for a, b in zip(box, pad, strict=True)) == key
-    assert seal(session, key, nonce) == raw  # deterministic for a given nonce
-    assert seal(session, key) != raw  # a fresh nonce each time
+    assert seal(session, key, p.SECURITY_ENCRYPT, nonce) == raw  # deterministic for a nonce
+    assert seal(session, key, p.SECURITY_NONE, nonce) != raw  # the level is tagged
+    assert seal(session, key, p.SECURITY_ENCRYPT) != raw  # a fresh nonce each time
+
+
+def test_level_none_is_sealed_too_for_a_session() -> None:
+    info = ServiceSecurity("none", bytes(range(32))).info(4, b"\x07" * 32)
+    assert (info.security, info.sealed, len(bytes.fromhex(info.key))) == \
+        (p.SECURITY_NONE, 1, 80)

@@ -101,10 +101,13 @@ class Forwarding:
         return {s.token for s in self.streams.values()}
 
     def host_up(self, name: str) -> None:
-        """A new daemon on host `name`: it knows none of the streams."""
+        """A new daemon on host `name`: it knows none of the streams.  Those it sends get new
+        receiving ends as well: its UDP salts start from its clock again, which may have
+        gone back, and a receiver takes no salt older than the last one it saw."""
         for stream in self.streams.values():
             if stream.src == name:
                 stream.installed_src = None
+                stream.installed_dst = None
             if stream.dst == name:
                 stream.installed_dst = None
         self.dirty.set()

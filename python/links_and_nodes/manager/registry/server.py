@@ -210,7 +210,10 @@ class Server:
         if self.admission is None:
             return None
         try:
-            verdict = self.admission.judge(writer.get_extra_info("socket"))
+            # In a thread: the kernel query and the user database (NSS: maybe LDAP) may take
+            # a while, and every other client waits on this loop.
+            verdict = await asyncio.get_running_loop().run_in_executor(
+                None, self.admission.judge, writer.get_extra_info("socket"))
             session.admitted = verdict.how
             if verdict.admitted:
                 return None
