@@ -190,6 +190,9 @@ void Box::seal(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_
         std::memset(tag, 0, kTagBytes); // cannot happen with the wire's sizes: opens nowhere
         return;
     }
+    uint8_t nothing = 0; // no payload (a torn frame): libsodium wants real pointers still
+    if (size == 0)
+        in = out = &nothing;
     uint8_t nonce[12];
     nonce_of(counter, nonce);
     unsigned long long tag_len = 0;
@@ -217,6 +220,9 @@ bool Box::open(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_
     uint8_t all[kMaxAd];
     if (!join_ad(ad, ad_size, trailer, trailer_size, all))
         return false;
+    uint8_t nothing = 0; // no payload (a torn frame): libsodium wants real pointers still
+    if (size == 0)
+        in = out = &nothing;
     uint8_t nonce[12];
     nonce_of(counter, nonce);
     if (suite_ == Suite::aes256gcm)
