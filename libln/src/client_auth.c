@@ -13,27 +13,14 @@
 #include "client_auth.h"
 #include "ln/ln.h"
 
-static int hex_value(char c)
-{
-    if (c >= '0' && c <= '9')
-        return c - '0';
-    if (c >= 'a' && c <= 'f')
-        return c - 'a' + 10;
-    if (c >= 'A' && c <= 'F')
-        return c - 'A' + 10;
-    return -1;
-}
-
 int ln_auth_from_hex(const char* s, size_t len, uint8_t out[LN_AUTH_BYTES])
 {
-    if (len != LN_AUTH_HEX)
+    size_t bin_len = 0;
+    const char* end = NULL;
+    if (len != LN_AUTH_HEX ||
+        sodium_hex2bin(out, LN_AUTH_BYTES, s, len, NULL, &bin_len, &end) != 0 ||
+        bin_len != LN_AUTH_BYTES || end != s + len)
         return -1;
-    for (size_t i = 0; i < LN_AUTH_BYTES; i++) {
-        int hi = hex_value(s[2 * i]), lo = hex_value(s[2 * i + 1]);
-        if (hi < 0 || lo < 0)
-            return -1;
-        out[i] = (uint8_t)(hi << 4 | lo);
-    }
     return 0;
 }
 

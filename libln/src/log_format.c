@@ -18,6 +18,18 @@ typedef struct spec {
     char conv;
 } spec;
 
+/* Past a width or precision: `*` (counted: an int argument comes first) or digits. */
+static const char* skip_count(spec* s, const char* p)
+{
+    if (*p == '*') {
+        s->stars++;
+        return p + 1;
+    }
+    while (*p >= '0' && *p <= '9')
+        p++;
+    return p;
+}
+
 static const char* parse_spec(const char* p, spec* s)
 {
     s->stars = 0;
@@ -29,25 +41,11 @@ static const char* parse_spec(const char* p, spec* s)
     }
     while (*p != 0 && strchr("-+ #0'", *p) != NULL)
         p++;
-    if (*p == '*') {
-        s->stars++;
-        p++;
-    } else {
-        while (*p >= '0' && *p <= '9')
-            p++;
-    }
+    p = skip_count(s, p); /* width */
     if (*p == '$')
         return NULL;
-    if (*p == '.') {
-        p++;
-        if (*p == '*') {
-            s->stars++;
-            p++;
-        } else {
-            while (*p >= '0' && *p <= '9')
-                p++;
-        }
-    }
+    if (*p == '.')
+        p = skip_count(s, p + 1); /* precision */
     s->length_at = p;
     if (p[0] == 'h' && p[1] == 'h') {
         s->length = 'H';
