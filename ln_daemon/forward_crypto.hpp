@@ -1,7 +1,7 @@
 // The protection of forwarded data (docs/security.md, "Host-to-host data"): the per-stream
 // keys derived from the daemon key, the tag (and, for `encrypt`, the cipher) of every UDP
-// datagram and TCP frame, and the UDP replay window.  libsodium only; no sockets, so the unit
-// tests and the fuzz targets use it as the data path does.
+// datagram and TCP frame, and the UDP replay window.  libsodium and OpenSSL's libcrypto; no
+// sockets, so the unit tests and the fuzz targets use it as the data path does.
 #pragma once
 
 #include <cstddef>
@@ -72,14 +72,18 @@ public:
               size_t trailer_size = 0) noexcept;
 
 private:
-    void mac(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t *payload,
+    // poly1305: the tag of header, payload, trailer and their lengths; false on failure.
+    bool mac(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t *payload,
              size_t size, const uint8_t *trailer, size_t trailer_size,
              uint8_t tag[kTagBytes]) noexcept;
+    // The AEAD suites: seals (tag out) or opens (tag checked); false on failure.
+    bool aead(bool encrypt, uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t *in,
+              size_t size, uint8_t *out, uint8_t tag[kTagBytes]) noexcept;
 
     const Suite suite_;
     Key key_;
-    struct AesState;
-    std::unique_ptr<AesState> aes_; // the expanded AES key (aes256gcm only)
+    struct Engine;
+    std::unique_ptr<Engine> engine_; // OpenSSL's MAC or keyed cipher context
 };
 
 // Which counters of one salt were seen: a sliding bitmap of kBits counters below the highest

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -41,6 +42,12 @@ constexpr int kConnectTimeoutMs = 5000;
 constexpr int kReplyTimeoutMs = 5000;
 constexpr int kFirstBackoffMs = 50, kMaxBackoffMs = 2000;
 constexpr unsigned kUserTimeoutMs = 10000; // unacknowledged data this long: connection dead
+// A borrowed sample (not the newest) is skipped when the publisher would overwrite it within
+// fewer than this many writes: it would most likely be torn on the wire.
+constexpr uint64_t kHeadroom = 2;
+// A large sample sent from its slot waits this long for room in the socket before it is
+// copied and queued (a receiver that stopped reading then costs the queue's bound, counted).
+constexpr auto kSendWait = std::chrono::milliseconds(200);
 
 const char *reject_text(wire::Reject reason)
 {
@@ -189,6 +196,13 @@ void TcpSender::read_loop()
             break;
         if (next == Next::none)
             continue;
+        if (borrow && about_to_go(info.seq)) {
+            // Sending the oldest sample of a stream a whole ring behind would tear it: skip
+            // to newer ones (the drop is counted), so the stream catches up.
+            ln_ring_tap_release(tap_.get());
+            StreamCounters::add(counters_.drops);
+            continue;
+        }
         if (send_direct(borrow ? payload : nullptr, buf, info)) {
             if (!buf)
                 buf = take_buffer();
@@ -229,6 +243,16 @@ void TcpSender::read_loop()
     }
 }
 
+bool TcpSender::about_to_go(uint64_t seq)
+{
+    const uint64_t newest = ln_ring_tap_write_seq(tap_.get());
+    const uint64_t slots = ln_ring_tap_slots(tap_.get());
+    if (newest <= seq || slots == 0)
+        return false; // the newest is always sent
+    const uint64_t lag = newest - seq;
+    return lag + 1 + kHeadroom > slots; // fewer than kHeadroom writes until it is overwritten
+}
+
 size_t TcpSender::frame_size() const noexcept
 {
     return wire::kFrameHeaderSize + spec_.message_size + wire::kFrameTrailerSize +
@@ -265,7 +289,11 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
     wire::encode_frame_trailer(trailer, true);
     if (!slot || cipher_) // sealed once, before any byte goes (encrypt: from the slot itself)
         payload = seal(s, header, trailer, payload);
-    auto send_part = [&](size_t end) {
+    // Sends the frame up to `end`; `wait`: while the socket is full, waits for room until
+    // `deadline` (a stop or an error ends it early; the writer meets and handles the error).
+    using Clock = std::chrono::steady_clock;
+    const Clock::time_point deadline = Clock::now() + kSendWait;
+    auto send_part = [&](size_t end, bool wait) {
         while (s.sent < end) {
             iovec iov[4];
             msghdr msg = {};
@@ -274,22 +302,32 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
             if (end < frame_size()) // header and payload only: not the trailer nor the tag
                 msg.msg_iovlen -= box_ ? 2 : 1;
             ssize_t n = ::sendmsg(fd, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
-            if (n > 0)
+            if (n > 0) {
                 s.sent += static_cast<size_t>(n);
-            else if (n < 0 && errno == EINTR)
                 continue;
-            else
-                break; // full, or an error the writer will meet and handle
+            }
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (!wait || n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK))
+                break;
+            auto left =
+                std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+            if (left.count() <= 0 ||
+                wait_fd(fd, POLLOUT, stop_, static_cast<int>(left.count())) != Wait::ready)
+                break;
         }
     };
     if (slot) {
-        // Header and payload straight from the slot (encrypt: enciphered from it), then whether
+        // Header and payload straight from the slot (encrypt: enciphered from it), waiting
+        // a while for room in the socket rather than copying (the ring is the queue: the
+        // publisher overwrites the slot only when the stream falls a whole ring behind;
+        // after kSendWait what is left goes to the queue, copied), then whether
         // it stayed intact meanwhile, then the trailer that says so.  authenticate: the tag
         // is taken over the slot while it is still borrowed, so if it stayed intact the bytes
         // sent are the bytes tagged (encrypt: the bytes enciphered); a torn frame's tag
         // covers header and trailer only.
         const size_t body = wire::kFrameHeaderSize + spec_.message_size;
-        send_part(body);
+        send_part(body, true);
         s.whole = s.sent < body; // the writer finishes it (or sends it again) from a copy
         if (s.whole)
             std::memcpy(buf.get(), slot, spec_.message_size);
@@ -302,9 +340,9 @@ bool TcpSender::send_direct(const void *borrowed, Buffer &buf, const ln_sample_i
             box_->seal(counter_ + 1, header, wire::kFrameHeaderSize, nullptr, 0, nullptr, tag_,
                        trailer, wire::kFrameTrailerSize);
         if (s.sent == body)
-            send_part(frame_size());
+            send_part(frame_size(), true);
     } else {
-        send_part(frame_size()); // a copy: the whole frame in one go
+        send_part(frame_size(), false); // a copy: the whole frame in one go, else queued
     }
     const bool whole = s.sent == frame_size();
     if (whole)

@@ -2,9 +2,12 @@
 // into a bounded queue (when it is full the oldest queued sample is dropped), a writer
 // thread keeps a connection to the receiving daemon and sends the queue in order,
 // reconnecting with back-off.  When the writer is idle on a healthy connection and nothing
-// is queued, the reader sends the sample itself without blocking (no thread wake-up), large
-// samples straight from the ring slot (no copy; encrypt: enciphered from it), and queues
-// a copy of only what the socket did not take at once.  The frame's trailer says whether
+// is queued, the reader sends the sample itself (no thread wake-up): a small one copied out
+// and without blocking, queueing what the socket did not take at once; a large one straight
+// from the ring slot (no copy; encrypt: enciphered from it), waiting up to 200 ms for room
+// in the socket (the ring is the queue, so a publisher faster than the link costs no copies
+// that are dropped later, only samples the stream overruns, counted; a receiver that stopped
+// reading costs the queue's bound).  The frame's trailer says whether
 // the slot stayed intact while it was sent (the publisher overwrites it only when the
 // stream falls a whole ring behind); a torn frame is dropped by the receiver and counted as
 // a drop here.  With a security level other than none every frame ends in a tag under a
@@ -63,6 +66,9 @@ private:
     // was dealt with (sent whole, dropped as torn, or queued in `buf` with what part of it
     // went out).
     bool send_direct(const void *borrowed, Buffer &buf, const ln_sample_info &info);
+    // Whether the borrowed sample `seq` is about to be overwritten (the stream is about a
+    // whole ring behind) and is not the newest: then it is skipped rather than sent torn.
+    bool about_to_go(uint64_t seq);
     // Counts a frame written whole: a sample, or a drop if it was torn.
     void count_sent(const Sample &s);
     // The frame of `s` (header, payload, trailer, tag) from byte s.sent on, as 1 to 4 iovecs.

@@ -175,12 +175,14 @@ def figure(kind: str, rec: Record) -> str:
     )
 
 
-def run_all(bench: Bench, rounds: int) -> list[Record]:
-    """Every round runs every case; the order rotates from round to round, so drifting
-    background load does not always hit the same system."""
+def run_all(bench: Bench, rounds: int, only: set[str] | None = None) -> list[Record]:
+    """Every round runs every case (of the systems in `only`, if given); the order rotates
+    from round to round, so drifting background load does not always hit the same system."""
     cases = [("latency", s, sys_) for s, sys_ in report.LATENCY_CASES] + [
         ("throughput", s, sys_) for s, sys_ in report.THROUGHPUT_CASES
     ]
+    if only:
+        cases = [c for c in cases if c[2] in only]
     runs: list[Record] = []
     for rnd in range(rounds):
         log(f"round {rnd + 1}/{rounds}")
@@ -240,6 +242,18 @@ def main() -> int:
         help="ln_daemon --spin-us of both daemons (default 0: no polling)",
     )
     parser.add_argument(
+        "--only",
+        help="comma-separated systems to run, e.g. raw_tcp,ln_tcp,ln_tcp_paced (a paced "
+        "case needs raw_tcp): for a look at one path, not a measurement of the goals",
+    )
+    parser.add_argument(
+        "--security",
+        choices=("none", "authenticate", "encrypt"),
+        default=None,
+        help="the instance's `security` level for the ln a->b cases (default: the "
+        "instance default, authenticate)",
+    )
+    parser.add_argument(
         "--build-dir",
         type=Path,
         default=REPO / "build" / "release",
@@ -275,8 +289,16 @@ def main() -> int:
     ):
         daemon_args = ("--spin-us", str(args.daemon_spin_us)) if args.daemon_spin_us else ()
         lab = Lab(netlab, bin_dir, args.force_multihost, daemon_args)
+        lab.security = args.security
         bench = Bench(lab, args.quick)
-        runs = run_all(bench, rounds)
+        only = set(args.only.split(",")) if args.only else None
+        unknown = sorted(
+            (only or set()) - {s for _, s in report.THROUGHPUT_CASES + report.LATENCY_CASES}
+        )
+        if unknown:
+            print(f"bench_network: unknown systems {', '.join(unknown)}", file=sys.stderr)
+            return 2
+        runs = run_all(bench, rounds, only)
         shm_left = lab.shm_left()
     summary = report.summarize(runs)
     goals = report.goals(summary)
@@ -284,7 +306,8 @@ def main() -> int:
     print(goal_text())
     print(
         f"hosts: network namespaces a, b, mgr on one bridge (veth), on {os.cpu_count()} "
-        f"CPUs shared by all; ln_daemon --spin-us {args.daemon_spin_us}; load average at start {load_start[0]:.2f}, at end "
+        f"CPUs shared by all; ln_daemon --spin-us {args.daemon_spin_us}; security "
+        f"{args.security or 'authenticate (default)'}; load average at start {load_start[0]:.2f}, at end "
         f"{os.getloadavg()[0]:.2f}; python {platform.python_version()}, kernel "
         f"{platform.release()}"
         + ("; --quick: a smoke run, the numbers are not a measurement" if args.quick else "")
@@ -314,6 +337,8 @@ def main() -> int:
                 "loadavg_start": load_start,
                 "loadavg_end": os.getloadavg(),
                 "rounds": rounds,
+                "security": args.security or "authenticate",
+                "daemon_spin_us": args.daemon_spin_us,
                 "latency_counts": {str(k): v for k, v in bench.lat.items()},
                 "throughput_counts": {str(k): v for k, v in bench.thr.items()},
                 "pace": report.PACE,

@@ -42,19 +42,7 @@ ROUNDS, QUICK_ROUNDS = 5, 2
 Record = dict[str, Any]
 
 
-class SecureLab(Lab):
-    """The lab whose managers write `security: <level>` into the instance section."""
-
-    security = "none"
-
-    def _config(self, instance: str, address: str, procs: list[Proc]) -> str:
-        text = super()._config(instance, address, procs)
-        return text.replace(
-            f"manager: {address}\n", f"manager: {address}\nsecurity: {self.security}\n", 1
-        )
-
-
-def measure(bench: Bench, lab: SecureLab, rounds: int) -> list[Record]:
+def measure(bench: Bench, lab: Lab, rounds: int) -> list[Record]:
     cases = [
         (kind, system, level)
         for kind in ("latency", "throughput")
@@ -170,7 +158,7 @@ def main() -> int:
         tempfile.TemporaryDirectory(prefix="ln_bench_security_") as tmp,
         NetLab(Path(tmp)) as netlab,
     ):
-        lab = SecureLab(netlab, bin_dir)
+        lab = Lab(netlab, bin_dir)
         bench = Bench(lab, args.quick)
         runs = measure(bench, lab, rounds)
     lines, goals = table(runs)

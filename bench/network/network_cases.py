@@ -79,7 +79,10 @@ class Proc:
 
 class Lab:
     """The run's lab: hosts a, b and mgr, an ln_daemon on a and b (with a data port where
-    the daemon has one), and the programs of bench/network."""
+    the daemon has one), and the programs of bench/network.  `security`: the instance's
+    `security` level its managers write (None: the default, authenticate)."""
+
+    security: str | None = None
 
     def __init__(
         self,
@@ -233,6 +236,7 @@ class Lab:
             "instance",
             f"name: {instance}",
             f"manager: {address}",
+            *([f"security: {self.security}"] if self.security else []),
             "",
             "hosts",
             f"localhost: daemon_port:{port}",

@@ -132,6 +132,10 @@ LN_ADMIN_API int ln_ring_tap_inject_abort(ln_ring_tap* tap);
 /* Newest sequence number of the topic, 0 if none: of the ring the tap is on, or of its
  * newest successor if that one is retired (without moving the tap).  0 for a bad handle. */
 LN_ADMIN_API uint64_t ln_ring_tap_write_seq(ln_ring_tap* tap);
+/* How many samples the ring the tap is on holds (its slots); 0 for a bad handle.  A sample
+ * `lag` sequence numbers behind ln_ring_tap_write_seq is overwritten after about
+ * slots - 1 - lag more writes. */
+LN_ADMIN_API uint32_t ln_ring_tap_slots(const ln_ring_tap* tap);
 /* The name of the segment the tap is on now (changes when it followed a successor); owned
  * by the tap.  NULL for a bad handle. */
 LN_ADMIN_API const char* ln_ring_tap_segment(const ln_ring_tap* tap);

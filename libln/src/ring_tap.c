@@ -290,6 +290,13 @@ uint64_t ln_ring_tap_write_seq(ln_ring_tap* t)
     return seq;
 }
 
+uint32_t ln_ring_tap_slots(const ln_ring_tap* t)
+{
+    if (bad_tap(t, "ln_ring_tap_slots") != LN_OK)
+        return 0;
+    return t->ring.slot_count;
+}
+
 const char* ln_ring_tap_segment(const ln_ring_tap* t)
 {
     if (bad_tap(t, "ln_ring_tap_segment") != LN_OK)

@@ -107,6 +107,8 @@ static void test_inject_keeps_seq_and_timestamp(void)
     ln_ring_cursor latest = {.next = 1, .buffers = 1, .reader = -1};
     ln_ring_cursor queued = {.next = r.hdr->readers[2].next_seq, .buffers = 4, .reader = 2};
     LN_CHECK_EQ(ln_ring_tap_write_seq(in), 0);
+    LN_CHECK_EQ(ln_ring_tap_slots(in), r.slot_count); // what a lagging sender measures by
+    LN_CHECK(r.slot_count >= 8);
 
     uint8_t data[MSG];
     memset(data, 41, sizeof(data));
@@ -587,6 +589,7 @@ static void test_open_checks(void)
     LN_CHECK(strstr(ln_last_error(), "/ln.taptest.no.such.ring") != NULL);
     LN_CHECK(ln_ring_tap_segment(NULL) == NULL);
     LN_CHECK_EQ(ln_ring_tap_write_seq(NULL), 0);
+    LN_CHECK_EQ(ln_ring_tap_slots(NULL), 0);
     ln_ring_tap_close(NULL);
     LN_CHECK_EQ(inject(NULL, 1), LN_EBADHANDLE);
     drop(a, seg_name);
