@@ -202,9 +202,7 @@ Box::Box(const Key &key, Suite suite) noexcept : suite_(suite), key_(key)
 
 Box::~Box() { sodium_memzero(key_.bytes, Key::kBytes); }
 
-bool Box::mac(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t *payload,
-              size_t size, const uint8_t *trailer, size_t trailer_size,
-              uint8_t tag[kTagBytes]) noexcept
+bool Box::mac_begin(uint64_t counter, const uint8_t *ad, size_t ad_size) noexcept
 {
     if (!engine_ || !engine_->mac)
         return false;
@@ -212,20 +210,45 @@ bool Box::mac(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t
     nonce_of(counter, nonce);
     uint8_t one_time[crypto_onetimeauth_KEYBYTES];
     crypto_stream_chacha20_ietf(one_time, sizeof one_time, nonce, key_.bytes);
+    bool ok = EVP_MAC_init(engine_->mac, one_time, sizeof one_time, nullptr) == 1 &&
+              EVP_MAC_update(engine_->mac, ad, ad_size) == 1;
+    sodium_memzero(one_time, sizeof one_time);
+    return ok;
+}
+
+bool Box::mac_update(const uint8_t *data, size_t size) noexcept
+{
+    return engine_ && engine_->mac && (size == 0 || EVP_MAC_update(engine_->mac, data, size) == 1);
+}
+
+bool Box::mac_end(size_t ad_size, size_t size, const uint8_t *trailer, size_t trailer_size,
+                  uint8_t tag[kTagBytes]) noexcept
+{
+    if (!engine_ || !engine_->mac)
+        return false;
     uint8_t lengths[24];
     put64(lengths, ad_size);
     put64(lengths + 8, size);
     put64(lengths + 16, trailer_size);
-    EVP_MAC_CTX *ctx = engine_->mac;
     size_t out = 0;
-    bool ok = EVP_MAC_init(ctx, one_time, sizeof one_time, nullptr) == 1 &&
-              EVP_MAC_update(ctx, ad, ad_size) == 1 &&
-              (size == 0 || EVP_MAC_update(ctx, payload, size) == 1) &&
-              (trailer_size == 0 || EVP_MAC_update(ctx, trailer, trailer_size) == 1) &&
-              EVP_MAC_update(ctx, lengths, sizeof lengths) == 1 &&
-              EVP_MAC_final(ctx, tag, &out, kTagBytes) == 1 && out == kTagBytes;
-    sodium_memzero(one_time, sizeof one_time);
-    return ok;
+    return (trailer_size == 0 || EVP_MAC_update(engine_->mac, trailer, trailer_size) == 1) &&
+           EVP_MAC_update(engine_->mac, lengths, sizeof lengths) == 1 &&
+           EVP_MAC_final(engine_->mac, tag, &out, kTagBytes) == 1 && out == kTagBytes;
+}
+
+bool Box::mac_check(size_t ad_size, size_t size, const uint8_t *trailer, size_t trailer_size,
+                    const uint8_t tag[kTagBytes]) noexcept
+{
+    uint8_t want[kTagBytes];
+    return mac_end(ad_size, size, trailer, trailer_size, want) && crypto_verify_16(want, tag) == 0;
+}
+
+bool Box::mac(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t *payload,
+              size_t size, const uint8_t *trailer, size_t trailer_size,
+              uint8_t tag[kTagBytes]) noexcept
+{
+    return mac_begin(counter, ad, ad_size) && mac_update(payload, size) &&
+           mac_end(ad_size, size, trailer, trailer_size, tag);
 }
 
 bool Box::aead(bool encrypt, uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t *in,
@@ -272,11 +295,9 @@ bool Box::open(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_
 {
     if (suite_ == Suite::none)
         return true;
-    if (suite_ == Suite::poly1305) {
-        uint8_t want[kTagBytes];
-        return mac(counter, ad, ad_size, in, size, trailer, trailer_size, want) &&
-               crypto_verify_16(want, tag) == 0;
-    }
+    if (suite_ == Suite::poly1305)
+        return mac_begin(counter, ad, ad_size) && mac_update(in, size) &&
+               mac_check(ad_size, size, trailer, trailer_size, tag);
     uint8_t all[kMaxAd];
     uint8_t expected[kTagBytes];
     std::memcpy(expected, tag, kTagBytes); // OpenSSL takes a writable tag

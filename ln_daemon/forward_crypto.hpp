@@ -71,7 +71,19 @@ public:
               uint8_t *out, const uint8_t tag[kTagBytes], const uint8_t *trailer = nullptr,
               size_t trailer_size = 0) noexcept;
 
+    // poly1305 only (streams()): the tag of a frame whose payload is fed in pieces as it
+    // arrives: mac_begin with the counter and header, mac_update with each piece in order,
+    // then mac_check with the sizes, the trailer and the tag received (false: not authentic,
+    // or a failure).  Gives what open() gives for the same bytes.
+    bool streams() const noexcept { return suite_ == Suite::poly1305; }
+    bool mac_begin(uint64_t counter, const uint8_t *ad, size_t ad_size) noexcept;
+    bool mac_update(const uint8_t *data, size_t size) noexcept;
+    bool mac_check(size_t ad_size, size_t size, const uint8_t *trailer, size_t trailer_size,
+                   const uint8_t tag[kTagBytes]) noexcept;
+
 private:
+    bool mac_end(size_t ad_size, size_t size, const uint8_t *trailer, size_t trailer_size,
+                 uint8_t tag[kTagBytes]) noexcept;
     // poly1305: the tag of header, payload, trailer and their lengths; false on failure.
     bool mac(uint64_t counter, const uint8_t *ad, size_t ad_size, const uint8_t *payload,
              size_t size, const uint8_t *trailer, size_t trailer_size,

@@ -71,6 +71,21 @@ TcpSession::Frame TcpSession::header(const uint8_t head[wire::kFrameHeaderSize],
     return f.size == message_size_ ? Frame::intact : Frame::bad_size;
 }
 
+void TcpSession::begin(const uint8_t head[wire::kFrameHeaderSize]) noexcept
+{
+    fed_ = 0;
+    streaming_ =
+        box_ && box_->streams() && box_->mac_begin(counter_ + 1, head, wire::kFrameHeaderSize);
+}
+
+void TcpSession::part(const uint8_t *data, size_t size) noexcept
+{
+    if (streaming_) {
+        streaming_ = box_->mac_update(data, size);
+        fed_ += size;
+    }
+}
+
 TcpSession::Frame TcpSession::frame(const uint8_t head[wire::kFrameHeaderSize], uint8_t *payload,
                                     const uint8_t tail[wire::kFrameTrailerSize],
                                     const uint8_t *tag) noexcept
@@ -78,8 +93,14 @@ TcpSession::Frame TcpSession::frame(const uint8_t head[wire::kFrameHeaderSize], 
     ++counter_;
     const wire::Trailer trailer = wire::decode_frame_trailer(tail);
     const size_t covered = tagged_payload(trailer != wire::Trailer::torn, message_size_);
-    if (box_ && !box_->open(counter_, head, wire::kFrameHeaderSize, payload, covered, payload, tag,
-                            tail, wire::kFrameTrailerSize))
+    const bool streamed = streaming_ && fed_ == covered && covered == message_size_;
+    streaming_ = false;
+    if (box_ && streamed &&
+        !box_->mac_check(wire::kFrameHeaderSize, covered, tail, wire::kFrameTrailerSize, tag))
+        return Frame::rejected;
+    if (box_ && !streamed &&
+        !box_->open(counter_, head, wire::kFrameHeaderSize, payload, covered, payload, tag, tail,
+                    wire::kFrameTrailerSize))
         return Frame::rejected;
     switch (trailer) {
     case wire::Trailer::intact:

@@ -49,6 +49,12 @@ public:
     // connection, as does a bad trailer.
     Frame frame(const uint8_t head[wire::kFrameHeaderSize], uint8_t *payload,
                 const uint8_t tail[wire::kFrameTrailerSize], const uint8_t *tag) noexcept;
+    // Streaming (authenticate): the tag of the next frame's payload is computed while it
+    // arrives: begin() after its header, part() with each piece in order; frame() then
+    // only finishes it (if the payload was fed whole and the frame is intact; otherwise it
+    // computes the tag over what it is given, as without).
+    void begin(const uint8_t head[wire::kFrameHeaderSize]) noexcept;
+    void part(const uint8_t *data, size_t size) noexcept;
     size_t tag_size() const noexcept { return box_ ? sec::kTagBytes : 0; }
     uint64_t message_size() const noexcept { return message_size_; }
 
@@ -56,6 +62,8 @@ private:
     uint64_t message_size_ = 0;
     uint64_t counter_ = 0; // of the last frame
     std::unique_ptr<sec::Box> box_;
+    bool streaming_ = false; // begin() was called for the next frame and every part() took
+    uint64_t fed_ = 0;       // payload bytes given to part() since begin()
 };
 
 // The sender's half: the hello to send, and whether the reply accepts it (then the key of

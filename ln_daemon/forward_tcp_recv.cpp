@@ -1,17 +1,20 @@
 // The TCP receive threads (forward_tcp_recv.hpp).  A frame's size is checked against the
 // stream before its payload is read, so a bad sender costs its connection, never memory.
-// The socket wakes its thread once a whole frame is buffered (SO_RCVLOWAT), whose payload
-// is then received straight into a ring slot; a frame's trailer decides whether it is
+// A large frame's payload is received straight into a ring slot while it arrives (the
+// thread woken every 256 KiB, SO_RCVLOWAT), so the copy out of the socket overlaps the
+// sending; a frame that stalls for 2 ms goes on through a private buffer, so the ring's
+// write lock is never held for a stalled link.  A frame's trailer decides whether it is
 // published (intact) or dropped (torn while sent), once its tag was found authentic (else
 // the connection is closed and the frame counted as rejected).
 #include "forward_tcp_recv.hpp"
 
+#include <algorithm>
 #include <cerrno>
+#include <cstring>
 #include <new>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
-#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <system_error>
 #include <thread>
@@ -24,12 +27,17 @@ namespace lnd::fwd {
 namespace {
 
 constexpr int kHelloTimeoutMs = 10000;
-// A frame counted as buffered is read within this, or the connection is dropped (the read
-// holds the ring's write lock).
-constexpr int kInPlaceTimeoutMs = 1000;
-// Frames this large are received whole into a ring slot; smaller ones cost less to copy
-// than the kernel's wake-up bookkeeping (SO_RCVLOWAT) saves.
-constexpr size_t kGatherBytes = 64 * 1024;
+// Frames this large are received straight into a ring slot as their bytes arrive (the
+// ring's write lock held meanwhile); smaller ones are read whole and then copied, which
+// costs less than taking the lock early.
+constexpr size_t kInPlaceBytes = 64 * 1024;
+// While the lock is held, the thread sleeps until this much more of the frame is buffered
+// (SO_RCVLOWAT), so a large frame costs a few wake-ups, not one per segment...
+constexpr size_t kWakeBytes = 256 * 1024;
+// ...and when nothing more came for this long, the frame goes on through a private buffer
+// and the lock is let go (a local publisher of the topic waits at most this for a stalled
+// link, plus the time a flowing frame takes to arrive).
+constexpr int kStallMs = 2;
 constexpr int kAcceptWakeMs = 1000; // to reap ended connections without new ones
 // A sender host that died is noticed after about idle + interval * count seconds.
 constexpr int kKeepIdle = 10, kKeepInterval = 2, kKeepCount = 3;
@@ -44,57 +52,50 @@ void send_reply(int fd, wire::Kind kind, wire::Reject reason, uint64_t token,
     write_full(fd, &iov, 1, stop, error);
 }
 
-// Asks the kernel to wake a reader only once `frame` bytes are buffered (SO_RCVLOWAT); false
-// (and no mark) unless the receive buffer holds several whole frames and the kernel keeps the
-// mark as asked.
-bool wake_for_whole_frames(int fd, size_t frame)
+// Wakes a reader only once `bytes` are buffered (SO_RCVLOWAT), unless the mark is that already.
+void want_buffered(int fd, int &mark, size_t bytes)
 {
-    int rcvbuf = 0, want = 0, got = 0;
-    socklen_t len = sizeof rcvbuf;
-    if (::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, &len) != 0 || rcvbuf <= 0 ||
-        frame > static_cast<size_t>(rcvbuf) / 4)
-        return false;
-    want = static_cast<int>(frame);
-    len = sizeof got;
-    if (::setsockopt(fd, SOL_SOCKET, SO_RCVLOWAT, &want, sizeof want) == 0 &&
-        ::getsockopt(fd, SOL_SOCKET, SO_RCVLOWAT, &got, &len) == 0 && got == want)
-        return true;
-    int one = 1;
-    ::setsockopt(fd, SOL_SOCKET, SO_RCVLOWAT, &one, sizeof one);
-    return false;
+    const int want = static_cast<int>(bytes);
+    if (want != mark && ::setsockopt(fd, SOL_SOCKET, SO_RCVLOWAT, &want, sizeof want) == 0)
+        mark = want;
 }
 
 } // namespace
 
-// Waits until fd is readable; `in_place` if a whole frame is buffered by then.
-Io TcpReceiver::wait_frame(int fd, size_t frame, bool &in_place, std::string &error)
+Io TcpReceiver::read_held(int fd, uint8_t *buf, size_t n, size_t &got, int &mark,
+                          std::string &error, TcpSession *feed)
 {
-    auto buffered = [fd]() -> size_t {
-        int n = 0;
-        return ::ioctl(fd, FIONREAD, &n) == 0 && n > 0 ? static_cast<size_t>(n) : 0;
-    };
-    if (spin_ns_ > 0) {
-        auto end = std::chrono::steady_clock::now() + std::chrono::nanoseconds(spin_ns_);
-        while (buffered() < frame && !stop_.raised() && std::chrono::steady_clock::now() < end)
-            std::this_thread::yield(); // a frame that comes soon is taken without a wake-up
-    }
-    if (buffered() < frame) {
-        switch (wait_fd(fd, POLLIN, stop_, -1)) {
+    while (got < n) {
+        ssize_t r = ::recv(fd, buf + got, n - got, MSG_DONTWAIT);
+        if (r > 0) {
+            if (feed) // its tag is computed while the rest arrives
+                feed->part(buf + got, static_cast<size_t>(r));
+            got += static_cast<size_t>(r);
+            continue;
+        }
+        if (r == 0)
+            return Io::closed;
+        if (errno == EINTR)
+            continue;
+        if (errno != EAGAIN && errno != EWOULDBLOCK) {
+            error = std::strerror(errno);
+            return Io::error;
+        }
+        want_buffered(fd, mark, std::min(n - got, kWakeBytes));
+        switch (wait_fd(fd, POLLIN, stop_, kStallMs)) {
         case Wait::stopped:
             return Io::stopped;
         case Wait::timeout:
-            error = "poll timed out";
-            return Io::error;
+            return Io::timeout; // stalled: the caller lets go of the lock
         case Wait::ready:
             break;
         }
     }
-    in_place = buffered() >= frame;
     return Io::ok;
 }
 
 bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, TcpSession &session, uint8_t *payload,
-                                bool in_place)
+                                bool in_place, int &mark)
 {
     const int fd = c.fd.get();
     std::string error;
@@ -102,7 +103,8 @@ bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, TcpSession &sessio
     uint8_t tail[wire::kFrameTrailerSize + sec::kTagBytes];
     const size_t tail_size = wire::kFrameTrailerSize + session.tag_size();
     const uint8_t *tag = tail + wire::kFrameTrailerSize;
-    Io io = read_full(fd, head, sizeof head, stop_, -1, error, in_place ? 0 : spin_ns_);
+    want_buffered(fd, mark, 1);
+    Io io = read_full(fd, head, sizeof head, stop_, -1, error, spin_ns_);
     if (io != Io::ok)
         return ended(c, s, io, error);
     wire::FrameHeader f;
@@ -112,25 +114,36 @@ bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, TcpSession &sessio
                              ", the stream's messages have " + std::to_string(s.spec.message_size));
         return false;
     }
+    size_t got = 0, tail_got = 0;
     void *slot = nullptr;
     if (in_place && s.begin(f.seq, &slot)) {
-        // All of it is buffered: these reads do not wait (the timeout only guards the lock).
-        io = read_full(fd, slot, f.size, stop_, kInPlaceTimeoutMs, error);
+        // Straight into the slot as the bytes come; the slot stays unpublished until the
+        // frame was judged.
+        auto *dst = static_cast<uint8_t *>(slot);
+        session.begin(head);
+        io = read_held(fd, dst, f.size, got, mark, error, &session);
         if (io == Io::ok)
-            io = read_full(fd, tail, tail_size, stop_, kInPlaceTimeoutMs, error);
-        TcpSession::Frame v = TcpSession::Frame::torn;
-        if (io == Io::ok)
-            v = session.frame(head, static_cast<uint8_t *>(slot), tail, tag);
-        s.finish(v == TcpSession::Frame::intact, f.timestamp_ns, v == TcpSession::Frame::rejected);
-        if (io != Io::ok)
+            io = read_held(fd, tail, tail_size, tail_got, mark, error);
+        if (io == Io::ok) {
+            const TcpSession::Frame v = session.frame(head, dst, tail, tag);
+            s.finish(v == TcpSession::Frame::intact, f.timestamp_ns,
+                     v == TcpSession::Frame::rejected);
+            if (v == TcpSession::Frame::torn)
+                return !s.closed(); // finish() counted the drop
+            return judged(c, s, v);
+        }
+        if (io != Io::timeout) {
+            s.finish(false, f.timestamp_ns); // counted as a drop
             return ended(c, s, io, error);
-        if (v == TcpSession::Frame::torn)
-            return !s.closed(); // finish() counted the drop
-        return judged(c, s, v);
+        }
+        // Stalled: what came so far moves to the private buffer, the lock is let go.
+        std::memcpy(payload, dst, got);
+        s.finish(false, f.timestamp_ns, true);
     }
-    io = read_full(fd, payload, f.size, stop_, -1, error);
+    want_buffered(fd, mark, 1);
+    io = read_full(fd, payload + got, f.size - got, stop_, -1, error);
     if (io == Io::ok)
-        io = read_full(fd, tail, tail_size, stop_, -1, error);
+        io = read_full(fd, tail + tail_got, tail_size - tail_got, stop_, -1, error);
     if (io != Io::ok)
         return ended(c, s, io, error);
     TcpSession::Frame v = session.frame(head, payload, tail, tag);
@@ -327,23 +340,9 @@ void TcpReceiver::serve(Connection &c)
     iovec iov = {reply, sizeof reply};
     write_full(fd, &iov, 1, stop_, error);
     s->attach(c.peer);
-    const size_t frame = wire::kFrameHeaderSize + s->spec.message_size + wire::kFrameTrailerSize +
-                         session.tag_size();
-    const bool gather = frame >= kGatherBytes && wake_for_whole_frames(fd, frame);
-    for (;;) {
-        // With the whole frame in the socket's buffer, its payload goes straight into the
-        // ring (one copy, the ring's lock held only for it); otherwise it is read as it comes
-        // into `payload` and copied into the ring once complete.
-        bool in_place = false;
-        if (gather) {
-            Io io = wait_frame(fd, frame, in_place, error);
-            if (io != Io::ok) {
-                ended(c, *s, io, error);
-                break;
-            }
-        }
-        if (!receive_frame(c, *s, session, payload.get(), in_place))
-            break;
+    const bool in_place = s->spec.message_size >= kInPlaceBytes;
+    int mark = 1; // the socket's SO_RCVLOWAT
+    while (receive_frame(c, *s, session, payload.get(), in_place, mark)) {
     }
     s->detach();
     c.done.store(true);

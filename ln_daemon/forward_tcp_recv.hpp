@@ -1,6 +1,6 @@
 // The TCP receive side: an accept thread on the data port's listener and one thread per
 // connection, which reads the hello, answers accept or reject, then reads frames and
-// writes them into the stream's ring (straight into a slot when a whole frame is buffered).
+// writes them into the stream's ring (a large one straight into a slot as it arrives).
 // What the bytes mean is decided by TcpSession (forward_tcp_frame.hpp).
 #pragma once
 
@@ -50,12 +50,16 @@ private:
 
     void accept_loop();
     void serve(Connection &c);
-    // Waits until fd is readable; `in_place` if a whole frame of `frame` bytes is buffered.
-    Io wait_frame(int fd, size_t frame, bool &in_place, std::string &error);
-    // Reads one frame into the ring (in place: straight into a slot, else through
-    // `payload`); false once the connection is to end.
+    // Reads bytes [got, n) of buf while the ring's lock is held, as they arrive: Io::ok, or
+    // Io::timeout if nothing came for kStallMs (`got` says how far it came), or how the
+    // connection ended.  `mark`: the socket's SO_RCVLOWAT, kept up to date; `feed`: gets
+    // each piece as it comes (TcpSession::part).
+    Io read_held(int fd, uint8_t *buf, size_t n, size_t &got, int &mark, std::string &error,
+                 TcpSession *feed = nullptr);
+    // Reads one frame into the ring (in place: straight into a slot as it arrives, else
+    // through `payload`); false once the connection is to end.
     bool receive_frame(Connection &c, RecvStream &s, TcpSession &session, uint8_t *payload,
-                       bool in_place);
+                       bool in_place, int &mark);
     // Counts and records a frame's verdict; false if the connection is to end.
     static bool judged(const Connection &c, RecvStream &s, TcpSession::Frame verdict);
     static bool ended(const Connection &c, RecvStream &s, Io io, const std::string &error);

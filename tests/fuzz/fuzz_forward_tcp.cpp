@@ -4,6 +4,9 @@
 // in the order and sizes the receive thread reads them; and a sender reading the receiver's
 // reply, on the same bytes.  The stream's level is the hello's suite's, so the seeds cover
 // none, authenticate and encrypt; the receiver's nonce is fixed so that seeds can be sealed.
+// Every frame is judged twice, with its tag computed while the payload arrives in pieces and
+// at once; the verdicts must agree.
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -67,9 +70,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!wire::decode_hello(data, hello) || hello.token != kToken)
         return 0;
     HelloRules rules{kMessageSize, kLayoutHash, level_of(hello.suite), &stream_key()};
-    TcpSession session;
+    // `session` judges each frame as the receiver does, its tag computed while the payload
+    // arrives in pieces (their size from the frame's seq); `whole` judges the same bytes at
+    // once: the verdicts must agree.
+    TcpSession session, whole;
     uint8_t reply[wire::kReplySize];
-    if (session.accept(hello, data, rules, kReceiverNonce, reply) != wire::Reject::none)
+    if (session.accept(hello, data, rules, kReceiverNonce, reply) != wire::Reject::none ||
+        whole.accept(hello, data, rules, kReceiverNonce, reply) != wire::Reject::none)
         return 0;
     data += wire::kHelloSize;
     size -= wire::kHelloSize;
@@ -89,8 +96,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         std::memcpy(tail, data + f.size, tail_size);
         data += f.size + tail_size;
         size -= f.size + tail_size;
+        const size_t piece = 1 + f.seq % 97;
+        session.begin(head);
+        for (size_t at = 0; at < f.size; at += piece)
+            session.part(payload.data() + at, std::min(piece, f.size - at));
+        std::vector<uint8_t> copy = payload;
         TcpSession::Frame v =
             session.frame(head, payload.data(), tail, tail + wire::kFrameTrailerSize);
+        if (whole.frame(head, copy.data(), tail, tail + wire::kFrameTrailerSize) != v)
+            __builtin_trap(); // streaming judged differently
         if (v != TcpSession::Frame::intact && v != TcpSession::Frame::torn)
             break; // the connection ends
     }

@@ -402,6 +402,50 @@ void test_frame_trailers()
     LN_CHECK(reader.read(0) != LN_OK);
 }
 
+// Large frames are received into a ring slot as they arrive; one that stalls (here for
+// 20 ms, ten times the receiver's patience with the ring's lock held) in its payload,
+// between payload and trailer or inside the trailer goes on through the private buffer:
+// every one arrives whole and in order, the one sent in a single piece too.
+void test_large_frames_that_stall()
+{
+    constexpr size_t kSize = 256 * 1024,
+                     kFrame = wire::kFrameHeaderSize + kSize + wire::kFrameTrailerSize;
+    TestRing dst(kSize, 8);
+    Forwarder rx(local_options());
+    CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp, Level::none)).text, "");
+    Reader reader(dst);
+    Client c(rx.data_port());
+    uint8_t hello[wire::kHelloSize];
+    wire::encode_hello(hello, {kToken, kSize, kHash});
+    c.send(hello, sizeof hello);
+    LN_CHECK(c.reply().kind == wire::Kind::accept);
+    // Where each frame pauses: none, mid-payload, after the payload, inside the trailer.
+    const size_t pauses[] = {0, wire::kFrameHeaderSize + kSize / 3, wire::kFrameHeaderSize + kSize,
+                             kFrame - 3};
+    uint64_t seq = 0;
+    for (size_t pause : pauses) {
+        ++seq;
+        std::vector<uint8_t> f(kFrame);
+        wire::encode_frame_header(f.data(), {seq, stamp(seq), kSize});
+        fill(f.data() + wire::kFrameHeaderSize, kSize, seq);
+        wire::encode_frame_trailer(f.data() + wire::kFrameHeaderSize + kSize, true);
+        if (pause == 0) {
+            c.send(f.data(), f.size());
+        } else {
+            c.send(f.data(), pause);
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+            c.send(f.data() + pause, f.size() - pause);
+        }
+        LN_CHECK_EQ(reader.read(5), LN_OK);
+        LN_CHECK_EQ(reader.info.seq, seq);
+        LN_CHECK_EQ(reader.info.timestamp_ns, stamp(seq));
+        LN_CHECK(matches(reader.buf.data(), kSize, seq));
+    }
+    auto r = stats_of(rx, kToken, false);
+    LN_CHECK_EQ(r.samples, seq);
+    LN_CHECK_EQ(r.drops + r.invalid + r.stale, 0);
+}
+
 // The publisher floods a ring of two slots far faster than the stream sends: the sender,
 // sending straight from the slots (level none; authenticate, which tags the slot while it
 // is borrowed; encrypt, which enciphers from it), has samples overwritten under it.  Every
@@ -464,6 +508,7 @@ int main()
     LN_TEST_RUN(test_refused_streams);
     LN_TEST_RUN(test_bad_hello_and_frames);
     LN_TEST_RUN(test_frame_trailers);
+    LN_TEST_RUN(test_large_frames_that_stall);
     LN_TEST_RUN(test_overwritten_while_sent);
     LN_TEST_RUN(test_overwritten_while_sent_with_a_key);
     LN_TEST_RUN(test_overwritten_while_sent_encrypted);
