@@ -31,7 +31,7 @@ sys.path.insert(0, str(HERE))  # bench_network.py here, not tests/python/bench_n
 
 from bench_network import Bench  # noqa: E402
 from netlab import NetLab, netlab_available  # noqa: E402
-from network_cases import CaseError, Lab, Proc  # noqa: E402
+from network_cases import CaseError, Lab  # noqa: E402
 
 LEVELS = ("none", "authenticate", "encrypt")
 SYSTEMS = ("ln_udp", "ln_tcp")
