@@ -258,6 +258,25 @@ Wait wait_fd(int fd, short events, const StopSignal &stop, int timeout_ms) noexc
     }
 }
 
+Io recv_some(int fd, void *buf, size_t n, size_t &got, std::string &error)
+{
+    for (;;) {
+        ssize_t r = ::recv(fd, buf, n, MSG_DONTWAIT);
+        if (r > 0) {
+            got = static_cast<size_t>(r);
+            return Io::ok;
+        }
+        if (r == 0)
+            return Io::closed;
+        if (errno == EINTR)
+            continue;
+        if (errno == EAGAIN || errno == EWOULDBLOCK)
+            return Io::timeout;
+        error = std::strerror(errno);
+        return Io::error;
+    }
+}
+
 Io read_full(int fd, void *buf, size_t n, const StopSignal &stop, int timeout_ms,
              std::string &error, int64_t spin_ns)
 {
@@ -265,20 +284,15 @@ Io read_full(int fd, void *buf, size_t n, const StopSignal &stop, int timeout_ms
     auto deadline = Clock::now() + std::chrono::milliseconds(timeout_ms < 0 ? 0 : timeout_ms);
     auto spin_until = Clock::now() + std::chrono::nanoseconds(spin_ns);
     while (n > 0) {
-        ssize_t got = ::recv(fd, p, n, MSG_DONTWAIT);
-        if (got > 0) {
+        size_t got = 0;
+        Io io = recv_some(fd, p, n, got, error);
+        if (io == Io::ok) {
             p += got;
-            n -= static_cast<size_t>(got);
+            n -= got;
             continue;
         }
-        if (got == 0)
-            return Io::closed;
-        if (errno == EINTR)
-            continue;
-        if (errno != EAGAIN && errno != EWOULDBLOCK) {
-            error = std::strerror(errno);
-            return Io::error;
-        }
+        if (io != Io::timeout)
+            return io;
         if (spin_ns > 0 && Clock::now() < spin_until && !stop.raised()) {
             std::this_thread::yield(); // data that comes soon is taken without a wake-up
             continue;

@@ -70,6 +70,10 @@ Wait wait_fd(int fd, short events, const StopSignal &stop, int timeout_ms) noexc
 
 // Result of a full read or write on a non-blocking stream socket.
 enum class Io { ok, closed, error, timeout, stopped };
+// One read of up to n bytes without waiting: Io::ok with got > 0 bytes read, Io::timeout if
+// none are buffered (wait for POLLIN, then try again), Io::closed at the end of the stream,
+// Io::error with errno's text in `error`.
+Io recv_some(int fd, void *buf, size_t n, size_t &got, std::string &error);
 // Reads exactly n bytes (timeout_ms < 0: no deadline).  `error` gets errno's text.
 // spin_ns > 0: poll (yielding the CPU) that long before sleeping in poll().
 Io read_full(int fd, void *buf, size_t n, const StopSignal &stop, int timeout_ms,

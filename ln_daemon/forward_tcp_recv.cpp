@@ -66,21 +66,16 @@ Io TcpReceiver::read_held(int fd, uint8_t *buf, size_t n, size_t &got, int &mark
                           std::string &error, TcpSession *feed)
 {
     while (got < n) {
-        ssize_t r = ::recv(fd, buf + got, n - got, MSG_DONTWAIT);
-        if (r > 0) {
+        size_t piece = 0;
+        Io io = recv_some(fd, buf + got, n - got, piece, error);
+        if (io == Io::ok) {
             if (feed) // its tag is computed while the rest arrives
-                feed->part(buf + got, static_cast<size_t>(r));
-            got += static_cast<size_t>(r);
+                feed->part(buf + got, piece);
+            got += piece;
             continue;
         }
-        if (r == 0)
-            return Io::closed;
-        if (errno == EINTR)
-            continue;
-        if (errno != EAGAIN && errno != EWOULDBLOCK) {
-            error = std::strerror(errno);
-            return Io::error;
-        }
+        if (io != Io::timeout)
+            return io;
         want_buffered(fd, mark, std::min(n - got, kWakeBytes));
         switch (wait_fd(fd, POLLIN, stop_, kStallMs)) {
         case Wait::stopped:
