@@ -1,7 +1,7 @@
 // The TCP receive threads (forward_tcp_recv.hpp).  A frame's size is checked against the
 // stream before its payload is read, so a bad sender costs its connection, never memory.
 // A large frame's payload is received straight into a ring slot while it arrives (the
-// thread woken every 256 KiB, SO_RCVLOWAT), so the copy out of the socket overlaps the
+// thread woken every 256 KiB or an eighth of the receive buffer, SO_RCVLOWAT), so the copy out of the socket overlaps the
 // sending; a frame that stalls for 2 ms goes on through a private buffer, so the ring's
 // write lock is never held for a stalled link.  A frame's trailer decides whether it is
 // published (intact) or dropped (torn while sent), once its tag was found authentic (else
@@ -60,11 +60,23 @@ void want_buffered(int fd, int &mark, size_t bytes)
         mark = want;
 }
 
+// How much more of a frame wakes the connection: kWakeBytes, or an eighth of a smaller
+// receive buffer (the sender's window may never let more than part of it be buffered).
+size_t wake_bytes(int fd)
+{
+    int rcvbuf = 0;
+    socklen_t len = sizeof rcvbuf;
+    if (::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, &len) != 0 || rcvbuf <= 0)
+        return 1;
+    return std::clamp<size_t>(static_cast<size_t>(rcvbuf) / 8, 1, kWakeBytes);
+}
+
 } // namespace
 
-Io TcpReceiver::read_held(int fd, uint8_t *buf, size_t n, size_t &got, int &mark,
-                          std::string &error, TcpSession *feed)
+Io TcpReceiver::read_held(Connection &c, uint8_t *buf, size_t n, size_t &got, std::string &error,
+                          TcpSession *feed)
 {
+    const int fd = c.fd.get();
     while (got < n) {
         size_t piece = 0;
         Io io = recv_some(fd, buf + got, n - got, piece, error);
@@ -76,7 +88,7 @@ Io TcpReceiver::read_held(int fd, uint8_t *buf, size_t n, size_t &got, int &mark
         }
         if (io != Io::timeout)
             return io;
-        want_buffered(fd, mark, std::min(n - got, kWakeBytes));
+        want_buffered(fd, c.mark, std::min(n - got, c.wake_bytes));
         switch (wait_fd(fd, POLLIN, stop_, kStallMs)) {
         case Wait::stopped:
             return Io::stopped;
@@ -90,7 +102,7 @@ Io TcpReceiver::read_held(int fd, uint8_t *buf, size_t n, size_t &got, int &mark
 }
 
 bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, TcpSession &session, uint8_t *payload,
-                                bool in_place, int &mark)
+                                bool in_place)
 {
     const int fd = c.fd.get();
     std::string error;
@@ -98,7 +110,7 @@ bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, TcpSession &sessio
     uint8_t tail[wire::kFrameTrailerSize + sec::kTagBytes];
     const size_t tail_size = wire::kFrameTrailerSize + session.tag_size();
     const uint8_t *tag = tail + wire::kFrameTrailerSize;
-    want_buffered(fd, mark, 1);
+    want_buffered(fd, c.mark, 1);
     Io io = read_full(fd, head, sizeof head, stop_, -1, error, spin_ns_);
     if (io != Io::ok)
         return ended(c, s, io, error);
@@ -116,9 +128,9 @@ bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, TcpSession &sessio
         // frame was judged.
         auto *dst = static_cast<uint8_t *>(slot);
         session.begin(head);
-        io = read_held(fd, dst, f.size, got, mark, error, &session);
+        io = read_held(c, dst, f.size, got, error, &session);
         if (io == Io::ok)
-            io = read_held(fd, tail, tail_size, tail_got, mark, error);
+            io = read_held(c, tail, tail_size, tail_got, error);
         if (io == Io::ok) {
             const TcpSession::Frame v = session.frame(head, dst, tail, tag);
             s.finish(v == TcpSession::Frame::intact, f.timestamp_ns,
@@ -135,7 +147,7 @@ bool TcpReceiver::receive_frame(Connection &c, RecvStream &s, TcpSession &sessio
         std::memcpy(payload, dst, got);
         s.finish(false, f.timestamp_ns, true);
     }
-    want_buffered(fd, mark, 1);
+    want_buffered(fd, c.mark, 1);
     io = read_full(fd, payload + got, f.size - got, stop_, -1, error);
     if (io == Io::ok)
         io = read_full(fd, tail + tail_got, tail_size - tail_got, stop_, -1, error);
@@ -336,8 +348,8 @@ void TcpReceiver::serve(Connection &c)
     write_full(fd, &iov, 1, stop_, error);
     s->attach(c.peer);
     const bool in_place = s->spec.message_size >= kInPlaceBytes;
-    int mark = 1; // the socket's SO_RCVLOWAT
-    while (receive_frame(c, *s, session, payload.get(), in_place, mark)) {
+    c.wake_bytes = wake_bytes(fd);
+    while (receive_frame(c, *s, session, payload.get(), in_place)) {
     }
     s->detach();
     c.done.store(true);

@@ -46,20 +46,23 @@ private:
         std::atomic<uint64_t> token{0}; // set once the hello was read
         std::atomic<bool> done{false};
         std::thread thread;
+        // The connection thread's: how much more of a large frame wakes it (a part of the
+        // receive buffer, at most kWakeBytes), and the socket's SO_RCVLOWAT now.
+        size_t wake_bytes = 1;
+        int mark = 1;
     };
 
     void accept_loop();
     void serve(Connection &c);
     // Reads bytes [got, n) of buf while the ring's lock is held, as they arrive: Io::ok, or
     // Io::timeout if nothing came for kStallMs (`got` says how far it came), or how the
-    // connection ended.  `mark`: the socket's SO_RCVLOWAT, kept up to date; `feed`: gets
-    // each piece as it comes (TcpSession::part).
-    Io read_held(int fd, uint8_t *buf, size_t n, size_t &got, int &mark, std::string &error,
+    // connection ended.  `feed`: gets each piece as it comes (TcpSession::part).
+    Io read_held(Connection &c, uint8_t *buf, size_t n, size_t &got, std::string &error,
                  TcpSession *feed = nullptr);
     // Reads one frame into the ring (in place: straight into a slot as it arrives, else
     // through `payload`); false once the connection is to end.
     bool receive_frame(Connection &c, RecvStream &s, TcpSession &session, uint8_t *payload,
-                       bool in_place, int &mark);
+                       bool in_place);
     // Counts and records a frame's verdict; false if the connection is to end.
     static bool judged(const Connection &c, RecvStream &s, TcpSession::Frame verdict);
     static bool ended(const Connection &c, RecvStream &s, Io io, const std::string &error);
