@@ -345,23 +345,6 @@ static int open_connection(ln_service* s, const char* host_id, const char* unix_
                               s->provider, s->via);
 }
 
-/* On a new TCP connection: SECURE with our nonce, SECURED with the provider's, then the keys
- * (svc_secure.h).  Level none sends nothing: the provider refuses HELLO unless it has none
- * too.  LN_OK or an error (recorded). */
-static int secure_with(ln_service* s, const ln_svc_key* k, const struct timespec* deadline);
-
-static int secure_connection(ln_service* s, const struct timespec* deadline)
-{
-    ln_svc_key key;
-    int rc = ln_svc_key_get(s->clnt, &key);
-    if (rc != LN_OK)
-        return ln_set_error(s->clnt, rc, "service \"%s\": %s", s->name, ln_last_error());
-    if (key.level != LN_SVC_SEC_NONE)
-        rc = secure_with(s, &key, deadline);
-    sodium_memzero(key.key, sizeof key.key); /* on every way out */
-    return rc;
-}
-
 /* The handshake of secure_connection() under `k` (a protected level). */
 static int secure_with(ln_service* s, const ln_svc_key* k, const struct timespec* deadline)
 {
@@ -410,6 +393,21 @@ static int secure_with(ln_service* s, const ln_svc_key* k, const struct timespec
     if (rc != LN_OK)
         return ln_set_error(s->clnt, rc, "service \"%s\": cannot derive the channel keys", s->name);
     return LN_OK;
+}
+
+/* On a new TCP connection: SECURE with our nonce, SECURED with the provider's, then the keys
+ * (svc_secure.h).  Level none sends nothing: the provider refuses HELLO unless it has none
+ * too.  LN_OK or an error (recorded). */
+static int secure_connection(ln_service* s, const struct timespec* deadline)
+{
+    ln_svc_key key;
+    int rc = ln_svc_key_get(s->clnt, &key);
+    if (rc != LN_OK)
+        return ln_set_error(s->clnt, rc, "service \"%s\": %s", s->name, ln_last_error());
+    if (key.level != LN_SVC_SEC_NONE)
+        rc = secure_with(s, &key, deadline);
+    sodium_memzero(key.key, sizeof key.key); /* on every way out */
+    return rc;
 }
 
 /* Looks the service up, connects and greets the provider. */

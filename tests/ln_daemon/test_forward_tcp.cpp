@@ -353,30 +353,39 @@ void test_bad_hello_and_frames()
     LN_CHECK_EQ(dst.newest(), 3);
 }
 
+// A frame of level none: header, `size` bytes of fill(seq), the trailer.
+std::vector<uint8_t> plain_frame(uint64_t seq, size_t size, bool intact)
+{
+    std::vector<uint8_t> f(wire::kFrameHeaderSize + size + wire::kFrameTrailerSize);
+    wire::encode_frame_header(f.data(), {seq, stamp(seq), size});
+    fill(f.data() + wire::kFrameHeaderSize, size, seq);
+    wire::encode_frame_trailer(f.data() + wire::kFrameHeaderSize + size, intact);
+    return f;
+}
+
+// The hello of stream kToken with messages of `size` bytes, and the receiver's accept.
+void say_hello(Client &c, size_t size)
+{
+    uint8_t hello[wire::kHelloSize];
+    wire::encode_hello(hello, {kToken, size, kHash});
+    c.send(hello, sizeof hello);
+    LN_CHECK(c.reply().kind == wire::Kind::accept);
+}
+
 // A frame whose trailer says it was torn while sent is dropped (counted) and the next one
 // goes in, whole or fed in pieces; a frame with no trailer where it belongs costs the
 // connection and nothing reaches the ring.
 void test_frame_trailers()
 {
-    constexpr size_t kSize = 4096,
-                     kFrame = wire::kFrameHeaderSize + kSize + wire::kFrameTrailerSize;
+    constexpr size_t kSize = 4096;
     TestRing dst(kSize, 8);
     Forwarder rx(local_options());
     CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp, Level::none)).text, "");
-    auto frame = [](uint64_t seq, bool intact) {
-        std::vector<uint8_t> f(kFrame);
-        wire::encode_frame_header(f.data(), {seq, stamp(seq), kSize});
-        fill(f.data() + wire::kFrameHeaderSize, kSize, seq);
-        wire::encode_frame_trailer(f.data() + wire::kFrameHeaderSize + kSize, intact);
-        return f;
-    };
+    auto frame = [](uint64_t seq, bool intact) { return plain_frame(seq, kSize, intact); };
     Reader reader(dst);
     {
         Client c(rx.data_port());
-        uint8_t hello[wire::kHelloSize];
-        wire::encode_hello(hello, {kToken, kSize, kHash});
-        c.send(hello, sizeof hello);
-        LN_CHECK(c.reply().kind == wire::Kind::accept);
+        say_hello(c, kSize);
         auto torn = frame(1, false);
         c.send(torn.data(), torn.size());
         auto good = frame(2, true);
@@ -415,20 +424,14 @@ void test_large_frames_that_stall()
     CHECK_STR(rx.set_recv(recv_spec(kToken, dst, Transport::tcp, Level::none)).text, "");
     Reader reader(dst);
     Client c(rx.data_port());
-    uint8_t hello[wire::kHelloSize];
-    wire::encode_hello(hello, {kToken, kSize, kHash});
-    c.send(hello, sizeof hello);
-    LN_CHECK(c.reply().kind == wire::Kind::accept);
+    say_hello(c, kSize);
     // Where each frame pauses: none, mid-payload, after the payload, inside the trailer.
     const size_t pauses[] = {0, wire::kFrameHeaderSize + kSize / 3, wire::kFrameHeaderSize + kSize,
                              kFrame - 3};
     uint64_t seq = 0;
     for (size_t pause : pauses) {
         ++seq;
-        std::vector<uint8_t> f(kFrame);
-        wire::encode_frame_header(f.data(), {seq, stamp(seq), kSize});
-        fill(f.data() + wire::kFrameHeaderSize, kSize, seq);
-        wire::encode_frame_trailer(f.data() + wire::kFrameHeaderSize + kSize, true);
+        std::vector<uint8_t> f = plain_frame(seq, kSize, true);
         if (pause == 0) {
             c.send(f.data(), f.size());
         } else {

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import socket
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -113,6 +115,22 @@ def _fake_manager(server: socket.socket, instance: str, proves: bool) -> None:
         conn.recv(4096)  # until the client closes
 
 
+@contextmanager
+def _impostor(proves: bool) -> Iterator[int]:
+    """A fake manager of instance "impostor" on a free local port (yielded) for one client:
+    it answers a proof with an AUTH_OK made without the key (`proves`) or with none."""
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(1)
+        fake = threading.Thread(target=_fake_manager, args=(server, "impostor", proves),
+                                daemon=True)
+        fake.start()
+        try:
+            yield server.getsockname()[1]
+        finally:
+            fake.join(30)
+
+
 @pytest.mark.parametrize(("proves", "text"), [
     (True, "failed to prove the client key of instance \"impostor\""),
     (False, "did not prove the client key of instance \"impostor\""),
@@ -120,30 +138,17 @@ def _fake_manager(server: socket.socket, instance: str, proves: bool) -> None:
 def test_client_refuses_a_manager_that_cannot_prove_the_key(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, proves: bool, text: str) -> None:
     monkeypatch.setenv("LN_CLIENT_KEY_FILE", str(write_key(tmp_path / "client.key")))
-    with socket.socket() as server:
-        server.bind(("127.0.0.1", 0))
-        server.listen(1)
-        fake = threading.Thread(target=_fake_manager, args=(server, "impostor", proves),
-                                daemon=True)
-        fake.start()
-        with pytest.raises(LnPermError) as info:
-            Client(f"127.0.0.1:{server.getsockname()[1]}", "victim")
-        fake.join(30)
+    with _impostor(proves) as port, pytest.raises(LnPermError) as info:
+        Client(f"127.0.0.1:{port}", "victim")
     assert text in str(info.value)
 
 
 def test_python_tools_refuse_a_manager_that_skips_its_proof(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("LN_CLIENT_KEY_FILE", str(write_key(tmp_path / "client.key")))
-    with socket.socket() as server:
-        server.bind(("127.0.0.1", 0))
-        server.listen(1)
-        fake = threading.Thread(target=_fake_manager, args=(server, "impostor", False),
-                                daemon=True)
-        fake.start()
-        with pytest.raises(ListingError, match="did not prove the client key"):
-            fetch("127.0.0.1", server.getsockname()[1])
-        fake.join(30)
+    with (_impostor(False) as port,
+          pytest.raises(ListingError, match="did not prove the client key")):
+        fetch("127.0.0.1", port)
 
 
 def test_python_tools_prove_the_key_too(admission: Admission, tmp_path: Path, remote_host: str,
